@@ -1,0 +1,157 @@
+//! OpenEXR images as the pipeline exchanges them: one 3-channel feature per file (R, G, B as
+//! 32-bit float, linear), ZIP scanline compression, string attributes for run metadata.
+//!
+//! Half floats are never written: photometric values (1e5 cd/m² and more) overflow f16.
+
+use crate::error::{Error, Result};
+use exr::prelude::*;
+use std::path::Path;
+
+/// A linear RGB image, row-major from the top-left, interleaved `[r, g, b]` per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 3]>,
+    /// Header attributes (name, value) beyond the standard ones.
+    pub attributes: Vec<(String, String)>,
+}
+
+impl RgbImage {
+    pub fn new(width: usize, height: usize) -> RgbImage {
+        RgbImage {
+            width,
+            height,
+            pixels: vec![[0.0; 3]; width * height],
+            attributes: Vec::new(),
+        }
+    }
+    pub fn attribute(&self, name: &str) -> Option<&str> {
+        self.attributes.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_str())
+    }
+    /// Position of the first non-finite pixel value, if any.
+    pub fn first_non_finite(&self) -> Option<(usize, usize)> {
+        self.pixels
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+            .map(|i| (i % self.width, i / self.width))
+    }
+}
+
+/// Writes `image` atomically as a ZIP-compressed scanline EXR with f32 R, G, B channels.
+pub fn write_rgb(path: &Path, image: &RgbImage) -> Result<()> {
+    if image.pixels.len() != image.width * image.height || image.width == 0 || image.height == 0 {
+        return Err(Error::input(
+            path,
+            format!("refusing to write a {}x{} image with {} pixels", image.width, image.height, image.pixels.len()),
+        ));
+    }
+    let (w, pixels) = (image.width, &image.pixels);
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let [r, g, b] = pixels[p.y() * w + p.x()];
+        (r, g, b)
+    });
+    let mut attributes = LayerAttributes::default();
+    for (k, v) in &image.attributes {
+        attributes.other.insert(Text::from(k.as_str()), AttributeValue::Text(Text::from(v.as_str())));
+    }
+    attributes.software_name = Some(Text::from(format!("luxest {}", crate::meta::PROGRAM_VERSION).as_str()));
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new((image.width, image.height), attributes, encoding, channels);
+    let mut buffer = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .non_parallel()
+        .to_buffered(&mut buffer)
+        .map_err(|e| Error::input(path, format!("cannot encode EXR: {e}")))?;
+    crate::fsio::write_bytes_atomically(path, buffer.get_ref())
+}
+
+/// Reads an EXR that must contain R, G and B channels (f32 or f16; other channels ignored).
+pub fn read_rgb(path: &Path) -> Result<RgbImage> {
+    let bytes = crate::fsio::read_bytes(path)?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
+    let layer = &image.layer_data;
+    let (width, height) = (layer.size.width(), layer.size.height());
+    let names: Vec<String> = layer.channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    let find = |want: &str| {
+        layer.channel_data.list.iter().find(|c| c.name.to_string() == want).ok_or_else(|| {
+            Error::input(path, format!("expected channels R, G, B; found {}", names.join(", ")))
+        })
+    };
+    let mut pixels = vec![[0f32; 3]; width * height];
+    for (k, name) in ["R", "G", "B"].iter().enumerate() {
+        let channel = find(name)?;
+        let values: Vec<f32> = match &channel.sample_data {
+            FlatSamples::F32(v) => v.clone(),
+            FlatSamples::F16(v) => v.iter().map(|h| h.to_f32()).collect(),
+            FlatSamples::U32(_) => {
+                return Err(Error::input(path, format!("channel {name} holds integers, expected float")))
+            }
+        };
+        for (p, v) in pixels.iter_mut().zip(values) {
+            p[k] = v;
+        }
+    }
+    let mut attributes: Vec<(String, String)> = layer
+        .attributes
+        .other
+        .iter()
+        .chain(image.attributes.other.iter())
+        .filter_map(|(k, v)| match v {
+            AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect();
+    attributes.sort();
+    Ok(RgbImage {
+        width,
+        height,
+        pixels,
+        attributes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_keeps_values_and_metadata() {
+        let dir = std::env::temp_dir().join(format!("luxest-exr-{}", std::process::id()));
+        let path = dir.join("a_000004spp.hdr.exr");
+        let mut img = RgbImage::new(5, 3);
+        for (i, p) in img.pixels.iter_mut().enumerate() {
+            // Values far outside the f16 range must survive.
+            *p = [i as f32 * 1.0e5, -(i as f32) * 1e-7, 3.0e9];
+        }
+        img.attributes = vec![("luxest.seed".into(), "42".into())];
+        write_rgb(&path, &img).unwrap();
+        let back = read_rgb(&path).unwrap();
+        assert_eq!(back.pixels, img.pixels);
+        assert_eq!(back.attribute("luxest.seed"), Some("42"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn garbage_is_a_clear_error() {
+        let dir = std::env::temp_dir().join(format!("luxest-exr-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("bad.exr");
+        std::fs::write(&path, b"not an exr").unwrap();
+        let e = read_rgb(&path).unwrap_err().to_string();
+        assert!(e.contains("bad.exr: not a readable OpenEXR file"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

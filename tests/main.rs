@@ -1,0 +1,1 @@
+//! Cross-stage integration tests (one test binary, as in ripgrep).
