@@ -1,0 +1,383 @@
+//! scene-compile: authored scene (RON + mesh files) → one compiled scene file.
+//!
+//! The compiled scene ([`luxest_core::compiled`]) is world space, self-contained (no references
+//! to source files), carries a schema version, a content hash and a features manifest. This
+//! crate owns everything about *reading authored input*: RON parsing, validation, tessellation
+//! of analytic shapes, OBJ and glTF loading, transforms, dropping degenerate triangles, the
+//! emitter table and the sensor expansion.
+
+pub mod meshes;
+pub mod shapes;
+pub mod validate;
+
+use clap::Parser;
+use luxest_core::compiled::{
+    CompiledScene, Emitter, Features, NamedMaterial, ObjectRange, SceneHeader, SensorSet, Stats, NO_EMITTER,
+};
+use luxest_core::math::Vec3;
+use luxest_core::scene::{Emission, Material, PointPower, Scene, Sensor, SensorPoint, Shape};
+use luxest_core::{Error, Result};
+use shapes::LocalMesh;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+/// Compile an authored luxest scene into one self-contained scene file.
+#[derive(Parser, Debug)]
+#[command(name = "scene-compile", version, about)]
+pub struct Args {
+    /// The authored scene (.ron), or with --info a compiled scene.
+    pub input: PathBuf,
+    /// Output file [default: build/<scene name>/scene.lxs].
+    #[arg(short, long)]
+    pub out: Option<PathBuf>,
+    /// Validate and load everything, print the summary, write nothing.
+    #[arg(long)]
+    pub check: bool,
+    /// Print the header (features manifest, emitters, sensors, stats) of a compiled scene.
+    #[arg(long, conflicts_with_all = ["out", "check"])]
+    pub info: bool,
+    /// No warnings or summary on stderr.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// What compiling produced besides the scene.
+#[derive(Debug, Default)]
+pub struct Report {
+    /// Human-readable warnings (dropped degenerate triangles, unused materials).
+    pub warnings: Vec<String>,
+}
+
+/// Runs the command line.
+pub fn run(args: Args) -> Result<()> {
+    if args.info {
+        let scene = CompiledScene::load(&args.input)?;
+        println!("{}", luxest_core::fsio::to_ron_string(&scene.header));
+        println!("// content hash {}", scene.content_hash);
+        return Ok(());
+    }
+    let (mut scene, report) = compile_file(&args.input)?;
+    if !args.quiet {
+        for w in &report.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    let bytes = scene.encode();
+    let summary = {
+        let s = &scene.header.stats;
+        format!(
+            "{}: {} triangles, {} vertices, {} emitters, {} sensor points, hash {}",
+            scene.header.name,
+            s.triangles,
+            s.vertices,
+            scene.header.emitters.len(),
+            scene.header.sensors.iter().map(|x| x.points.len()).sum::<usize>(),
+            scene.content_hash
+        )
+    };
+    if args.check {
+        if !args.quiet {
+            eprintln!("ok {summary}");
+        }
+        return Ok(());
+    }
+    let out = args
+        .out
+        .unwrap_or_else(|| Path::new("build").join(&scene.header.name).join("scene.lxs"));
+    luxest_core::fsio::write_bytes_atomically(&out, &bytes)?;
+    if !args.quiet {
+        eprintln!("wrote {} ({summary})", out.display());
+    }
+    Ok(())
+}
+
+/// Reads, validates and compiles an authored scene file.
+pub fn compile_file(path: &Path) -> Result<(CompiledScene, Report)> {
+    let scene: Scene = luxest_core::fsio::read_ron(path)?;
+    compile(&scene, path)
+}
+
+/// World-space geometry being assembled.
+#[derive(Default)]
+struct Builder {
+    positions: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+    indices: Vec<[u32; 3]>,
+    triangle_material: Vec<u32>,
+    triangle_emitter: Vec<u32>,
+    dropped: u64,
+    bounds_min: Vec3,
+    bounds_max: Vec3,
+    total_area: f64,
+}
+
+/// Twice the area of the triangle over its two edge lengths: the sine of the angle between the
+/// edges. Below this the triangle is numerically a line and is dropped.
+const DEGENERATE_SINE: f64 = 1e-9;
+
+impl Builder {
+    /// Transforms `mesh` to world space and appends its non-degenerate triangles; returns
+    /// (triangles added, their area, triangles dropped).
+    fn add(
+        &mut self,
+        path: &Path,
+        place: &str,
+        mesh: LocalMesh,
+        transform: &luxest_core::math::Affine,
+        flip: bool,
+        material: u32,
+        emitter: u32,
+    ) -> Result<(u32, f64, u64)> {
+        let det = transform.determinant();
+        // Mirroring transforms reverse the winding; undo that so the front side stays the one
+        // the author meant, and flip on request.
+        let reverse = (det < 0.0) != flip;
+        let normal_sign = if flip { -1.0 } else { 1.0 } * det.signum();
+        let base = self.positions.len();
+        if base + mesh.positions.len() > u32::MAX as usize - 1 {
+            return Err(Error::at(path, place, "scene exceeds 2^32 vertices"));
+        }
+        for (i, p) in mesh.positions.iter().enumerate() {
+            let w = transform.apply_point(*p).to_f32();
+            if !w.iter().all(|c| c.is_finite()) {
+                return Err(Error::at(path, place, format!("vertex {i} is not finite in world space (scale overflow)")));
+            }
+            self.positions.push(w);
+        }
+        match &mesh.normals {
+            Some(ns) => self.normals.extend(ns.iter().map(|n| {
+                let w = transform.apply_normal(*n) * normal_sign;
+                w.try_normalize().map(|u| u.to_f32()).unwrap_or([0.0; 3])
+            })),
+            None => self.normals.extend(std::iter::repeat_n([0.0f32; 3], mesh.positions.len())),
+        }
+        let (mut added, mut area, mut dropped) = (0u32, 0.0, 0u64);
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|i| Vec3::from(self.positions[base + i as usize]));
+            let (e1, e2) = (b - a, c - a);
+            let cross = e1.cross(e2).length();
+            if !(cross.is_finite() && cross > DEGENERATE_SINE * e1.length() * e2.length()) {
+                dropped += 1;
+                continue;
+            }
+            let mut tri = t.map(|i| base as u32 + i);
+            if reverse {
+                tri.swap(1, 2);
+            }
+            for p in [a, b, c] {
+                self.bounds_min = self.bounds_min.min(p);
+                self.bounds_max = self.bounds_max.max(p);
+            }
+            self.indices.push(tri);
+            self.triangle_material.push(material);
+            self.triangle_emitter.push(emitter);
+            area += 0.5 * cross;
+            added += 1;
+        }
+        self.dropped += dropped;
+        self.total_area += area;
+        Ok((added, area, dropped))
+    }
+}
+
+fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMesh> {
+    let resolve = |p: &str| -> Result<PathBuf> {
+        let full = scene_path.parent().unwrap_or(Path::new(".")).join(p);
+        if full.is_file() {
+            Ok(full)
+        } else {
+            Err(Error::at(scene_path, format!("{place}.shape.path"), format!("mesh file {} not found", full.display())))
+        }
+    };
+    Ok(match shape {
+        Shape::Quad { corner, u, v } => shapes::quad(*corner, *u, *v),
+        Shape::Box { size } => shapes::cuboid(*size),
+        Shape::Sphere { radius, subdivisions } => shapes::icosphere(*radius, *subdivisions),
+        Shape::Obj { path } => meshes::load_obj(&resolve(path)?)?,
+        Shape::Gltf { path } => meshes::load_gltf(&resolve(path)?)?,
+    })
+}
+
+fn expand_sensor(s: &Sensor) -> SensorSet {
+    match s {
+        Sensor::Points { name, points } => SensorSet {
+            name: name.clone(),
+            grid: None,
+            points: points
+                .iter()
+                .map(|p| SensorPoint {
+                    position: p.position,
+                    normal: p.normal.try_normalize().expect("validated"),
+                })
+                .collect(),
+        },
+        Sensor::Grid {
+            name,
+            corner,
+            u,
+            v,
+            counts,
+            normal,
+        } => {
+            let n = normal.unwrap_or_else(|| u.cross(*v)).try_normalize().expect("validated");
+            let (nu, nv) = *counts;
+            let mut points = Vec::with_capacity((nu * nv) as usize);
+            for j in 0..nv {
+                for i in 0..nu {
+                    let s = (i as f64 + 0.5) / nu as f64;
+                    let t = (j as f64 + 0.5) / nv as f64;
+                    points.push(SensorPoint {
+                        position: *corner + *u * s + *v * t,
+                        normal: n,
+                    });
+                }
+            }
+            SensorSet {
+                name: name.clone(),
+                grid: Some(*counts),
+                points,
+            }
+        }
+    }
+}
+
+/// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
+pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
+    validate::check_scene(path, scene)?;
+    let mut report = Report::default();
+    let material_index: std::collections::BTreeMap<&str, u32> =
+        scene.materials.keys().enumerate().map(|(i, k)| (k.as_str(), i as u32)).collect();
+    let mut b = Builder {
+        bounds_min: Vec3::splat(f64::INFINITY),
+        bounds_max: Vec3::splat(f64::NEG_INFINITY),
+        ..Default::default()
+    };
+    let mut emitters = Vec::new();
+    let mut objects = Vec::new();
+    for (i, o) in scene.objects.iter().enumerate() {
+        let place = format!("objects[{i}]");
+        let name = o.name.clone().unwrap_or_else(|| place.clone());
+        let mesh = object_mesh(path, &place, &o.shape)?;
+        let material = material_index[o.material.as_str()];
+        let emitter = if o.emission.is_some() { emitters.len() as u32 } else { NO_EMITTER };
+        let first = b.indices.len() as u32;
+        let (count, area, dropped) = b.add(path, &place, mesh, &o.transform.to_affine(), o.flip_normals, material, emitter)?;
+        if dropped > 0 {
+            report.warnings.push(format!(
+                "{}: {place} ({name}): dropped {dropped} degenerate triangle{}",
+                path.display(),
+                if dropped == 1 { "" } else { "s" }
+            ));
+        }
+        if count == 0 {
+            return Err(Error::at(path, &place, "object has no non-degenerate triangles"));
+        }
+        if let Some(e) = &o.emission {
+            let radiance_rgb = match e {
+                Emission::Radiance(l) => *l,
+                // L = flux / (pi A) for a Lambertian emitter radiating from one side.
+                Emission::Flux { lumens, color } => color.with_luminance(lumens / (PI * area)).expect("validated"),
+            };
+            emitters.push(Emitter::Area {
+                name: name.clone(),
+                first_triangle: first,
+                triangle_count: count,
+                radiance_rgb,
+                area_m2: area,
+                flux_rgb: radiance_rgb * (PI * area),
+            });
+        }
+        objects.push(ObjectRange {
+            name,
+            first_triangle: first,
+            triangle_count: count,
+            material,
+            emitter: (emitter != NO_EMITTER).then_some(emitter),
+        });
+    }
+    for (i, l) in scene.point_lights.iter().enumerate() {
+        // Isotropic source: flux = 4 pi I.
+        let intensity = match l.power {
+            PointPower::Intensity(cd) => cd,
+            PointPower::Flux(lm) => lm / (4.0 * PI),
+        };
+        let intensity_rgb = l.color.with_luminance(intensity).expect("validated");
+        emitters.push(Emitter::Point {
+            name: l.name.clone().unwrap_or_else(|| format!("point_lights[{i}]")),
+            position: l.position,
+            intensity_rgb,
+            flux_rgb: intensity_rgb * (4.0 * PI),
+        });
+    }
+    let fluxes: Vec<f64> = emitters.iter().map(Emitter::flux_lm).collect();
+    let emitter_cdf = luxest_core::sampling::Distribution1D::new(&fluxes)
+        .ok_or_else(|| Error::input(path, "emitters have no finite positive total flux"))?
+        .cdf()
+        .to_vec();
+
+    let used: std::collections::BTreeSet<u32> = b.triangle_material.iter().copied().collect();
+    let materials: Vec<NamedMaterial> = scene
+        .materials
+        .iter()
+        .map(|(name, model)| NamedMaterial {
+            name: name.clone(),
+            model: model.clone(),
+        })
+        .collect();
+    for (i, m) in materials.iter().enumerate() {
+        if !used.contains(&(i as u32)) {
+            report.warnings.push(format!("{}: materials[\"{}\"]: unused", path.display(), m.name));
+        }
+    }
+    let used_models: Vec<&Material> = used.iter().map(|&i| &materials[i as usize].model).collect();
+    let mut material_kinds: Vec<_> = used_models.iter().map(|m| m.kind()).collect();
+    material_kinds.sort();
+    material_kinds.dedup();
+    let any = |f: fn(&Material) -> bool| used_models.iter().any(|m| f(m));
+    let features = Features {
+        material_kinds,
+        point_emitters: emitters.iter().any(|e| matches!(e, Emitter::Point { .. })),
+        area_emitters: emitters.iter().any(|e| matches!(e, Emitter::Area { .. })),
+        specular_paths: any(|m| matches!(m, Material::Mirror { .. } | Material::Dielectric { .. })),
+        transmission: any(|m| matches!(m, Material::Dielectric { .. })),
+        glossy: any(|m| matches!(m, Material::Glossy { .. })),
+        smooth_normals: b.normals.iter().any(|n| *n != [0.0; 3]),
+        spectral: false,
+        camera: scene.camera.is_some(),
+        sensors: !scene.sensors.is_empty(),
+    };
+    let name = scene.name.clone().unwrap_or_else(|| {
+        path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into())
+    });
+    let stats = Stats {
+        vertices: b.positions.len() as u64,
+        triangles: b.indices.len() as u64,
+        dropped_degenerate: b.dropped,
+        bounds_min: b.bounds_min,
+        bounds_max: b.bounds_max,
+        total_area_m2: b.total_area,
+    };
+    let header = SceneHeader {
+        name,
+        compiler_version: luxest_core::meta::PROGRAM_VERSION.to_string(),
+        camera: scene.camera.clone(),
+        materials,
+        emitters,
+        emitter_cdf,
+        objects,
+        sensors: scene.sensors.iter().map(expand_sensor).collect(),
+        features,
+        stats,
+    };
+    let compiled = CompiledScene {
+        header,
+        positions: b.positions,
+        normals: b.normals,
+        indices: b.indices,
+        triangle_material: b.triangle_material,
+        triangle_emitter: b.triangle_emitter,
+        content_hash: String::new(),
+    };
+    compiled.check_consistency().map_err(|m| Error::input(path, m))?;
+    Ok((compiled, report))
+}

@@ -1,0 +1,262 @@
+//! Loading of mesh files referenced by a scene: Wavefront OBJ (via `tobj`) and glTF 2.0
+//! (`.gltf` with external or data-URI buffers, and `.glb`, via `gltf`).
+//!
+//! Errors name the mesh file and, for OBJ syntax errors, the line.
+
+use crate::shapes::LocalMesh;
+use luxest_core::math::{Affine, Vec3};
+use luxest_core::{Error, Result};
+use std::io::{BufRead, Read};
+use std::path::Path;
+
+/// A `BufRead` adapter that counts the newlines consumed, so that a parse error reported by
+/// `tobj` (which reads line by line and stops at the first bad line) can be given a line number.
+struct LineCounter<R> {
+    inner: R,
+    newlines: usize,
+}
+
+impl<R: BufRead> Read for LineCounter<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.newlines += buf[..n].iter().filter(|&&b| b == b'\n').count();
+        Ok(n)
+    }
+}
+
+impl<R: BufRead> BufRead for LineCounter<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        self.inner.fill_buf()
+    }
+    fn consume(&mut self, amt: usize) {
+        if let Ok(buf) = self.inner.fill_buf() {
+            self.newlines += buf[..amt.min(buf.len())].iter().filter(|&&b| b == b'\n').count();
+        }
+        self.inner.consume(amt);
+    }
+}
+
+/// Loads every model of an OBJ file as one mesh (polygons triangulated, OBJ materials ignored).
+pub fn load_obj(path: &Path) -> Result<LocalMesh> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut reader = LineCounter {
+        inner: std::io::BufReader::with_capacity(1 << 20, file),
+        newlines: 0,
+    };
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    // Material libraries are ignored: the scene assigns materials.
+    let loaded = tobj::load_obj_buf(&mut reader, &options, |_| Err(tobj::LoadError::OpenFileFailed));
+    let models = match loaded {
+        Ok((models, _materials)) => models,
+        Err(e) => {
+            use tobj::LoadError::*;
+            let per_line = matches!(
+                e,
+                UnrecognizedCharacter
+                    | PositionParseError
+                    | NormalParseError
+                    | TexcoordParseError
+                    | FaceParseError
+                    | ColorParseError
+                    | InvalidObjectName
+                    | InvalidPolygon
+                    | ScalingByZeroError
+            );
+            return Err(if per_line {
+                Error::at(path, format!("line {}", reader.newlines.max(1)), format!("malformed OBJ: {e}"))
+            } else {
+                Error::input(path, format!("malformed OBJ: {e}"))
+            });
+        }
+    };
+    let mut mesh = LocalMesh {
+        normals: Some(Vec::new()),
+        ..Default::default()
+    };
+    for model in models {
+        let m = model.mesh;
+        let nv = m.positions.len() / 3;
+        let positions: Vec<Vec3> = m
+            .positions
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0] as f64, c[1] as f64, c[2] as f64))
+            .collect();
+        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(Error::at(
+                path,
+                format!("vertex {} of object '{}'", i + 1, model.name),
+                "non-finite coordinate",
+            ));
+        }
+        let normals = (m.normals.len() == m.positions.len()).then(|| {
+            m.normals
+                .chunks_exact(3)
+                .map(|c| Vec3::new(c[0] as f64, c[1] as f64, c[2] as f64))
+                .collect::<Vec<_>>()
+        });
+        if m.indices.iter().any(|&i| i as usize >= nv) {
+            return Err(Error::input(path, format!("object '{}' has a face index out of range", model.name)));
+        }
+        let triangles = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        mesh.append(LocalMesh {
+            positions,
+            normals,
+            triangles,
+        });
+    }
+    if mesh.triangles.is_empty() {
+        return Err(Error::input(path, "OBJ file contains no faces"));
+    }
+    Ok(mesh)
+}
+
+/// Decodes standard base64 (RFC 4648), as used by glTF data URIs.
+fn decode_base64(s: &str) -> Option<Vec<u8>> {
+    let val = |c: u8| -> Option<u32> {
+        Some(match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => return None,
+        } as u32)
+    };
+    let bytes: Vec<u8> = s.bytes().filter(|b| !b.is_ascii_whitespace()).collect();
+    let data = match bytes.iter().position(|&b| b == b'=') {
+        Some(p) if bytes[p..].iter().all(|&b| b == b'=') => &bytes[..p],
+        Some(_) => return None,
+        None => &bytes[..],
+    };
+    let mut out = Vec::with_capacity(data.len() * 3 / 4);
+    for chunk in data.chunks(4) {
+        if chunk.len() == 1 {
+            return None;
+        }
+        let mut acc = 0u32;
+        for (i, &c) in chunk.iter().enumerate() {
+            acc |= val(c)? << (18 - 6 * i);
+        }
+        out.extend_from_slice(&acc.to_be_bytes()[1..chunk.len()]);
+    }
+    Some(out)
+}
+
+/// Loads all triangle meshes of a glTF file's default scene, node transforms applied.
+pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
+    let bytes = luxest_core::fsio::read_bytes(path)?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| Error::input(path, format!("malformed glTF: {e}")))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut buffers: Vec<Vec<u8>> = Vec::new();
+    for buffer in gltf.document.buffers() {
+        let data = match buffer.source() {
+            gltf::buffer::Source::Bin => gltf
+                .blob
+                .clone()
+                .ok_or_else(|| Error::input(path, "glTF refers to a binary chunk that the file does not have"))?,
+            gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                let payload = uri.split_once(";base64,").map(|(_, d)| d);
+                payload.and_then(decode_base64).ok_or_else(|| {
+                    Error::at(path, format!("buffer {}", buffer.index()), "malformed base64 data URI")
+                })?
+            }
+            gltf::buffer::Source::Uri(uri) => {
+                let file = base.join(uri);
+                std::fs::read(&file).map_err(|e| {
+                    Error::at(path, format!("buffer {}", buffer.index()), format!("{}: {e}", file.display()))
+                })?
+            }
+        };
+        if data.len() < buffer.length() {
+            return Err(Error::at(
+                path,
+                format!("buffer {}", buffer.index()),
+                format!("has {} bytes, the file declares {}", data.len(), buffer.length()),
+            ));
+        }
+        buffers.push(data);
+    }
+    let scene = gltf
+        .document
+        .default_scene()
+        .or_else(|| gltf.document.scenes().next())
+        .ok_or_else(|| Error::input(path, "glTF file has no scene"))?;
+    let mut mesh = LocalMesh {
+        normals: Some(Vec::new()),
+        ..Default::default()
+    };
+    let mut stack: Vec<(gltf::Node, Affine)> = scene.nodes().map(|n| (n, Affine::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let world = parent.compose(&Affine::from_cols4(node.transform().matrix()));
+        for child in node.children() {
+            stack.push((child, world));
+        }
+        let Some(gmesh) = node.mesh() else { continue };
+        for prim in gmesh.primitives() {
+            let place = format!("mesh {} primitive {}", gmesh.index(), prim.index());
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                return Err(Error::at(path, place, format!("primitive mode {:?} is not supported (only triangles)", prim.mode())));
+            }
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
+            let positions: Vec<Vec3> = reader
+                .read_positions()
+                .ok_or_else(|| Error::at(path, &place, "primitive has no POSITION attribute"))?
+                .map(|p| Vec3::from(p))
+                .collect();
+            if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+                return Err(Error::at(path, format!("{place} vertex {i}"), "non-finite coordinate"));
+            }
+            let nv = positions.len() as u32;
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(ix) => ix.into_u32().collect(),
+                None => (0..nv).collect(),
+            };
+            if indices.len() % 3 != 0 || indices.iter().any(|&i| i >= nv) {
+                return Err(Error::at(path, place, "index list is not a whole number of in-range triangles"));
+            }
+            let normals = reader.read_normals().map(|n| n.map(Vec3::from).collect::<Vec<_>>());
+            let normals = normals.filter(|n| n.len() == positions.len());
+            // Node transform to the file's root frame; the object transform follows later.
+            let det = world.determinant();
+            let positions = positions.into_iter().map(|p| world.apply_point(p)).collect();
+            let normals = normals.map(|n| {
+                n.into_iter()
+                    .map(|v| world.apply_normal(v) * det.signum())
+                    .collect::<Vec<_>>()
+            });
+            let mut triangles: Vec<[u32; 3]> = indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            if det < 0.0 {
+                triangles.iter_mut().for_each(|t| t.swap(1, 2));
+            }
+            mesh.append(LocalMesh {
+                positions,
+                normals,
+                triangles,
+            });
+        }
+    }
+    if mesh.triangles.is_empty() {
+        return Err(Error::input(path, "glTF scene contains no triangles"));
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_decodes_rfc4648_vectors() {
+        for (enc, dec) in [("", ""), ("Zg==", "f"), ("Zm8=", "fo"), ("Zm9v", "foo"), ("Zm9vYmFy", "foobar")] {
+            assert_eq!(decode_base64(enc).unwrap(), dec.as_bytes());
+        }
+        assert!(decode_base64("Zm9v!").is_none());
+        assert!(decode_base64("Z").is_none());
+    }
+}
