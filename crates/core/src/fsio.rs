@@ -51,9 +51,12 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
-/// Parses RON text; errors carry `file:line:col`.
+/// Parses RON text; errors carry `file:line:col`. Optional fields may be written bare
+/// (`name: "floor"`) or as `Some("floor")`.
 pub fn parse_ron<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
-    ron::Options::default().from_str(text).map_err(|e| {
+    ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .from_str(text).map_err(|e| {
         let place = format!("{}:{}:{}", path.display(), e.span.start.line, e.span.start.col);
         Error::input(place, e.code.to_string())
     })

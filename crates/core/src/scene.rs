@@ -117,6 +117,9 @@ pub struct Object {
 pub enum Shape {
     /// The parallelogram `corner + s u + t v`, s, t in [0, 1]; front side along `u x v`.
     Quad { corner: Vec3, u: Vec3, v: Vec3 },
+    /// A planar convex polygon, fan-triangulated from the first vertex; front side by the
+    /// right-hand rule of the vertex order (counter-clockwise seen from the front).
+    Polygon { vertices: Vec<Vec3> },
     /// An axis-aligned box centred on the origin with edge lengths `size`; normals point out.
     Box { size: Vec3 },
     /// A sphere of `radius` centred on the origin, tessellated as an icosphere with

@@ -191,6 +191,7 @@ fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMes
     };
     Ok(match shape {
         Shape::Quad { corner, u, v } => shapes::quad(*corner, *u, *v),
+        Shape::Polygon { vertices } => shapes::polygon(vertices),
         Shape::Box { size } => shapes::cuboid(*size),
         Shape::Sphere { radius, subdivisions } => shapes::icosphere(*radius, *subdivisions),
         Shape::Obj { path } => meshes::load_obj(&resolve(path)?)?,

@@ -38,6 +38,15 @@ pub fn quad(corner: Vec3, u: Vec3, v: Vec3) -> LocalMesh {
     }
 }
 
+/// A convex polygon fanned from its first vertex.
+pub fn polygon(vertices: &[Vec3]) -> LocalMesh {
+    LocalMesh {
+        positions: vertices.to_vec(),
+        normals: None,
+        triangles: (1..vertices.len().saturating_sub(1) as u32).map(|i| [0, i, i + 1]).collect(),
+    }
+}
+
 /// An axis-aligned box centred on the origin with outward-facing sides.
 pub fn cuboid(size: Vec3) -> LocalMesh {
     let h = size * 0.5;

@@ -195,6 +195,14 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
                 c.vec(&format!("{place}.shape.u"), *u)?;
                 c.vec(&format!("{place}.shape.v"), *v)?;
             }
+            Shape::Polygon { vertices } => {
+                if vertices.len() < 3 {
+                    return Err(c.fail(&format!("{place}.shape.vertices"), "a polygon needs at least 3 vertices"));
+                }
+                for (k, v) in vertices.iter().enumerate() {
+                    c.vec(&format!("{place}.shape.vertices[{k}]"), *v)?;
+                }
+            }
             Shape::Box { size } => {
                 c.vec(&format!("{place}.shape.size"), *size)?;
                 if size.x <= 0.0 || size.y <= 0.0 || size.z <= 0.0 {
