@@ -71,8 +71,8 @@ def trefoil_glb(nu=256, nv=12, tube=0.35):
             b = i * nv + (j + 1) % nv
             c = ((i + 1) % nu) * nv + (j + 1) % nv
             d = ((i + 1) % nu) * nv + j
-            # Counter-clockwise seen from outside (normal along n).
-            idx += [a, d, c, a, c, b]
+            # Counter-clockwise seen from outside: (b - a) x (c - a) ~ dn/dv x T points along n.
+            idx += [a, b, c, a, c, d]
     pbytes = b"".join(struct.pack("<3f", *p) for p in pos)
     nbytes = b"".join(struct.pack("<3f", *n) for n in nrm)
     ibytes = b"".join(struct.pack("<I", i) for i in idx)

@@ -1,1 +1,6 @@
-//! Cross-stage integration tests (one test binary, as in ripgrep).
+//! Cross-stage integration tests, compiled as one binary (as in ripgrep).
+//! Helpers live in `util`; each stage has its own module.
+
+mod scene_compile_errors;
+mod scene_compile_scenes;
+mod util;

@@ -1,0 +1,68 @@
+//! Test helpers: hermetic temporary directories and running a stage in-process.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// A fresh directory under the system temp dir, removed when dropped.
+pub struct TempDir(PathBuf);
+
+impl TempDir {
+    pub fn new(tag: &str) -> TempDir {
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let n = N.fetch_add(1, Ordering::SeqCst);
+        let p = std::env::temp_dir().join(format!("luxest-it-{}-{tag}-{n}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        TempDir(p)
+    }
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+    pub fn write(&self, name: &str, content: impl AsRef<[u8]>) -> PathBuf {
+        let p = self.0.join(name);
+        if let Some(d) = p.parent() {
+            std::fs::create_dir_all(d).unwrap();
+        }
+        std::fs::write(&p, content).unwrap();
+        p
+    }
+    /// Every file in the directory tree (to prove that nothing was left behind).
+    pub fn files(&self) -> Vec<PathBuf> {
+        fn walk(d: &Path, out: &mut Vec<PathBuf>) {
+            for e in std::fs::read_dir(d).unwrap() {
+                let p = e.unwrap().path();
+                if p.is_dir() {
+                    walk(&p, out)
+                } else {
+                    out.push(p)
+                }
+            }
+        }
+        let mut v = Vec::new();
+        walk(&self.0, &mut v);
+        v.sort();
+        v
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The repository root (this package's manifest directory).
+pub fn repo_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Runs `scene-compile` in-process with `args` (program name excluded); returns the error, if
+/// any, rendered as the binary would print it, with its exit code.
+pub fn scene_compile(args: &[&str]) -> Result<(), (u8, String)> {
+    let argv = std::iter::once("scene-compile").chain(args.iter().copied());
+    let parsed = luxest_core::cli::parse::<scene_compile::Args>(argv).map_err(|e| (e.exit_code(), e.to_string()))?;
+    match parsed {
+        None => Ok(()),
+        Some(a) => scene_compile::run(a).map_err(|e| (e.exit_code(), e.to_string())),
+    }
+}
