@@ -25,7 +25,11 @@ fn expect_error(text: &str, extra: &[(&str, &[u8])]) -> String {
         .expect_err("compiling bad input must fail");
     assert_eq!(code, 1, "{msg}");
     assert!(!msg.contains('\n'), "message must be one line: {msg}");
-    assert_eq!(dir.files(), before, "a failed compile must leave no file behind");
+    assert_eq!(
+        dir.files(),
+        before,
+        "a failed compile must leave no file behind"
+    );
     msg
 }
 
@@ -63,7 +67,10 @@ fn missing_field_is_named() {
 fn missing_mesh_file_is_named() {
     let obj = format!("{FLOOR}\n        (shape: Obj(path: \"meshes/nope.obj\"), material: \"w\"),");
     let msg = expect_error(&scene(MATERIALS, &obj, LIGHT), &[]);
-    assert_has(&msg, &["scene.ron: objects[1].shape.path", "nope.obj", "not found"]);
+    assert_has(
+        &msg,
+        &["scene.ron: objects[1].shape.path", "nope.obj", "not found"],
+    );
 }
 
 #[test]
@@ -93,12 +100,18 @@ fn nan_in_obj_names_the_vertex() {
 #[test]
 fn malformed_gltf_is_named() {
     let obj = format!("{FLOOR}\n        (shape: Gltf(path: \"bad.gltf\"), material: \"w\"),");
-    let msg = expect_error(&scene(MATERIALS, &obj, LIGHT), &[("bad.gltf", br#"{"asset": 5}"#)]);
+    let msg = expect_error(
+        &scene(MATERIALS, &obj, LIGHT),
+        &[("bad.gltf", br#"{"asset": 5}"#)],
+    );
     assert_has(&msg, &["bad.gltf: malformed glTF"]);
     // A binary glTF cut short.
     let glb = std::fs::read(crate::util::repo_root().join("scenes/meshes/trefoil.glb")).unwrap();
     let obj = format!("{FLOOR}\n        (shape: Gltf(path: \"cut.glb\"), material: \"w\"),");
-    let msg = expect_error(&scene(MATERIALS, &obj, LIGHT), &[("cut.glb", &glb[..glb.len() / 2])]);
+    let msg = expect_error(
+        &scene(MATERIALS, &obj, LIGHT),
+        &[("cut.glb", &glb[..glb.len() / 2])],
+    );
     assert_has(&msg, &["cut.glb: "]);
 }
 
@@ -114,10 +127,19 @@ fn gltf_with_missing_buffer_file_is_named() {
 fn non_finite_scene_numbers_are_named() {
     let obj = FLOOR.replace("corner: (0.0, 0.0, 0.0)", "corner: (NaN, 0.0, 0.0)");
     let msg = expect_error(&scene(MATERIALS, &obj, LIGHT), &[]);
-    assert_has(&msg, &["scene.ron: objects[0].shape.corner[0]", "not a finite number"]);
+    assert_has(
+        &msg,
+        &[
+            "scene.ron: objects[0].shape.corner[0]",
+            "not a finite number",
+        ],
+    );
     let light = LIGHT.replace("(0.5, 1.0, -0.5)", "(0.5, inf, -0.5)");
     let msg = expect_error(&scene(MATERIALS, FLOOR, &light), &[]);
-    assert_has(&msg, &["point_lights[0].position[1]", "not a finite number"]);
+    assert_has(
+        &msg,
+        &["point_lights[0].position[1]", "not a finite number"],
+    );
 }
 
 #[test]
@@ -140,10 +162,16 @@ fn emitters_without_power_are_rejected() {
     let light = LIGHT.replace("Intensity(10.0)", "Flux(-3.0)");
     let msg = expect_error(&scene(MATERIALS, FLOOR, &light), &[]);
     assert_has(&msg, &["point_lights[0].power", "must be positive"]);
-    let obj = FLOOR.replace("material: \"w\"", "material: \"w\", emission: Radiance((0.0, 0.0, 0.0))");
+    let obj = FLOOR.replace(
+        "material: \"w\"",
+        "material: \"w\", emission: Radiance((0.0, 0.0, 0.0))",
+    );
     let msg = expect_error(&scene(MATERIALS, &obj, LIGHT), &[]);
     assert_has(&msg, &["objects[0].emission", "zero power"]);
-    let obj = FLOOR.replace("material: \"w\"", "material: \"w\", emission: Flux(lumens: -1.0)");
+    let obj = FLOOR.replace(
+        "material: \"w\"",
+        "material: \"w\", emission: Flux(lumens: -1.0)",
+    );
     let msg = expect_error(&scene(MATERIALS, &obj, LIGHT), &[]);
     assert_has(&msg, &["objects[0].emission.lumens", "must be positive"]);
 }
@@ -175,7 +203,11 @@ fn degenerate_triangles_are_dropped_with_a_count() {
     assert_eq!(compiled.header.stats.triangles, 2);
     assert_eq!(compiled.header.stats.dropped_degenerate, 2);
     assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
-    assert!(report.warnings[0].contains("objects[0] (mesh): dropped 2 degenerate triangles"), "{:?}", report.warnings);
+    assert!(
+        report.warnings[0].contains("objects[0] (mesh): dropped 2 degenerate triangles"),
+        "{:?}",
+        report.warnings
+    );
     assert!((compiled.header.stats.total_area_m2 - 1.0).abs() < 1e-6);
 }
 

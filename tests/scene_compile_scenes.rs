@@ -35,7 +35,8 @@ fn every_scene_in_scenes_compiles_and_round_trips() {
     for entry in std::fs::read_dir(repo_root().join("scenes")).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "ron") {
-            let (mut scene, _) = scene_compile::compile_file(&path).unwrap_or_else(|e| panic!("{e}"));
+            let (mut scene, _) =
+                scene_compile::compile_file(&path).unwrap_or_else(|e| panic!("{e}"));
             let bytes = scene.encode();
             let back = CompiledScene::decode(&path, &bytes).unwrap();
             assert_eq!(back, scene, "{}", path.display());
@@ -53,41 +54,90 @@ fn compiled_file_is_written_atomically_and_reproducibly() {
     scene_compile(&[scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"]).unwrap();
     let first = std::fs::read(&out).unwrap();
     scene_compile(&[scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"]).unwrap();
-    assert_eq!(std::fs::read(&out).unwrap(), first, "compilation must be deterministic");
-    assert_eq!(dir.files(), vec![out.clone()], "no temporary files may remain");
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        first,
+        "compilation must be deterministic"
+    );
+    assert_eq!(
+        dir.files(),
+        vec![out.clone()],
+        "no temporary files may remain"
+    );
     scene_compile(&["--info", out.to_str().unwrap()]).unwrap();
 }
 
 #[test]
 fn cornell_box_light_and_features() {
     let s = compile("cornell-box");
-    let Emitter::Area { area_m2, radiance_rgb, flux_rgb, .. } = &s.header.emitters[0] else { panic!() };
+    let Emitter::Area {
+        area_m2,
+        radiance_rgb,
+        flux_rgb,
+        ..
+    } = &s.header.emitters[0]
+    else {
+        panic!()
+    };
     // Stored as f32: relative accuracy ~1e-7.
     assert!((area_m2 / (0.130 * 0.105) - 1.0).abs() < 1e-6);
     assert_eq!(radiance_rgb.0, [17.0, 12.0, 4.0]);
     assert!((flux_rgb.0[0] - PI * 17.0 * area_m2).abs() < 1e-12);
     let f = &s.header.features;
-    assert!(f.area_emitters && !f.point_emitters && !f.specular_paths && !f.glossy && f.camera && f.sensors);
-    assert_eq!(s.header.sensors.iter().map(|x| x.points.len()).sum::<usize>(), 105);
+    assert!(
+        f.area_emitters
+            && !f.point_emitters
+            && !f.specular_paths
+            && !f.glossy
+            && f.camera
+            && f.sensors
+    );
+    assert_eq!(
+        s.header
+            .sensors
+            .iter()
+            .map(|x| x.points.len())
+            .sum::<usize>(),
+        105
+    );
     // A camera ray over the blocks reaches the back wall (z = 0.5592) at the right distance.
     let rt = RayTracer::for_scene(&s, true).unwrap();
     let cam = s.header.camera.as_ref().unwrap();
     let target = Vec3::new(0.278, 0.45, 0.5592);
     let d = target - cam.position;
-    let hit = rt.intersect(cam.position, d.try_normalize().unwrap(), 0.0, f64::INFINITY).unwrap();
-    assert!((hit.t - d.length()).abs() < 1e-5, "{} vs {}", hit.t, d.length());
+    let hit = rt
+        .intersect(cam.position, d.try_normalize().unwrap(), 0.0, f64::INFINITY)
+        .unwrap();
+    assert!(
+        (hit.t - d.length()).abs() < 1e-5,
+        "{} vs {}",
+        hit.t,
+        d.length()
+    );
     assert_eq!(object_of(&s, hit.triangle), "back-wall");
 }
 
 fn object_of(s: &CompiledScene, t: u32) -> &str {
-    let o = s.header.objects.iter().find(|o| (o.first_triangle..o.first_triangle + o.triangle_count).contains(&t));
+    let o = s
+        .header
+        .objects
+        .iter()
+        .find(|o| (o.first_triangle..o.first_triangle + o.triangle_count).contains(&t));
     &o.unwrap().name
 }
 
 #[test]
 fn sobolev_planes_face_the_source() {
     let s = compile("sobolev");
-    let Emitter::Point { intensity_rgb, flux_rgb, position, .. } = &s.header.emitters[0] else { panic!() };
+    let Emitter::Point {
+        intensity_rgb,
+        flux_rgb,
+        position,
+        ..
+    } = &s.header.emitters[0]
+    else {
+        panic!()
+    };
     assert_eq!(*position, Vec3::ZERO);
     assert!((intensity_rgb.luminance() - 100.0).abs() < 1e-9);
     assert!((flux_rgb.luminance() - 400.0 * PI).abs() < 1e-9);
@@ -118,8 +168,15 @@ fn integrating_sphere_tessellation_matches_its_stated_bounds() {
             (a.dot(n)).abs()
         })
         .fold(f64::INFINITY, f64::min);
-    eprintln!("integrating sphere: max sagitta {:e}", 1.0 - min_plane_distance);
-    assert!(1.0 - min_plane_distance < 8e-5, "sagitta {:e}", 1.0 - min_plane_distance);
+    eprintln!(
+        "integrating sphere: max sagitta {:e}",
+        1.0 - min_plane_distance
+    );
+    assert!(
+        1.0 - min_plane_distance < 8e-5,
+        "sagitta {:e}",
+        1.0 - min_plane_distance
+    );
     for p in &s.header.sensors[0].points {
         assert!(p.position.length() < min_plane_distance);
         assert!(p.normal.dot(-p.position) > 0.999 * p.position.length());
@@ -131,11 +188,19 @@ fn cie_room_is_closed_and_faces_inward() {
     let s = compile("cie171-5.8");
     let (area, vol) = area_and_volume(&s, 0, s.triangle_count() as u32, Vec3::splat(2.0));
     assert!((area - 96.0).abs() < 1e-9);
-    assert!((vol + 64.0).abs() < 1e-9, "inward box has volume -64, got {vol}");
-    let Emitter::Point { intensity_rgb, .. } = &s.header.emitters[0] else { panic!() };
+    assert!(
+        (vol + 64.0).abs() < 1e-9,
+        "inward box has volume -64, got {vol}"
+    );
+    let Emitter::Point { intensity_rgb, .. } = &s.header.emitters[0] else {
+        panic!()
+    };
     assert!((intensity_rgb.luminance() - 10000.0 / (4.0 * PI)).abs() < 1e-9);
     assert_eq!(s.header.sensors[0].points.len(), 64);
-    assert_eq!(s.header.sensors[0].points[0].position, Vec3::new(0.25, 0.0, 0.25));
+    assert_eq!(
+        s.header.sensors[0].points[0].position,
+        Vec3::new(0.25, 0.0, 0.25)
+    );
 }
 
 #[test]
@@ -148,8 +213,14 @@ fn obj_torus_matches_the_analytic_torus() {
     let (big_r, r) = (0.3, 0.1);
     // Inscribed tessellation: slightly below the analytic area 4 pi^2 R r and volume 2 pi^2 R r^2.
     let (a_exact, v_exact) = (4.0 * PI * PI * big_r * r, 2.0 * PI * PI * big_r * r * r);
-    assert!(area < a_exact && (a_exact - area) / a_exact < 0.01, "{area} vs {a_exact}");
-    assert!(vol > 0.0 && (v_exact - vol) / v_exact < 0.02, "{vol} vs {v_exact}");
+    assert!(
+        area < a_exact && (a_exact - area) / a_exact < 0.01,
+        "{area} vs {a_exact}"
+    );
+    assert!(
+        vol > 0.0 && (v_exact - vol) / v_exact < 0.02,
+        "{vol} vs {v_exact}"
+    );
     assert!(s.header.features.smooth_normals && s.header.features.glossy);
     // Flux-specified emitter: pi L A equals the requested flux.
     assert!((s.header.emitters[0].flux_lm() - 2000.0).abs() < 1e-6);
@@ -160,7 +231,12 @@ fn gltf_trefoil_keeps_node_transforms_and_orientation() {
     let s = compile("gltf-trefoil");
     let o = object(&s, "knot");
     assert_eq!(o.triangle_count, 256 * 12 * 2);
-    let (_, vol) = area_and_volume(&s, o.first_triangle, o.triangle_count, Vec3::new(0.0, 0.2, 0.0));
+    let (_, vol) = area_and_volume(
+        &s,
+        o.first_triangle,
+        o.triangle_count,
+        Vec3::new(0.0, 0.2, 0.0),
+    );
     assert!(vol > 0.0, "tube must face outward");
     // The node scale 0.1 applies: the knot (|x| <= 3 + tube) spans at most 0.7 m.
     let mut lo = Vec3::splat(f64::INFINITY);

@@ -60,7 +60,8 @@ pub fn repo_root() -> PathBuf {
 /// any, rendered as the binary would print it, with its exit code.
 pub fn scene_compile(args: &[&str]) -> Result<(), (u8, String)> {
     let argv = std::iter::once("scene-compile").chain(args.iter().copied());
-    let parsed = luxest_core::cli::parse::<scene_compile::Args>(argv).map_err(|e| (e.exit_code(), e.to_string()))?;
+    let parsed = luxest_core::cli::parse::<scene_compile::Args>(argv)
+        .map_err(|e| (e.exit_code(), e.to_string()))?;
     match parsed {
         None => Ok(()),
         Some(a) => scene_compile::run(a).map_err(|e| (e.exit_code(), e.to_string())),

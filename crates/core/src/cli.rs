@@ -9,7 +9,9 @@ use std::process::ExitCode;
 
 /// Parses `argv` (including the program name) into `A`; usage errors become [`Error::Usage`],
 /// `--help`/`--version` become `Ok(None)` after printing.
-pub fn parse<A: Parser>(argv: impl IntoIterator<Item = impl Into<OsString> + Clone>) -> Result<Option<A>, Error> {
+pub fn parse<A: Parser>(
+    argv: impl IntoIterator<Item = impl Into<OsString> + Clone>,
+) -> Result<Option<A>, Error> {
     match A::try_parse_from(argv) {
         Ok(a) => Ok(Some(a)),
         Err(e) if e.exit_code() == 0 => {

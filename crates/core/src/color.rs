@@ -33,7 +33,11 @@ impl Rgb {
     }
     /// Photometric luminance Y (Rec. 709 weights).
     pub fn luminance(&self) -> f64 {
-        self.0.iter().zip(LUMINANCE_WEIGHTS).map(|(c, w)| c * w).sum()
+        self.0
+            .iter()
+            .zip(LUMINANCE_WEIGHTS)
+            .map(|(c, w)| c * w)
+            .sum()
     }
     pub fn max_component(&self) -> f64 {
         self.0.iter().cloned().fold(f64::NEG_INFINITY, f64::max)

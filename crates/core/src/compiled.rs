@@ -64,7 +64,12 @@ pub struct NamedMaterial {
 #[serde(deny_unknown_fields)]
 pub enum Emitter {
     /// Isotropic point source: intensity per RGB channel in cd (Y = luminous intensity).
-    Point { name: String, position: Vec3, intensity_rgb: Rgb, flux_rgb: Rgb },
+    Point {
+        name: String,
+        position: Vec3,
+        intensity_rgb: Rgb,
+        flux_rgb: Rgb,
+    },
     /// Lambertian area emitter over a contiguous triangle range, emitting from front sides.
     Area {
         name: String,
@@ -87,7 +92,9 @@ impl Emitter {
     /// Luminous flux in lm (Y of the RGB flux).
     pub fn flux_lm(&self) -> f64 {
         match self {
-            Emitter::Point { flux_rgb, .. } | Emitter::Area { flux_rgb, .. } => flux_rgb.luminance(),
+            Emitter::Point { flux_rgb, .. } | Emitter::Area { flux_rgb, .. } => {
+                flux_rgb.luminance()
+            }
         }
     }
 }
@@ -193,14 +200,18 @@ struct Reader<'a> {
 impl<'a> Reader<'a> {
     fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8]> {
         let end = self.pos.checked_add(n).filter(|&e| e <= self.bytes.len());
-        let end = end.ok_or_else(|| Error::input(self.path, format!("truncated compiled scene (in {what})")))?;
+        let end = end.ok_or_else(|| {
+            Error::input(self.path, format!("truncated compiled scene (in {what})"))
+        })?;
         let s = &self.bytes[self.pos..end];
         self.pos = end;
         Ok(s)
     }
     fn u32s(&mut self, n: usize, what: &str) -> Result<Vec<u32>> {
         let s = self.take(n * 4, what)?;
-        Ok(s.chunks_exact(4).map(|c| u32::from_le_bytes(c.try_into().unwrap())).collect())
+        Ok(s.chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect())
     }
     fn f32x3(&mut self, n: usize, what: &str) -> Result<Vec<[f32; 3]>> {
         let s = self.take(n * 12, what)?;
@@ -257,7 +268,10 @@ impl CompiledScene {
     /// Parses a compiled scene; `path` is used only in error messages.
     pub fn decode(path: &Path, bytes: &[u8]) -> Result<CompiledScene> {
         if bytes.len() < PREAMBLE_LEN || &bytes[..8] != MAGIC {
-            return Err(Error::input(path, "not a luxest compiled scene (bad magic); run scene-compile on the .ron scene"));
+            return Err(Error::input(
+                path,
+                "not a luxest compiled scene (bad magic); run scene-compile on the .ron scene",
+            ));
         }
         let schema = u32::from_le_bytes(bytes[8..12].try_into().unwrap());
         if schema != SCHEMA_VERSION {
@@ -270,14 +284,27 @@ impl CompiledScene {
         let body = &bytes[32..];
         let hash = xxhash_rust::xxh3::xxh3_128(body);
         if hash != stored_hash {
-            return Err(Error::input(path, "content hash mismatch: the compiled scene is corrupted or truncated"));
+            return Err(Error::input(
+                path,
+                "content hash mismatch: the compiled scene is corrupted or truncated",
+            ));
         }
         let hlen = u64::from_le_bytes(body[..8].try_into().unwrap()) as usize;
-        let mut r = Reader { path, bytes: body, pos: 8 };
+        let mut r = Reader {
+            path,
+            bytes: body,
+            pos: 8,
+        };
         let header_bytes = r.take(hlen, "header")?;
-        let text = std::str::from_utf8(header_bytes).map_err(|_| Error::input(path, "compiled scene header is not UTF-8"))?;
-        let header: SceneHeader = ron::from_str(text)
-            .map_err(|e| Error::at(path, "header", format!("cannot parse compiled scene header: {e}")))?;
+        let text = std::str::from_utf8(header_bytes)
+            .map_err(|_| Error::input(path, "compiled scene header is not UTF-8"))?;
+        let header: SceneHeader = ron::from_str(text).map_err(|e| {
+            Error::at(
+                path,
+                "header",
+                format!("cannot parse compiled scene header: {e}"),
+            )
+        })?;
         let nv = header.stats.vertices as usize;
         let nt = header.stats.triangles as usize;
         let positions = r.f32x3(nv, "positions")?;
@@ -286,7 +313,10 @@ impl CompiledScene {
         let triangle_material = r.u32s(nt, "triangle materials")?;
         let triangle_emitter = r.u32s(nt, "triangle emitters")?;
         if r.pos != body.len() {
-            return Err(Error::input(path, "trailing bytes after the compiled scene arrays"));
+            return Err(Error::input(
+                path,
+                "trailing bytes after the compiled scene arrays",
+            ));
         }
         let scene = CompiledScene {
             header,
@@ -297,7 +327,9 @@ impl CompiledScene {
             triangle_emitter,
             content_hash: format!("{hash:032x}"),
         };
-        scene.check_consistency().map_err(|m| Error::input(path, m))?;
+        scene
+            .check_consistency()
+            .map_err(|m| Error::input(path, m))?;
         Ok(scene)
     }
 
@@ -310,7 +342,12 @@ impl CompiledScene {
     /// Index bounds and table sizes, so that no stage can index out of range.
     pub fn check_consistency(&self) -> std::result::Result<(), String> {
         let nv = self.positions.len() as u32;
-        if let Some((t, _)) = self.indices.iter().enumerate().find(|(_, tri)| tri.iter().any(|&i| i >= nv)) {
+        if let Some((t, _)) = self
+            .indices
+            .iter()
+            .enumerate()
+            .find(|(_, tri)| tri.iter().any(|&i| i >= nv))
+        {
             return Err(format!("triangle {t} references a vertex beyond {nv}"));
         }
         let nm = self.header.materials.len() as u32;
@@ -318,7 +355,11 @@ impl CompiledScene {
             return Err(format!("triangle {t} references material beyond {nm}"));
         }
         let ne = self.header.emitters.len() as u32;
-        if let Some(t) = self.triangle_emitter.iter().position(|&e| e != NO_EMITTER && e >= ne) {
+        if let Some(t) = self
+            .triangle_emitter
+            .iter()
+            .position(|&e| e != NO_EMITTER && e >= ne)
+        {
             return Err(format!("triangle {t} references emitter beyond {ne}"));
         }
         if self.header.emitter_cdf.len() != self.header.emitters.len() {
@@ -353,14 +394,20 @@ mod tests {
                 camera: None,
                 materials: vec![NamedMaterial {
                     name: "w".into(),
-                    model: Material::Lambertian { reflectance: Rgb::splat(0.5) },
+                    model: Material::Lambertian {
+                        reflectance: Rgb::splat(0.5),
+                    },
                 }],
                 emitters: vec![],
                 emitter_cdf: vec![],
                 objects: vec![],
                 sensors: vec![],
                 features: Features::default(),
-                stats: Stats { vertices: 3, triangles: 1, ..Stats::default() },
+                stats: Stats {
+                    vertices: 3,
+                    triangles: 1,
+                    ..Stats::default()
+                },
             },
             positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
             normals: vec![[0.0; 3]; 3],
@@ -385,9 +432,13 @@ mod tests {
         let mut bytes = s.encode();
         let n = bytes.len();
         bytes[n - 5] ^= 1;
-        let e = CompiledScene::decode(Path::new("t.lxs"), &bytes).unwrap_err().to_string();
+        let e = CompiledScene::decode(Path::new("t.lxs"), &bytes)
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("t.lxs: content hash mismatch"), "{e}");
-        let e = CompiledScene::decode(Path::new("t.lxs"), b"hello").unwrap_err().to_string();
+        let e = CompiledScene::decode(Path::new("t.lxs"), b"hello")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("not a luxest compiled scene"), "{e}");
     }
 

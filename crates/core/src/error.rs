@@ -19,7 +19,10 @@ pub enum Error {
         message: String,
     },
     /// An operating-system error reading or writing a file.
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
@@ -32,7 +35,11 @@ impl Error {
             message: message.into(),
         }
     }
-    pub fn at(path: impl AsRef<Path>, place: impl Into<String>, message: impl Into<String>) -> Error {
+    pub fn at(
+        path: impl AsRef<Path>,
+        place: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Error {
         Error::Input {
             path: path.as_ref().to_path_buf(),
             place: Some(place.into()),

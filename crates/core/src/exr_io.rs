@@ -27,7 +27,10 @@ impl RgbImage {
         }
     }
     pub fn attribute(&self, name: &str) -> Option<&str> {
-        self.attributes.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_str())
+        self.attributes
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_str())
     }
     /// Position of the first non-finite pixel value, if any.
     pub fn first_non_finite(&self) -> Option<(usize, usize)> {
@@ -43,7 +46,12 @@ pub fn write_rgb(path: &Path, image: &RgbImage) -> Result<()> {
     if image.pixels.len() != image.width * image.height || image.width == 0 || image.height == 0 {
         return Err(Error::input(
             path,
-            format!("refusing to write a {}x{} image with {} pixels", image.width, image.height, image.pixels.len()),
+            format!(
+                "refusing to write a {}x{} image with {} pixels",
+                image.width,
+                image.height,
+                image.pixels.len()
+            ),
         ));
     }
     let (w, pixels) = (image.width, &image.pixels);
@@ -53,9 +61,14 @@ pub fn write_rgb(path: &Path, image: &RgbImage) -> Result<()> {
     });
     let mut attributes = LayerAttributes::default();
     for (k, v) in &image.attributes {
-        attributes.other.insert(Text::from(k.as_str()), AttributeValue::Text(Text::from(v.as_str())));
+        attributes.other.insert(
+            Text::from(k.as_str()),
+            AttributeValue::Text(Text::from(v.as_str())),
+        );
     }
-    attributes.software_name = Some(Text::from(format!("luxest {}", crate::meta::PROGRAM_VERSION).as_str()));
+    attributes.software_name = Some(Text::from(
+        format!("luxest {}", crate::meta::PROGRAM_VERSION).as_str(),
+    ));
     let encoding = Encoding {
         compression: Compression::ZIP16,
         blocks: Blocks::ScanLines,
@@ -84,11 +97,24 @@ pub fn read_rgb(path: &Path) -> Result<RgbImage> {
         .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.width(), layer.size.height());
-    let names: Vec<String> = layer.channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    let names: Vec<String> = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
     let find = |want: &str| {
-        layer.channel_data.list.iter().find(|c| c.name.to_string() == want).ok_or_else(|| {
-            Error::input(path, format!("expected channels R, G, B; found {}", names.join(", ")))
-        })
+        layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == want)
+            .ok_or_else(|| {
+                Error::input(
+                    path,
+                    format!("expected channels R, G, B; found {}", names.join(", ")),
+                )
+            })
     };
     let mut pixels = vec![[0f32; 3]; width * height];
     for (k, name) in ["R", "G", "B"].iter().enumerate() {
@@ -97,7 +123,10 @@ pub fn read_rgb(path: &Path) -> Result<RgbImage> {
             FlatSamples::F32(v) => v.clone(),
             FlatSamples::F16(v) => v.iter().map(|h| h.to_f32()).collect(),
             FlatSamples::U32(_) => {
-                return Err(Error::input(path, format!("channel {name} holds integers, expected float")))
+                return Err(Error::input(
+                    path,
+                    format!("channel {name} holds integers, expected float"),
+                ))
             }
         };
         for (p, v) in pixels.iter_mut().zip(values) {

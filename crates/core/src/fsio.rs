@@ -22,7 +22,10 @@ fn temp_sibling(path: &Path) -> PathBuf {
 
 /// Writes `path` atomically: the content produced by `fill` goes to a temporary file which is
 /// renamed into place only if `fill` succeeds; on any failure the temporary is removed.
-pub fn write_atomically(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
+pub fn write_atomically(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> Result<()>,
+) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
@@ -31,7 +34,9 @@ pub fn write_atomically(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result
         let file = std::fs::File::create(&tmp).map_err(|e| Error::io(path, e))?;
         let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
         fill(&mut w)?;
-        let file = w.into_inner().map_err(|e| Error::io(path, e.into_error()))?;
+        let file = w
+            .into_inner()
+            .map_err(|e| Error::io(path, e.into_error()))?;
         file.sync_all().map_err(|e| Error::io(path, e))?;
         std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
     })();
@@ -56,22 +61,31 @@ pub fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 pub fn parse_ron<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
     ron::Options::default()
         .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
-        .from_str(text).map_err(|e| {
-        let place = format!("{}:{}:{}", path.display(), e.span.start.line, e.span.start.col);
-        Error::input(place, e.code.to_string())
-    })
+        .from_str(text)
+        .map_err(|e| {
+            let place = format!(
+                "{}:{}:{}",
+                path.display(),
+                e.span.start.line,
+                e.span.start.col
+            );
+            Error::input(place, e.code.to_string())
+        })
 }
 
 /// Reads and parses a RON file.
 pub fn read_ron<T: DeserializeOwned>(path: &Path) -> Result<T> {
     let bytes = read_bytes(path)?;
-    let text = std::str::from_utf8(&bytes).map_err(|e| Error::input(path, format!("not UTF-8 text: {e}")))?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|e| Error::input(path, format!("not UTF-8 text: {e}")))?;
     parse_ron(path, text)
 }
 
 /// Serialises `value` as pretty RON.
 pub fn to_ron_string<T: Serialize>(value: &T) -> String {
-    let config = ron::ser::PrettyConfig::new().depth_limit(4).struct_names(true);
+    let config = ron::ser::PrettyConfig::new()
+        .depth_limit(4)
+        .struct_names(true);
     // Serialising our own plain data types cannot fail.
     ron::ser::to_string_pretty(value, config).expect("RON serialisation of plain data")
 }
@@ -97,7 +111,11 @@ mod tests {
         });
         assert!(r.is_err());
         assert!(!path.exists());
-        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0, "temporary file left behind");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            0,
+            "temporary file left behind"
+        );
         write_bytes_atomically(&path, b"whole").unwrap();
         assert_eq!(std::fs::read(&path).unwrap(), b"whole");
         std::fs::remove_dir_all(&dir).unwrap();

@@ -33,7 +33,11 @@ impl From<[f32; 3]> for Vec3 {
 }
 
 impl Vec3 {
-    pub const ZERO: Vec3 = Vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    pub const ZERO: Vec3 = Vec3 {
+        x: 0.0,
+        y: 0.0,
+        z: 0.0,
+    };
 
     pub const fn new(x: f64, y: f64, z: f64) -> Self {
         Vec3 { x, y, z }
@@ -173,7 +177,10 @@ impl Affine {
         }
     }
     pub fn translate(t: Vec3) -> Affine {
-        Affine { t, ..Affine::IDENTITY }
+        Affine {
+            t,
+            ..Affine::IDENTITY
+        }
     }
     /// Rotation by `deg` degrees about the coordinate axis `axis` (0 = x, 1 = y, 2 = z), right-handed.
     pub fn rotate_axis(axis: usize, deg: f64) -> Affine {
@@ -214,7 +221,10 @@ impl Affine {
                 *v = (0..3).map(|k| self.m[i][k] * o.m[k][j]).sum();
             }
         }
-        Affine { m, t: self.apply_vector(o.t) + self.t }
+        Affine {
+            m,
+            t: self.apply_vector(o.t) + self.t,
+        }
     }
     pub fn apply_point(&self, p: Vec3) -> Vec3 {
         self.apply_vector(p) + self.t
@@ -260,11 +270,20 @@ mod tests {
     #[test]
     fn rotation_is_right_handed() {
         let r = Affine::rotate_axis(2, 90.0);
-        assert!(close(r.apply_vector(Vec3::new(1.0, 0.0, 0.0)), Vec3::new(0.0, 1.0, 0.0)));
+        assert!(close(
+            r.apply_vector(Vec3::new(1.0, 0.0, 0.0)),
+            Vec3::new(0.0, 1.0, 0.0)
+        ));
         let r = Affine::rotate_axis(0, 90.0);
-        assert!(close(r.apply_vector(Vec3::new(0.0, 1.0, 0.0)), Vec3::new(0.0, 0.0, 1.0)));
+        assert!(close(
+            r.apply_vector(Vec3::new(0.0, 1.0, 0.0)),
+            Vec3::new(0.0, 0.0, 1.0)
+        ));
         let r = Affine::rotate_axis(1, 90.0);
-        assert!(close(r.apply_vector(Vec3::new(0.0, 0.0, 1.0)), Vec3::new(1.0, 0.0, 0.0)));
+        assert!(close(
+            r.apply_vector(Vec3::new(0.0, 0.0, 1.0)),
+            Vec3::new(1.0, 0.0, 0.0)
+        ));
     }
 
     #[test]
@@ -286,13 +305,23 @@ mod tests {
         let t = Affine::translate(Vec3::new(1.0, 0.0, 0.0));
         let s = Affine::scale(Vec3::splat(2.0));
         let p = Vec3::new(1.0, 1.0, 1.0);
-        assert!(close(t.compose(&s).apply_point(p), Vec3::new(3.0, 2.0, 2.0)));
-        assert!(close(s.compose(&t).apply_point(p), Vec3::new(4.0, 2.0, 2.0)));
+        assert!(close(
+            t.compose(&s).apply_point(p),
+            Vec3::new(3.0, 2.0, 2.0)
+        ));
+        assert!(close(
+            s.compose(&t).apply_point(p),
+            Vec3::new(4.0, 2.0, 2.0)
+        ));
     }
 
     #[test]
     fn basis_is_orthonormal() {
-        for n in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, 0.0, -1.0), Vec3::new(0.3, -0.8, 0.1)] {
+        for n in [
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(0.3, -0.8, 0.1),
+        ] {
             let n = n.try_normalize().unwrap();
             let (t, b) = n.orthonormal_basis();
             assert!((t.length() - 1.0).abs() < 1e-12 && (b.length() - 1.0).abs() < 1e-12);

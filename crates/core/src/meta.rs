@@ -63,9 +63,12 @@ impl RunInfo {
         Ok(RunInfo {
             samples: num(KEYS[0])?,
             seed: num(KEYS[1])?,
-            seconds: get(KEYS[2])?
-                .parse()
-                .map_err(|_| Error::input(path, format!("header attribute {} is not a number", KEYS[2])))?,
+            seconds: get(KEYS[2])?.parse().map_err(|_| {
+                Error::input(
+                    path,
+                    format!("header attribute {} is not a number", KEYS[2]),
+                )
+            })?,
             estimator: get(KEYS[3])?.to_string(),
             scene_hash: get(KEYS[4])?.to_string(),
             program_version: get(KEYS[5])?.to_string(),

@@ -86,7 +86,11 @@ fn make_ray(origin: Vec3, direction: Vec3, tnear: f64, tfar: f64) -> sys::RTCRay
         dir_y: direction.y as f32,
         dir_z: direction.z as f32,
         time: 0.0,
-        tfar: if tfar.is_finite() { tfar as f32 } else { f32::INFINITY },
+        tfar: if tfar.is_finite() {
+            tfar as f32
+        } else {
+            f32::INFINITY
+        },
         mask: u32::MAX,
         id: 0,
         flags: 0,
@@ -139,7 +143,9 @@ impl RayTracer {
         unsafe {
             let device = sys::rtcNewDevice(c"verbose=0".as_ptr());
             if device.is_null() {
-                return Err(fail("rtcNewDevice failed (unsupported CPU or missing libembree3?)".into()));
+                return Err(fail(
+                    "rtcNewDevice failed (unsupported CPU or missing libembree3?)".into(),
+                ));
             }
             let scene = sys::rtcNewScene(device);
             let tracer = RayTracer {
@@ -147,7 +153,11 @@ impl RayTracer {
                 scene,
                 triangles: indices.len(),
             };
-            let flags = if robust { sys::RTCSceneFlags::ROBUST } else { sys::RTCSceneFlags::NONE };
+            let flags = if robust {
+                sys::RTCSceneFlags::ROBUST
+            } else {
+                sys::RTCSceneFlags::NONE
+            };
             sys::rtcSetSceneFlags(scene, flags);
             sys::rtcSetSceneBuildQuality(scene, sys::RTCBuildQuality::HIGH);
             if !indices.is_empty() {
@@ -170,7 +180,9 @@ impl RayTracer {
                 ) as *mut [u32; 3];
                 if vb.is_null() || ib.is_null() {
                     sys::rtcReleaseGeometry(geom);
-                    return Err(fail(device_error(device).unwrap_or_else(|| "out of memory".into())));
+                    return Err(fail(
+                        device_error(device).unwrap_or_else(|| "out of memory".into()),
+                    ));
                 }
                 ptr::copy_nonoverlapping(positions.as_ptr(), vb, positions.len());
                 ptr::copy_nonoverlapping(indices.as_ptr(), ib, indices.len());
@@ -245,8 +257,10 @@ impl RayTracer {
 
     /// Visibility for a batch of segments (`rtcOccluded1M`); `out[i]` is true if blocked.
     pub fn occluded_many(&self, rays: &[Ray], out: &mut Vec<bool>) {
-        let mut buf: Vec<sys::RTCRay> =
-            rays.iter().map(|r| make_ray(r.origin, r.direction, r.tnear, r.tfar)).collect();
+        let mut buf: Vec<sys::RTCRay> = rays
+            .iter()
+            .map(|r| make_ray(r.origin, r.direction, r.tnear, r.tfar))
+            .collect();
         let mut ctx = context(false);
         if !buf.is_empty() {
             // SAFETY: `buf` holds `len` contiguous, aligned RTCRay values.
@@ -290,15 +304,38 @@ mod tests {
         enable_flush_to_zero();
         let rt = two_squares();
         let h = rt
-            .intersect(Vec3::new(0.75, 0.25, -2.0), Vec3::new(0.0, 0.0, 1.0), 0.0, f64::INFINITY)
+            .intersect(
+                Vec3::new(0.75, 0.25, -2.0),
+                Vec3::new(0.0, 0.0, 1.0),
+                0.0,
+                f64::INFINITY,
+            )
             .unwrap();
         assert!((h.t - 2.0).abs() < 1e-6);
         assert_eq!(h.triangle, 0);
         // (0.75, 0.25) = (1-u-v) a + u b + v c with a=(0,0), b=(1,0), c=(1,1): u = 0.5, v = 0.25.
         assert!((h.u - 0.5).abs() < 1e-6 && (h.v - 0.25).abs() < 1e-6);
-        assert!(h.geometric_normal.z > 0.0, "front side must be (b-a)x(c-a) = +z, got {:?}", h.geometric_normal);
-        assert!(rt.intersect(Vec3::new(2.0, 2.0, -1.0), Vec3::new(0.0, 0.0, 1.0), 0.0, 10.0).is_none());
-        assert!(rt.intersect(Vec3::new(0.5, 0.5, -2.0), Vec3::new(0.0, 0.0, 1.0), 0.0, 1.5).is_none());
+        assert!(
+            h.geometric_normal.z > 0.0,
+            "front side must be (b-a)x(c-a) = +z, got {:?}",
+            h.geometric_normal
+        );
+        assert!(rt
+            .intersect(
+                Vec3::new(2.0, 2.0, -1.0),
+                Vec3::new(0.0, 0.0, 1.0),
+                0.0,
+                10.0
+            )
+            .is_none());
+        assert!(rt
+            .intersect(
+                Vec3::new(0.5, 0.5, -2.0),
+                Vec3::new(0.0, 0.0, 1.0),
+                0.0,
+                1.5
+            )
+            .is_none());
     }
 
     #[test]
@@ -319,13 +356,21 @@ mod tests {
         for _ in 0..1000 {
             let origin = Vec3::new(r.next_f64() * 2.0 - 0.5, r.next_f64() * 2.0 - 0.5, 0.5);
             let direction = crate::sampling::uniform_sphere(r.next_f64(), r.next_f64());
-            rays.push(Ray { origin, direction, tnear: 0.0, tfar: 3.0 });
+            rays.push(Ray {
+                origin,
+                direction,
+                tnear: 0.0,
+                tfar: 3.0,
+            });
         }
         let (mut hits, mut occ) = (Vec::new(), Vec::new());
         rt.intersect_many(&rays, &mut hits);
         rt.occluded_many(&rays, &mut occ);
         for (i, ray) in rays.iter().enumerate() {
-            assert_eq!(hits[i], rt.intersect(ray.origin, ray.direction, ray.tnear, ray.tfar));
+            assert_eq!(
+                hits[i],
+                rt.intersect(ray.origin, ray.direction, ray.tnear, ray.tfar)
+            );
             assert_eq!(occ[i], hits[i].is_some());
         }
     }
@@ -333,6 +378,8 @@ mod tests {
     #[test]
     fn empty_scene_hits_nothing() {
         let rt = RayTracer::new(&[], &[], false).unwrap();
-        assert!(rt.intersect(Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), 0.0, f64::INFINITY).is_none());
+        assert!(rt
+            .intersect(Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), 0.0, f64::INFINITY)
+            .is_none());
     }
 }

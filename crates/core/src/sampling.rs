@@ -77,7 +77,7 @@ impl Distribution1D {
                 acc
             })
             .collect();
-        if !(acc > 0.0) {
+        if acc <= 0.0 || !acc.is_finite() {
             return None;
         }
         for c in &mut cdf {
@@ -112,7 +112,10 @@ impl Distribution1D {
     }
     /// Index with probability `pmf(index)` for `u` uniform in [0, 1), never a zero-weight entry.
     pub fn sample(&self, u: f64) -> (usize, f64) {
-        let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.cdf.len() - 1);
         (i, self.pmf(i))
     }
 }
@@ -170,14 +173,23 @@ mod tests {
     fn assert_chi_square_ok(observed: &[f64], expected: &[f64]) {
         let (stat, dof) = chi_square(observed, expected);
         let limit = dof as f64 + 5.0 * (2.0 * dof as f64).sqrt();
-        assert!(stat < limit, "chi-square {stat:.1} with {dof} dof exceeds {limit:.1}");
+        assert!(
+            stat < limit,
+            "chi-square {stat:.1} with {dof} dof exceeds {limit:.1}"
+        );
     }
 
     #[test]
     fn same_seed_same_sequence_and_streams_differ() {
-        let a: Vec<u32> = (0..8).scan(Rng::new(7, 3), |r, _| Some(r.next_u32())).collect();
-        let b: Vec<u32> = (0..8).scan(Rng::new(7, 3), |r, _| Some(r.next_u32())).collect();
-        let c: Vec<u32> = (0..8).scan(Rng::new(7, 4), |r, _| Some(r.next_u32())).collect();
+        let a: Vec<u32> = (0..8)
+            .scan(Rng::new(7, 3), |r, _| Some(r.next_u32()))
+            .collect();
+        let b: Vec<u32> = (0..8)
+            .scan(Rng::new(7, 3), |r, _| Some(r.next_u32()))
+            .collect();
+        let c: Vec<u32> = (0..8)
+            .scan(Rng::new(7, 4), |r, _| Some(r.next_u32()))
+            .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
     }
@@ -246,12 +258,21 @@ mod tests {
         for _ in 0..n {
             let d = uniform_sphere(r.next_f64(), r.next_f64());
             let zi = (((d.z + 1.0) / 2.0 * nz as f64) as usize).min(nz - 1);
-            let pi = ((d.y.atan2(d.x).rem_euclid(2.0 * PI) / (2.0 * PI) * np as f64) as usize).min(np - 1);
+            let pi = ((d.y.atan2(d.x).rem_euclid(2.0 * PI) / (2.0 * PI) * np as f64) as usize)
+                .min(np - 1);
             counts[zi * np + pi] += 1.0;
             // The midpoint subdivision of a triangle gives 4 sub-triangles of equal area.
             let (b1, b2) = uniform_triangle(r.next_f64(), r.next_f64());
             let b0 = 1.0 - b1 - b2;
-            let k = if b0 > 0.5 { 0 } else if b1 > 0.5 { 1 } else if b2 > 0.5 { 2 } else { 3 };
+            let k = if b0 > 0.5 {
+                0
+            } else if b1 > 0.5 {
+                1
+            } else if b2 > 0.5 {
+                2
+            } else {
+                3
+            };
             tri[k] += 1.0;
         }
         assert_chi_square_ok(&counts, &vec![n as f64 / (nz * np) as f64; nz * np]);

@@ -68,7 +68,11 @@ pub enum Material {
     /// A diffuse base plus a GGX microfacet specular lobe:
     /// f = diffuse/pi + specular * D_GGX(alpha = roughness²) G / (4 cos_i cos_o).
     /// Energy-bounded by requiring diffuse + specular <= 1 per channel.
-    Glossy { diffuse: Rgb, specular: Rgb, roughness: f64 },
+    Glossy {
+        diffuse: Rgb,
+        specular: Rgb,
+        roughness: f64,
+    },
 }
 
 /// The kind of a material, as listed in the features manifest.
@@ -210,7 +214,10 @@ pub enum PointPower {
 #[serde(deny_unknown_fields)]
 pub enum Sensor {
     /// Explicit points, each with its own normal.
-    Points { name: String, points: Vec<SensorPoint> },
+    Points {
+        name: String,
+        points: Vec<SensorPoint>,
+    },
     /// A rectangular grid of `counts.0 x counts.1` cells over the parallelogram
     /// `corner + s u + t v`; one sensor at each cell centre, facing `normal`
     /// (default: `u x v`).

@@ -12,7 +12,8 @@ pub mod validate;
 
 use clap::Parser;
 use luxest_core::compiled::{
-    CompiledScene, Emitter, Features, NamedMaterial, ObjectRange, SceneHeader, SensorSet, Stats, NO_EMITTER,
+    CompiledScene, Emitter, Features, NamedMaterial, ObjectRange, SceneHeader, SensorSet, Stats,
+    NO_EMITTER,
 };
 use luxest_core::math::Vec3;
 use luxest_core::scene::{Emission, Material, PointPower, Scene, Sensor, SensorPoint, Shape};
@@ -71,7 +72,12 @@ pub fn run(args: Args) -> Result<()> {
             s.triangles,
             s.vertices,
             scene.header.emitters.len(),
-            scene.header.sensors.iter().map(|x| x.points.len()).sum::<usize>(),
+            scene
+                .header
+                .sensors
+                .iter()
+                .map(|x| x.points.len())
+                .sum::<usize>(),
             scene.content_hash
         )
     };
@@ -81,9 +87,11 @@ pub fn run(args: Args) -> Result<()> {
         }
         return Ok(());
     }
-    let out = args
-        .out
-        .unwrap_or_else(|| Path::new("build").join(&scene.header.name).join("scene.lxs"));
+    let out = args.out.unwrap_or_else(|| {
+        Path::new("build")
+            .join(&scene.header.name)
+            .join("scene.lxs")
+    });
     luxest_core::fsio::write_bytes_atomically(&out, &bytes)?;
     if !args.quiet {
         eprintln!("wrote {} ({summary})", out.display());
@@ -115,19 +123,21 @@ struct Builder {
 /// edges. Below this the triangle is numerically a line and is dropped.
 const DEGENERATE_SINE: f64 = 1e-9;
 
+/// How one object's local mesh enters the world.
+struct Placement<'a> {
+    /// Where the object is in the scene file, for messages.
+    place: &'a str,
+    transform: luxest_core::math::Affine,
+    flip: bool,
+    material: u32,
+    emitter: u32,
+}
+
 impl Builder {
     /// Transforms `mesh` to world space and appends its non-degenerate triangles; returns
     /// (triangles added, their area, triangles dropped).
-    fn add(
-        &mut self,
-        path: &Path,
-        place: &str,
-        mesh: LocalMesh,
-        transform: &luxest_core::math::Affine,
-        flip: bool,
-        material: u32,
-        emitter: u32,
-    ) -> Result<(u32, f64, u64)> {
+    fn add(&mut self, path: &Path, mesh: LocalMesh, at: &Placement) -> Result<(u32, f64, u64)> {
+        let (place, transform, flip) = (at.place, &at.transform, at.flip);
         let det = transform.determinant();
         // Mirroring transforms reverse the winding; undo that so the front side stays the one
         // the author meant, and flip on request.
@@ -140,7 +150,11 @@ impl Builder {
         for (i, p) in mesh.positions.iter().enumerate() {
             let w = transform.apply_point(*p).to_f32();
             if !w.iter().all(|c| c.is_finite()) {
-                return Err(Error::at(path, place, format!("vertex {i} is not finite in world space (scale overflow)")));
+                return Err(Error::at(
+                    path,
+                    place,
+                    format!("vertex {i} is not finite in world space (scale overflow)"),
+                ));
             }
             self.positions.push(w);
         }
@@ -149,7 +163,9 @@ impl Builder {
                 let w = transform.apply_normal(*n) * normal_sign;
                 w.try_normalize().map(|u| u.to_f32()).unwrap_or([0.0; 3])
             })),
-            None => self.normals.extend(std::iter::repeat_n([0.0f32; 3], mesh.positions.len())),
+            None => self
+                .normals
+                .extend(std::iter::repeat_n([0.0f32; 3], mesh.positions.len())),
         }
         let (mut added, mut area, mut dropped) = (0u32, 0.0, 0u64);
         for t in &mesh.triangles {
@@ -169,8 +185,8 @@ impl Builder {
                 self.bounds_max = self.bounds_max.max(p);
             }
             self.indices.push(tri);
-            self.triangle_material.push(material);
-            self.triangle_emitter.push(emitter);
+            self.triangle_material.push(at.material);
+            self.triangle_emitter.push(at.emitter);
             area += 0.5 * cross;
             added += 1;
         }
@@ -186,14 +202,21 @@ fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMes
         if full.is_file() {
             Ok(full)
         } else {
-            Err(Error::at(scene_path, format!("{place}.shape.path"), format!("mesh file {} not found", full.display())))
+            Err(Error::at(
+                scene_path,
+                format!("{place}.shape.path"),
+                format!("mesh file {} not found", full.display()),
+            ))
         }
     };
     Ok(match shape {
         Shape::Quad { corner, u, v } => shapes::quad(*corner, *u, *v),
         Shape::Polygon { vertices } => shapes::polygon(vertices),
         Shape::Box { size } => shapes::cuboid(*size),
-        Shape::Sphere { radius, subdivisions } => shapes::icosphere(*radius, *subdivisions),
+        Shape::Sphere {
+            radius,
+            subdivisions,
+        } => shapes::icosphere(*radius, *subdivisions),
         Shape::Obj { path } => meshes::load_obj(&resolve(path)?)?,
         Shape::Gltf { path } => meshes::load_gltf(&resolve(path)?)?,
     })
@@ -220,7 +243,10 @@ fn expand_sensor(s: &Sensor) -> SensorSet {
             counts,
             normal,
         } => {
-            let n = normal.unwrap_or_else(|| u.cross(*v)).try_normalize().expect("validated");
+            let n = normal
+                .unwrap_or_else(|| u.cross(*v))
+                .try_normalize()
+                .expect("validated");
             let (nu, nv) = *counts;
             let mut points = Vec::with_capacity((nu * nv) as usize);
             for j in 0..nv {
@@ -246,8 +272,12 @@ fn expand_sensor(s: &Sensor) -> SensorSet {
 pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     validate::check_scene(path, scene)?;
     let mut report = Report::default();
-    let material_index: std::collections::BTreeMap<&str, u32> =
-        scene.materials.keys().enumerate().map(|(i, k)| (k.as_str(), i as u32)).collect();
+    let material_index: std::collections::BTreeMap<&str, u32> = scene
+        .materials
+        .keys()
+        .enumerate()
+        .map(|(i, k)| (k.as_str(), i as u32))
+        .collect();
     let mut b = Builder {
         bounds_min: Vec3::splat(f64::INFINITY),
         bounds_max: Vec3::splat(f64::NEG_INFINITY),
@@ -260,9 +290,20 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         let name = o.name.clone().unwrap_or_else(|| place.clone());
         let mesh = object_mesh(path, &place, &o.shape)?;
         let material = material_index[o.material.as_str()];
-        let emitter = if o.emission.is_some() { emitters.len() as u32 } else { NO_EMITTER };
+        let emitter = if o.emission.is_some() {
+            emitters.len() as u32
+        } else {
+            NO_EMITTER
+        };
         let first = b.indices.len() as u32;
-        let (count, area, dropped) = b.add(path, &place, mesh, &o.transform.to_affine(), o.flip_normals, material, emitter)?;
+        let placement = Placement {
+            place: &place,
+            transform: o.transform.to_affine(),
+            flip: o.flip_normals,
+            material,
+            emitter,
+        };
+        let (count, area, dropped) = b.add(path, mesh, &placement)?;
         if dropped > 0 {
             report.warnings.push(format!(
                 "{}: {place} ({name}): dropped {dropped} degenerate triangle{}",
@@ -271,13 +312,19 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             ));
         }
         if count == 0 {
-            return Err(Error::at(path, &place, "object has no non-degenerate triangles"));
+            return Err(Error::at(
+                path,
+                &place,
+                "object has no non-degenerate triangles",
+            ));
         }
         if let Some(e) = &o.emission {
             let radiance_rgb = match e {
                 Emission::Radiance(l) => *l,
                 // L = flux / (pi A) for a Lambertian emitter radiating from one side.
-                Emission::Flux { lumens, color } => color.with_luminance(lumens / (PI * area)).expect("validated"),
+                Emission::Flux { lumens, color } => color
+                    .with_luminance(lumens / (PI * area))
+                    .expect("validated"),
             };
             emitters.push(Emitter::Area {
                 name: name.clone(),
@@ -304,7 +351,10 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         };
         let intensity_rgb = l.color.with_luminance(intensity).expect("validated");
         emitters.push(Emitter::Point {
-            name: l.name.clone().unwrap_or_else(|| format!("point_lights[{i}]")),
+            name: l
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("point_lights[{i}]")),
             position: l.position,
             intensity_rgb,
             flux_rgb: intensity_rgb * (4.0 * PI),
@@ -327,7 +377,11 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         .collect();
     for (i, m) in materials.iter().enumerate() {
         if !used.contains(&(i as u32)) {
-            report.warnings.push(format!("{}: materials[\"{}\"]: unused", path.display(), m.name));
+            report.warnings.push(format!(
+                "{}: materials[\"{}\"]: unused",
+                path.display(),
+                m.name
+            ));
         }
     }
     let used_models: Vec<&Material> = used.iter().map(|&i| &materials[i as usize].model).collect();
@@ -348,7 +402,9 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         sensors: !scene.sensors.is_empty(),
     };
     let name = scene.name.clone().unwrap_or_else(|| {
-        path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into())
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scene".into())
     });
     let stats = Stats {
         vertices: b.positions.len() as u64,
@@ -379,6 +435,8 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         triangle_emitter: b.triangle_emitter,
         content_hash: String::new(),
     };
-    compiled.check_consistency().map_err(|m| Error::input(path, m))?;
+    compiled
+        .check_consistency()
+        .map_err(|m| Error::input(path, m))?;
     Ok((compiled, report))
 }

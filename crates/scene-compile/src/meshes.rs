@@ -30,7 +30,10 @@ impl<R: BufRead> BufRead for LineCounter<R> {
     }
     fn consume(&mut self, amt: usize) {
         if let Ok(buf) = self.inner.fill_buf() {
-            self.newlines += buf[..amt.min(buf.len())].iter().filter(|&&b| b == b'\n').count();
+            self.newlines += buf[..amt.min(buf.len())]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count();
         }
         self.inner.consume(amt);
     }
@@ -48,10 +51,11 @@ pub fn load_obj(path: &Path) -> Result<LocalMesh> {
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     // Material libraries are ignored: the scene assigns materials.
-    let loaded = tobj::load_obj_buf(&mut reader, &options, |_| Err(tobj::LoadError::OpenFileFailed));
+    let loaded = tobj::load_obj_buf(&mut reader, &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    });
     let models = match loaded {
         Ok((models, _materials)) => models,
         Err(e) => {
@@ -69,7 +73,11 @@ pub fn load_obj(path: &Path) -> Result<LocalMesh> {
                     | ScalingByZeroError
             );
             return Err(if per_line {
-                Error::at(path, format!("line {}", reader.newlines.max(1)), format!("malformed OBJ: {e}"))
+                Error::at(
+                    path,
+                    format!("line {}", reader.newlines.max(1)),
+                    format!("malformed OBJ: {e}"),
+                )
             } else {
                 Error::input(path, format!("malformed OBJ: {e}"))
             });
@@ -101,9 +109,16 @@ pub fn load_obj(path: &Path) -> Result<LocalMesh> {
                 .collect::<Vec<_>>()
         });
         if m.indices.iter().any(|&i| i as usize >= nv) {
-            return Err(Error::input(path, format!("object '{}' has a face index out of range", model.name)));
+            return Err(Error::input(
+                path,
+                format!("object '{}' has a face index out of range", model.name),
+            ));
         }
-        let triangles = m.indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let triangles = m
+            .indices
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
         mesh.append(LocalMesh {
             positions,
             normals,
@@ -151,25 +166,36 @@ fn decode_base64(s: &str) -> Option<Vec<u8>> {
 /// Loads all triangle meshes of a glTF file's default scene, node transforms applied.
 pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
     let bytes = luxest_core::fsio::read_bytes(path)?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| Error::input(path, format!("malformed glTF: {e}")))?;
+    let gltf = gltf::Gltf::from_slice(&bytes)
+        .map_err(|e| Error::input(path, format!("malformed glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
     let mut buffers: Vec<Vec<u8>> = Vec::new();
     for buffer in gltf.document.buffers() {
         let data = match buffer.source() {
-            gltf::buffer::Source::Bin => gltf
-                .blob
-                .clone()
-                .ok_or_else(|| Error::input(path, "glTF refers to a binary chunk that the file does not have"))?,
+            gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
+                Error::input(
+                    path,
+                    "glTF refers to a binary chunk that the file does not have",
+                )
+            })?,
             gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                 let payload = uri.split_once(";base64,").map(|(_, d)| d);
                 payload.and_then(decode_base64).ok_or_else(|| {
-                    Error::at(path, format!("buffer {}", buffer.index()), "malformed base64 data URI")
+                    Error::at(
+                        path,
+                        format!("buffer {}", buffer.index()),
+                        "malformed base64 data URI",
+                    )
                 })?
             }
             gltf::buffer::Source::Uri(uri) => {
                 let file = base.join(uri);
                 std::fs::read(&file).map_err(|e| {
-                    Error::at(path, format!("buffer {}", buffer.index()), format!("{}: {e}", file.display()))
+                    Error::at(
+                        path,
+                        format!("buffer {}", buffer.index()),
+                        format!("{}: {e}", file.display()),
+                    )
                 })?
             }
         };
@@ -177,7 +203,11 @@ pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
             return Err(Error::at(
                 path,
                 format!("buffer {}", buffer.index()),
-                format!("has {} bytes, the file declares {}", data.len(), buffer.length()),
+                format!(
+                    "has {} bytes, the file declares {}",
+                    data.len(),
+                    buffer.length()
+                ),
             ));
         }
         buffers.push(data);
@@ -191,7 +221,8 @@ pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
         normals: Some(Vec::new()),
         ..Default::default()
     };
-    let mut stack: Vec<(gltf::Node, Affine)> = scene.nodes().map(|n| (n, Affine::IDENTITY)).collect();
+    let mut stack: Vec<(gltf::Node, Affine)> =
+        scene.nodes().map(|n| (n, Affine::IDENTITY)).collect();
     while let Some((node, parent)) = stack.pop() {
         let world = parent.compose(&Affine::from_cols4(node.transform().matrix()));
         for child in node.children() {
@@ -201,36 +232,59 @@ pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
         for prim in gmesh.primitives() {
             let place = format!("mesh {} primitive {}", gmesh.index(), prim.index());
             if prim.mode() != gltf::mesh::Mode::Triangles {
-                return Err(Error::at(path, place, format!("primitive mode {:?} is not supported (only triangles)", prim.mode())));
+                return Err(Error::at(
+                    path,
+                    place,
+                    format!(
+                        "primitive mode {:?} is not supported (only triangles)",
+                        prim.mode()
+                    ),
+                ));
             }
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
             let positions: Vec<Vec3> = reader
                 .read_positions()
                 .ok_or_else(|| Error::at(path, &place, "primitive has no POSITION attribute"))?
-                .map(|p| Vec3::from(p))
+                .map(Vec3::from)
                 .collect();
             if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-                return Err(Error::at(path, format!("{place} vertex {i}"), "non-finite coordinate"));
+                return Err(Error::at(
+                    path,
+                    format!("{place} vertex {i}"),
+                    "non-finite coordinate",
+                ));
             }
             let nv = positions.len() as u32;
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(ix) => ix.into_u32().collect(),
                 None => (0..nv).collect(),
             };
-            if indices.len() % 3 != 0 || indices.iter().any(|&i| i >= nv) {
-                return Err(Error::at(path, place, "index list is not a whole number of in-range triangles"));
+            if !indices.len().is_multiple_of(3) || indices.iter().any(|&i| i >= nv) {
+                return Err(Error::at(
+                    path,
+                    place,
+                    "index list is not a whole number of in-range triangles",
+                ));
             }
-            let normals = reader.read_normals().map(|n| n.map(Vec3::from).collect::<Vec<_>>());
+            let normals = reader
+                .read_normals()
+                .map(|n| n.map(Vec3::from).collect::<Vec<_>>());
             let normals = normals.filter(|n| n.len() == positions.len());
             // Node transform to the file's root frame; the object transform follows later.
             let det = world.determinant();
-            let positions = positions.into_iter().map(|p| world.apply_point(p)).collect();
+            let positions = positions
+                .into_iter()
+                .map(|p| world.apply_point(p))
+                .collect();
             let normals = normals.map(|n| {
                 n.into_iter()
                     .map(|v| world.apply_normal(v) * det.signum())
                     .collect::<Vec<_>>()
             });
-            let mut triangles: Vec<[u32; 3]> = indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+            let mut triangles: Vec<[u32; 3]> = indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect();
             if det < 0.0 {
                 triangles.iter_mut().for_each(|t| t.swap(1, 2));
             }
@@ -253,7 +307,13 @@ mod tests {
 
     #[test]
     fn base64_decodes_rfc4648_vectors() {
-        for (enc, dec) in [("", ""), ("Zg==", "f"), ("Zm8=", "fo"), ("Zm9v", "foo"), ("Zm9vYmFy", "foobar")] {
+        for (enc, dec) in [
+            ("", ""),
+            ("Zg==", "f"),
+            ("Zm8=", "fo"),
+            ("Zm9v", "foo"),
+            ("Zm9vYmFy", "foobar"),
+        ] {
             assert_eq!(decode_base64(enc).unwrap(), dec.as_bytes());
         }
         assert!(decode_base64("Zm9v!").is_none());

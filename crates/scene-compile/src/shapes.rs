@@ -16,7 +16,8 @@ impl LocalMesh {
     /// Appends `other`, keeping normals only if both have them (else flat everywhere).
     pub fn append(&mut self, other: LocalMesh) {
         let base = self.positions.len() as u32;
-        let keep_normals = (self.positions.is_empty() || self.normals.is_some()) && other.normals.is_some();
+        let keep_normals =
+            (self.positions.is_empty() || self.normals.is_some()) && other.normals.is_some();
         if keep_normals {
             let mut n = self.normals.take().unwrap_or_default();
             n.extend(other.normals.unwrap());
@@ -25,7 +26,8 @@ impl LocalMesh {
             self.normals = None;
         }
         self.positions.extend(other.positions);
-        self.triangles.extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
     }
 }
 
@@ -43,7 +45,9 @@ pub fn polygon(vertices: &[Vec3]) -> LocalMesh {
     LocalMesh {
         positions: vertices.to_vec(),
         normals: None,
-        triangles: (1..vertices.len().saturating_sub(1) as u32).map(|i| [0, i, i + 1]).collect(),
+        triangles: (1..vertices.len().saturating_sub(1) as u32)
+            .map(|i| [0, i, i + 1])
+            .collect(),
     }
 }
 
@@ -123,7 +127,9 @@ pub fn icosphere(radius: f64, level: u32) -> LocalMesh {
         let mut midpoint = |a: u32, b: u32, pos: &mut Vec<Vec3>| {
             let key = (a.min(b), a.max(b));
             *cache.entry(key).or_insert_with(|| {
-                let m = ((pos[a as usize] + pos[b as usize]) * 0.5).try_normalize().unwrap();
+                let m = ((pos[a as usize] + pos[b as usize]) * 0.5)
+                    .try_normalize()
+                    .unwrap();
                 pos.push(m);
                 (pos.len() - 1) as u32
             })

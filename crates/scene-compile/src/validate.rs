@@ -3,7 +3,9 @@
 
 use luxest_core::color::Rgb;
 use luxest_core::math::Vec3;
-use luxest_core::scene::{Camera, Emission, Material, PointLight, PointPower, Scene, Sensor, Shape};
+use luxest_core::scene::{
+    Camera, Emission, Material, PointLight, PointPower, Scene, Sensor, Shape,
+};
 use luxest_core::{Error, Result};
 use std::path::Path;
 
@@ -35,7 +37,8 @@ impl Check<'_> {
     }
     fn nonzero_vec(&self, place: &str, v: Vec3) -> Result<Vec3> {
         self.vec(place, v)?;
-        v.try_normalize().ok_or_else(|| self.fail(place, "must not be the zero vector"))
+        v.try_normalize()
+            .ok_or_else(|| self.fail(place, "must not be the zero vector"))
     }
     fn rgb_in(&self, place: &str, c: Rgb, lo: f64, hi: f64, what: &str) -> Result<()> {
         for (i, v) in c.0.into_iter().enumerate() {
@@ -77,20 +80,30 @@ fn check_camera(c: &Check, cam: &Camera) -> Result<()> {
     }
     c.finite("camera.vfov_deg", cam.vfov_deg)?;
     if !(cam.vfov_deg > 0.0 && cam.vfov_deg < 180.0) {
-        return Err(c.fail("camera.vfov_deg", format!("{} is outside (0, 180)", cam.vfov_deg)));
+        return Err(c.fail(
+            "camera.vfov_deg",
+            format!("{} is outside (0, 180)", cam.vfov_deg),
+        ));
     }
     let (w, h) = cam.resolution;
     if w == 0 || h == 0 || w > MAX_RESOLUTION || h > MAX_RESOLUTION {
-        return Err(c.fail("camera.resolution", format!("{w}x{h} is outside 1..={MAX_RESOLUTION} per side")));
+        return Err(c.fail(
+            "camera.resolution",
+            format!("{w}x{h} is outside 1..={MAX_RESOLUTION} per side"),
+        ));
     }
     Ok(())
 }
 
 fn check_material(c: &Check, place: &str, m: &Material) -> Result<()> {
     match m {
-        Material::Lambertian { reflectance } | Material::Mirror { reflectance } => {
-            c.rgb_in(&format!("{place}.reflectance"), *reflectance, 0.0, 1.0, "reflectance")
-        }
+        Material::Lambertian { reflectance } | Material::Mirror { reflectance } => c.rgb_in(
+            &format!("{place}.reflectance"),
+            *reflectance,
+            0.0,
+            1.0,
+            "reflectance",
+        ),
         Material::Dielectric { ior } => {
             c.positive(&format!("{place}.ior"), *ior, "index of refraction")?;
             if *ior > 10.0 {
@@ -103,17 +116,35 @@ fn check_material(c: &Check, place: &str, m: &Material) -> Result<()> {
             specular,
             roughness,
         } => {
-            c.rgb_in(&format!("{place}.diffuse"), *diffuse, 0.0, 1.0, "reflectance")?;
-            c.rgb_in(&format!("{place}.specular"), *specular, 0.0, 1.0, "reflectance")?;
+            c.rgb_in(
+                &format!("{place}.diffuse"),
+                *diffuse,
+                0.0,
+                1.0,
+                "reflectance",
+            )?;
+            c.rgb_in(
+                &format!("{place}.specular"),
+                *specular,
+                0.0,
+                1.0,
+                "reflectance",
+            )?;
             if let Some(i) = (0..3).find(|&i| diffuse.0[i] + specular.0[i] > 1.0) {
                 return Err(c.fail(
                     place,
-                    format!("diffuse + specular = {} in channel {i} exceeds 1 (not energy conserving)", diffuse.0[i] + specular.0[i]),
+                    format!(
+                        "diffuse + specular = {} in channel {i} exceeds 1 (not energy conserving)",
+                        diffuse.0[i] + specular.0[i]
+                    ),
                 ));
             }
             c.finite(&format!("{place}.roughness"), *roughness)?;
             if !(*roughness > 0.0 && *roughness <= 1.0) {
-                return Err(c.fail(&format!("{place}.roughness"), format!("{roughness} is outside (0, 1]")));
+                return Err(c.fail(
+                    &format!("{place}.roughness"),
+                    format!("{roughness} is outside (0, 1]"),
+                ));
             }
             Ok(())
         }
@@ -127,7 +158,10 @@ fn check_point_light(c: &Check, place: &str, l: &PointLight) -> Result<()> {
     };
     c.finite(&format!("{place}.power"), v)?;
     if v <= 0.0 {
-        return Err(c.fail(&format!("{place}.power"), format!("emitter power must be positive, got {v}")));
+        return Err(c.fail(
+            &format!("{place}.power"),
+            format!("emitter power must be positive, got {v}"),
+        ));
     }
     c.emission_rgb(&format!("{place}.color"), l.color)
 }
@@ -158,7 +192,10 @@ fn check_sensor(c: &Check, place: &str, s: &Sensor) -> Result<()> {
                 return Err(c.fail(place, "u and v are parallel"));
             }
             if counts.0 == 0 || counts.1 == 0 || (counts.0 as u64) * (counts.1 as u64) > 1 << 24 {
-                return Err(c.fail(&format!("{place}.counts"), format!("{counts:?} must be positive, at most 2^24 points")));
+                return Err(c.fail(
+                    &format!("{place}.counts"),
+                    format!("{counts:?} must be positive, at most 2^24 points"),
+                ));
             }
             if let Some(n) = normal {
                 c.nonzero_vec(&format!("{place}.normal"), *n)?;
@@ -180,14 +217,20 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
     for (i, o) in scene.objects.iter().enumerate() {
         let place = format!("objects[{i}]");
         if !scene.materials.contains_key(&o.material) {
-            return Err(c.fail(&format!("{place}.material"), format!("unknown material \"{}\"", o.material)));
+            return Err(c.fail(
+                &format!("{place}.material"),
+                format!("unknown material \"{}\"", o.material),
+            ));
         }
         let t = &o.transform;
         c.vec(&format!("{place}.transform.scale"), t.scale)?;
         c.vec(&format!("{place}.transform.rotate_deg"), t.rotate_deg)?;
         c.vec(&format!("{place}.transform.translate"), t.translate)?;
         if t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0 {
-            return Err(c.fail(&format!("{place}.transform.scale"), "has a zero component (flattens the object)"));
+            return Err(c.fail(
+                &format!("{place}.transform.scale"),
+                "has a zero component (flattens the object)",
+            ));
         }
         match &o.shape {
             Shape::Quad { corner, u, v } => {
@@ -197,7 +240,10 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
             }
             Shape::Polygon { vertices } => {
                 if vertices.len() < 3 {
-                    return Err(c.fail(&format!("{place}.shape.vertices"), "a polygon needs at least 3 vertices"));
+                    return Err(c.fail(
+                        &format!("{place}.shape.vertices"),
+                        "a polygon needs at least 3 vertices",
+                    ));
                 }
                 for (k, v) in vertices.iter().enumerate() {
                     c.vec(&format!("{place}.shape.vertices[{k}]"), *v)?;
@@ -206,10 +252,16 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
             Shape::Box { size } => {
                 c.vec(&format!("{place}.shape.size"), *size)?;
                 if size.x <= 0.0 || size.y <= 0.0 || size.z <= 0.0 {
-                    return Err(c.fail(&format!("{place}.shape.size"), "box edge lengths must be positive"));
+                    return Err(c.fail(
+                        &format!("{place}.shape.size"),
+                        "box edge lengths must be positive",
+                    ));
                 }
             }
-            Shape::Sphere { radius, subdivisions } => {
+            Shape::Sphere {
+                radius,
+                subdivisions,
+            } => {
                 c.positive(&format!("{place}.shape.radius"), *radius, "radius")?;
                 if *subdivisions > MAX_SPHERE_SUBDIVISIONS {
                     return Err(c.fail(
@@ -226,7 +278,10 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
             Some(Emission::Flux { lumens, color }) => {
                 c.finite(&format!("{place}.emission.lumens"), *lumens)?;
                 if *lumens <= 0.0 {
-                    return Err(c.fail(&format!("{place}.emission.lumens"), format!("emitter power must be positive, got {lumens}")));
+                    return Err(c.fail(
+                        &format!("{place}.emission.lumens"),
+                        format!("emitter power must be positive, got {lumens}"),
+                    ));
                 }
                 c.emission_rgb(&format!("{place}.emission.color"), *color)?;
             }
@@ -236,7 +291,10 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
         check_point_light(&c, &format!("point_lights[{i}]"), l)?;
     }
     if scene.point_lights.is_empty() && scene.objects.iter().all(|o| o.emission.is_none()) {
-        return Err(Error::input(path, "scene has no emitter (no point light and no object with emission)"));
+        return Err(Error::input(
+            path,
+            "scene has no emitter (no point light and no object with emission)",
+        ));
     }
     let mut names = std::collections::BTreeSet::new();
     for (i, s) in scene.sensors.iter().enumerate() {
@@ -245,7 +303,10 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
             Sensor::Points { name, .. } | Sensor::Grid { name, .. } => name,
         };
         if !names.insert(name.clone()) {
-            return Err(c.fail(&format!("{place}.name"), format!("duplicate sensor name \"{name}\"")));
+            return Err(c.fail(
+                &format!("{place}.name"),
+                format!("duplicate sensor name \"{name}\""),
+            ));
         }
         check_sensor(&c, &place, s)?;
     }

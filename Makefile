@@ -1,0 +1,51 @@
+# luxest pipeline. Every stage is called through a variable so that a researcher can swap one
+# for their own program (e.g. `make scenes SCENE_COMPILE=./my-compiler`), as long as it honours
+# the contracts in ARCHITECTURE.md.
+#
+#   make run       compile the default scene (cornell-box) and print its manifest
+#   make scenes    compile every scene in scenes/ into build/<name>/scene.lxs
+#   make test      formatting, lints and all tests
+#   make bench     benchmarks (1M-triangle compile + load)
+#
+# Stages of later milestones (trace, estimate, denoise, evaluate; `make reference noisy train
+# eval validate`) are added with their crates; they are not faked here.
+
+PRESET ?= quick
+CARGO ?= cargo
+RELEASE := target/release
+DEFAULT_SCENE ?= cornell-box
+
+SCENE_COMPILE ?= $(RELEASE)/scene-compile
+
+SCENES := $(basename $(notdir $(wildcard scenes/*.ron)))
+COMPILED := $(patsubst %,build/%/scene.lxs,$(SCENES))
+RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml Cargo.lock
+MESHES := $(wildcard scenes/meshes/*)
+
+.PHONY: run scenes test lint bench clean
+
+run: build/$(DEFAULT_SCENE)/scene.lxs
+	$(SCENE_COMPILE) --info $<
+
+scenes: $(COMPILED)
+
+$(RELEASE)/scene-compile: $(RUST_SOURCES)
+	$(CARGO) build --release -p scene-compile
+	@touch $@
+
+# The compiled scene depends on its source, the meshes it may load and the compiler.
+build/%/scene.lxs: scenes/%.ron $(MESHES) $(SCENE_COMPILE)
+	$(SCENE_COMPILE) $< -o $@
+
+lint:
+	$(CARGO) fmt --all -- --check
+	$(CARGO) clippy --workspace --all-targets -- -D warnings
+
+test: lint
+	$(CARGO) test --workspace
+
+bench:
+	$(CARGO) bench -p scene-compile --bench compile_1m
+
+clean:
+	rm -rf build

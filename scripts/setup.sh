@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Sets up everything luxest needs on a Debian machine. Idempotent: a second run only checks.
+#
+#   - Debian packages: libembree-dev (Embree 3.13, used through the `embree` crate), pkg-config,
+#     make, gcc, python3 + pip (to fetch the onnxruntime library);
+#   - the ONNX Runtime shared library, from the PyPI onnxruntime==1.31.* wheel, unpacked to
+#     $LUXEST_ORT_DIR (default ~/.cache/luxest/onnxruntime); stages find it through
+#     ORT_DYLIB_PATH or that default path;
+#   - a Rust toolchain must already be installed (cargo on PATH, Rust >= 1.85).
+#
+# Usage: scripts/setup.sh [--no-ort]
+set -euo pipefail
+
+want_ort=1
+for a in "$@"; do
+    case "$a" in
+        --no-ort) want_ort=0 ;;
+        *) echo "usage: $0 [--no-ort]" >&2; exit 2 ;;
+    esac
+done
+
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+
+missing=()
+for pkg in libembree-dev pkg-config make gcc python3 python3-pip; do
+    if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
+        missing+=("$pkg")
+    fi
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+    echo "setup: installing Debian packages: ${missing[*]}" >&2
+    "${sudo_cmd[@]}" apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+if ! command -v cargo >/dev/null 2>&1; then
+    echo "error: cargo not found: install a Rust toolchain (>= 1.85) first, e.g. with rustup" >&2
+    exit 1
+fi
+
+if [ "$want_ort" -eq 1 ]; then
+    ort_dir="${LUXEST_ORT_DIR:-$HOME/.cache/luxest/onnxruntime}"
+    if ! ls "$ort_dir"/libonnxruntime.so.1.31.* >/dev/null 2>&1; then
+        echo "setup: fetching the ONNX Runtime 1.31 library into $ort_dir" >&2
+        tmp="$(mktemp -d)"
+        trap 'rm -rf "$tmp"' EXIT
+        python3 -m pip download --quiet --no-deps --only-binary=:all: \
+            --platform manylinux_2_28_x86_64 --python-version 3.11 \
+            -d "$tmp" "onnxruntime==1.31.*"
+        mkdir -p "$ort_dir"
+        python3 - "$tmp" "$ort_dir" <<'PY'
+import glob, os, shutil, sys, zipfile
+tmp, dest = sys.argv[1], sys.argv[2]
+wheel = glob.glob(os.path.join(tmp, "onnxruntime-*.whl"))[0]
+with zipfile.ZipFile(wheel) as z:
+    for name in z.namelist():
+        base = os.path.basename(name)
+        if base.startswith("libonnxruntime"):
+            with z.open(name) as src, open(os.path.join(dest, base + ".part"), "wb") as dst:
+                shutil.copyfileobj(src, dst)
+            os.replace(os.path.join(dest, base + ".part"), os.path.join(dest, base))
+PY
+        lib="$(ls "$ort_dir"/libonnxruntime.so.1.31.* | head -n1)"
+        ln -sf "$(basename "$lib")" "$ort_dir/libonnxruntime.so"
+    fi
+fi
+echo "setup: ok" >&2
