@@ -22,7 +22,12 @@ fn tmp(tag: &str) -> PathBuf {
 fn success_writes_the_compiled_scene() {
     let d = tmp("ok");
     let out = d.join("cb/scene.lxs");
-    let o = bin().arg(scenes().join("cornell-box.ron")).arg("-o").arg(&out).output().unwrap();
+    let o = bin()
+        .arg(scenes().join("cornell-box.ron"))
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.is_file());
     let info = bin().arg("--info").arg(&out).output().unwrap();
@@ -41,7 +46,10 @@ fn bad_input_exits_1_with_one_line_and_no_output() {
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.starts_with("error: ") && err.contains("bad.ron: point_lights[0].power"), "{err}");
+    assert!(
+        err.starts_with("error: ") && err.contains("bad.ron: point_lights[0].power"),
+        "{err}"
+    );
     assert!(!err.contains("panicked"));
     assert!(!out.exists());
     // A compiled scene that is not one.
