@@ -10,6 +10,7 @@
 //!
 //! Invariant: no stage depends on another stage's crate; whatever two stages share lives here.
 
+pub mod bsdf;
 pub mod cli;
 pub mod color;
 pub mod compiled;
