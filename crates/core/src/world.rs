@@ -1,0 +1,276 @@
+//! A compiled scene ready for Monte Carlo: the Embree tracer plus the queries every estimator
+//! needs — surface interactions at hits, emitter choice by flux, emission sampling, points on
+//! area emitters for next-event estimation, and scale-aware ray offsets.
+
+use crate::color::Rgb;
+use crate::compiled::{CompiledScene, Emitter, NO_EMITTER};
+use crate::error::Result;
+use crate::math::Vec3;
+use crate::rt::{Hit, RayTracer};
+use crate::sampling::{cosine_hemisphere, uniform_sphere, uniform_triangle, Distribution1D, Rng};
+use crate::scene::Material;
+
+/// A surface point hit by a ray.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    /// Position reconstructed from the triangle's vertices (more accurate than origin + t d).
+    pub position: Vec3,
+    /// Unit geometric normal, front side `(b - a) x (c - a)`.
+    pub ng: Vec3,
+    /// Unit shading normal (interpolated vertex normals, or `ng` for flat triangles), on the
+    /// same side as `ng`.
+    pub ns: Vec3,
+    pub triangle: u32,
+    pub distance: f64,
+}
+
+/// A point on a light source with the flux it carries (for light paths).
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionSample {
+    pub position: Vec3,
+    /// Unit normal of an area emitter; `None` for a point source.
+    pub normal: Option<Vec3>,
+    pub direction: Vec3,
+    /// Flux weight (lm per RGB channel) of the path: emitter flux / selection probability.
+    pub flux: Rgb,
+    pub emitter: u32,
+}
+
+/// A point on an area emitter or a point source, for next-event estimation.
+#[derive(Clone, Copy, Debug)]
+pub struct LightPoint {
+    pub position: Vec3,
+    /// `None` for a point source.
+    pub normal: Option<Vec3>,
+    /// Radiance (area) or intensity (point) per channel.
+    pub emitted: Rgb,
+    /// Area density (area emitters, including the emitter choice) or discrete probability
+    /// (point sources).
+    pub pdf: f64,
+}
+
+pub struct World {
+    pub scene: CompiledScene,
+    pub tracer: RayTracer,
+    emitter_choice: Distribution1D,
+    /// Per area emitter, the distribution of its triangles by area (None for point emitters).
+    triangle_choice: Vec<Option<Distribution1D>>,
+    /// Absolute offset used to leave surfaces and stop short of targets, from the scene size.
+    pub epsilon: f64,
+    /// Length of the bounding-box diagonal, m.
+    pub diagonal: f64,
+}
+
+impl World {
+    pub fn new(scene: CompiledScene) -> Result<World> {
+        let tracer = RayTracer::for_scene(&scene, true)?;
+        let weights: Vec<f64> = scene.header.emitters.iter().map(Emitter::flux_lm).collect();
+        let emitter_choice = Distribution1D::new(&weights).ok_or_else(|| {
+            crate::Error::input(&scene.header.name, "scene has no emitter with positive flux")
+        })?;
+        let triangle_choice = scene
+            .header
+            .emitters
+            .iter()
+            .map(|e| match e {
+                Emitter::Area {
+                    first_triangle,
+                    triangle_count,
+                    ..
+                } => {
+                    let areas: Vec<f64> = (*first_triangle..first_triangle + triangle_count)
+                        .map(|t| {
+                            let [a, b, c] = scene.triangle(t as usize);
+                            0.5 * (b - a).cross(c - a).length()
+                        })
+                        .collect();
+                    Distribution1D::new(&areas)
+                }
+                Emitter::Point { .. } => None,
+            })
+            .collect();
+        let s = &scene.header.stats;
+        let mut lo = s.bounds_min;
+        let mut hi = s.bounds_max;
+        for e in &scene.header.emitters {
+            if let Emitter::Point { position, .. } = e {
+                lo = lo.min(*position);
+                hi = hi.max(*position);
+            }
+        }
+        for set in &scene.header.sensors {
+            for p in &set.points {
+                lo = lo.min(p.position);
+                hi = hi.max(p.position);
+            }
+        }
+        let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
+        let extent = lo.max_abs_component().max(hi.max_abs_component()).max(diagonal);
+        // f32 geometry: positions are accurate to ~6e-8 of the largest coordinate.
+        let epsilon = 1e-6 * extent;
+        Ok(World {
+            scene,
+            tracer,
+            emitter_choice,
+            triangle_choice,
+            epsilon,
+            diagonal,
+        })
+    }
+
+    pub fn material(&self, triangle: u32) -> &Material {
+        self.scene.material_of(triangle as usize)
+    }
+
+    pub fn emitter_of(&self, triangle: u32) -> Option<u32> {
+        let e = self.scene.triangle_emitter[triangle as usize];
+        (e != NO_EMITTER).then_some(e)
+    }
+
+    /// Unit geometric normal of a triangle.
+    pub fn geometric_normal(&self, triangle: u32) -> Vec3 {
+        let [a, b, c] = self.scene.triangle(triangle as usize);
+        (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::new(0.0, 0.0, 1.0))
+    }
+
+    /// The surface point of a hit.
+    pub fn surface(&self, hit: &Hit) -> SurfacePoint {
+        let t = hit.triangle as usize;
+        let idx = self.scene.indices[t];
+        let [a, b, c] = idx.map(|i| Vec3::from(self.scene.positions[i as usize]));
+        let (u, v) = (hit.u, hit.v);
+        let position = a * (1.0 - u - v) + b * u + c * v;
+        let ng = (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+        let [na, nb, nc] = idx.map(|i| Vec3::from(self.scene.normals[i as usize]));
+        let ns = (na * (1.0 - u - v) + nb * u + nc * v)
+            .try_normalize()
+            .map(|n| if n.dot(ng) < 0.0 { -n } else { n })
+            .unwrap_or(ng);
+        SurfacePoint {
+            position,
+            ng,
+            ns,
+            triangle: hit.triangle,
+            distance: hit.t,
+        }
+    }
+
+    /// Closest surface along a ray.
+    pub fn intersect(&self, origin: Vec3, direction: Vec3) -> Option<SurfacePoint> {
+        self.tracer
+            .intersect(origin, direction, 0.0, f64::INFINITY)
+            .map(|h| self.surface(&h))
+    }
+
+    /// Origin for a ray leaving `p` (on a surface with unit normal `ng`) in direction `d`:
+    /// offset to the side `d` points to, proportionally to the coordinates' magnitude.
+    pub fn offset(&self, p: Vec3, ng: Vec3, d: Vec3) -> Vec3 {
+        let eps = self.epsilon.max(2e-6 * p.max_abs_component());
+        if d.dot(ng) >= 0.0 {
+            p + ng * eps
+        } else {
+            p - ng * eps
+        }
+    }
+
+    /// Whether the segment from `from` (already offset) to `to` is blocked, stopping short of
+    /// `to` by the scene epsilon (targets usually lie on surfaces).
+    pub fn occluded(&self, from: Vec3, to: Vec3) -> bool {
+        let d = to - from;
+        let len = d.length();
+        let eps = self.epsilon.max(2e-6 * to.max_abs_component());
+        if len <= eps {
+            return false;
+        }
+        self.tracer.occluded(from, d / len, 0.0, len - eps)
+    }
+
+    /// Starts a light path: an emitter chosen by flux, a point on it and a direction
+    /// (isotropic for point sources, cosine-distributed from the front of area emitters).
+    pub fn sample_emission(&self, rng: &mut Rng) -> EmissionSample {
+        let (ei, p_e) = self.emitter_choice.sample(rng.next_f64());
+        match &self.scene.header.emitters[ei] {
+            Emitter::Point { position, flux_rgb, .. } => EmissionSample {
+                position: *position,
+                normal: None,
+                direction: uniform_sphere(rng.next_f64(), rng.next_f64()),
+                flux: *flux_rgb * (1.0 / p_e),
+                emitter: ei as u32,
+            },
+            Emitter::Area { flux_rgb, .. } => {
+                let (position, normal, _) = self.sample_area_point(ei, rng);
+                let local = cosine_hemisphere(rng.next_f64(), rng.next_f64());
+                let (t, b) = normal.orthonormal_basis();
+                EmissionSample {
+                    position,
+                    normal: Some(normal),
+                    direction: t * local.x + b * local.y + normal * local.z,
+                    flux: *flux_rgb * (1.0 / p_e),
+                    emitter: ei as u32,
+                }
+            }
+        }
+    }
+
+    /// A uniformly distributed point on area emitter `ei`: (position, unit front normal,
+    /// triangle).
+    fn sample_area_point(&self, ei: usize, rng: &mut Rng) -> (Vec3, Vec3, u32) {
+        let Emitter::Area { first_triangle, .. } = &self.scene.header.emitters[ei] else {
+            unreachable!("sample_area_point on a point emitter")
+        };
+        let dist = self.triangle_choice[ei].as_ref().expect("area emitter has triangles");
+        let (ti, _) = dist.sample(rng.next_f64());
+        let t = first_triangle + ti as u32;
+        let [a, b, c] = self.scene.triangle(t as usize);
+        let (b1, b2) = uniform_triangle(rng.next_f64(), rng.next_f64());
+        let p = a + (b - a) * b1 + (c - a) * b2;
+        (p, self.geometric_normal(t), t)
+    }
+
+    /// A point on a light chosen by flux, for next-event estimation.
+    pub fn sample_light_point(&self, rng: &mut Rng) -> LightPoint {
+        let (ei, p_e) = self.emitter_choice.sample(rng.next_f64());
+        match &self.scene.header.emitters[ei] {
+            Emitter::Point {
+                position,
+                intensity_rgb,
+                ..
+            } => LightPoint {
+                position: *position,
+                normal: None,
+                emitted: *intensity_rgb,
+                pdf: p_e,
+            },
+            Emitter::Area {
+                radiance_rgb, area_m2, ..
+            } => {
+                let (position, normal, _) = self.sample_area_point(ei, rng);
+                LightPoint {
+                    position,
+                    normal: Some(normal),
+                    emitted: *radiance_rgb,
+                    pdf: p_e / area_m2,
+                }
+            }
+        }
+    }
+
+    /// Area density with which [`World::sample_light_point`] picks a point on the area emitter
+    /// `emitter` (for multiple importance sampling).
+    pub fn light_point_pdf(&self, emitter: u32) -> f64 {
+        let p_e = self.emitter_choice.pmf(emitter as usize);
+        match &self.scene.header.emitters[emitter as usize] {
+            Emitter::Area { area_m2, .. } => p_e / area_m2,
+            Emitter::Point { .. } => 0.0,
+        }
+    }
+
+    /// Luminance per channel emitted by the surface of `triangle` towards `w` (zero behind
+    /// the emitter or off emitters).
+    pub fn emitted_radiance(&self, triangle: u32, ng: Vec3, w: Vec3) -> Rgb {
+        match self.emitter_of(triangle).map(|e| &self.scene.header.emitters[e as usize]) {
+            Some(Emitter::Area { radiance_rgb, .. }) if ng.dot(w) > 0.0 => *radiance_rgb,
+            _ => Rgb::BLACK,
+        }
+    }
+}

@@ -1,0 +1,124 @@
+//! A backward ("gathering") estimator of illuminance at a point, independent of the local
+//! estimate and free of its singularity: used as the reference at edges and corners.
+//!
+//! E(p) = direct + ∫ L_r(ω) cos θ dω. Direct light: exact for point sources, light-sampled for
+//! area emitters. Indirect light: a cosine-distributed direction from p (weight π) and a path
+//! traced from there with next-event estimation at every vertex and analog Russian roulette;
+//! emission found by BSDF sampling is ignored (it is all counted by next-event estimation), so
+//! the estimator needs a scene without specular paths, and is unbiased with bounded variance
+//! wherever the sensor is.
+
+use crate::local::point_source_direct;
+use crate::parallel::{mean_and_standard_error, run_batches};
+use luxest_core::bsdf::{self, Transport};
+use luxest_core::color::Rgb;
+use luxest_core::math::Vec3;
+use luxest_core::sampling::{cosine_hemisphere, Rng};
+use luxest_core::scene::SensorPoint;
+use luxest_core::world::World;
+use std::f64::consts::PI;
+
+#[derive(Clone, Debug)]
+pub struct GatherConfig {
+    /// Samples per sensor point.
+    pub samples: u64,
+    pub batches: usize,
+    pub seed: u64,
+    pub threads: usize,
+    pub max_depth: u32,
+}
+
+/// Light arriving at `x` (surface normal `n`, towards directions on `n`'s side) from one
+/// sampled light point, times `f cos` evaluated by `response(w_to_light)`: the next-event
+/// estimate for area and point emitters. Point sources are skipped when `skip_points`.
+fn next_event(world: &World, x: Vec3, n: Vec3, rng: &mut Rng, response: impl Fn(Vec3) -> Rgb, skip_points: bool) -> Rgb {
+    let l = world.sample_light_point(rng);
+    let v = l.position - x;
+    let d2 = v.length_squared();
+    if d2 <= 0.0 {
+        return Rgb::BLACK;
+    }
+    let d = d2.sqrt();
+    let w = v / d;
+    let geometric = match l.normal {
+        Some(nl) => {
+            let c = -nl.dot(w);
+            if c <= 0.0 {
+                return Rgb::BLACK;
+            }
+            c / d2
+        }
+        None if skip_points => return Rgb::BLACK,
+        None => 1.0 / d2,
+    };
+    let r = response(w);
+    if r.max_component() <= 0.0 {
+        return Rgb::BLACK;
+    }
+    if world.occluded(world.offset(x, n, w), l.position) {
+        return Rgb::BLACK;
+    }
+    l.emitted * r * (geometric / l.pdf)
+}
+
+fn sample_once(world: &World, s: &SensorPoint, rng: &mut Rng, max_depth: u32) -> Rgb {
+    let n = s.normal;
+    // Direct light from area emitters (point sources are added exactly by the caller).
+    let mut e = next_event(world, s.position, n, rng, |w| Rgb::splat(n.dot(w).max(0.0)), true);
+    // Indirect: cosine-sampled direction, weight pi.
+    let local = cosine_hemisphere(rng.next_f64(), rng.next_f64());
+    let (t, b) = n.orthonormal_basis();
+    let mut dir = t * local.x + b * local.y + n * local.z;
+    let mut origin = world.offset(s.position, n, dir);
+    let mut beta = Rgb::splat(PI);
+    for _ in 0..max_depth {
+        let Some(sp) = world.intersect(origin, dir) else { break };
+        let m = world.material(sp.triangle);
+        let wo = -dir;
+        let ng = if wo.dot(sp.ng) >= 0.0 { sp.ng } else { -sp.ng };
+        let radiance = next_event(world, sp.position, ng, rng, |w| bsdf::eval(m, wo, w, sp.ng, sp.ns) * w.dot(sp.ns).abs(), false);
+        e = e + beta * radiance;
+        let Some(smp) = bsdf::sample(m, wo, sp.ng, sp.ns, rng.next_2d(), rng.next_f64(), Transport::Radiance) else {
+            break;
+        };
+        let survival = smp.weight.max_component().min(1.0);
+        if survival <= 0.0 || rng.next_f64() >= survival {
+            break;
+        }
+        beta = beta * smp.weight * (1.0 / survival);
+        origin = world.offset(sp.position, sp.ng, smp.wi);
+        dir = smp.wi;
+    }
+    e
+}
+
+/// Per sensor: (RGB mean, Y mean, Y standard error).
+pub fn estimate(world: &World, sensors: &[SensorPoint], cfg: &GatherConfig) -> Vec<(Rgb, f64, f64)> {
+    let direct = point_source_direct(world, sensors);
+    let batches = cfg.batches.max(2);
+    let per_batch = (cfg.samples / batches as u64).max(1);
+    let results = run_batches(batches, cfg.threads, "gather", |b| {
+        let mut rng = Rng::new(cfg.seed, b as u64 + 1);
+        sensors
+            .iter()
+            .map(|s| {
+                let mut acc = Rgb::BLACK;
+                for _ in 0..per_batch {
+                    acc = acc + sample_once(world, s, &mut rng, cfg.max_depth);
+                }
+                acc * (1.0 / per_batch as f64)
+            })
+            .collect::<Vec<Rgb>>()
+    });
+    (0..sensors.len())
+        .map(|i| {
+            let ys: Vec<f64> = results.iter().map(|r| r[i].luminance()).collect();
+            let mut rgb = Rgb::BLACK;
+            for r in &results {
+                rgb = rgb + r[i] * (1.0 / batches as f64);
+            }
+            let (m, se) = mean_and_standard_error(&ys);
+            (rgb + direct[i], m + direct[i].luminance(), se)
+        })
+        .collect()
+}

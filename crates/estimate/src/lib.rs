@@ -1,0 +1,356 @@
+//! estimate: the local estimate of illuminance at sensor points, a backward reference
+//! estimator, exact solutions and their comparison with results.
+//!
+//! Subcommands: `sensors` (local estimate), `gather` (backward reference estimator), `exact`
+//! (print exact solutions), `compare` (results against an exact case, with a z-test).
+
+pub mod compare;
+pub mod gather;
+pub mod local;
+pub mod parallel;
+pub mod singularity;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use luxest_core::compiled::CompiledScene;
+use luxest_core::meta::{RunInfo, PROGRAM_VERSION};
+use luxest_core::scene::SensorPoint;
+use luxest_core::sensors::{SensorResults, SensorSetResult, SensorValue};
+use luxest_core::world::World;
+use luxest_core::{Error, Result};
+use singularity::Singularity;
+use std::path::{Path, PathBuf};
+
+/// Local estimates of illuminance, exact solutions and validation.
+#[derive(Parser, Debug)]
+#[command(name = "estimate", version, about)]
+pub struct Args {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct RunArgs {
+    /// Compiled scene (build/<name>/scene.lxs).
+    pub scene: PathBuf,
+    /// Output sensor results (.ron) [default: <scene dir>/<name>.sensors.ron].
+    #[arg(short, long)]
+    pub out: Option<PathBuf>,
+    /// Also write the results as CSV to this file.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Independent batches (for the standard error).
+    #[arg(long, default_value_t = 32)]
+    pub batches: usize,
+    #[command(flatten)]
+    pub common: luxest_core::cli::CommonArgs,
+    /// Safety bound on path length (the bias it causes is below q^max_depth for survival q).
+    #[arg(long, default_value_t = 100_000)]
+    pub max_depth: u32,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub enum SingularityMode {
+    Ball,
+    Clamp,
+    None,
+}
+
+/// Default kernel regularisation radius, as a fraction of the scene's bounding-box diagonal
+/// (chosen from the corner measurement in the README).
+pub const DEFAULT_EPS_FRACTION: f64 = 1e-3;
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Local estimate of illuminance at all sensor points of a scene.
+    Sensors {
+        #[command(flatten)]
+        run: RunArgs,
+        /// Number of light paths.
+        #[arg(long, default_value_t = 100_000)]
+        paths: u64,
+        /// How the kernel singularity near sensor points is controlled.
+        #[arg(long, value_enum, default_value_t = SingularityMode::Ball)]
+        singularity: SingularityMode,
+        /// Regularisation radius in m [default: 1e-3 of the scene diagonal].
+        #[arg(long)]
+        eps: Option<f64>,
+    },
+    /// Backward (gathering) estimate at the sensor points: an independent reference that has
+    /// no kernel singularity (scenes without specular paths).
+    Gather {
+        #[command(flatten)]
+        run: RunArgs,
+        /// Samples per sensor point.
+        #[arg(long, default_value_t = 10_000)]
+        samples: u64,
+    },
+    /// Print exact solutions.
+    Exact {
+        #[command(subcommand)]
+        case: ExactCase,
+    },
+    /// Compare sensor results with an exact case; fails if any |z| exceeds --max-z.
+    Compare {
+        /// Sensor results (.sensors.ron).
+        results: PathBuf,
+        /// Case and parameters, e.g. `sobolev:I=100,h1=1,h2=1,rho1=0.5,rho2=0.5`,
+        /// `sphere:I=100,R=1,rho=0.5[,x=..,y=..,z=..]`, `cie171-5.8:flux=1e4,area=96,rho=0.5,x=2,y=2,z=2`.
+        #[arg(long)]
+        case: String,
+        #[arg(long, default_value_t = 4.0)]
+        max_z: f64,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+pub enum ExactCase {
+    /// Point source between two parallel Lambertian planes: E1(r), E2(r).
+    Sobolev {
+        #[arg(long, default_value_t = 100.0)]
+        intensity: f64,
+        #[arg(long, default_value_t = 1.0)]
+        h1: f64,
+        #[arg(long, default_value_t = 1.0)]
+        h2: f64,
+        #[arg(long, default_value_t = 0.5)]
+        rho1: f64,
+        #[arg(long, default_value_t = 0.5)]
+        rho2: f64,
+        /// Distances from the foot of the source, m.
+        #[arg(long, value_delimiter = ',', default_value = "0,0.5,1,2,4,8")]
+        r: Vec<f64>,
+    },
+    /// Integrating sphere with a central source: direct, indirect and total at the wall.
+    Sphere {
+        #[arg(long, default_value_t = 100.0)]
+        intensity: f64,
+        #[arg(long, default_value_t = 1.0)]
+        radius: f64,
+        #[arg(long, default_value_t = 0.5)]
+        rho: f64,
+    },
+    /// CIE 171:2006 case 5.8: mean indirect illuminance in a closed room.
+    Cie171 {
+        #[arg(long, default_value_t = 10_000.0)]
+        flux: f64,
+        #[arg(long, default_value_t = 96.0)]
+        area: f64,
+        #[arg(long, default_value_t = 0.5)]
+        rho: f64,
+    },
+}
+
+/// Loads a compiled scene and checks that it has sensors.
+pub fn load_world(path: &Path) -> Result<World> {
+    let scene = CompiledScene::load(path)?;
+    if scene.header.sensors.is_empty() {
+        return Err(Error::input(path, "scene has no sensors (add Points or Grid sensors to the .ron)"));
+    }
+    World::new(scene).map_err(|e| match e {
+        Error::Usage(m) => Error::input(path, m),
+        other => other,
+    })
+}
+
+fn all_sensors(world: &World) -> Vec<SensorPoint> {
+    world.scene.header.sensors.iter().flat_map(|s| s.points.iter().copied()).collect()
+}
+
+fn default_out(scene: &Path, name: &str) -> PathBuf {
+    scene.with_file_name(format!("{name}.sensors.ron"))
+}
+
+/// Packs per-sensor values into the results contract and writes RON (and CSV).
+fn write_results(
+    world: &World,
+    run: &RunArgs,
+    info: RunInfo,
+    singularity: String,
+    values: &[(luxest_core::color::Rgb, f64, f64)],
+) -> Result<PathBuf> {
+    let mut k = 0;
+    let sets = world
+        .scene
+        .header
+        .sensors
+        .iter()
+        .map(|s| SensorSetResult {
+            name: s.name.clone(),
+            points: s
+                .points
+                .iter()
+                .map(|p| {
+                    let (rgb, value, standard_error) = values[k];
+                    k += 1;
+                    SensorValue {
+                        position: p.position,
+                        normal: p.normal,
+                        value,
+                        standard_error,
+                        rgb,
+                    }
+                })
+                .collect(),
+        })
+        .collect();
+    if let Some((i, _)) = values.iter().enumerate().find(|(_, v)| !(v.1.is_finite() && v.2.is_finite())) {
+        return Err(Error::input(&run.scene, format!("estimate at sensor {i} is not finite")));
+    }
+    let results = SensorResults {
+        scene: world.scene.header.name.clone(),
+        run: info,
+        unit: "lx".into(),
+        singularity,
+        sets,
+    };
+    let out = run.out.clone().unwrap_or_else(|| default_out(&run.scene, &world.scene.header.name));
+    results.write_ron(&out)?;
+    if let Some(csv) = &run.csv {
+        results.write_csv(csv)?;
+    }
+    Ok(out)
+}
+
+fn check_run_args(run: &RunArgs) -> Result<()> {
+    if run.batches < 2 {
+        return Err(Error::Usage("--batches must be at least 2 (the standard error needs them)".into()));
+    }
+    Ok(())
+}
+
+/// Runs the command line.
+pub fn run(args: Args) -> Result<()> {
+    match args.command {
+        Command::Sensors {
+            run,
+            paths,
+            singularity,
+            eps,
+        } => {
+            check_run_args(&run)?;
+            if paths < run.batches as u64 {
+                return Err(Error::Usage("--paths must be at least --batches".into()));
+            }
+            let world = load_world(&run.scene)?;
+            let eps = eps.unwrap_or(DEFAULT_EPS_FRACTION * world.diagonal);
+            if !(eps > 0.0 && eps.is_finite()) {
+                return Err(Error::Usage(format!("--eps must be positive, got {eps}")));
+            }
+            let sing = match singularity {
+                SingularityMode::Ball => Singularity::Ball { eps },
+                SingularityMode::Clamp => Singularity::Clamp { eps },
+                SingularityMode::None => Singularity::None,
+            };
+            let sensors = all_sensors(&world);
+            let cfg = local::LocalConfig {
+                paths,
+                batches: run.batches,
+                seed: run.common.seed,
+                threads: parallel::thread_count(run.common.threads),
+                singularity: sing,
+                max_depth: run.max_depth,
+            };
+            let r = local::estimate(&world, &sensors, &cfg);
+            let info = RunInfo {
+                samples: paths,
+                seed: run.common.seed,
+                seconds: r.seconds,
+                estimator: "local-estimate".into(),
+                scene_hash: world.scene.content_hash.clone(),
+                program_version: PROGRAM_VERSION.into(),
+            };
+            let values: Vec<_> = (0..sensors.len()).map(|i| (r.rgb[i], r.value[i], r.standard_error[i])).collect();
+            let out = write_results(&world, &run, info, sing.to_string(), &values)?;
+            eprintln!(
+                "wrote {}: {} paths, {} collisions, {} shadow rays, {:.2} s",
+                out.display(),
+                paths,
+                r.collisions,
+                r.shadow_rays,
+                r.seconds
+            );
+            Ok(())
+        }
+        Command::Gather { run, samples } => {
+            check_run_args(&run)?;
+            let world = load_world(&run.scene)?;
+            if world.scene.header.features.specular_paths {
+                return Err(Error::input(&run.scene, "gather needs a scene without mirrors or dielectrics"));
+            }
+            let sensors = all_sensors(&world);
+            let cfg = gather::GatherConfig {
+                samples,
+                batches: run.batches,
+                seed: run.common.seed,
+                threads: parallel::thread_count(run.common.threads),
+                max_depth: run.max_depth,
+            };
+            let start = std::time::Instant::now();
+            let values = gather::estimate(&world, &sensors, &cfg);
+            let info = RunInfo {
+                samples,
+                seed: run.common.seed,
+                seconds: start.elapsed().as_secs_f64(),
+                estimator: "gather".into(),
+                scene_hash: world.scene.content_hash.clone(),
+                program_version: PROGRAM_VERSION.into(),
+            };
+            let out = write_results(&world, &run, info, "none (backward estimator)".into(), &values)?;
+            eprintln!("wrote {}", out.display());
+            Ok(())
+        }
+        Command::Exact { case } => {
+            print_exact(case);
+            Ok(())
+        }
+        Command::Compare { results, case, max_z } => {
+            let case = compare::Case::parse(&case).map_err(|m| Error::Usage(format!("--case: {m}")))?;
+            compare::run(&results, &case, max_z)
+        }
+    }
+}
+
+fn print_exact(case: ExactCase) {
+    match case {
+        ExactCase::Sobolev {
+            intensity,
+            h1,
+            h2,
+            rho1,
+            rho2,
+            r,
+        } => {
+            let s = luxest_core::exact::Sobolev {
+                intensity_cd: intensity,
+                h1,
+                h2,
+                rho1,
+                rho2,
+            };
+            println!("Sobolev problem: I = {intensity} cd, h1 = {h1} m, h2 = {h2} m, rho1 = {rho1}, rho2 = {rho2}");
+            println!("flux onto plane 1: {:.9e} lm, onto plane 2: {:.9e} lm", s.flux1(), s.swapped().flux1());
+            println!("{:>10} {:>18} {:>18} {:>18} {:>10}", "r (m)", "E1 (lx)", "E1 direct", "E2 (lx)", "err.bound");
+            for r in r {
+                let (e1, e2) = (s.illuminance1(r), s.illuminance2(r));
+                println!(
+                    "{:>10} {:>18.10e} {:>18.10e} {:>18.10e} {:>10.1e}",
+                    r,
+                    e1.value,
+                    s.direct1(r),
+                    e2.value,
+                    e1.error_bound.max(e2.error_bound)
+                );
+            }
+        }
+        ExactCase::Sphere { intensity, radius, rho } => {
+            let ind = luxest_core::exact::integrating_sphere_indirect(intensity, radius, rho);
+            let direct = intensity / (radius * radius);
+            println!("Integrating sphere, central source: I = {intensity} cd, R = {radius} m, rho = {rho}");
+            println!("direct {direct:.10e} lx + indirect {ind:.10e} lx = {:.10e} lx everywhere on the wall", direct + ind);
+        }
+        ExactCase::Cie171 { flux, area, rho } => {
+            let e = luxest_core::exact::cie171_mean_indirect_illuminance(flux, area, rho);
+            println!("CIE 171:2006 5.8: flux {flux} lm, S_T = {area} m², rho = {rho}: mean indirect illuminance {e:.10e} lx");
+        }
+    }
+}

@@ -1,0 +1,268 @@
+//! The local estimate of illuminance at many sensor points at once.
+//!
+//! Light paths start at emitters chosen by flux (point sources isotropically, area emitters
+//! with cosine-distributed directions from their front side), each carrying the flux weight
+//! `Q = Φ_e / P(e)`. At every collision j on a non-specular surface, each sensor p facing it
+//! receives `Q_j f(ω_in, ω_jp) cos_j cos_p / d² V(j, p)` — for a Lambertian surface
+//! `f = rho/π` — through a batch of shadow rays. The path then continues by sampling the BSDF
+//! with analog Russian roulette (survival probability = the sample's weight, capped at 1, so a
+//! grey Lambertian wall keeps Q constant and ends the path with probability 1 − rho).
+//! Specular collisions (mirror, dielectric) continue the path without a connection: a delta
+//! BSDF has no value towards a given sensor.
+//!
+//! Direct light: for point sources it is computed exactly (`I cos_p / d² V`, no variance); for
+//! area emitters the emission point is the zeroth collision, with kernel `cos_e cos_p/(π d²)`.
+//!
+//! Standard errors come from independent batches (see [`crate::parallel`]). All sums are f64.
+
+use crate::parallel::{mean_and_standard_error, run_batches};
+use crate::singularity::Singularity;
+use luxest_core::bsdf::{self, Transport};
+use luxest_core::color::Rgb;
+use luxest_core::compiled::Emitter;
+use luxest_core::math::Vec3;
+use luxest_core::rt::Ray;
+use luxest_core::sampling::Rng;
+use luxest_core::scene::SensorPoint;
+use luxest_core::world::World;
+
+#[derive(Clone, Debug)]
+pub struct LocalConfig {
+    pub paths: u64,
+    pub batches: usize,
+    pub seed: u64,
+    pub threads: usize,
+    pub singularity: Singularity,
+    /// Safety bound on path length; with survival probability q the bias is at most q^max_depth.
+    pub max_depth: u32,
+}
+
+/// Results per sensor point.
+#[derive(Clone, Debug)]
+pub struct LocalResult {
+    /// Mean RGB illuminance, lx per channel.
+    pub rgb: Vec<Rgb>,
+    /// Mean photometric illuminance Y and its standard error, lx.
+    pub value: Vec<f64>,
+    pub standard_error: Vec<f64>,
+    /// The exact direct part from point sources (included in `value`).
+    pub direct_point: Vec<f64>,
+    pub seconds: f64,
+    pub collisions: u64,
+    pub shadow_rays: u64,
+}
+
+/// Per-thread scratch buffers, reused across collisions.
+#[derive(Default)]
+struct Scratch {
+    rays: Vec<Ray>,
+    targets: Vec<(usize, Rgb)>,
+    blocked: Vec<bool>,
+}
+
+struct BatchSums {
+    sums: Vec<[f64; 3]>,
+    collisions: u64,
+    shadow_rays: u64,
+}
+
+/// Where a connection starts: a scattering collision or a point on an area emitter.
+enum Source<'a> {
+    Collision { material: &'a luxest_core::scene::Material, wo: Vec3, ng: Vec3, ns: Vec3 },
+    Emitter { normal: Vec3 },
+}
+
+/// Adds the contributions of one vertex at `x` (with geometric normal `ng`) carrying flux `q`
+/// to every sensor that sees it.
+#[allow(clippy::too_many_arguments)]
+fn connect(
+    world: &World,
+    sensors: &[SensorPoint],
+    singularity: &Singularity,
+    x: Vec3,
+    ng: Vec3,
+    source: &Source,
+    q: Rgb,
+    scratch: &mut Scratch,
+    out: &mut BatchSums,
+) {
+    scratch.rays.clear();
+    scratch.targets.clear();
+    let min_d2 = (1e-12 * world.diagonal).powi(2);
+    for (i, s) in sensors.iter().enumerate() {
+        let v = s.position - x;
+        let d2 = v.length_squared();
+        if d2 <= min_d2 {
+            continue; // the direction is undefined; a set of measure zero
+        }
+        let d = d2.sqrt();
+        let w = v / d;
+        let cos_p = -s.normal.dot(w);
+        if cos_p <= 0.0 {
+            continue;
+        }
+        let f_cos = match source {
+            Source::Collision { material, wo, ng, ns } => {
+                let f = bsdf::eval(material, *wo, w, *ng, *ns);
+                f * w.dot(*ns).abs()
+            }
+            Source::Emitter { normal } => {
+                let c = normal.dot(w);
+                if c <= 0.0 {
+                    continue;
+                }
+                Rgb::splat(c / std::f64::consts::PI)
+            }
+        };
+        let contribution = q * f_cos * (cos_p * singularity.inverse_square(d2));
+        if contribution.max_component() <= 0.0 {
+            continue;
+        }
+        let origin = world.offset(x, ng, w);
+        let to = s.position - origin;
+        let len = to.length();
+        let eps = world.epsilon.max(2e-6 * s.position.max_abs_component());
+        if len <= eps {
+            // Closer than the scene's resolution: nothing can be in between.
+            let acc = &mut out.sums[i];
+            for c in 0..3 {
+                acc[c] += contribution.0[c];
+            }
+            continue;
+        }
+        scratch.rays.push(Ray {
+            origin,
+            direction: to / len,
+            tnear: 0.0,
+            tfar: len - eps,
+        });
+        scratch.targets.push((i, contribution));
+    }
+    out.shadow_rays += scratch.rays.len() as u64;
+    world.tracer.occluded_many(&scratch.rays, &mut scratch.blocked);
+    for ((i, c), blocked) in scratch.targets.iter().zip(&scratch.blocked) {
+        if !blocked {
+            let acc = &mut out.sums[*i];
+            for k in 0..3 {
+                acc[k] += c.0[k];
+            }
+        }
+    }
+}
+
+/// Exact direct illuminance from the point sources (RGB), with visibility.
+pub fn point_source_direct(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
+    sensors
+        .iter()
+        .map(|s| {
+            let mut e = Rgb::BLACK;
+            for em in &world.scene.header.emitters {
+                if let Emitter::Point {
+                    position,
+                    intensity_rgb,
+                    ..
+                } = em
+                {
+                    let v = *position - s.position;
+                    let d2 = v.length_squared();
+                    let cos = s.normal.dot(v) / d2.sqrt();
+                    if cos > 0.0 && d2 > 0.0 {
+                        let from = *position;
+                        let blocked = world.occluded(from, s.position);
+                        if !blocked {
+                            e = e + *intensity_rgb * (cos / d2);
+                        }
+                    }
+                }
+            }
+            e
+        })
+        .collect()
+}
+
+fn run_batch(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig, batch: usize, paths: u64) -> BatchSums {
+    let mut rng = Rng::new(cfg.seed, batch as u64 + 1);
+    let mut out = BatchSums {
+        sums: vec![[0.0; 3]; sensors.len()],
+        collisions: 0,
+        shadow_rays: 0,
+    };
+    let mut scratch = Scratch::default();
+    for _ in 0..paths {
+        let e = world.sample_emission(&mut rng);
+        let mut q = e.flux;
+        let mut origin = e.position;
+        if let Some(n) = e.normal {
+            let src = Source::Emitter { normal: n };
+            connect(world, sensors, &cfg.singularity, e.position, n, &src, q, &mut scratch, &mut out);
+            origin = world.offset(e.position, n, e.direction);
+        }
+        let mut dir = e.direction;
+        for _ in 0..cfg.max_depth {
+            let Some(sp) = world.intersect(origin, dir) else { break };
+            out.collisions += 1;
+            let material = world.material(sp.triangle);
+            let wo = -dir;
+            if !bsdf::is_delta(material) {
+                let src = Source::Collision {
+                    material,
+                    wo,
+                    ng: sp.ng,
+                    ns: sp.ns,
+                };
+                connect(world, sensors, &cfg.singularity, sp.position, sp.ng, &src, q, &mut scratch, &mut out);
+            }
+            let Some(s) = bsdf::sample(material, wo, sp.ng, sp.ns, rng.next_2d(), rng.next_f64(), Transport::Flux) else {
+                break;
+            };
+            let survival = s.weight.max_component().min(1.0);
+            if survival <= 0.0 || rng.next_f64() >= survival {
+                break;
+            }
+            q = q * s.weight * (1.0 / survival);
+            origin = world.offset(sp.position, sp.ng, s.wi);
+            dir = s.wi;
+        }
+    }
+    out
+}
+
+/// Runs the local estimate for `sensors`.
+pub fn estimate(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig) -> LocalResult {
+    let start = std::time::Instant::now();
+    let direct = point_source_direct(world, sensors);
+    let batches = cfg.batches.max(2);
+    let per_batch = |b: usize| cfg.paths / batches as u64 + u64::from((b as u64) < cfg.paths % batches as u64);
+    let results = run_batches(batches, cfg.threads, "local estimate", |b| {
+        run_batch(world, sensors, cfg, b, per_batch(b))
+    });
+    let n = sensors.len();
+    let mut rgb = vec![Rgb::BLACK; n];
+    let mut value = vec![0.0; n];
+    let mut standard_error = vec![0.0; n];
+    for i in 0..n {
+        let mut ys = Vec::with_capacity(batches);
+        let mut acc = [0.0; 3];
+        for (b, r) in results.iter().enumerate() {
+            let paths = per_batch(b).max(1) as f64;
+            let e = r.sums[i].map(|s| s / paths);
+            for c in 0..3 {
+                acc[c] += e[c] / batches as f64;
+            }
+            ys.push(Rgb(e).luminance());
+        }
+        let (m, se) = mean_and_standard_error(&ys);
+        rgb[i] = Rgb(acc) + direct[i];
+        value[i] = m + direct[i].luminance();
+        standard_error[i] = se;
+    }
+    LocalResult {
+        rgb,
+        value,
+        standard_error,
+        direct_point: direct.iter().map(Rgb::luminance).collect(),
+        seconds: start.elapsed().as_secs_f64(),
+        collisions: results.iter().map(|r| r.collisions).sum(),
+        shadow_rays: results.iter().map(|r| r.shadow_rays).sum(),
+    }
+}
