@@ -5,10 +5,11 @@
 #   make run       compile the default scene (cornell-box) and print its manifest
 #   make scenes    compile every scene in scenes/ into build/<name>/scene.lxs
 #   make test      formatting, lints and all tests
+#   make validate  local estimate vs exact solutions, direct-simulation baseline
 #   make bench     benchmarks (1M-triangle compile + load)
 #
-# Stages of later milestones (trace, estimate, denoise, evaluate; `make reference noisy train
-# eval validate`) are added with their crates; they are not faked here.
+# Stages of later milestones (trace, aov-write, denoise, evaluate; `make reference noisy train
+# eval`) are added with their crates; they are not faked here.
 
 PRESET ?= quick
 CARGO ?= cargo
@@ -16,13 +17,14 @@ RELEASE := target/release
 DEFAULT_SCENE ?= cornell-box
 
 SCENE_COMPILE ?= $(RELEASE)/scene-compile
+ESTIMATE ?= $(RELEASE)/estimate
 
 SCENES := $(basename $(notdir $(wildcard scenes/*.ron)))
 COMPILED := $(patsubst %,build/%/scene.lxs,$(SCENES))
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml Cargo.lock
 MESHES := $(wildcard scenes/meshes/*)
 
-.PHONY: run scenes test lint bench clean
+.PHONY: run scenes test lint bench validate clean
 
 run: build/$(DEFAULT_SCENE)/scene.lxs
 	$(SCENE_COMPILE) --info $<
@@ -32,6 +34,15 @@ scenes: $(COMPILED)
 $(RELEASE)/scene-compile: $(RUST_SOURCES)
 	$(CARGO) build --release -p scene-compile
 	@touch $@
+
+$(RELEASE)/estimate: $(RUST_SOURCES)
+	$(CARGO) build --release -p estimate
+	@touch $@
+
+# The local estimate against exact solutions (Sobolev, integrating sphere, CIE 171 5.8) and
+# the direct-simulation baseline; fails if any |z| > 4.
+validate: $(SCENE_COMPILE) $(ESTIMATE)
+	SCENE_COMPILE=$(SCENE_COMPILE) ESTIMATE=$(ESTIMATE) PRESET=$(PRESET) python3 pipelines/validate.py
 
 # The compiled scene depends on its source, the meshes it may load and the compiler.
 build/%/scene.lxs: scenes/%.ron $(MESHES) $(SCENE_COMPILE)

@@ -59,6 +59,9 @@ pub struct World {
     pub epsilon: f64,
     /// Length of the bounding-box diagonal, m.
     pub diagonal: f64,
+    /// The smallest side of the bounding box that is not flat (the "room size"), m; the
+    /// diagonal for a flat scene. Scale for defaults such as the kernel regularisation radius.
+    pub room_scale: f64,
 }
 
 impl World {
@@ -105,6 +108,11 @@ impl World {
             }
         }
         let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
+        let size = hi - lo;
+        let room_scale = [size.x, size.y, size.z]
+            .into_iter()
+            .filter(|&s| s > 1e-6 * diagonal)
+            .fold(diagonal, f64::min);
         let extent = lo.max_abs_component().max(hi.max_abs_component()).max(diagonal);
         // f32 geometry: positions are accurate to ~6e-8 of the largest coordinate.
         let epsilon = 1e-6 * extent;
@@ -115,6 +123,7 @@ impl World {
             triangle_choice,
             epsilon,
             diagonal,
+            room_scale,
         })
     }
 

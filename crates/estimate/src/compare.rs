@@ -12,7 +12,9 @@ use std::path::Path;
 #[derive(Clone, Debug, PartialEq)]
 pub enum Case {
     /// Source at the origin, plane 1 at y = −h1 (sensors with y < 0), plane 2 at y = +h2.
-    Sobolev(Sobolev),
+    /// With a bin radius, the exact value is the mean over the counting disk (direct
+    /// simulation).
+    Sobolev(Sobolev, Option<f64>),
     /// Sphere centred at the origin; every sensor on the wall.
     Sphere { intensity_cd: f64, radius: f64, rho: f64, source: Vec3 },
     /// Closed room: compares the area-weighted mean indirect illuminance (value minus the
@@ -62,7 +64,8 @@ impl Case {
                     rho2: get("rho2", None)?,
                 };
                 s.check()?;
-                Case::Sobolev(s)
+                let bin = map.remove("bin");
+                Case::Sobolev(s, bin)
             }
             "sphere" => Case::Sphere {
                 intensity_cd: get("I", None)?,
@@ -88,13 +91,17 @@ impl Case {
     pub fn rows(&self, results: &SensorResults) -> Vec<Row> {
         let points = results.sets.iter().flat_map(|s| s.points.iter().map(move |p| (s.name.as_str(), p)));
         match self {
-            Case::Sobolev(s) => points
+            Case::Sobolev(s, bin) => points
                 .map(|(set, p)| {
                     let r = (p.position.x * p.position.x + p.position.z * p.position.z).sqrt();
-                    let e = if p.position.y < 0.0 { s.illuminance1(r) } else { s.illuminance2(r) };
+                    let plane = if p.position.y < 0.0 { *s } else { s.swapped() };
+                    let exact = match bin {
+                        None => plane.illuminance1(r).value,
+                        Some(b) => exact::disk_average(|x| plane.illuminance1(x).value, r, *b),
+                    };
                     Row {
                         label: format!("{set} r={r}"),
-                        exact: e.value,
+                        exact,
                         estimate: p.value,
                         standard_error: p.standard_error,
                     }
@@ -169,8 +176,16 @@ pub fn print_table(title: &str, rows: &[Row], max_z: f64) -> usize {
 }
 
 /// `estimate compare`: reads results, compares, prints; an error if any |z| > max_z.
-pub fn run(path: &Path, case: &Case, max_z: f64) -> Result<()> {
-    let results = SensorResults::read_ron(path)?;
+pub fn run(path: &Path, case: &Case, max_z: f64, sets: &[String]) -> Result<()> {
+    let mut results = SensorResults::read_ron(path)?;
+    if !sets.is_empty() {
+        for name in sets {
+            if !results.sets.iter().any(|s| &s.name == name) {
+                return Err(Error::input(path, format!("no sensor set named \"{name}\"")));
+            }
+        }
+        results.sets.retain(|s| sets.contains(&s.name));
+    }
     let rows = case.rows(&results);
     let title = format!(
         "{} — {} light paths, {:.2} s, singularity {}",
@@ -193,7 +208,9 @@ mod tests {
     #[test]
     fn case_specs_parse_and_reject_mistakes() {
         let c = Case::parse("sobolev:I=100,h1=1,h2=2,rho1=0.5,rho2=0.9").unwrap();
-        assert!(matches!(c, Case::Sobolev(s) if s.h2 == 2.0 && s.rho2 == 0.9));
+        assert!(matches!(c, Case::Sobolev(s, None) if s.h2 == 2.0 && s.rho2 == 0.9));
+        let c = Case::parse("sobolev:I=100,h1=1,h2=2,rho1=0.5,rho2=0.9,bin=0.1").unwrap();
+        assert!(matches!(c, Case::Sobolev(_, Some(b)) if b == 0.1));
         assert!(Case::parse("sobolev:I=100,h1=1").unwrap_err().contains("h2"));
         assert!(Case::parse("sphere:I=1,R=1,rho=0.5,w=3").unwrap_err().contains("'w'"));
         assert!(Case::parse("cube").is_err());

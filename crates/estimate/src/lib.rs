@@ -55,8 +55,8 @@ pub enum SingularityMode {
     None,
 }
 
-/// Default kernel regularisation radius, as a fraction of the scene's bounding-box diagonal
-/// (chosen from the corner measurement in the README).
+/// Default kernel regularisation radius, as a fraction of the scene's room scale (the smallest
+/// non-flat side of its bounding box; chosen from the corner measurement in the README).
 pub const DEFAULT_EPS_FRACTION: f64 = 1e-3;
 
 #[derive(Subcommand, Debug)]
@@ -71,9 +71,20 @@ pub enum Command {
         /// How the kernel singularity near sensor points is controlled.
         #[arg(long, value_enum, default_value_t = SingularityMode::Ball)]
         singularity: SingularityMode,
-        /// Regularisation radius in m [default: 1e-3 of the scene diagonal].
+        /// Regularisation radius in m [default: 1e-3 of the room scale, the smallest non-flat
+        /// side of the scene's bounding box].
         #[arg(long)]
         eps: Option<f64>,
+    },
+    /// Direct simulation baseline: photons counted in disks around the sensor points.
+    Direct {
+        #[command(flatten)]
+        run: RunArgs,
+        #[arg(long, default_value_t = 100_000)]
+        paths: u64,
+        /// Radius of the counting disk around each sensor, m.
+        #[arg(long)]
+        bin_radius: f64,
     },
     /// Backward (gathering) estimate at the sensor points: an independent reference that has
     /// no kernel singularity (scenes without specular paths).
@@ -93,12 +104,16 @@ pub enum Command {
     Compare {
         /// Sensor results (.sensors.ron).
         results: PathBuf,
-        /// Case and parameters, e.g. `sobolev:I=100,h1=1,h2=1,rho1=0.5,rho2=0.5`,
+        /// Case and parameters, e.g. `sobolev:I=100,h1=1,h2=1,rho1=0.5,rho2=0.5[,bin=R]` (bin:
+        /// compare direct-simulation results with the mean over their counting disks),
         /// `sphere:I=100,R=1,rho=0.5[,x=..,y=..,z=..]`, `cie171-5.8:flux=1e4,area=96,rho=0.5,x=2,y=2,z=2`.
         #[arg(long)]
         case: String,
         #[arg(long, default_value_t = 4.0)]
         max_z: f64,
+        /// Compare only these sensor sets (comma-separated names) [default: all].
+        #[arg(long, value_delimiter = ',')]
+        sets: Vec<String>,
     },
 }
 
@@ -232,7 +247,7 @@ pub fn run(args: Args) -> Result<()> {
                 return Err(Error::Usage("--paths must be at least --batches".into()));
             }
             let world = load_world(&run.scene)?;
-            let eps = eps.unwrap_or(DEFAULT_EPS_FRACTION * world.diagonal);
+            let eps = eps.unwrap_or(DEFAULT_EPS_FRACTION * world.room_scale);
             if !(eps > 0.0 && eps.is_finite()) {
                 return Err(Error::Usage(format!("--eps must be positive, got {eps}")));
             }
@@ -247,7 +262,7 @@ pub fn run(args: Args) -> Result<()> {
                 batches: run.batches,
                 seed: run.common.seed,
                 threads: parallel::thread_count(run.common.threads),
-                singularity: sing,
+                detector: local::Detector::LocalEstimate(sing),
                 max_depth: run.max_depth,
             };
             let r = local::estimate(&world, &sensors, &cfg);
@@ -269,6 +284,35 @@ pub fn run(args: Args) -> Result<()> {
                 r.shadow_rays,
                 r.seconds
             );
+            Ok(())
+        }
+        Command::Direct { run, paths, bin_radius } => {
+            check_run_args(&run)?;
+            if !(bin_radius > 0.0 && bin_radius.is_finite()) {
+                return Err(Error::Usage(format!("--bin-radius must be positive, got {bin_radius}")));
+            }
+            let world = load_world(&run.scene)?;
+            let sensors = all_sensors(&world);
+            let cfg = local::LocalConfig {
+                paths,
+                batches: run.batches,
+                seed: run.common.seed,
+                threads: parallel::thread_count(run.common.threads),
+                detector: local::Detector::Bins { radius: bin_radius },
+                max_depth: run.max_depth,
+            };
+            let r = local::estimate(&world, &sensors, &cfg);
+            let info = RunInfo {
+                samples: paths,
+                seed: run.common.seed,
+                seconds: r.seconds,
+                estimator: "direct-simulation".into(),
+                scene_hash: world.scene.content_hash.clone(),
+                program_version: PROGRAM_VERSION.into(),
+            };
+            let values: Vec<_> = (0..sensors.len()).map(|i| (r.rgb[i], r.value[i], r.standard_error[i])).collect();
+            let out = write_results(&world, &run, info, format!("bins(radius={bin_radius:e} m)"), &values)?;
+            eprintln!("wrote {}: {} paths, {:.2} s", out.display(), paths, r.seconds);
             Ok(())
         }
         Command::Gather { run, samples } => {
@@ -303,9 +347,14 @@ pub fn run(args: Args) -> Result<()> {
             print_exact(case);
             Ok(())
         }
-        Command::Compare { results, case, max_z } => {
+        Command::Compare {
+            results,
+            case,
+            max_z,
+            sets,
+        } => {
             let case = compare::Case::parse(&case).map_err(|m| Error::Usage(format!("--case: {m}")))?;
-            compare::run(&results, &case, max_z)
+            compare::run(&results, &case, max_z, &sets)
         }
     }
 }

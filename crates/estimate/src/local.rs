@@ -16,7 +16,7 @@
 //! Standard errors come from independent batches (see [`crate::parallel`]). All sums are f64.
 
 use crate::parallel::{mean_and_standard_error, run_batches};
-use crate::singularity::Singularity;
+pub use crate::singularity::Singularity;
 use luxest_core::bsdf::{self, Transport};
 use luxest_core::color::Rgb;
 use luxest_core::compiled::Emitter;
@@ -26,13 +26,24 @@ use luxest_core::sampling::Rng;
 use luxest_core::scene::SensorPoint;
 use luxest_core::world::World;
 
+/// How sensors receive light from the random walk.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Detector {
+    /// The local estimate: a deterministic connection from every collision to every sensor.
+    LocalEstimate(Singularity),
+    /// Direct simulation (the baseline): a sensor counts the flux of the photons that land on
+    /// its surface within `radius` of it, divided by the disk area π radius²; no connections,
+    /// no exact direct term.
+    Bins { radius: f64 },
+}
+
 #[derive(Clone, Debug)]
 pub struct LocalConfig {
     pub paths: u64,
     pub batches: usize,
     pub seed: u64,
     pub threads: usize,
-    pub singularity: Singularity,
+    pub detector: Detector,
     /// Safety bound on path length; with survival probability q the bias is at most q^max_depth.
     pub max_depth: u32,
 }
@@ -180,6 +191,24 @@ pub fn point_source_direct(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
         .collect()
 }
 
+/// Direct simulation: the photon arriving at `x` (travelling along `dir`) on a surface with
+/// normal `ng` deposits its flux `q` into every bin it lands in.
+fn deposit(sensors: &[SensorPoint], radius: f64, x: Vec3, ng: Vec3, dir: Vec3, q: Rgb, out: &mut BatchSums) {
+    let inv_area = 1.0 / (std::f64::consts::PI * radius * radius);
+    for (i, s) in sensors.iter().enumerate() {
+        let v = x - s.position;
+        if v.length_squared() < radius * radius
+            && ng.dot(s.normal).abs() > 0.999
+            && v.dot(s.normal).abs() < 1e-3 * radius
+            && dir.dot(s.normal) < 0.0
+        {
+            for c in 0..3 {
+                out.sums[i][c] += q.0[c] * inv_area;
+            }
+        }
+    }
+}
+
 fn run_batch(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig, batch: usize, paths: u64) -> BatchSums {
     let mut rng = Rng::new(cfg.seed, batch as u64 + 1);
     let mut out = BatchSums {
@@ -193,8 +222,10 @@ fn run_batch(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig, batch: u
         let mut q = e.flux;
         let mut origin = e.position;
         if let Some(n) = e.normal {
-            let src = Source::Emitter { normal: n };
-            connect(world, sensors, &cfg.singularity, e.position, n, &src, q, &mut scratch, &mut out);
+            if let Detector::LocalEstimate(sing) = &cfg.detector {
+                let src = Source::Emitter { normal: n };
+                connect(world, sensors, sing, e.position, n, &src, q, &mut scratch, &mut out);
+            }
             origin = world.offset(e.position, n, e.direction);
         }
         let mut dir = e.direction;
@@ -203,14 +234,18 @@ fn run_batch(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig, batch: u
             out.collisions += 1;
             let material = world.material(sp.triangle);
             let wo = -dir;
-            if !bsdf::is_delta(material) {
-                let src = Source::Collision {
-                    material,
-                    wo,
-                    ng: sp.ng,
-                    ns: sp.ns,
-                };
-                connect(world, sensors, &cfg.singularity, sp.position, sp.ng, &src, q, &mut scratch, &mut out);
+            match &cfg.detector {
+                Detector::LocalEstimate(sing) if !bsdf::is_delta(material) => {
+                    let src = Source::Collision {
+                        material,
+                        wo,
+                        ng: sp.ng,
+                        ns: sp.ns,
+                    };
+                    connect(world, sensors, sing, sp.position, sp.ng, &src, q, &mut scratch, &mut out);
+                }
+                Detector::LocalEstimate(_) => {}
+                Detector::Bins { radius } => deposit(sensors, *radius, sp.position, sp.ng, dir, q, &mut out),
             }
             let Some(s) = bsdf::sample(material, wo, sp.ng, sp.ns, rng.next_2d(), rng.next_f64(), Transport::Flux) else {
                 break;
@@ -230,7 +265,10 @@ fn run_batch(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig, batch: u
 /// Runs the local estimate for `sensors`.
 pub fn estimate(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig) -> LocalResult {
     let start = std::time::Instant::now();
-    let direct = point_source_direct(world, sensors);
+    let direct = match cfg.detector {
+        Detector::LocalEstimate(_) => point_source_direct(world, sensors),
+        Detector::Bins { .. } => vec![Rgb::BLACK; sensors.len()],
+    };
     let batches = cfg.batches.max(2);
     let per_batch = |b: usize| cfg.paths / batches as u64 + u64::from((b as u64) < cfg.paths % batches as u64);
     let results = run_batches(batches, cfg.threads, "local estimate", |b| {
