@@ -23,8 +23,8 @@ pub mod meta;
 pub mod quadrature;
 pub mod rt;
 pub mod sampling;
-pub mod world;
 pub mod scene;
 pub mod sensors;
+pub mod world;
 
 pub use error::{Error, Result};

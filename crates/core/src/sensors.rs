@@ -53,7 +53,12 @@ impl SensorResults {
     pub fn write_csv(&self, path: &Path) -> Result<()> {
         crate::fsio::write_atomically(path, |w| {
             let io = |e| Error::io(path, e);
-            writeln!(w, "set,index,x,y,z,nx,ny,nz,value_{u},standard_error_{u},r,g,b", u = self.unit).map_err(io)?;
+            writeln!(
+                w,
+                "set,index,x,y,z,nx,ny,nz,value_{u},standard_error_{u},r,g,b",
+                u = self.unit
+            )
+            .map_err(io)?;
             for s in &self.sets {
                 for (i, p) in s.points.iter().enumerate() {
                     writeln!(

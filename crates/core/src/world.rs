@@ -69,7 +69,10 @@ impl World {
         let tracer = RayTracer::for_scene(&scene, true)?;
         let weights: Vec<f64> = scene.header.emitters.iter().map(Emitter::flux_lm).collect();
         let emitter_choice = Distribution1D::new(&weights).ok_or_else(|| {
-            crate::Error::input(&scene.header.name, "scene has no emitter with positive flux")
+            crate::Error::input(
+                &scene.header.name,
+                "scene has no emitter with positive flux",
+            )
         })?;
         let triangle_choice = scene
             .header
@@ -113,7 +116,10 @@ impl World {
             .into_iter()
             .filter(|&s| s > 1e-6 * diagonal)
             .fold(diagonal, f64::min);
-        let extent = lo.max_abs_component().max(hi.max_abs_component()).max(diagonal);
+        let extent = lo
+            .max_abs_component()
+            .max(hi.max_abs_component())
+            .max(diagonal);
         // f32 geometry: positions are accurate to ~6e-8 of the largest coordinate.
         let epsilon = 1e-6 * extent;
         Ok(World {
@@ -139,7 +145,10 @@ impl World {
     /// Unit geometric normal of a triangle.
     pub fn geometric_normal(&self, triangle: u32) -> Vec3 {
         let [a, b, c] = self.scene.triangle(triangle as usize);
-        (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::new(0.0, 0.0, 1.0))
+        (b - a)
+            .cross(c - a)
+            .try_normalize()
+            .unwrap_or(Vec3::new(0.0, 0.0, 1.0))
     }
 
     /// The surface point of a hit.
@@ -149,7 +158,10 @@ impl World {
         let [a, b, c] = idx.map(|i| Vec3::from(self.scene.positions[i as usize]));
         let (u, v) = (hit.u, hit.v);
         let position = a * (1.0 - u - v) + b * u + c * v;
-        let ng = (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+        let ng = (b - a)
+            .cross(c - a)
+            .try_normalize()
+            .unwrap_or(Vec3::new(0.0, 0.0, 1.0));
         let [na, nb, nc] = idx.map(|i| Vec3::from(self.scene.normals[i as usize]));
         let ns = (na * (1.0 - u - v) + nb * u + nc * v)
             .try_normalize()
@@ -182,16 +194,37 @@ impl World {
         }
     }
 
-    /// Whether the segment from `from` (already offset) to `to` is blocked, stopping short of
-    /// `to` by the scene epsilon (targets usually lie on surfaces).
+    /// The margin kept at both ends of a segment between two points given in world space.
+    pub fn margin(&self, a: Vec3, b: Vec3) -> f64 {
+        self.epsilon
+            .max(2e-6 * a.max_abs_component().max(b.max_abs_component()))
+    }
+
+    /// Whether the segment from `from` to `to` is blocked, ignoring the margin at both ends:
+    /// both usually lie on surfaces, and a sensor on an edge or in a corner lies on several
+    /// (whose planes pass through the segment's start).
     pub fn occluded(&self, from: Vec3, to: Vec3) -> bool {
         let d = to - from;
         let len = d.length();
-        let eps = self.epsilon.max(2e-6 * to.max_abs_component());
-        if len <= eps {
+        let eps = self.margin(from, to);
+        if len <= 2.0 * eps {
             return false;
         }
-        self.tracer.occluded(from, d / len, 0.0, len - eps)
+        self.tracer.occluded(from, d / len, eps, len - eps)
+    }
+
+    /// Closest surface within `tfar` along a ray that starts on a sensor point: hits closer
+    /// than the margin (the surfaces the sensor itself lies on) are ignored.
+    pub fn intersect_from_sensor(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        tfar: f64,
+    ) -> Option<SurfacePoint> {
+        let eps = self.margin(origin, origin);
+        self.tracer
+            .intersect(origin, direction, eps, tfar)
+            .map(|h| self.surface(&h))
     }
 
     /// Starts a light path: an emitter chosen by flux, a point on it and a direction
@@ -199,7 +232,9 @@ impl World {
     pub fn sample_emission(&self, rng: &mut Rng) -> EmissionSample {
         let (ei, p_e) = self.emitter_choice.sample(rng.next_f64());
         match &self.scene.header.emitters[ei] {
-            Emitter::Point { position, flux_rgb, .. } => EmissionSample {
+            Emitter::Point {
+                position, flux_rgb, ..
+            } => EmissionSample {
                 position: *position,
                 normal: None,
                 direction: uniform_sphere(rng.next_f64(), rng.next_f64()),
@@ -227,7 +262,9 @@ impl World {
         let Emitter::Area { first_triangle, .. } = &self.scene.header.emitters[ei] else {
             unreachable!("sample_area_point on a point emitter")
         };
-        let dist = self.triangle_choice[ei].as_ref().expect("area emitter has triangles");
+        let dist = self.triangle_choice[ei]
+            .as_ref()
+            .expect("area emitter has triangles");
         let (ti, _) = dist.sample(rng.next_f64());
         let t = first_triangle + ti as u32;
         let [a, b, c] = self.scene.triangle(t as usize);
@@ -251,7 +288,9 @@ impl World {
                 pdf: p_e,
             },
             Emitter::Area {
-                radiance_rgb, area_m2, ..
+                radiance_rgb,
+                area_m2,
+                ..
             } => {
                 let (position, normal, _) = self.sample_area_point(ei, rng);
                 LightPoint {
@@ -277,7 +316,10 @@ impl World {
     /// Luminance per channel emitted by the surface of `triangle` towards `w` (zero behind
     /// the emitter or off emitters).
     pub fn emitted_radiance(&self, triangle: u32, ng: Vec3, w: Vec3) -> Rgb {
-        match self.emitter_of(triangle).map(|e| &self.scene.header.emitters[e as usize]) {
+        match self
+            .emitter_of(triangle)
+            .map(|e| &self.scene.header.emitters[e as usize])
+        {
             Some(Emitter::Area { radiance_rgb, .. }) if ng.dot(w) > 0.0 => *radiance_rgb,
             _ => Rgb::BLACK,
         }

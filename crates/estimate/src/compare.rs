@@ -16,10 +16,20 @@ pub enum Case {
     /// simulation).
     Sobolev(Sobolev, Option<f64>),
     /// Sphere centred at the origin; every sensor on the wall.
-    Sphere { intensity_cd: f64, radius: f64, rho: f64, source: Vec3 },
+    Sphere {
+        intensity_cd: f64,
+        radius: f64,
+        rho: f64,
+        source: Vec3,
+    },
     /// Closed room: compares the area-weighted mean indirect illuminance (value minus the
     /// exact direct term) over all sensors, which must tile the room's surfaces in equal cells.
-    Cie171Room { flux_lm: f64, area_m2: f64, rho: f64, source: Vec3 },
+    Cie171Room {
+        flux_lm: f64,
+        area_m2: f64,
+        rho: f64,
+        source: Vec3,
+    },
 }
 
 /// One compared quantity.
@@ -45,8 +55,13 @@ impl Case {
         let (name, params) = spec.split_once(':').unwrap_or((spec, ""));
         let mut map = BTreeMap::new();
         for kv in params.split(',').filter(|s| !s.is_empty()) {
-            let (k, v) = kv.split_once('=').ok_or_else(|| format!("expected key=value, got '{kv}'"))?;
-            let v: f64 = v.trim().parse().map_err(|_| format!("'{v}' is not a number"))?;
+            let (k, v) = kv
+                .split_once('=')
+                .ok_or_else(|| format!("expected key=value, got '{kv}'"))?;
+            let v: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| format!("'{v}' is not a number"))?;
             map.insert(k.trim().to_string(), v);
         }
         let mut get = |k: &str, default: Option<f64>| {
@@ -71,7 +86,11 @@ impl Case {
                 intensity_cd: get("I", None)?,
                 radius: get("R", None)?,
                 rho: get("rho", None)?,
-                source: Vec3::new(get("x", Some(0.0))?, get("y", Some(0.0))?, get("z", Some(0.0))?),
+                source: Vec3::new(
+                    get("x", Some(0.0))?,
+                    get("y", Some(0.0))?,
+                    get("z", Some(0.0))?,
+                ),
             },
             "cie171-5.8" => Case::Cie171Room {
                 flux_lm: get("flux", None)?,
@@ -79,7 +98,11 @@ impl Case {
                 rho: get("rho", None)?,
                 source: Vec3::new(get("x", None)?, get("y", None)?, get("z", None)?),
             },
-            other => return Err(format!("unknown case '{other}' (sobolev, sphere, cie171-5.8)")),
+            other => {
+                return Err(format!(
+                    "unknown case '{other}' (sobolev, sphere, cie171-5.8)"
+                ))
+            }
         };
         if let Some(k) = map.keys().next() {
             return Err(format!("unknown parameter '{k}' for case {name}"));
@@ -89,7 +112,10 @@ impl Case {
 
     /// The rows to compare for `results`.
     pub fn rows(&self, results: &SensorResults) -> Vec<Row> {
-        let points = results.sets.iter().flat_map(|s| s.points.iter().map(move |p| (s.name.as_str(), p)));
+        let points = results
+            .sets
+            .iter()
+            .flat_map(|s| s.points.iter().map(move |p| (s.name.as_str(), p)));
         match self {
             Case::Sobolev(s, bin) => points
                 .map(|(set, p)| {
@@ -114,8 +140,17 @@ impl Case {
                 source,
             } => points
                 .map(|(set, p)| Row {
-                    label: format!("{set} ({:.3}, {:.3}, {:.3})", p.position.x, p.position.y, p.position.z),
-                    exact: exact::integrating_sphere_illuminance(*intensity_cd, *radius, *rho, *source, p.position),
+                    label: format!(
+                        "{set} ({:.3}, {:.3}, {:.3})",
+                        p.position.x, p.position.y, p.position.z
+                    ),
+                    exact: exact::integrating_sphere_illuminance(
+                        *intensity_cd,
+                        *radius,
+                        *rho,
+                        *source,
+                        p.position,
+                    ),
                     estimate: p.value,
                     standard_error: p.standard_error,
                 })
@@ -129,7 +164,8 @@ impl Case {
                 let intensity = flux_lm / (4.0 * std::f64::consts::PI);
                 let (mut sum, mut var, mut n) = (0.0, 0.0, 0.0);
                 for (_, p) in points {
-                    sum += p.value - exact::point_source_illuminance(intensity, *source, p.position, p.normal);
+                    sum += p.value
+                        - exact::point_source_illuminance(intensity, *source, p.position, p.normal);
                     var += p.standard_error * p.standard_error;
                     n += 1.0;
                 }
@@ -181,7 +217,10 @@ pub fn run(path: &Path, case: &Case, max_z: f64, sets: &[String]) -> Result<()> 
     if !sets.is_empty() {
         for name in sets {
             if !results.sets.iter().any(|s| &s.name == name) {
-                return Err(Error::input(path, format!("no sensor set named \"{name}\"")));
+                return Err(Error::input(
+                    path,
+                    format!("no sensor set named \"{name}\""),
+                ));
             }
         }
         results.sets.retain(|s| sets.contains(&s.name));
@@ -196,7 +235,13 @@ pub fn run(path: &Path, case: &Case, max_z: f64, sets: &[String]) -> Result<()> 
     );
     let bad = print_table(&title, &rows, max_z);
     if bad > 0 {
-        return Err(Error::input(path, format!("validation failed: {bad} of {} values have |z| > {max_z}", rows.len())));
+        return Err(Error::input(
+            path,
+            format!(
+                "validation failed: {bad} of {} values have |z| > {max_z}",
+                rows.len()
+            ),
+        ));
     }
     Ok(())
 }
@@ -211,8 +256,12 @@ mod tests {
         assert!(matches!(c, Case::Sobolev(s, None) if s.h2 == 2.0 && s.rho2 == 0.9));
         let c = Case::parse("sobolev:I=100,h1=1,h2=2,rho1=0.5,rho2=0.9,bin=0.1").unwrap();
         assert!(matches!(c, Case::Sobolev(_, Some(b)) if b == 0.1));
-        assert!(Case::parse("sobolev:I=100,h1=1").unwrap_err().contains("h2"));
-        assert!(Case::parse("sphere:I=1,R=1,rho=0.5,w=3").unwrap_err().contains("'w'"));
+        assert!(Case::parse("sobolev:I=100,h1=1")
+            .unwrap_err()
+            .contains("h2"));
+        assert!(Case::parse("sphere:I=1,R=1,rho=0.5,w=3")
+            .unwrap_err()
+            .contains("'w'"));
         assert!(Case::parse("cube").is_err());
     }
 }

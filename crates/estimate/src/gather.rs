@@ -15,7 +15,7 @@ use luxest_core::color::Rgb;
 use luxest_core::math::Vec3;
 use luxest_core::sampling::{cosine_hemisphere, Rng};
 use luxest_core::scene::SensorPoint;
-use luxest_core::world::World;
+use luxest_core::world::{SurfacePoint, World};
 use std::f64::consts::PI;
 
 #[derive(Clone, Debug)]
@@ -31,7 +31,14 @@ pub struct GatherConfig {
 /// Light arriving at `x` (surface normal `n`, towards directions on `n`'s side) from one
 /// sampled light point, times `f cos` evaluated by `response(w_to_light)`: the next-event
 /// estimate for area and point emitters. Point sources are skipped when `skip_points`.
-fn next_event(world: &World, x: Vec3, n: Vec3, rng: &mut Rng, response: impl Fn(Vec3) -> Rgb, skip_points: bool) -> Rgb {
+fn next_event(
+    world: &World,
+    x: Vec3,
+    n: Vec3,
+    rng: &mut Rng,
+    response: impl Fn(Vec3) -> Rgb,
+    skip_points: bool,
+) -> Rgb {
     let l = world.sample_light_point(rng);
     let v = l.position - x;
     let d2 = v.length_squared();
@@ -61,24 +68,41 @@ fn next_event(world: &World, x: Vec3, n: Vec3, rng: &mut Rng, response: impl Fn(
     l.emitted * r * (geometric / l.pdf)
 }
 
-fn sample_once(world: &World, s: &SensorPoint, rng: &mut Rng, max_depth: u32) -> Rgb {
-    let n = s.normal;
-    // Direct light from area emitters (point sources are added exactly by the caller).
-    let mut e = next_event(world, s.position, n, rng, |w| Rgb::splat(n.dot(w).max(0.0)), true);
-    // Indirect: cosine-sampled direction, weight pi.
-    let local = cosine_hemisphere(rng.next_f64(), rng.next_f64());
-    let (t, b) = n.orthonormal_basis();
-    let mut dir = t * local.x + b * local.y + n * local.z;
-    let mut origin = world.offset(s.position, n, dir);
-    let mut beta = Rgb::splat(PI);
+/// Reflected radiance leaving the surface point `sp` towards `-dir` (emission at `sp`
+/// excluded), by a path with next-event estimation at every vertex.
+fn reflected_radiance(
+    world: &World,
+    first: SurfacePoint,
+    dir: Vec3,
+    rng: &mut Rng,
+    max_depth: u32,
+) -> Rgb {
+    let mut l = Rgb::BLACK;
+    let mut beta = Rgb::WHITE;
+    let mut sp = first;
+    let mut dir = dir;
     for _ in 0..max_depth {
-        let Some(sp) = world.intersect(origin, dir) else { break };
         let m = world.material(sp.triangle);
         let wo = -dir;
         let ng = if wo.dot(sp.ng) >= 0.0 { sp.ng } else { -sp.ng };
-        let radiance = next_event(world, sp.position, ng, rng, |w| bsdf::eval(m, wo, w, sp.ng, sp.ns) * w.dot(sp.ns).abs(), false);
-        e = e + beta * radiance;
-        let Some(smp) = bsdf::sample(m, wo, sp.ng, sp.ns, rng.next_2d(), rng.next_f64(), Transport::Radiance) else {
+        let radiance = next_event(
+            world,
+            sp.position,
+            ng,
+            rng,
+            |w| bsdf::eval(m, wo, w, sp.ng, sp.ns) * w.dot(sp.ns).abs(),
+            false,
+        );
+        l = l + beta * radiance;
+        let Some(smp) = bsdf::sample(
+            m,
+            wo,
+            sp.ng,
+            sp.ns,
+            rng.next_2d(),
+            rng.next_f64(),
+            Transport::Radiance,
+        ) else {
             break;
         };
         let survival = smp.weight.max_component().min(1.0);
@@ -86,14 +110,72 @@ fn sample_once(world: &World, s: &SensorPoint, rng: &mut Rng, max_depth: u32) ->
             break;
         }
         beta = beta * smp.weight * (1.0 / survival);
-        origin = world.offset(sp.position, sp.ng, smp.wi);
+        let origin = world.offset(sp.position, sp.ng, smp.wi);
         dir = smp.wi;
+        match world.intersect(origin, dir) {
+            Some(next) => sp = next,
+            None => break,
+        }
+    }
+    l
+}
+
+/// A cosine-distributed direction about `n` and the ray origin just off the sensor.
+fn sensor_ray(world: &World, s: &SensorPoint, rng: &mut Rng) -> (Vec3, Vec3) {
+    let n = s.normal;
+    let local = cosine_hemisphere(rng.next_f64(), rng.next_f64());
+    let (t, b) = n.orthonormal_basis();
+    let dir = t * local.x + b * local.y + n * local.z;
+    (world.offset(s.position, n, dir), dir)
+}
+
+fn sample_once(world: &World, s: &SensorPoint, rng: &mut Rng, max_depth: u32) -> Rgb {
+    let n = s.normal;
+    // Direct light from area emitters (point sources are added exactly by the caller).
+    let mut e = next_event(
+        world,
+        s.position,
+        n,
+        rng,
+        |w| Rgb::splat(n.dot(w).max(0.0)),
+        true,
+    );
+    // Indirect: cosine-sampled direction, weight pi.
+    let (origin, dir) = sensor_ray(world, s, rng);
+    if let Some(sp) = world.intersect_from_sensor(origin, dir, f64::INFINITY) {
+        e = e + reflected_radiance(world, sp, dir, rng, max_depth) * PI;
     }
     e
 }
 
+/// Near-field part of the illuminance at a sensor: light whose last scattering (or emission)
+/// happened on a surface closer than `radius` along the line of sight. Together with the local
+/// estimate restricted to collisions at least `radius` away, it partitions E exactly (the
+/// local estimate's visibility term makes "collision j" equal "first surface seen towards j").
+pub fn near_field_sample(
+    world: &World,
+    s: &SensorPoint,
+    radius: f64,
+    rng: &mut Rng,
+    max_depth: u32,
+) -> Rgb {
+    let (origin, dir) = sensor_ray(world, s, rng);
+    let Some(sp) = world.intersect_from_sensor(origin, dir, radius) else {
+        return Rgb::BLACK;
+    };
+    if (sp.position - s.position).length_squared() >= radius * radius {
+        return Rgb::BLACK;
+    }
+    let emitted = world.emitted_radiance(sp.triangle, sp.ng, -dir);
+    (emitted + reflected_radiance(world, sp, dir, rng, max_depth)) * PI
+}
+
 /// Per sensor: (RGB mean, Y mean, Y standard error).
-pub fn estimate(world: &World, sensors: &[SensorPoint], cfg: &GatherConfig) -> Vec<(Rgb, f64, f64)> {
+pub fn estimate(
+    world: &World,
+    sensors: &[SensorPoint],
+    cfg: &GatherConfig,
+) -> Vec<(Rgb, f64, f64)> {
     let direct = point_source_direct(world, sensors);
     let batches = cfg.batches.max(2);
     let per_batch = (cfg.samples / batches as u64).max(1);

@@ -8,6 +8,7 @@ pub mod compare;
 pub mod gather;
 pub mod local;
 pub mod parallel;
+pub mod placement;
 pub mod singularity;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -46,7 +47,33 @@ pub struct RunArgs {
     /// Safety bound on path length (the bias it causes is below q^max_depth for survival q).
     #[arg(long, default_value_t = 100_000)]
     pub max_depth: u32,
+    /// Sensors on edges or in corners are evaluated this far off the adjacent surfaces, m
+    /// [default: 1e-3 of the room scale, the smallest non-flat side of the bounding box].
+    #[arg(long)]
+    pub edge_offset: Option<f64>,
 }
+
+impl RunArgs {
+    fn edge_offset(&self, world: &World) -> Result<f64> {
+        let d = self
+            .edge_offset
+            .unwrap_or(DEFAULT_EDGE_OFFSET_FRACTION * world.room_scale);
+        if d > 0.0 && d.is_finite() {
+            Ok(d)
+        } else {
+            Err(Error::Usage(format!(
+                "--edge-offset must be positive, got {d}"
+            )))
+        }
+    }
+}
+
+/// Default near-field radius, as a fraction of the room scale.
+pub const DEFAULT_NEAR_FRACTION: f64 = 1e-2;
+
+/// Default distance of edge/corner sensors from the adjacent surfaces, as a fraction of the
+/// room scale.
+pub const DEFAULT_EDGE_OFFSET_FRACTION: f64 = 1e-3;
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
 pub enum SingularityMode {
@@ -75,6 +102,13 @@ pub enum Command {
         /// side of the scene's bounding box].
         #[arg(long)]
         eps: Option<f64>,
+        /// Near-field radius, m: for sensors with another surface this close, collisions
+        /// nearer than this are estimated backwards instead [default: 1e-2 of the room scale].
+        #[arg(long)]
+        near_radius: Option<f64>,
+        /// Backward samples per near-field sensor (0 disables the split).
+        #[arg(long, default_value_t = 20_000)]
+        near_samples: u64,
     },
     /// Direct simulation baseline: photons counted in disks around the sensor points.
     Direct {
@@ -159,7 +193,10 @@ pub enum ExactCase {
 pub fn load_world(path: &Path) -> Result<World> {
     let scene = CompiledScene::load(path)?;
     if scene.header.sensors.is_empty() {
-        return Err(Error::input(path, "scene has no sensors (add Points or Grid sensors to the .ron)"));
+        return Err(Error::input(
+            path,
+            "scene has no sensors (add Points or Grid sensors to the .ron)",
+        ));
     }
     World::new(scene).map_err(|e| match e {
         Error::Usage(m) => Error::input(path, m),
@@ -168,7 +205,23 @@ pub fn load_world(path: &Path) -> Result<World> {
 }
 
 fn all_sensors(world: &World) -> Vec<SensorPoint> {
-    world.scene.header.sensors.iter().flat_map(|s| s.points.iter().copied()).collect()
+    world
+        .scene
+        .header
+        .sensors
+        .iter()
+        .flat_map(|s| s.points.iter().copied())
+        .collect()
+}
+
+/// The sensors as evaluated: moved off adjacent surfaces by `delta`, flagged when another
+/// surface lies within `near_radius` (see [`placement`]).
+fn evaluation_points(world: &World, delta: f64, near_radius: f64) -> placement::Placement {
+    let p = placement::place(world, &all_sensors(world), delta, near_radius);
+    if p.moved > 0 {
+        eprintln!("note: {} sensor(s) on edges or in corners are evaluated {delta:e} m off the adjacent surfaces", p.moved);
+    }
+    p
 }
 
 fn default_out(scene: &Path, name: &str) -> PathBuf {
@@ -208,8 +261,15 @@ fn write_results(
                 .collect(),
         })
         .collect();
-    if let Some((i, _)) = values.iter().enumerate().find(|(_, v)| !(v.1.is_finite() && v.2.is_finite())) {
-        return Err(Error::input(&run.scene, format!("estimate at sensor {i} is not finite")));
+    if let Some((i, _)) = values
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !(v.1.is_finite() && v.2.is_finite()))
+    {
+        return Err(Error::input(
+            &run.scene,
+            format!("estimate at sensor {i} is not finite"),
+        ));
     }
     let results = SensorResults {
         scene: world.scene.header.name.clone(),
@@ -218,7 +278,10 @@ fn write_results(
         singularity,
         sets,
     };
-    let out = run.out.clone().unwrap_or_else(|| default_out(&run.scene, &world.scene.header.name));
+    let out = run
+        .out
+        .clone()
+        .unwrap_or_else(|| default_out(&run.scene, &world.scene.header.name));
     results.write_ron(&out)?;
     if let Some(csv) = &run.csv {
         results.write_csv(csv)?;
@@ -228,7 +291,9 @@ fn write_results(
 
 fn check_run_args(run: &RunArgs) -> Result<()> {
     if run.batches < 2 {
-        return Err(Error::Usage("--batches must be at least 2 (the standard error needs them)".into()));
+        return Err(Error::Usage(
+            "--batches must be at least 2 (the standard error needs them)".into(),
+        ));
     }
     Ok(())
 }
@@ -241,6 +306,8 @@ pub fn run(args: Args) -> Result<()> {
             paths,
             singularity,
             eps,
+            near_radius,
+            near_samples,
         } => {
             check_run_args(&run)?;
             if paths < run.batches as u64 {
@@ -256,7 +323,13 @@ pub fn run(args: Args) -> Result<()> {
                 SingularityMode::Clamp => Singularity::Clamp { eps },
                 SingularityMode::None => Singularity::None,
             };
-            let sensors = all_sensors(&world);
+            let near_radius = near_radius.unwrap_or(DEFAULT_NEAR_FRACTION * world.room_scale);
+            let placed = evaluation_points(&world, run.edge_offset(&world)?, near_radius);
+            let sensors = placed.points;
+            let near_field = (near_samples > 0).then_some(local::NearField {
+                radius: near_radius,
+                samples: near_samples,
+            });
             let cfg = local::LocalConfig {
                 paths,
                 batches: run.batches,
@@ -264,8 +337,9 @@ pub fn run(args: Args) -> Result<()> {
                 threads: parallel::thread_count(run.common.threads),
                 detector: local::Detector::LocalEstimate(sing),
                 max_depth: run.max_depth,
+                near_field,
             };
-            let r = local::estimate(&world, &sensors, &cfg);
+            let r = local::estimate(&world, &sensors, &placed.near, &cfg);
             let info = RunInfo {
                 samples: paths,
                 seed: run.common.seed,
@@ -274,7 +348,9 @@ pub fn run(args: Args) -> Result<()> {
                 scene_hash: world.scene.content_hash.clone(),
                 program_version: PROGRAM_VERSION.into(),
             };
-            let values: Vec<_> = (0..sensors.len()).map(|i| (r.rgb[i], r.value[i], r.standard_error[i])).collect();
+            let values: Vec<_> = (0..sensors.len())
+                .map(|i| (r.rgb[i], r.value[i], r.standard_error[i]))
+                .collect();
             let out = write_results(&world, &run, info, sing.to_string(), &values)?;
             eprintln!(
                 "wrote {}: {} paths, {} collisions, {} shadow rays, {:.2} s",
@@ -286,10 +362,16 @@ pub fn run(args: Args) -> Result<()> {
             );
             Ok(())
         }
-        Command::Direct { run, paths, bin_radius } => {
+        Command::Direct {
+            run,
+            paths,
+            bin_radius,
+        } => {
             check_run_args(&run)?;
             if !(bin_radius > 0.0 && bin_radius.is_finite()) {
-                return Err(Error::Usage(format!("--bin-radius must be positive, got {bin_radius}")));
+                return Err(Error::Usage(format!(
+                    "--bin-radius must be positive, got {bin_radius}"
+                )));
             }
             let world = load_world(&run.scene)?;
             let sensors = all_sensors(&world);
@@ -300,8 +382,9 @@ pub fn run(args: Args) -> Result<()> {
                 threads: parallel::thread_count(run.common.threads),
                 detector: local::Detector::Bins { radius: bin_radius },
                 max_depth: run.max_depth,
+                near_field: None,
             };
-            let r = local::estimate(&world, &sensors, &cfg);
+            let r = local::estimate(&world, &sensors, &vec![false; sensors.len()], &cfg);
             let info = RunInfo {
                 samples: paths,
                 seed: run.common.seed,
@@ -310,18 +393,34 @@ pub fn run(args: Args) -> Result<()> {
                 scene_hash: world.scene.content_hash.clone(),
                 program_version: PROGRAM_VERSION.into(),
             };
-            let values: Vec<_> = (0..sensors.len()).map(|i| (r.rgb[i], r.value[i], r.standard_error[i])).collect();
-            let out = write_results(&world, &run, info, format!("bins(radius={bin_radius:e} m)"), &values)?;
-            eprintln!("wrote {}: {} paths, {:.2} s", out.display(), paths, r.seconds);
+            let values: Vec<_> = (0..sensors.len())
+                .map(|i| (r.rgb[i], r.value[i], r.standard_error[i]))
+                .collect();
+            let out = write_results(
+                &world,
+                &run,
+                info,
+                format!("bins(radius={bin_radius:e} m)"),
+                &values,
+            )?;
+            eprintln!(
+                "wrote {}: {} paths, {:.2} s",
+                out.display(),
+                paths,
+                r.seconds
+            );
             Ok(())
         }
         Command::Gather { run, samples } => {
             check_run_args(&run)?;
             let world = load_world(&run.scene)?;
             if world.scene.header.features.specular_paths {
-                return Err(Error::input(&run.scene, "gather needs a scene without mirrors or dielectrics"));
+                return Err(Error::input(
+                    &run.scene,
+                    "gather needs a scene without mirrors or dielectrics",
+                ));
             }
-            let sensors = all_sensors(&world);
+            let sensors = evaluation_points(&world, run.edge_offset(&world)?, 0.0).points;
             let cfg = gather::GatherConfig {
                 samples,
                 batches: run.batches,
@@ -339,7 +438,13 @@ pub fn run(args: Args) -> Result<()> {
                 scene_hash: world.scene.content_hash.clone(),
                 program_version: PROGRAM_VERSION.into(),
             };
-            let out = write_results(&world, &run, info, "none (backward estimator)".into(), &values)?;
+            let out = write_results(
+                &world,
+                &run,
+                info,
+                "none (backward estimator)".into(),
+                &values,
+            )?;
             eprintln!("wrote {}", out.display());
             Ok(())
         }
@@ -353,7 +458,8 @@ pub fn run(args: Args) -> Result<()> {
             max_z,
             sets,
         } => {
-            let case = compare::Case::parse(&case).map_err(|m| Error::Usage(format!("--case: {m}")))?;
+            let case =
+                compare::Case::parse(&case).map_err(|m| Error::Usage(format!("--case: {m}")))?;
             compare::run(&results, &case, max_z, &sets)
         }
     }
@@ -377,8 +483,15 @@ fn print_exact(case: ExactCase) {
                 rho2,
             };
             println!("Sobolev problem: I = {intensity} cd, h1 = {h1} m, h2 = {h2} m, rho1 = {rho1}, rho2 = {rho2}");
-            println!("flux onto plane 1: {:.9e} lm, onto plane 2: {:.9e} lm", s.flux1(), s.swapped().flux1());
-            println!("{:>10} {:>18} {:>18} {:>18} {:>10}", "r (m)", "E1 (lx)", "E1 direct", "E2 (lx)", "err.bound");
+            println!(
+                "flux onto plane 1: {:.9e} lm, onto plane 2: {:.9e} lm",
+                s.flux1(),
+                s.swapped().flux1()
+            );
+            println!(
+                "{:>10} {:>18} {:>18} {:>18} {:>10}",
+                "r (m)", "E1 (lx)", "E1 direct", "E2 (lx)", "err.bound"
+            );
             for r in r {
                 let (e1, e2) = (s.illuminance1(r), s.illuminance2(r));
                 println!(
@@ -391,7 +504,11 @@ fn print_exact(case: ExactCase) {
                 );
             }
         }
-        ExactCase::Sphere { intensity, radius, rho } => {
+        ExactCase::Sphere {
+            intensity,
+            radius,
+            rho,
+        } => {
             let ind = luxest_core::exact::integrating_sphere_indirect(intensity, radius, rho);
             let direct = intensity / (radius * radius);
             println!("Integrating sphere, central source: I = {intensity} cd, R = {radius} m, rho = {rho}");

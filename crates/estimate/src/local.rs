@@ -37,6 +37,15 @@ pub enum Detector {
     Bins { radius: f64 },
 }
 
+/// The near-field split for sensors close to other surfaces: collisions closer than `radius`
+/// are left to a backward estimate with `samples` samples per sensor (see
+/// [`crate::gather::near_field_sample`]); the two parts partition the illuminance exactly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearField {
+    pub radius: f64,
+    pub samples: u64,
+}
+
 #[derive(Clone, Debug)]
 pub struct LocalConfig {
     pub paths: u64,
@@ -46,6 +55,8 @@ pub struct LocalConfig {
     pub detector: Detector,
     /// Safety bound on path length; with survival probability q the bias is at most q^max_depth.
     pub max_depth: u32,
+    /// Near-field split, applied to the sensors flagged `near`.
+    pub near_field: Option<NearField>,
 }
 
 /// Results per sensor point.
@@ -79,8 +90,15 @@ struct BatchSums {
 
 /// Where a connection starts: a scattering collision or a point on an area emitter.
 enum Source<'a> {
-    Collision { material: &'a luxest_core::scene::Material, wo: Vec3, ng: Vec3, ns: Vec3 },
-    Emitter { normal: Vec3 },
+    Collision {
+        material: &'a luxest_core::scene::Material,
+        wo: Vec3,
+        ng: Vec3,
+        ns: Vec3,
+    },
+    Emitter {
+        normal: Vec3,
+    },
 }
 
 /// Adds the contributions of one vertex at `x` (with geometric normal `ng`) carrying flux `q`
@@ -89,6 +107,7 @@ enum Source<'a> {
 fn connect(
     world: &World,
     sensors: &[SensorPoint],
+    skip_within: &[f64],
     singularity: &Singularity,
     x: Vec3,
     ng: Vec3,
@@ -103,8 +122,10 @@ fn connect(
     for (i, s) in sensors.iter().enumerate() {
         let v = s.position - x;
         let d2 = v.length_squared();
-        if d2 <= min_d2 {
-            continue; // the direction is undefined; a set of measure zero
+        if d2 <= min_d2 || d2 < skip_within[i] * skip_within[i] {
+            // The direction is undefined (a set of measure zero), or the near field is
+            // estimated backwards.
+            continue;
         }
         let d = d2.sqrt();
         let w = v / d;
@@ -113,7 +134,12 @@ fn connect(
             continue;
         }
         let f_cos = match source {
-            Source::Collision { material, wo, ng, ns } => {
+            Source::Collision {
+                material,
+                wo,
+                ng,
+                ns,
+            } => {
                 let f = bsdf::eval(material, *wo, w, *ng, *ns);
                 f * w.dot(*ns).abs()
             }
@@ -132,8 +158,8 @@ fn connect(
         let origin = world.offset(x, ng, w);
         let to = s.position - origin;
         let len = to.length();
-        let eps = world.epsilon.max(2e-6 * s.position.max_abs_component());
-        if len <= eps {
+        let eps = world.margin(origin, s.position);
+        if len <= 2.0 * eps {
             // Closer than the scene's resolution: nothing can be in between.
             let acc = &mut out.sums[i];
             for c in 0..3 {
@@ -141,16 +167,19 @@ fn connect(
             }
             continue;
         }
+        // The margin at both ends skips the surfaces the sensor lies on (edges, corners).
         scratch.rays.push(Ray {
             origin,
             direction: to / len,
-            tnear: 0.0,
+            tnear: eps,
             tfar: len - eps,
         });
         scratch.targets.push((i, contribution));
     }
     out.shadow_rays += scratch.rays.len() as u64;
-    world.tracer.occluded_many(&scratch.rays, &mut scratch.blocked);
+    world
+        .tracer
+        .occluded_many(&scratch.rays, &mut scratch.blocked);
     for ((i, c), blocked) in scratch.targets.iter().zip(&scratch.blocked) {
         if !blocked {
             let acc = &mut out.sums[*i];
@@ -193,7 +222,15 @@ pub fn point_source_direct(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
 
 /// Direct simulation: the photon arriving at `x` (travelling along `dir`) on a surface with
 /// normal `ng` deposits its flux `q` into every bin it lands in.
-fn deposit(sensors: &[SensorPoint], radius: f64, x: Vec3, ng: Vec3, dir: Vec3, q: Rgb, out: &mut BatchSums) {
+fn deposit(
+    sensors: &[SensorPoint],
+    radius: f64,
+    x: Vec3,
+    ng: Vec3,
+    dir: Vec3,
+    q: Rgb,
+    out: &mut BatchSums,
+) {
     let inv_area = 1.0 / (std::f64::consts::PI * radius * radius);
     for (i, s) in sensors.iter().enumerate() {
         let v = x - s.position;
@@ -209,7 +246,21 @@ fn deposit(sensors: &[SensorPoint], radius: f64, x: Vec3, ng: Vec3, dir: Vec3, q
     }
 }
 
-fn run_batch(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig, batch: usize, paths: u64) -> BatchSums {
+fn run_batch(
+    world: &World,
+    sensors: &[SensorPoint],
+    near: &[bool],
+    cfg: &LocalConfig,
+    batch: usize,
+    paths: u64,
+) -> BatchSums {
+    let skip_within: Vec<f64> = near
+        .iter()
+        .map(|&n| match (n, cfg.near_field) {
+            (true, Some(nf)) => nf.radius,
+            _ => 0.0,
+        })
+        .collect();
     let mut rng = Rng::new(cfg.seed, batch as u64 + 1);
     let mut out = BatchSums {
         sums: vec![[0.0; 3]; sensors.len()],
@@ -224,13 +275,26 @@ fn run_batch(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig, batch: u
         if let Some(n) = e.normal {
             if let Detector::LocalEstimate(sing) = &cfg.detector {
                 let src = Source::Emitter { normal: n };
-                connect(world, sensors, sing, e.position, n, &src, q, &mut scratch, &mut out);
+                connect(
+                    world,
+                    sensors,
+                    &skip_within,
+                    sing,
+                    e.position,
+                    n,
+                    &src,
+                    q,
+                    &mut scratch,
+                    &mut out,
+                );
             }
             origin = world.offset(e.position, n, e.direction);
         }
         let mut dir = e.direction;
         for _ in 0..cfg.max_depth {
-            let Some(sp) = world.intersect(origin, dir) else { break };
+            let Some(sp) = world.intersect(origin, dir) else {
+                break;
+            };
             out.collisions += 1;
             let material = world.material(sp.triangle);
             let wo = -dir;
@@ -242,12 +306,33 @@ fn run_batch(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig, batch: u
                         ng: sp.ng,
                         ns: sp.ns,
                     };
-                    connect(world, sensors, sing, sp.position, sp.ng, &src, q, &mut scratch, &mut out);
+                    connect(
+                        world,
+                        sensors,
+                        &skip_within,
+                        sing,
+                        sp.position,
+                        sp.ng,
+                        &src,
+                        q,
+                        &mut scratch,
+                        &mut out,
+                    );
                 }
                 Detector::LocalEstimate(_) => {}
-                Detector::Bins { radius } => deposit(sensors, *radius, sp.position, sp.ng, dir, q, &mut out),
+                Detector::Bins { radius } => {
+                    deposit(sensors, *radius, sp.position, sp.ng, dir, q, &mut out)
+                }
             }
-            let Some(s) = bsdf::sample(material, wo, sp.ng, sp.ns, rng.next_2d(), rng.next_f64(), Transport::Flux) else {
+            let Some(s) = bsdf::sample(
+                material,
+                wo,
+                sp.ng,
+                sp.ns,
+                rng.next_2d(),
+                rng.next_f64(),
+                Transport::Flux,
+            ) else {
                 break;
             };
             let survival = s.weight.max_component().min(1.0);
@@ -259,20 +344,49 @@ fn run_batch(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig, batch: u
             dir = s.wi;
         }
     }
+    if let (Detector::LocalEstimate(_), Some(nf)) = (&cfg.detector, cfg.near_field) {
+        let samples = (nf.samples / cfg.batches.max(2) as u64).max(1);
+        for (i, s) in sensors.iter().enumerate() {
+            if skip_within[i] > 0.0 {
+                let mut acc = Rgb::BLACK;
+                for _ in 0..samples {
+                    acc = acc
+                        + crate::gather::near_field_sample(
+                            world,
+                            s,
+                            nf.radius,
+                            &mut rng,
+                            cfg.max_depth,
+                        );
+                }
+                // Stored as a sum over `paths` so that the common division gives the mean.
+                let scale = paths as f64 / samples as f64;
+                for c in 0..3 {
+                    out.sums[i][c] += acc.0[c] * scale;
+                }
+            }
+        }
+    }
     out
 }
 
 /// Runs the local estimate for `sensors`.
-pub fn estimate(world: &World, sensors: &[SensorPoint], cfg: &LocalConfig) -> LocalResult {
+pub fn estimate(
+    world: &World,
+    sensors: &[SensorPoint],
+    near: &[bool],
+    cfg: &LocalConfig,
+) -> LocalResult {
     let start = std::time::Instant::now();
     let direct = match cfg.detector {
         Detector::LocalEstimate(_) => point_source_direct(world, sensors),
         Detector::Bins { .. } => vec![Rgb::BLACK; sensors.len()],
     };
     let batches = cfg.batches.max(2);
-    let per_batch = |b: usize| cfg.paths / batches as u64 + u64::from((b as u64) < cfg.paths % batches as u64);
+    let per_batch =
+        |b: usize| cfg.paths / batches as u64 + u64::from((b as u64) < cfg.paths % batches as u64);
     let results = run_batches(batches, cfg.threads, "local estimate", |b| {
-        run_batch(world, sensors, cfg, b, per_batch(b))
+        run_batch(world, sensors, near, cfg, b, per_batch(b))
     });
     let n = sensors.len();
     let mut rgb = vec![Rgb::BLACK; n];

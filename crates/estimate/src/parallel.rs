@@ -7,14 +7,21 @@ use std::sync::Mutex;
 
 /// The number of worker threads: `requested`, or all available cores.
 pub fn thread_count(requested: Option<usize>) -> usize {
-    requested
-        .filter(|&t| t > 0)
-        .unwrap_or_else(|| std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))
+    requested.filter(|&t| t > 0).unwrap_or_else(|| {
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1)
+    })
 }
 
 /// Runs `work(b)` for b in 0..batches on `threads` threads; returns the results in batch order.
 /// Shows a progress line on stderr when it is a terminal.
-pub fn run_batches<T: Send>(batches: usize, threads: usize, label: &str, work: impl Fn(usize) -> T + Sync) -> Vec<T> {
+pub fn run_batches<T: Send>(
+    batches: usize,
+    threads: usize,
+    label: &str,
+    work: impl Fn(usize) -> T + Sync,
+) -> Vec<T> {
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<T>>> = Mutex::new((0..batches).map(|_| None).collect());
@@ -41,7 +48,12 @@ pub fn run_batches<T: Send>(batches: usize, threads: usize, label: &str, work: i
     if progress {
         eprintln!();
     }
-    results.into_inner().unwrap().into_iter().map(|r| r.expect("every batch ran")).collect()
+    results
+        .into_inner()
+        .unwrap()
+        .into_iter()
+        .map(|r| r.expect("every batch ran"))
+        .collect()
 }
 
 /// Mean and standard error of the mean of independent batch values.

@@ -93,7 +93,10 @@ mod tests {
         for d in [0.0, 0.03, 0.099, 0.1, 0.101, 0.15, 0.5, 3.0] {
             let exact = ball_mean_by_chords(d, eps);
             let formula = ball_mean_inverse_square(d, eps);
-            assert!((formula / exact - 1.0).abs() < 1e-7, "d={d}: {formula} vs {exact}");
+            assert!(
+                (formula / exact - 1.0).abs() < 1e-7,
+                "d={d}: {formula} vs {exact}"
+            );
         }
     }
 
@@ -104,7 +107,10 @@ mod tests {
             let d = ratio * eps;
             let rel = ball_mean_inverse_square(d, eps) * d * d - 1.0;
             let predicted = 0.2 / (ratio * ratio);
-            assert!((rel - predicted).abs() < 0.05 * predicted, "d/eps={ratio}: {rel} vs {predicted}");
+            assert!(
+                (rel - predicted).abs() < 0.05 * predicted,
+                "d/eps={ratio}: {rel} vs {predicted}"
+            );
         }
         // Continuity at the switch to 1/d² is within 2.3e-4.
         let s = Singularity::Ball { eps };

@@ -1,0 +1,132 @@
+//! Sensors on edges and in corners.
+//!
+//! A sensor lying on an edge also lies in the plane of the adjacent surface, which it then sees
+//! exactly edge-on: every estimator is ill-posed there (the local-estimate kernel has cos_j = 0
+//! on that surface, a gathering ray starts inside it). The physically meaningful value is the
+//! limit from the open side. We evaluate it at the sensor moved `delta` away from every nearby
+//! surface other than its own: short probe rays in the 17 directions of the sensor's closed
+//! hemisphere find surfaces closer than `2 delta`, and the point is pushed out along their
+//! normals (twice, for corners). The bias this adds is of the order of the illuminance
+//! gradient times delta; the estimators use delta = their regularisation radius eps.
+
+use luxest_core::math::Vec3;
+use luxest_core::scene::SensorPoint;
+use luxest_core::world::World;
+
+/// Sensors as evaluated.
+pub struct Placement {
+    pub points: Vec<SensorPoint>,
+    /// Whether a surface other than the sensor's own lies within the near-field radius.
+    pub near: Vec<bool>,
+    pub moved: usize,
+}
+
+/// The 17 probe directions of the closed hemisphere about `n`.
+fn probe_directions(n: Vec3) -> Vec<Vec3> {
+    let (t, b) = n.orthonormal_basis();
+    let mut v = Vec::with_capacity(17);
+    for i in -1i32..=1 {
+        for j in -1i32..=1 {
+            for k in 0i32..=1 {
+                if i != 0 || j != 0 || k != 0 {
+                    v.push(
+                        (t * i as f64 + b * j as f64 + n * k as f64)
+                            .try_normalize()
+                            .unwrap(),
+                    );
+                }
+            }
+        }
+    }
+    v
+}
+
+/// Moves edge/corner sensors `delta` off the adjacent surfaces and flags sensors that have a
+/// surface other than their own within `near_radius`.
+pub fn place(world: &World, sensors: &[SensorPoint], delta: f64, near_radius: f64) -> Placement {
+    let (points, moved) = separate_from_adjacent_surfaces(world, sensors, delta);
+    let near = points
+        .iter()
+        .map(|s| {
+            let origin = s.position + s.normal * world.margin(s.position, s.position);
+            probe_directions(s.normal).into_iter().any(|d| {
+                world
+                    .tracer
+                    .intersect(origin, d, 0.0, near_radius)
+                    .is_some_and(|h| {
+                        let sp = world.surface(&h);
+                        sp.ng.dot(s.normal).abs() < 0.999
+                            || (sp.position - s.position).dot(s.normal).abs() > delta * 1e-3
+                    })
+            })
+        })
+        .collect();
+    Placement {
+        points,
+        near,
+        moved,
+    }
+}
+
+/// Returns the evaluation points and how many sensors were moved.
+pub fn separate_from_adjacent_surfaces(
+    world: &World,
+    sensors: &[SensorPoint],
+    delta: f64,
+) -> (Vec<SensorPoint>, usize) {
+    let mut moved = 0;
+    let out = sensors
+        .iter()
+        .map(|s| {
+            let mut p = s.position;
+            let n = s.normal;
+            let mut changed = false;
+            for _ in 0..2 {
+                let lift = world.margin(p, p);
+                let origin = p + n * lift;
+                let mut push = Vec3::ZERO;
+                for d in probe_directions(n) {
+                    if let Some(h) = world.tracer.intersect(origin, d, 0.0, 2.0 * delta) {
+                        let sp = world.surface(&h);
+                        // Normal of the hit surface, facing the sensor.
+                        let m = if sp.ng.dot(d) < 0.0 { sp.ng } else { -sp.ng };
+                        let dist = (p - sp.position).dot(m);
+                        if dist < delta && m.dot(n) < 0.999 {
+                            let need = (delta - dist) * m;
+                            // Combine pushes per axis without double counting.
+                            push = Vec3::new(
+                                if need.x.abs() > push.x.abs() {
+                                    need.x
+                                } else {
+                                    push.x
+                                },
+                                if need.y.abs() > push.y.abs() {
+                                    need.y
+                                } else {
+                                    push.y
+                                },
+                                if need.z.abs() > push.z.abs() {
+                                    need.z
+                                } else {
+                                    push.z
+                                },
+                            );
+                        }
+                    }
+                }
+                if push.length_squared() == 0.0 {
+                    break;
+                }
+                // Stay in the sensor's own plane.
+                p = p + push - n * push.dot(n);
+                changed = true;
+            }
+            moved += usize::from(changed);
+            SensorPoint {
+                position: p,
+                normal: n,
+            }
+        })
+        .collect();
+    (out, moved)
+}
