@@ -120,8 +120,10 @@ impl World {
             .max_abs_component()
             .max(hi.max_abs_component())
             .max(diagonal);
-        // f32 geometry: positions are accurate to ~6e-8 of the largest coordinate.
-        let epsilon = 1e-6 * extent;
+        // f32 geometry: positions are accurate to ~6e-8 of their magnitude, so offsets are
+        // taken relative to the local coordinates (see `margin`); this is only the floor for
+        // points near the origin.
+        let epsilon = 1e-9 * extent;
         Ok(World {
             scene,
             tracer,

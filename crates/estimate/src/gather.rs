@@ -90,7 +90,7 @@ fn reflected_radiance(
             sp.position,
             ng,
             rng,
-            |w| bsdf::eval(m, wo, w, sp.ng, sp.ns) * w.dot(sp.ns).abs(),
+            |w| bsdf::eval(m, wo, w, sp.ng, sp.ng) * w.dot(sp.ng).abs(),
             false,
         );
         l = l + beta * radiance;
@@ -98,7 +98,7 @@ fn reflected_radiance(
             m,
             wo,
             sp.ng,
-            sp.ns,
+            sp.ng,
             rng.next_2d(),
             rng.next_f64(),
             Transport::Radiance,

@@ -13,6 +13,10 @@
 //! Direct light: for point sources it is computed exactly (`I cos_p / d² V`, no variance); for
 //! area emitters the emission point is the zeroth collision, with kernel `cos_e cos_p/(π d²)`.
 //!
+//! Scattering uses the geometric normal: interpolated shading normals are a rendering device
+//! that breaks energy conservation (a cosine lobe about a tilted normal dips below the
+//! surface), which would bias illuminance.
+//!
 //! Standard errors come from independent batches (see [`crate::parallel`]). All sums are f64.
 
 use crate::parallel::{mean_and_standard_error, run_batches};
@@ -304,7 +308,7 @@ fn run_batch(
                         material,
                         wo,
                         ng: sp.ng,
-                        ns: sp.ns,
+                        ns: sp.ng,
                     };
                     connect(
                         world,
@@ -328,7 +332,7 @@ fn run_batch(
                 material,
                 wo,
                 sp.ng,
-                sp.ns,
+                sp.ng,
                 rng.next_2d(),
                 rng.next_f64(),
                 Transport::Flux,

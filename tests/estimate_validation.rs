@@ -1,0 +1,330 @@
+//! The local estimate against exact solutions, and at the extremes: every test states its
+//! expectation and compares with a tolerance from the estimator's own standard error.
+
+use crate::util::repo_root;
+use estimate::local::{self, Detector, LocalConfig, LocalResult, NearField, Singularity};
+use luxest_core::exact::{self, Sobolev};
+use luxest_core::scene::SensorPoint;
+use luxest_core::world::World;
+
+fn world_from(text: &str) -> World {
+    let scene: luxest_core::scene::Scene =
+        luxest_core::fsio::parse_ron(std::path::Path::new("test.ron"), text).unwrap();
+    let (compiled, _) =
+        scene_compile::compile(&scene, &repo_root().join("scenes/test.ron")).unwrap();
+    World::new(compiled).unwrap()
+}
+
+fn sensors(world: &World) -> Vec<SensorPoint> {
+    world
+        .scene
+        .header
+        .sensors
+        .iter()
+        .flat_map(|s| s.points.iter().copied())
+        .collect()
+}
+
+fn config(paths: u64, seed: u64, threads: usize, world: &World) -> LocalConfig {
+    LocalConfig {
+        paths,
+        batches: 32,
+        seed,
+        threads,
+        detector: Detector::LocalEstimate(Singularity::Ball {
+            eps: 1e-3 * world.room_scale,
+        }),
+        max_depth: 100_000,
+        near_field: None,
+    }
+}
+
+fn run(world: &World, paths: u64) -> (Vec<SensorPoint>, LocalResult) {
+    let s = sensors(world);
+    let near = vec![false; s.len()];
+    let r = local::estimate(world, &s, &near, &config(paths, 1, 2, world));
+    (s, r)
+}
+
+/// The Sobolev scene at length scale `scale` (h and r multiplied), intensity `i`.
+fn sobolev_text(scale: f64, i: f64, h1: f64, h2: f64, rho: f64) -> String {
+    let (h1, h2) = (h1 * scale, h2 * scale);
+    let half = 1000.0 * scale;
+    let rs = [0.0, 0.01, 0.5, 2.0];
+    let pts = |y: f64, ny: f64| {
+        rs.iter()
+            .map(|r| {
+                format!(
+                    "(position: ({}, {y}, 0.0), normal: (0.0, {ny}, 0.0))",
+                    r * scale
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    format!(
+        r#"Scene(
+        materials: {{ "p": Lambertian(reflectance: ({rho}, {rho}, {rho})) }},
+        objects: [
+            (shape: Quad(corner: ({m}, {y1}, {half}), u: ({w}, 0.0, 0.0), v: (0.0, 0.0, {mw})), material: "p"),
+            (shape: Quad(corner: ({m}, {h2}, {m}), u: ({w}, 0.0, 0.0), v: (0.0, 0.0, {w})), material: "p"),
+        ],
+        point_lights: [(position: (0.0, 0.0, 0.0), power: Intensity({i}))],
+        sensors: [Points(name: "p1", points: [{p1}]), Points(name: "p2", points: [{p2}])],
+    )"#,
+        m = -half,
+        y1 = -h1,
+        w = 2.0 * half,
+        mw = -2.0 * half,
+        p1 = pts(-h1, 1.0),
+        p2 = pts(h2, -1.0),
+    )
+}
+
+/// Every sensor within `k` standard errors of the exact Sobolev solution (plus a relative
+/// allowance `rel` for stated modelling error); returns the largest |z|.
+fn check_sobolev(
+    world: &World,
+    s: &[SensorPoint],
+    r: &LocalResult,
+    exact: &Sobolev,
+    k: f64,
+    rel: f64,
+) -> f64 {
+    let mut worst: f64 = 0.0;
+    for (i, p) in s.iter().enumerate() {
+        let radius = p.position.x.hypot(p.position.z);
+        let plane = if p.position.y < 0.0 {
+            *exact
+        } else {
+            exact.swapped()
+        };
+        let e = plane.illuminance1(radius).value;
+        let v = r.value[i];
+        assert!(
+            v.is_finite() && r.standard_error[i].is_finite(),
+            "sensor {i}: {v} ± {}",
+            r.standard_error[i]
+        );
+        let z = (v - e) / r.standard_error[i].max(1e-300);
+        assert!(
+            (v - e).abs() <= k * r.standard_error[i] + rel * e,
+            "{}: sensor {i} r={radius}: estimate {v} ± {} vs exact {e} (z = {z:.2})",
+            world.scene.header.name,
+            r.standard_error[i]
+        );
+        worst = worst.max(z.abs());
+    }
+    worst
+}
+
+#[test]
+fn sobolev_matches_the_exact_solution() {
+    let w = world_from(&sobolev_text(1.0, 100.0, 1.0, 1.0, 0.5));
+    let (s, r) = run(&w, 100_000);
+    let exact = Sobolev {
+        intensity_cd: 100.0,
+        h1: 1.0,
+        h2: 1.0,
+        rho1: 0.5,
+        rho2: 0.5,
+    };
+    check_sobolev(&w, &s, &r, &exact, 4.0, 0.0);
+    // The point-source direct term is exact and included.
+    assert!((r.direct_point[0] - 100.0).abs() < 1e-9);
+}
+
+#[test]
+fn result_is_independent_of_the_thread_count() {
+    let w = world_from(&sobolev_text(1.0, 100.0, 1.0, 1.0, 0.7));
+    let s = sensors(&w);
+    let near = vec![false; s.len()];
+    let a = local::estimate(&w, &s, &near, &config(20_000, 9, 1, &w));
+    let b = local::estimate(&w, &s, &near, &config(20_000, 9, 2, &w));
+    assert_eq!(a.value, b.value);
+    assert_eq!(a.standard_error, b.standard_error);
+    let c = local::estimate(&w, &s, &near, &config(20_000, 10, 2, &w));
+    assert_ne!(
+        a.value, c.value,
+        "a different seed must give a different estimate"
+    );
+}
+
+#[test]
+fn extreme_scales_match_the_scaled_exact_solution() {
+    // Expectation: illuminance scales as 1/scale² and the estimate stays within 4 standard
+    // errors at 1e-3 m and 1e4 m scenes (f32 geometry up to 1e7 m).
+    for scale in [1e-3, 1e4] {
+        let w = world_from(&sobolev_text(scale, 100.0, 1.0, 1.0, 0.5));
+        let (s, r) = run(&w, 50_000);
+        let exact = Sobolev {
+            intensity_cd: 100.0,
+            h1: scale,
+            h2: scale,
+            rho1: 0.5,
+            rho2: 0.5,
+        };
+        check_sobolev(&w, &s, &r, &exact, 4.0, 0.0);
+    }
+}
+
+#[test]
+fn extreme_intensities_scale_linearly() {
+    // Expectation: 1e-6 cd and 1e9 cd give the 100 cd result scaled exactly (same seed, same
+    // paths), finite and within error bars of the exact solution.
+    let base = world_from(&sobolev_text(1.0, 100.0, 1.0, 1.0, 0.5));
+    let (_, rb) = run(&base, 20_000);
+    for i in [1e-6, 1e9] {
+        let w = world_from(&sobolev_text(1.0, i, 1.0, 1.0, 0.5));
+        let (s, r) = run(&w, 20_000);
+        for k in 0..s.len() {
+            let expected = rb.value[k] * i / 100.0;
+            assert!(
+                (r.value[k] - expected).abs() <= 1e-9 * expected,
+                "I={i}: {} vs {expected}",
+                r.value[k]
+            );
+        }
+        let exact = Sobolev {
+            intensity_cd: i,
+            h1: 1.0,
+            h2: 1.0,
+            rho1: 0.5,
+            rho2: 0.5,
+        };
+        check_sobolev(&w, &s, &r, &exact, 4.0, 0.0);
+    }
+}
+
+#[test]
+fn source_close_to_a_wall() {
+    // Expectation: a source 1e-4 m above plane 1 (direct illuminance 1e10 lx at its foot) is
+    // handled: finite values within 4 standard errors of the exact solution with h1 = 1e-4.
+    let w = world_from(&sobolev_text(1.0, 100.0, 1e-4, 1.0, 0.5));
+    let (s, r) = run(&w, 50_000);
+    let exact = Sobolev {
+        intensity_cd: 100.0,
+        h1: 1e-4,
+        h2: 1.0,
+        rho1: 0.5,
+        rho2: 0.5,
+    };
+    check_sobolev(&w, &s, &r, &exact, 4.0, 0.0);
+    assert!((r.value[0] - 1e10).abs() < 1e-3 * 1e10);
+}
+
+#[test]
+fn reflectance_near_one_stays_bounded_and_correct() {
+    // Expectation: rho = 0.999 in an integrating sphere (icosphere level 4, 5120 facets):
+    // paths average 1/(1 - rho) = 1000 collisions (a work bound, not a time limit), and the
+    // result matches rho Phi / (A (1 - rho)) + I/R², with A the polyhedron's area, within 4
+    // standard errors plus 1% for the polyhedron's non-uniformity.
+    let text = r#"Scene(
+        materials: { "w": Lambertian(reflectance: (0.999, 0.999, 0.999)) },
+        objects: [(shape: Sphere(radius: 1.0, subdivisions: 4), material: "w", flip_normals: true)],
+        point_lights: [(position: (0.0, 0.0, 0.0), power: Intensity(1.0))],
+        sensors: [Points(name: "wall", points: [
+            (position: (0.0, -0.995, 0.0), normal: (0.0, 1.0, 0.0)),
+            (position: (0.995, 0.0, 0.0), normal: (-1.0, 0.0, 0.0)),
+        ])],
+    )"#;
+    let w = world_from(text);
+    let (s, r) = run(&w, 3_000);
+    let area = w.scene.header.stats.total_area_m2;
+    let indirect = 0.999 * 4.0 * std::f64::consts::PI / (area * (1.0 - 0.999));
+    assert!(
+        r.collisions < 3_000 * 1000 * 2,
+        "{} collisions",
+        r.collisions
+    );
+    assert!(
+        r.collisions > 3_000 * 1000 / 2,
+        "{} collisions",
+        r.collisions
+    );
+    for i in 0..s.len() {
+        let e = indirect + 1.0 / (0.995f64 * 0.995);
+        assert!(
+            (r.value[i] - e).abs() <= 4.0 * r.standard_error[i] + 0.01 * e,
+            "sensor {i}: {} ± {} vs {e}",
+            r.value[i],
+            r.standard_error[i]
+        );
+    }
+}
+
+#[test]
+fn cie_room_mean_indirect_matches() {
+    // Expectation: the floor's mean indirect illuminance (16 x 16 cells) equals
+    // rho Phi / (S_T (1 - rho)) within 4 standard errors plus 0.5% for the midpoint rule.
+    let path = repo_root().join("scenes/cie171-5.8.ron");
+    let (compiled, _) = scene_compile::compile_file(&path).unwrap();
+    let w = World::new(compiled).unwrap();
+    let floor = &w.scene.header.sensors[0];
+    assert_eq!(floor.name, "floor");
+    let s = floor.points.clone();
+    let near = vec![false; s.len()];
+    let r = local::estimate(&w, &s, &near, &config(20_000, 3, 2, &w));
+    let i = 10_000.0 / (4.0 * std::f64::consts::PI);
+    let centre = luxest_core::math::Vec3::splat(2.0);
+    let n = s.len() as f64;
+    let mean: f64 = s
+        .iter()
+        .enumerate()
+        .map(|(k, p)| r.value[k] - exact::point_source_illuminance(i, centre, p.position, p.normal))
+        .sum::<f64>()
+        / n;
+    let se = (r.standard_error.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
+    let expected = exact::cie171_mean_indirect_illuminance(10_000.0, 96.0, 0.5);
+    assert!(
+        (mean - expected).abs() <= 4.0 * se + 0.005 * expected,
+        "{mean} ± {se} vs {expected}"
+    );
+}
+
+#[test]
+fn sensors_on_edges_and_corners_match_the_backward_reference() {
+    // Expectation: sensors exactly on an edge and in corners of the Cornell box give finite
+    // values that agree, within 4 combined standard errors, with the backward (gathering)
+    // estimator at the same evaluation points (the limit from the open side, taken 1e-3 of
+    // the room scale off the adjacent surfaces).
+    let path = repo_root().join("scenes/cornell-box.ron");
+    let (compiled, _) = scene_compile::compile_file(&path).unwrap();
+    let w = World::new(compiled).unwrap();
+    let corners = w.scene.header.sensors[0].points.clone();
+    let placed = estimate::placement::place(&w, &corners, 1e-3 * w.room_scale, 1e-2 * w.room_scale);
+    assert_eq!(
+        placed.moved,
+        corners.len(),
+        "every corner/edge sensor is moved off its walls"
+    );
+    assert!(placed.near.iter().all(|&n| n));
+    let mut cfg = config(100_000, 5, 2, &w);
+    cfg.near_field = Some(NearField {
+        radius: 1e-2 * w.room_scale,
+        samples: 20_000,
+    });
+    let le = local::estimate(&w, &placed.points, &placed.near, &cfg);
+    let reference = estimate::gather::estimate(
+        &w,
+        &placed.points,
+        &estimate::gather::GatherConfig {
+            samples: 20_000,
+            batches: 32,
+            seed: 6,
+            threads: 2,
+            max_depth: 100_000,
+        },
+    );
+    for i in 0..corners.len() {
+        let (_, g, gse) = reference[i];
+        let se = (le.standard_error[i].powi(2) + gse * gse).sqrt();
+        assert!(le.value[i].is_finite() && g > 0.0);
+        assert!(
+            (le.value[i] - g).abs() <= 4.0 * se,
+            "corner {i}: local {} ± {} vs gather {g} ± {gse}",
+            le.value[i],
+            le.standard_error[i]
+        );
+    }
+}
