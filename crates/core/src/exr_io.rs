@@ -84,6 +84,33 @@ pub fn write_rgb(path: &Path, image: &RgbImage) -> Result<()> {
     crate::fsio::write_bytes_atomically(path, buffer.get_ref())
 }
 
+/// sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
+pub fn srgb_encode(v: f64) -> f64 {
+    let v = v.clamp(0.0, 1.0);
+    if v <= 0.0031308 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Writes an 8-bit sRGB PNG preview: linear values times `exposure`, clipped, sRGB-encoded.
+pub fn write_preview_png(path: &Path, image: &RgbImage, exposure: f64) -> Result<()> {
+    let mut buf = image::RgbImage::new(image.width as u32, image.height as u32);
+    for (i, p) in image.pixels.iter().enumerate() {
+        let c = p.map(|v| (srgb_encode(v as f64 * exposure) * 255.0 + 0.5) as u8);
+        buf.put_pixel(
+            (i % image.width) as u32,
+            (i / image.width) as u32,
+            image::Rgb(c),
+        );
+    }
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    buf.write_to(&mut bytes, image::ImageFormat::Png)
+        .map_err(|e| Error::input(path, format!("cannot encode PNG: {e}")))?;
+    crate::fsio::write_bytes_atomically(path, bytes.get_ref())
+}
+
 /// Reads an EXR that must contain R, G and B channels (f32 or f16; other channels ignored).
 pub fn read_rgb(path: &Path) -> Result<RgbImage> {
     let bytes = crate::fsio::read_bytes(path)?;

@@ -11,6 +11,7 @@
 //! Invariant: no stage depends on another stage's crate; whatever two stages share lives here.
 
 pub mod bsdf;
+pub mod camera;
 pub mod cli;
 pub mod color;
 pub mod compiled;

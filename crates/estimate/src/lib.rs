@@ -6,6 +6,7 @@
 
 pub mod compare;
 pub mod gather;
+pub mod image;
 pub mod local;
 pub mod parallel;
 pub mod placement;
@@ -68,6 +69,10 @@ impl RunArgs {
     }
 }
 
+/// Default kernel clamp radius for images, as a fraction of the room scale (images have no
+/// near-field split, so a larger radius keeps pixels near edges from sparkling).
+pub const DEFAULT_IMAGE_EPS_FRACTION: f64 = 1e-2;
+
 /// Default near-field radius, as a fraction of the room scale.
 pub const DEFAULT_NEAR_FRACTION: f64 = 1e-2;
 
@@ -109,6 +114,38 @@ pub enum Command {
         /// Backward samples per near-field sensor (0 disables the split).
         #[arg(long, default_value_t = 20_000)]
         near_samples: u64,
+    },
+    /// Double local estimate: a luminance image from the scene's camera (EXR, like trace's).
+    Image {
+        /// Compiled scene (build/<name>/scene.lxs).
+        scene: PathBuf,
+        /// Output [default: <scene dir>/<name>_<paths, 6 digits>le.hdr.exr].
+        #[arg(short, long)]
+        out: Option<PathBuf>,
+        /// Also write the per-pixel standard error of Y as an EXR (R = G = B).
+        #[arg(long)]
+        stderr_out: Option<PathBuf>,
+        /// Also write an sRGB PNG preview (exposure: 1 / the 99th percentile of Y).
+        #[arg(long)]
+        preview: Option<PathBuf>,
+        /// Number of light paths.
+        #[arg(long, default_value_t = 1_000)]
+        paths: u64,
+        /// Camera samples per pixel (stratified, box filter).
+        #[arg(long, default_value_t = 1)]
+        pixel_samples: u32,
+        /// Override the camera resolution, WIDTHxHEIGHT.
+        #[arg(long)]
+        resolution: Option<String>,
+        #[arg(long, value_enum, default_value_t = SingularityMode::Clamp)]
+        singularity: SingularityMode,
+        /// Regularisation radius in m [default: 1e-2 of the room scale].
+        #[arg(long)]
+        eps: Option<f64>,
+        #[command(flatten)]
+        common: luxest_core::cli::CommonArgs,
+        #[arg(long, default_value_t = 100_000)]
+        max_depth: u32,
     },
     /// Direct simulation baseline: photons counted in disks around the sensor points.
     Direct {
@@ -446,6 +483,110 @@ pub fn run(args: Args) -> Result<()> {
                 &values,
             )?;
             eprintln!("wrote {}", out.display());
+            Ok(())
+        }
+        Command::Image {
+            scene,
+            out,
+            stderr_out,
+            preview,
+            paths,
+            pixel_samples,
+            resolution,
+            singularity,
+            eps,
+            common,
+            max_depth,
+        } => {
+            let compiled = CompiledScene::load(&scene)?;
+            let mut camera = compiled
+                .header
+                .camera
+                .clone()
+                .ok_or_else(|| Error::input(&scene, "scene has no camera"))?;
+            if let Some(r) = resolution {
+                let parsed = r
+                    .split_once('x')
+                    .and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)));
+                match parsed {
+                    Some((a, b)) if a > 0 && b > 0 => camera.resolution = (a, b),
+                    _ => {
+                        return Err(Error::Usage(format!(
+                            "--resolution: expected WIDTHxHEIGHT, got '{r}'"
+                        )))
+                    }
+                }
+            }
+            if paths == 0 {
+                return Err(Error::Usage("--paths must be positive".into()));
+            }
+            let world = World::new(compiled).map_err(|e| match e {
+                Error::Usage(m) => Error::input(&scene, m),
+                other => other,
+            })?;
+            let cam = luxest_core::camera::PinholeCamera::new(&camera)
+                .ok_or_else(|| Error::input(&scene, "degenerate camera"))?;
+            let eps = eps.unwrap_or(DEFAULT_IMAGE_EPS_FRACTION * world.room_scale);
+            let sing = match singularity {
+                SingularityMode::Ball => Singularity::Ball { eps },
+                SingularityMode::Clamp => Singularity::Clamp { eps },
+                SingularityMode::None => Singularity::None,
+            };
+            let cfg = image::ImageConfig {
+                paths,
+                pixel_samples,
+                seed: common.seed,
+                threads: parallel::thread_count(common.threads),
+                singularity: sing,
+                max_depth,
+            };
+            let r = image::render(&world, &cam, &cfg);
+            if let Some(i) = r.rgb.iter().position(|c| !c.is_finite()) {
+                return Err(Error::input(&scene, format!("pixel {i} is not finite")));
+            }
+            let info = RunInfo {
+                samples: paths,
+                seed: common.seed,
+                seconds: r.seconds,
+                estimator: "double-local-estimate".into(),
+                scene_hash: world.scene.content_hash.clone(),
+                program_version: PROGRAM_VERSION.into(),
+            };
+            let mut img = luxest_core::exr_io::RgbImage::new(r.width, r.height);
+            img.pixels = r.rgb.iter().map(|c| c.0.map(|v| v as f32)).collect();
+            img.attributes = info.to_attributes();
+            img.attributes
+                .push(("luxest.singularity".into(), sing.to_string()));
+            img.attributes
+                .push(("luxest.pixelSamples".into(), pixel_samples.to_string()));
+            let out = out.unwrap_or_else(|| {
+                scene.with_file_name(format!("{}_{paths:06}le.hdr.exr", world.scene.header.name))
+            });
+            luxest_core::exr_io::write_rgb(&out, &img)?;
+            if let Some(p) = preview {
+                let mut ys: Vec<f64> = r.rgb.iter().map(|c| c.luminance()).collect();
+                ys.sort_by(f64::total_cmp);
+                let p99 = ys[(ys.len() * 99 / 100).min(ys.len() - 1)];
+                let exposure = if p99 > 0.0 { 1.0 / p99 } else { 1.0 };
+                luxest_core::exr_io::write_preview_png(&p, &img, exposure)?;
+            }
+            if let Some(p) = stderr_out {
+                let mut se = luxest_core::exr_io::RgbImage::new(r.width, r.height);
+                se.pixels = r.standard_error.iter().map(|&v| [v as f32; 3]).collect();
+                se.attributes = img.attributes.clone();
+                luxest_core::exr_io::write_rgb(&p, &se)?;
+            }
+            eprintln!(
+                "wrote {}: {}x{}, {} paths, {} collisions, {} shadow rays, {:.2} s ({:.1} M shadow rays/s)",
+                out.display(),
+                r.width,
+                r.height,
+                paths,
+                r.collisions,
+                r.shadow_rays,
+                r.seconds,
+                r.shadow_rays as f64 / r.seconds / 1e6
+            );
             Ok(())
         }
         Command::Exact { case } => {

@@ -250,6 +250,39 @@ fn deposit(
     }
 }
 
+/// Exact point-source luminance towards the camera at view points given as (position,
+/// geometric normal, direction to the camera, triangle, weight).
+pub fn point_source_direct_to(world: &World, points: &[(Vec3, Vec3, Vec3, u32, Rgb)]) -> Vec<Rgb> {
+    points
+        .iter()
+        .map(|&(x, ng, wo, triangle, weight)| {
+            let m = world.material(triangle);
+            let mut l = Rgb::BLACK;
+            for em in &world.scene.header.emitters {
+                if let Emitter::Point {
+                    position,
+                    intensity_rgb,
+                    ..
+                } = em
+                {
+                    let v = *position - x;
+                    let d2 = v.length_squared();
+                    if d2 <= 0.0 {
+                        continue;
+                    }
+                    let w = v / d2.sqrt();
+                    let f = bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+                    if f.max_component() > 0.0 && !world.occluded(world.offset(x, ng, w), *position)
+                    {
+                        l = l + *intensity_rgb * f * (1.0 / d2);
+                    }
+                }
+            }
+            l * weight
+        })
+        .collect()
+}
+
 fn run_batch(
     world: &World,
     sensors: &[SensorPoint],
