@@ -6,7 +6,8 @@
 #   make scenes    compile every scene in scenes/ into build/<name>/scene.lxs
 #   make test      formatting, lints and all tests
 #   make validate  local estimate vs exact solutions, direct-simulation baseline
-#   make bench     benchmarks (1M-triangle compile + load)
+#   make singularity  kernel regularisation at Cornell-box corners (bias, variance vs eps)
+#   make bench     benchmarks (1M-triangle compile + load, local estimate, image)
 #
 # Stages of later milestones (trace, aov-write, denoise, evaluate; `make reference noisy train
 # eval`) are added with their crates; they are not faked here.
@@ -24,7 +25,7 @@ COMPILED := $(patsubst %,build/%/scene.lxs,$(SCENES))
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml Cargo.lock
 MESHES := $(wildcard scenes/meshes/*)
 
-.PHONY: run scenes test lint bench validate clean
+.PHONY: run scenes test lint bench validate singularity clean
 
 run: build/$(DEFAULT_SCENE)/scene.lxs
 	$(SCENE_COMPILE) --info $<
@@ -48,6 +49,9 @@ validate: $(SCENE_COMPILE) $(ESTIMATE)
 build/%/scene.lxs: scenes/%.ron $(MESHES) $(SCENE_COMPILE)
 	$(SCENE_COMPILE) $< -o $@
 
+singularity: $(SCENE_COMPILE) $(ESTIMATE)
+	SCENE_COMPILE=$(SCENE_COMPILE) ESTIMATE=$(ESTIMATE) PRESET=$(PRESET) python3 pipelines/singularity.py
+
 lint:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
@@ -55,8 +59,9 @@ lint:
 test: lint
 	$(CARGO) test --workspace
 
-bench:
+bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs
 	$(CARGO) bench -p scene-compile --bench compile_1m
+	$(CARGO) bench -p estimate --bench estimate
 
 clean:
 	rm -rf build

@@ -67,3 +67,22 @@ pub fn scene_compile(args: &[&str]) -> Result<(), (u8, String)> {
         Some(a) => scene_compile::run(a).map_err(|e| (e.exit_code(), e.to_string())),
     }
 }
+
+/// Runs `estimate` in-process, like [`scene_compile`].
+pub fn estimate(args: &[&str]) -> Result<(), (u8, String)> {
+    let argv = std::iter::once("estimate").chain(args.iter().copied());
+    let parsed = luxest_core::cli::parse::<estimate::Args>(argv)
+        .map_err(|e| (e.exit_code(), e.to_string()))?;
+    match parsed {
+        None => Ok(()),
+        Some(a) => estimate::run(a).map_err(|e| (e.exit_code(), e.to_string())),
+    }
+}
+
+/// Compiles RON scene text into `dir/name.lxs` through the scene-compile stage.
+pub fn compile_text(dir: &TempDir, name: &str, text: &str) -> PathBuf {
+    let ron = dir.write(&format!("{name}.ron"), text);
+    let out = dir.path().join(format!("{name}.lxs"));
+    scene_compile(&[ron.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"]).unwrap();
+    out
+}

@@ -195,7 +195,7 @@ fn contribution(
     r: &Record,
     v: &ViewPoint,
     m_v: &Material,
-) -> Option<(Rgb, Vec3, f64)> {
+) -> Option<(Rgb, Vec3)> {
     let d = v.position - r.position;
     let d2 = d.length_squared();
     if d2 <= 0.0 {
@@ -219,7 +219,7 @@ fn contribution(
         Some(t) => bsdf::eval(world.material(t), r.wo, w, r.ng, r.ng) * w.dot(r.ng).abs(),
     };
     let c = r.q * f_r * f_v * v.weight * sing.inverse_square(d2);
-    (c.max_component() > 0.0).then_some((c, w, dist))
+    (c.max_component() > 0.0).then_some((c, w))
 }
 
 /// Renders the double-local-estimate image of the scene's camera.
@@ -270,18 +270,21 @@ pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageRes
                     for (k, &vi) in idx.iter().enumerate() {
                         let v = &views[vi];
                         let m_v = world.material(v.material);
-                        if let Some((c, dir_to_view, dist)) =
+                        if let Some((c, dir_to_view)) =
                             contribution(world, &cfg.singularity, r, v, m_v)
                         {
-                            // Cast from the view point towards the record (coherent across the tile).
+                            // Cast from the view point towards the record (coherent across the
+                            // tile), measured from the offset origin so it stops short of it.
                             let origin = world.offset(v.position, v.ng, -dir_to_view);
+                            let to = r.position - origin;
+                            let len = to.length();
                             let eps = world.margin(v.position, r.position);
-                            if dist > 2.0 * eps {
+                            if len > 2.0 * eps {
                                 rays.push(Ray {
                                     origin,
-                                    direction: -dir_to_view,
+                                    direction: to / len,
                                     tnear: eps,
-                                    tfar: dist - eps,
+                                    tfar: len - eps,
                                 });
                                 targets.push((k, c));
                             }
