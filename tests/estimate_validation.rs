@@ -316,8 +316,7 @@ fn sensors_on_edges_and_corners_match_the_backward_reference() {
             max_depth: 100_000,
         },
     );
-    for i in 0..corners.len() {
-        let (_, g, gse) = reference[i];
+    for (i, &(_, g, gse)) in reference.iter().enumerate() {
         let se = (le.standard_error[i].powi(2) + gse * gse).sqrt();
         assert!(le.value[i].is_finite() && g > 0.0);
         assert!(

@@ -246,7 +246,7 @@ pub fn sample(
                 return None;
             }
             let p = pdf(m, wo, wi, ng, ns);
-            if !(p > 0.0) {
+            if p.is_nan() || p <= 0.0 {
                 return None;
             }
             let f = eval(m, wo, wi, ng, ns);

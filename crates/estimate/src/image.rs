@@ -85,8 +85,8 @@ fn view_points(
     let spp = cfg.pixel_samples.max(1);
     let grid = (spp as f64).sqrt().ceil() as u32;
     let mut out = Vec::with_capacity(w * h);
-    for pixel in 0..w * h {
-        let mut rng = Rng::new(cfg.seed ^ 0x5eed_0f_1e, pixel as u64);
+    for (pixel, emitted_px) in emitted.iter_mut().enumerate() {
+        let mut rng = Rng::new(cfg.seed ^ 0x5eed_0f1e, pixel as u64);
         for k in 0..spp {
             // Stratified jitter inside the pixel (box filter).
             let (gx, gy) = ((k % grid) as f64, (k / grid) as f64);
@@ -99,8 +99,8 @@ fn view_points(
                 let Some(sp) = world.intersect(origin, dir) else {
                     break;
                 };
-                emitted[pixel] =
-                    emitted[pixel] + weight * world.emitted_radiance(sp.triangle, sp.ng, -dir);
+                *emitted_px =
+                    *emitted_px + weight * world.emitted_radiance(sp.triangle, sp.ng, -dir);
                 let m = world.material(sp.triangle);
                 if !bsdf::is_delta(m) {
                     out.push(ViewPoint {

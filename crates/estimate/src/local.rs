@@ -92,6 +92,13 @@ struct BatchSums {
     shadow_rays: u64,
 }
 
+/// Adds an RGB contribution to an f64 accumulator.
+fn add(acc: &mut [f64; 3], c: Rgb) {
+    for (a, v) in acc.iter_mut().zip(c.0) {
+        *a += v;
+    }
+}
+
 /// Where a connection starts: a scattering collision or a point on an area emitter.
 enum Source<'a> {
     Collision {
@@ -165,10 +172,7 @@ fn connect(
         let eps = world.margin(origin, s.position);
         if len <= 2.0 * eps {
             // Closer than the scene's resolution: nothing can be in between.
-            let acc = &mut out.sums[i];
-            for c in 0..3 {
-                acc[c] += contribution.0[c];
-            }
+            add(&mut out.sums[i], contribution);
             continue;
         }
         // The margin at both ends skips the surfaces the sensor lies on (edges, corners).
@@ -186,10 +190,7 @@ fn connect(
         .occluded_many(&scratch.rays, &mut scratch.blocked);
     for ((i, c), blocked) in scratch.targets.iter().zip(&scratch.blocked) {
         if !blocked {
-            let acc = &mut out.sums[*i];
-            for k in 0..3 {
-                acc[k] += c.0[k];
-            }
+            add(&mut out.sums[*i], *c);
         }
     }
 }
@@ -243,9 +244,7 @@ fn deposit(
             && v.dot(s.normal).abs() < 1e-3 * radius
             && dir.dot(s.normal) < 0.0
         {
-            for c in 0..3 {
-                out.sums[i][c] += q.0[c] * inv_area;
-            }
+            add(&mut out.sums[i], q * inv_area);
         }
     }
 }
@@ -398,9 +397,7 @@ fn run_batch(
                 }
                 // Stored as a sum over `paths` so that the common division gives the mean.
                 let scale = paths as f64 / samples as f64;
-                for c in 0..3 {
-                    out.sums[i][c] += acc.0[c] * scale;
-                }
+                add(&mut out.sums[i], acc * scale);
             }
         }
     }
@@ -435,9 +432,7 @@ pub fn estimate(
         for (b, r) in results.iter().enumerate() {
             let paths = per_batch(b).max(1) as f64;
             let e = r.sums[i].map(|s| s / paths);
-            for c in 0..3 {
-                acc[c] += e[c] / batches as f64;
-            }
+            add(&mut acc, Rgb(e) * (1.0 / batches as f64));
             ys.push(Rgb(e).luminance());
         }
         let (m, se) = mean_and_standard_error(&ys);
