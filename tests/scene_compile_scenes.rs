@@ -196,7 +196,7 @@ fn cie_room_is_closed_and_faces_inward() {
         panic!()
     };
     assert!((intensity_rgb.luminance() - 10000.0 / (4.0 * PI)).abs() < 1e-9);
-    assert_eq!(s.header.sensors[0].points.len(), 64);
+    assert_eq!(s.header.sensors[0].points.len(), 256);
     assert_eq!(
         s.header.sensors[0].points[0].position,
         Vec3::new(0.25, 0.0, 0.25)
