@@ -199,7 +199,7 @@ fn cie_room_is_closed_and_faces_inward() {
     assert_eq!(s.header.sensors[0].points.len(), 256);
     assert_eq!(
         s.header.sensors[0].points[0].position,
-        Vec3::new(0.25, 0.0, 0.25)
+        Vec3::new(0.125, 0.0, 0.125)
     );
 }
 
