@@ -2,7 +2,8 @@
 # for their own program (e.g. `make scenes SCENE_COMPILE=./my-compiler`), as long as it honours
 # the contracts in ARCHITECTURE.md.
 #
-#   make run       compile the default scene (cornell-box) and print its manifest
+#   make run       the main job on the default scene (cornell-box): compile, local estimate
+#                  at its sensors, double-local-estimate image
 #   make scenes    compile every scene in scenes/ into build/<name>/scene.lxs
 #   make test      formatting, lints and all tests
 #   make validate  local estimate vs exact solutions, direct-simulation baseline
@@ -27,8 +28,12 @@ MESHES := $(wildcard scenes/meshes/*)
 
 .PHONY: run scenes test lint bench validate singularity clean
 
-run: build/$(DEFAULT_SCENE)/scene.lxs
-	$(SCENE_COMPILE) --info $<
+# The main job on the default scene: compile it, estimate illuminance at its sensors (local
+# estimate), render its double-local-estimate luminance image with a PNG preview.
+run: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE)
+	$(SCENE_COMPILE) --info $< > build/$(DEFAULT_SCENE)/scene.info.ron
+	$(ESTIMATE) sensors $< --paths 200000 --csv build/$(DEFAULT_SCENE)/$(DEFAULT_SCENE).sensors.csv
+	$(ESTIMATE) image $< --paths 1000 --resolution 256x256 --preview build/$(DEFAULT_SCENE)/$(DEFAULT_SCENE)_001000le.png
 
 scenes: $(COMPILED)
 
