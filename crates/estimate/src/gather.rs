@@ -94,24 +94,13 @@ fn reflected_radiance(
             false,
         );
         l = l + beta * radiance;
-        let Some(smp) = bsdf::sample(
-            m,
-            wo,
-            sp.ng,
-            sp.ng,
-            rng.next_2d(),
-            rng.next_f64(),
-            Transport::Radiance,
-        ) else {
+        let Some((next_beta, origin, next_dir)) =
+            crate::local::scatter(world, &sp, dir, beta, Transport::Radiance, rng)
+        else {
             break;
         };
-        let survival = smp.weight.max_component().min(1.0);
-        if survival <= 0.0 || rng.next_f64() >= survival {
-            break;
-        }
-        beta = beta * smp.weight * (1.0 / survival);
-        let origin = world.offset(sp.position, sp.ng, smp.wi);
-        dir = smp.wi;
+        beta = next_beta;
+        dir = next_dir;
         match world.intersect(origin, dir) {
             Some(next) => sp = next,
             None => break,

@@ -165,24 +165,12 @@ fn light_records(world: &World, cfg: &ImageConfig, batch: usize, paths: u64) -> 
                     triangle: Some(sp.triangle),
                 });
             }
-            let Some(s) = bsdf::sample(
-                m,
-                -dir,
-                sp.ng,
-                sp.ng,
-                rng.next_2d(),
-                rng.next_f64(),
-                Transport::Flux,
-            ) else {
+            let Some((next_q, next_origin, next_dir)) =
+                crate::local::scatter(world, &sp, dir, q, Transport::Flux, &mut rng)
+            else {
                 break;
             };
-            let survival = s.weight.max_component().min(1.0);
-            if survival <= 0.0 || rng.next_f64() >= survival {
-                break;
-            }
-            q = q * s.weight * (1.0 / survival);
-            origin = world.offset(sp.position, sp.ng, s.wi);
-            dir = s.wi;
+            (q, origin, dir) = (next_q, next_origin, next_dir);
         }
     }
     out

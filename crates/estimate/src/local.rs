@@ -28,7 +28,7 @@ use luxest_core::math::Vec3;
 use luxest_core::rt::Ray;
 use luxest_core::sampling::Rng;
 use luxest_core::scene::SensorPoint;
-use luxest_core::world::World;
+use luxest_core::world::{SurfacePoint, World};
 
 /// How sensors receive light from the random walk.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -90,6 +90,31 @@ struct BatchSums {
     sums: Vec<[f64; 3]>,
     collisions: u64,
     shadow_rays: u64,
+}
+
+/// One step of a random walk: samples the BSDF (with geometric normals) at `sp` for a path
+/// that arrived along `dir` with throughput `beta`, applies analog Russian roulette (survival
+/// probability = the sample's weight, at most 1), and returns the new throughput, ray origin
+/// and direction; `None` when the path ends.
+pub fn scatter(
+    world: &World,
+    sp: &SurfacePoint,
+    dir: Vec3,
+    beta: Rgb,
+    mode: Transport,
+    rng: &mut Rng,
+) -> Option<(Rgb, Vec3, Vec3)> {
+    let m = world.material(sp.triangle);
+    let s = bsdf::sample(m, -dir, sp.ng, sp.ng, rng.next_2d(), rng.next_f64(), mode)?;
+    let survival = s.weight.max_component().min(1.0);
+    if survival <= 0.0 || rng.next_f64() >= survival {
+        return None;
+    }
+    Some((
+        beta * s.weight * (1.0 / survival),
+        world.offset(sp.position, sp.ng, s.wi),
+        s.wi,
+    ))
 }
 
 /// Adds an RGB contribution to an f64 accumulator.
@@ -360,24 +385,12 @@ fn run_batch(
                     deposit(sensors, *radius, sp.position, sp.ng, dir, q, &mut out)
                 }
             }
-            let Some(s) = bsdf::sample(
-                material,
-                wo,
-                sp.ng,
-                sp.ng,
-                rng.next_2d(),
-                rng.next_f64(),
-                Transport::Flux,
-            ) else {
+            let Some((next_q, next_origin, next_dir)) =
+                scatter(world, &sp, dir, q, Transport::Flux, &mut rng)
+            else {
                 break;
             };
-            let survival = s.weight.max_component().min(1.0);
-            if survival <= 0.0 || rng.next_f64() >= survival {
-                break;
-            }
-            q = q * s.weight * (1.0 / survival);
-            origin = world.offset(sp.position, sp.ng, s.wi);
-            dir = s.wi;
+            (q, origin, dir) = (next_q, next_origin, next_dir);
         }
     }
     if let (Detector::LocalEstimate(_), Some(nf)) = (&cfg.detector, cfg.near_field) {

@@ -84,7 +84,11 @@ mod tests {
             (t1.max(0.0) - t0.max(0.0)).max(0.0)
         };
         // From outside, only the cone towards the centre (sin θ < ε/d) meets the ball.
-        let upper = if d > eps { -(1.0 - (eps / d).powi(2)).sqrt() } else { 1.0 };
+        let upper = if d > eps {
+            -(1.0 - (eps / d).powi(2)).sqrt()
+        } else {
+            1.0
+        };
         let (v, _) = luxest_core::quadrature::integrate(&mut chord, -1.0, upper, 1e-13);
         2.0 * std::f64::consts::PI * v / (4.0 / 3.0 * std::f64::consts::PI * eps.powi(3))
     }
