@@ -5,4 +5,5 @@ mod estimate_cli;
 mod estimate_validation;
 mod scene_compile_errors;
 mod scene_compile_scenes;
+mod trace_exact;
 mod util;

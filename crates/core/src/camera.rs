@@ -49,6 +49,20 @@ impl PinholeCamera {
     }
 }
 
+/// The sub-pixel position (u, v) in [0, 1)² of sample `sample` of pixel `pixel`: a hash of
+/// (seed, pixel, sample), so that every stage that samples pixels (trace, aov-write, the
+/// double local estimate) uses the same positions, independently of order and threads. The
+/// pixel filter is a box: positions are uniform over the pixel.
+pub fn pixel_jitter(seed: u64, pixel: u64, sample: u64) -> (f64, f64) {
+    let h = crate::sampling::splitmix64(
+        seed ^ crate::sampling::splitmix64(pixel.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ sample),
+    );
+    let u = (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    let h2 = crate::sampling::splitmix64(h);
+    let v = (h2 >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    (u, v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -72,5 +86,22 @@ mod tests {
         // which is -x in world space.
         let r = cam.direction(200.0, 50.0);
         assert!(r.x < 0.0 && (r.x.abs() / r.z - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn jitter_is_uniform_and_reproducible() {
+        assert_eq!(pixel_jitter(1, 2, 3), pixel_jitter(1, 2, 3));
+        assert_ne!(pixel_jitter(1, 2, 3), pixel_jitter(1, 2, 4));
+        let n = 64_000;
+        let mut counts = vec![0.0; 64];
+        for s in 0..n {
+            let (u, v) = pixel_jitter(7, s % 97, s);
+            counts[((u * 8.0) as usize) * 8 + (v * 8.0) as usize] += 1.0;
+        }
+        let (stat, dof) = crate::sampling::chi_square(&counts, &[n as f64 / 64.0; 64]);
+        assert!(
+            stat < dof as f64 + 5.0 * (2.0 * dof as f64).sqrt(),
+            "chi-square {stat}"
+        );
     }
 }

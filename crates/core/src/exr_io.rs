@@ -111,6 +111,22 @@ pub fn write_preview_png(path: &Path, image: &RgbImage, exposure: f64) -> Result
     crate::fsio::write_bytes_atomically(path, bytes.get_ref())
 }
 
+/// Writes a PNG preview exposed so that the 99th percentile of luminance maps to white.
+pub fn write_preview_png_auto(path: &Path, image: &RgbImage) -> Result<()> {
+    let mut ys: Vec<f64> = image
+        .pixels
+        .iter()
+        .map(|p| crate::color::Rgb(p.map(|v| v as f64)).luminance())
+        .filter(|y| y.is_finite())
+        .collect();
+    ys.sort_by(f64::total_cmp);
+    let p99 = ys
+        .get((ys.len() * 99 / 100).min(ys.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(1.0);
+    write_preview_png(path, image, if p99 > 0.0 { 1.0 / p99 } else { 1.0 })
+}
+
 /// Reads an EXR that must contain R, G and B channels (f32 or f16; other channels ignored).
 pub fn read_rgb(path: &Path) -> Result<RgbImage> {
     let bytes = crate::fsio::read_bytes(path)?;

@@ -21,6 +21,7 @@ pub mod exr_io;
 pub mod fsio;
 pub mod math;
 pub mod meta;
+pub mod parallel;
 pub mod quadrature;
 pub mod rt;
 pub mod sampling;

@@ -8,7 +8,7 @@ pub mod compare;
 pub mod gather;
 pub mod image;
 pub mod local;
-pub mod parallel;
+pub use luxest_core::parallel;
 pub mod placement;
 pub mod singularity;
 
@@ -564,11 +564,7 @@ pub fn run(args: Args) -> Result<()> {
             });
             luxest_core::exr_io::write_rgb(&out, &img)?;
             if let Some(p) = preview {
-                let mut ys: Vec<f64> = r.rgb.iter().map(|c| c.luminance()).collect();
-                ys.sort_by(f64::total_cmp);
-                let p99 = ys[(ys.len() * 99 / 100).min(ys.len() - 1)];
-                let exposure = if p99 > 0.0 { 1.0 / p99 } else { 1.0 };
-                luxest_core::exr_io::write_preview_png(&p, &img, exposure)?;
+                luxest_core::exr_io::write_preview_png_auto(&p, &img)?;
             }
             if let Some(p) = stderr_out {
                 let mut se = luxest_core::exr_io::RgbImage::new(r.width, r.height);

@@ -29,7 +29,7 @@ pub fn run_batches<T: Send>(
     std::thread::scope(|s| {
         for _ in 0..threads.min(batches).max(1) {
             s.spawn(|| {
-                luxest_core::rt::enable_flush_to_zero();
+                crate::rt::enable_flush_to_zero();
                 loop {
                     let b = next.fetch_add(1, Ordering::SeqCst);
                     if b >= batches {

@@ -1,0 +1,174 @@
+//! The path tracer: radiance along a camera ray.
+//!
+//! Unidirectional path tracing with next-event estimation (one light point per vertex, chosen
+//! by flux) combined with BSDF sampling by multiple importance sampling (power heuristic) for
+//! area emitters; point sources, being deltas, are reached by next-event estimation only.
+//! Russian roulette from the fourth vertex on, with survival probability min(0.95, max
+//! throughput). Scattering uses geometric normals (interpolated shading normals are kept for
+//! the normal AOV only: they break energy conservation, which the furnace test would catch).
+//!
+//! The features manifest selects a monomorphised variant: the code for point sources, area
+//! emitters and specular materials is compiled out of the variants of scenes without them.
+
+use luxest_core::bsdf::{self, Transport};
+use luxest_core::color::Rgb;
+use luxest_core::math::Vec3;
+use luxest_core::rt::Ray;
+use luxest_core::sampling::Rng;
+use luxest_core::world::World;
+
+/// Rays traced, for rates; optionally every ray, to time raw Embree on the same rays.
+#[derive(Default)]
+pub struct RayLog {
+    pub closest: u64,
+    pub shadow: u64,
+    pub record: bool,
+    pub closest_rays: Vec<Ray>,
+    pub shadow_rays: Vec<Ray>,
+}
+
+fn power_heuristic(a: f64, b: f64) -> f64 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}
+
+/// Signature of a radiance kernel.
+pub type Kernel = fn(&World, Vec3, Vec3, &mut Rng, u32, &mut RayLog) -> Rgb;
+
+/// Radiance arriving at `origin` from direction `dir`.
+pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
+    world: &World,
+    origin: Vec3,
+    dir: Vec3,
+    rng: &mut Rng,
+    max_depth: u32,
+    log: &mut RayLog,
+) -> Rgb {
+    let mut l = Rgb::BLACK;
+    let mut beta = Rgb::WHITE;
+    let (mut origin, mut dir) = (origin, dir);
+    // Solid-angle pdf of the BSDF sample that produced `dir`, and whether it was a delta.
+    let mut bsdf_pdf = 0.0;
+    let mut delta = true;
+    for depth in 0..max_depth {
+        log.closest += 1;
+        if log.record {
+            log.closest_rays.push(Ray {
+                origin,
+                direction: dir,
+                tnear: 0.0,
+                tfar: f64::INFINITY,
+            });
+        }
+        let Some(sp) = world.intersect(origin, dir) else {
+            break;
+        };
+        let wo = -dir;
+        if AREA {
+            if let Some(e) = world.emitter_of(sp.triangle) {
+                let le = world.emitted_radiance(sp.triangle, sp.ng, wo);
+                if le.max_component() > 0.0 {
+                    let w = if delta {
+                        1.0
+                    } else {
+                        let cos_l = sp.ng.dot(wo).abs();
+                        let light_pdf =
+                            world.light_point_pdf(e) * sp.distance * sp.distance / cos_l;
+                        power_heuristic(bsdf_pdf, light_pdf)
+                    };
+                    l = l + beta * le * w;
+                }
+            }
+        }
+        let m = world.material(sp.triangle);
+        let is_delta = SPECULAR && bsdf::is_delta(m);
+        if !is_delta && (POINT || AREA) {
+            // Next-event estimation.
+            let lp = world.sample_light_point(rng);
+            let v = lp.position - sp.position;
+            let d2 = v.length_squared();
+            if d2 > 0.0 {
+                let d = d2.sqrt();
+                let w = v / d;
+                let f = bsdf::eval(m, wo, w, sp.ng, sp.ng) * w.dot(sp.ng).abs();
+                if f.max_component() > 0.0 {
+                    let contribution = match lp.normal {
+                        Some(nl) if AREA => {
+                            let cos_l = -nl.dot(w);
+                            if cos_l > 0.0 {
+                                let light_pdf = lp.pdf * d2 / cos_l;
+                                let bp = bsdf::pdf(m, wo, w, sp.ng, sp.ng);
+                                f * lp.emitted * (power_heuristic(light_pdf, bp) / light_pdf)
+                            } else {
+                                Rgb::BLACK
+                            }
+                        }
+                        None if POINT => f * lp.emitted * (1.0 / (d2 * lp.pdf)),
+                        _ => Rgb::BLACK,
+                    };
+                    if contribution.max_component() > 0.0 {
+                        log.shadow += 1;
+                        let from = world.offset(sp.position, sp.ng, w);
+                        if log.record {
+                            log.shadow_rays.push(Ray {
+                                origin: from,
+                                direction: w,
+                                tnear: 0.0,
+                                tfar: d,
+                            });
+                        }
+                        if !world.occluded(from, lp.position) {
+                            l = l + beta * contribution;
+                        }
+                    }
+                }
+            }
+        }
+        let Some(s) = bsdf::sample(
+            m,
+            wo,
+            sp.ng,
+            sp.ng,
+            rng.next_2d(),
+            rng.next_f64(),
+            Transport::Radiance,
+        ) else {
+            break;
+        };
+        beta = beta * s.weight;
+        bsdf_pdf = s.pdf;
+        delta = s.delta;
+        if depth >= 3 {
+            let q = beta.max_component().min(0.95);
+            if q <= 0.0 || rng.next_f64() >= q {
+                break;
+            }
+            beta = beta * (1.0 / q);
+        }
+        if beta.max_component() <= 0.0 {
+            break;
+        }
+        origin = world.offset(sp.position, sp.ng, s.wi);
+        dir = s.wi;
+    }
+    l
+}
+
+/// The kernel variant for a scene's features.
+pub fn kernel_for(world: &World) -> Kernel {
+    let f = &world.scene.header.features;
+    match (f.point_emitters, f.area_emitters, f.specular_paths) {
+        (true, true, true) => radiance::<true, true, true>,
+        (true, true, false) => radiance::<true, true, false>,
+        (true, false, true) => radiance::<true, false, true>,
+        (true, false, false) => radiance::<true, false, false>,
+        (false, true, true) => radiance::<false, true, true>,
+        (false, true, false) => radiance::<false, true, false>,
+        (false, false, true) => radiance::<false, false, true>,
+        (false, false, false) => radiance::<false, false, false>,
+    }
+}

@@ -1,0 +1,310 @@
+//! trace and aov-write against exact answers: white furnace, point source over a plane,
+//! mirror, glass slab; energy bounds; determinism; outputs and errors.
+
+use crate::util::{compile_text, repo_root, TempDir};
+use luxest_core::bsdf::fresnel_dielectric;
+use luxest_core::compiled::CompiledScene;
+use luxest_core::world::World;
+use trace::{Film, Renderer};
+
+fn render(scene: &std::path::Path, spp: u32, threads: usize) -> (World, Film) {
+    let (world, cam) = trace::load(scene, None).unwrap();
+    let mut film = Film::new(cam.width as usize, cam.height as usize);
+    {
+        let r = Renderer::new(&world, cam, 1, threads, 1024);
+        r.advance(&mut film, spp, false);
+    }
+    (world, film)
+}
+
+/// Every pixel within 4 standard errors (plus `rel` of the expectation for stated modelling
+/// error) of `expected(x, y)`.
+fn check(film: &Film, rel: f64, expected: impl Fn(usize, usize) -> f64) {
+    let mean = film.mean();
+    let se = film.standard_error();
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let i = y * film.width + x;
+            let (v, e) = (mean[i].luminance(), expected(x, y));
+            assert!(v.is_finite());
+            assert!(
+                (v - e).abs() <= 4.0 * se[i] + rel * e,
+                "pixel ({x},{y}): {v} ± {} vs {e}",
+                se[i]
+            );
+        }
+    }
+}
+
+const CAMERA_INSIDE: &str = "camera: Camera(position: (0.1, -0.2, 0.05), look_at: (0.5, 0.3, 1.0), vfov_deg: 70.0, resolution: (12, 9)),";
+
+#[test]
+fn white_furnace_is_le_over_one_minus_rho() {
+    // A closed Lambertian enclosure emitting Le everywhere: L = Le + rho L, so every pixel sees
+    // Le / (1 - rho) exactly (any closed shape; here an icosphere seen from inside).
+    let dir = TempDir::new("furnace");
+    for rho in [0.5, 0.8] {
+        let text = format!(
+            r#"Scene({CAMERA_INSIDE}
+            materials: {{ "w": Lambertian(reflectance: ({rho}, {rho}, {rho})) }},
+            objects: [(shape: Sphere(radius: 1.0, subdivisions: 2), material: "w", flip_normals: true,
+                       emission: Radiance((1.0, 1.0, 1.0)))])"#
+        );
+        let scene = compile_text(&dir, &format!("furnace-{rho}"), &text);
+        // 1024 samples: the per-sample radiance is skewed (Russian roulette), and the z-test
+        // needs enough samples for the sample variance to be reliable.
+        let (_, film) = render(&scene, 1024, 2);
+        check(&film, 0.0, |_, _| 1.0 / (1.0 - rho));
+    }
+}
+
+#[test]
+fn glossy_furnace_respects_energy_bounds() {
+    // Energy conservation: with albedo at most d + s = 0.9, Le <= L <= Le / (1 - 0.9).
+    let dir = TempDir::new("glossy-furnace");
+    let text = format!(
+        r#"Scene({CAMERA_INSIDE}
+        materials: {{ "g": Glossy(diffuse: (0.3, 0.3, 0.3), specular: (0.6, 0.6, 0.6), roughness: 0.4) }},
+        objects: [(shape: Sphere(radius: 1.0, subdivisions: 2), material: "g", flip_normals: true,
+                   emission: Radiance((1.0, 1.0, 1.0)))])"#
+    );
+    let scene = compile_text(&dir, "glossy", &text);
+    let (_, film) = render(&scene, 128, 2);
+    let (mean, se) = (film.mean(), film.standard_error());
+    for (m, s) in mean.iter().zip(&se) {
+        let v = m.luminance();
+        assert!(v >= 1.0 - 4.0 * s && v <= 10.0 + 4.0 * s, "{v} ± {s}");
+        // And more than the diffuse part alone would give: the lobe reflects energy.
+        assert!(v > 1.0 / (1.0 - 0.3) - 4.0 * s, "{v}");
+    }
+}
+
+#[test]
+fn point_source_over_a_lambertian_plane() {
+    // Pixel radiance = rho/pi * I cos(theta) / d², box-filtered over the pixel.
+    let dir = TempDir::new("point-plane");
+    let text = r#"Scene(
+        camera: Camera(position: (0.0, 2.0, -2.0), look_at: (0.0, 0.0, 0.0), vfov_deg: 30.0, resolution: (10, 8)),
+        materials: { "w": Lambertian(reflectance: (0.6, 0.6, 0.6)) },
+        objects: [(shape: Quad(corner: (-50.0, 0.0, 50.0), u: (100.0, 0.0, 0.0), v: (0.0, 0.0, -100.0)), material: "w")],
+        point_lights: [(position: (0.3, 1.0, 0.2), power: Intensity(50.0))])"#;
+    let scene = compile_text(&dir, "pp", text);
+    let (_, film) = render(&scene, 64, 2);
+    let compiled = CompiledScene::load(&scene).unwrap();
+    let cam =
+        luxest_core::camera::PinholeCamera::new(compiled.header.camera.as_ref().unwrap()).unwrap();
+    check(&film, 0.002, |x, y| {
+        // Box filter by an 8 x 8 midpoint rule over the pixel.
+        let mut acc = 0.0;
+        for a in 0..8 {
+            for b in 0..8 {
+                let d = cam.direction(
+                    x as f64 + (a as f64 + 0.5) / 8.0,
+                    y as f64 + (b as f64 + 0.5) / 8.0,
+                );
+                let t = -cam.position.y / d.y;
+                let p = cam.position + d * t;
+                let l = luxest_core::math::Vec3::new(0.3, 1.0, 0.2) - p;
+                acc += 0.6 / std::f64::consts::PI * 50.0 * (l.y / l.length()) / l.length_squared();
+            }
+        }
+        acc / 64.0
+    });
+}
+
+#[test]
+fn mirror_shows_the_emitter_times_its_reflectance() {
+    let dir = TempDir::new("mirror");
+    let text = r#"Scene(
+        camera: Camera(position: (0.0, 0.0, 1.0), look_at: (0.1, 0.0, 0.0), vfov_deg: 20.0, resolution: (8, 6)),
+        materials: { "m": Mirror(reflectance: (0.9, 0.8, 0.7)), "e": Lambertian(reflectance: (0.0, 0.0, 0.0)) },
+        objects: [
+            (shape: Quad(corner: (-50.0, -50.0, 0.0), u: (100.0, 0.0, 0.0), v: (0.0, 100.0, 0.0)), material: "m"),
+            (shape: Quad(corner: (-50.0, -50.0, 2.0), u: (0.0, 100.0, 0.0), v: (100.0, 0.0, 0.0)), material: "e",
+             emission: Radiance((2.0, 2.0, 2.0))),
+        ])"#;
+    let scene = compile_text(&dir, "mirror", text);
+    let (_, film) = render(&scene, 16, 2);
+    let y = luxest_core::color::Rgb([0.9, 0.8, 0.7]).luminance() * 2.0;
+    check(&film, 1e-9, |_, _| y);
+}
+
+#[test]
+fn glass_slab_transmits_one_minus_r_over_one_plus_r() {
+    // Camera -> slab (n = 1.5, 0.1 m) -> emitter. With unpolarised Fresnel reflectance R at the
+    // viewing angle on both faces and all internal reflections, T = (1 - R) / (1 + R).
+    let dir = TempDir::new("slab");
+    let text = r#"Scene(
+        camera: Camera(position: (0.0, 0.0, 1.0), look_at: (0.0, 0.0, 0.0), vfov_deg: 40.0, resolution: (8, 6)),
+        materials: { "g": Dielectric(ior: 1.5), "e": Lambertian(reflectance: (0.0, 0.0, 0.0)) },
+        objects: [
+            (shape: Box(size: (100.0, 100.0, 0.1)), transform: (translate: (0.0, 0.0, -0.05)), material: "g"),
+            (shape: Quad(corner: (-50.0, -50.0, -1.0), u: (100.0, 0.0, 0.0), v: (0.0, 100.0, 0.0)), material: "e",
+             emission: Radiance((1.0, 1.0, 1.0))),
+        ])"#;
+    let scene = compile_text(&dir, "slab", text);
+    let (_, film) = render(&scene, 2048, 2);
+    let compiled = CompiledScene::load(&scene).unwrap();
+    let cam =
+        luxest_core::camera::PinholeCamera::new(compiled.header.camera.as_ref().unwrap()).unwrap();
+    check(&film, 0.002, |x, y| {
+        let d = cam.direction(x as f64 + 0.5, y as f64 + 0.5);
+        let (r, _) = fresnel_dielectric(-d.z, 1.5);
+        (1.0 - r) / (1.0 + r)
+    });
+}
+
+#[test]
+fn images_are_independent_of_threads_and_passes() {
+    let scene = repo_root().join("scenes/cornell-box.ron");
+    let dir = TempDir::new("det");
+    let lxs = compile_text(&dir, "cb", &std::fs::read_to_string(&scene).unwrap());
+    let (world, cam) = trace::load(&lxs, Some("24x16")).unwrap();
+    let one = {
+        let mut f = Film::new(24, 16);
+        Renderer::new(&world, cam, 3, 1, 1024).advance(&mut f, 8, false);
+        f.sum
+    };
+    let split = {
+        let mut f = Film::new(24, 16);
+        let r = Renderer::new(&world, cam, 3, 2, 1024);
+        r.advance(&mut f, 2, false);
+        r.advance(&mut f, 5, false);
+        r.advance(&mut f, 8, false);
+        f.sum
+    };
+    // Sums of the same samples in a different grouping agree to rounding.
+    for (a, b) in one.iter().zip(&split) {
+        for k in 0..3 {
+            assert!(
+                (a[k] - b[k]).abs() <= 1e-12 * a[k].abs().max(1.0),
+                "{a:?} vs {b:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn cli_writes_snapshots_references_and_features() {
+    let dir = TempDir::new("trace-cli");
+    let text = std::fs::read_to_string(repo_root().join("scenes/cornell-box.ron")).unwrap();
+    let lxs = compile_text(&dir, "cb", &text);
+    let prefix = dir.path().join("img");
+    let run = |args: &[&str]| {
+        let argv = std::iter::once("trace").chain(args.iter().copied());
+        let a = luxest_core::cli::parse::<trace::Args>(argv)
+            .unwrap()
+            .unwrap();
+        trace::run(a)
+    };
+    run(&[
+        lxs.to_str().unwrap(),
+        "-o",
+        prefix.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--snapshots",
+        "1,2",
+        "--resolution",
+        "16x12",
+        "--stderr",
+    ])
+    .unwrap();
+    for spp in ["000001", "000002", "000004"] {
+        let img = luxest_core::exr_io::read_rgb(&dir.path().join(format!("img_{spp}spp.hdr.exr")))
+            .unwrap();
+        assert_eq!((img.width, img.height), (16, 12));
+        assert_eq!(
+            img.attribute("luxest.samples"),
+            Some(spp.trim_start_matches('0'))
+        );
+        assert_eq!(img.attribute("luxest.estimator"), Some("path-tracing"));
+        assert!(dir.path().join(format!("img_{spp}spp.se.exr")).is_file());
+    }
+    run(&[
+        lxs.to_str().unwrap(),
+        "-o",
+        prefix.to_str().unwrap(),
+        "--spp",
+        "2",
+        "--reference",
+        "--resolution",
+        "16x12",
+    ])
+    .unwrap();
+    assert!(dir.path().join("img_ref.hdr.exr").is_file());
+    run(&[
+        lxs.to_str().unwrap(),
+        "-o",
+        prefix.to_str().unwrap(),
+        "--time",
+        "0.2",
+        "--resolution",
+        "16x12",
+    ])
+    .unwrap();
+    let err = run(&[lxs.to_str().unwrap(), "--spp", "0"]).unwrap_err();
+    assert_eq!(err.exit_code(), 2);
+    // Features with the same pixel sampling.
+    let aov = |args: &[&str]| {
+        let argv = std::iter::once("aov-write").chain(args.iter().copied());
+        let a = luxest_core::cli::parse::<aov_write::Args>(argv)
+            .unwrap()
+            .unwrap();
+        aov_write::run(a)
+    };
+    aov(&[
+        lxs.to_str().unwrap(),
+        "-o",
+        prefix.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--snapshots",
+        "1",
+        "--resolution",
+        "16x12",
+        "--depth",
+    ])
+    .unwrap();
+    for f in [
+        "000001spp.alb",
+        "000001spp.nrm",
+        "000004spp.alb",
+        "000004spp.nrm",
+        "000004spp.z",
+    ] {
+        assert!(dir.path().join(format!("img_{f}.exr")).is_file(), "{f}");
+    }
+    let nrm = luxest_core::exr_io::read_rgb(&dir.path().join("img_000004spp.nrm.exr")).unwrap();
+    for p in &nrm.pixels {
+        // Unit where a surface is seen, zero where the ray leaves the open box.
+        let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        assert!(
+            (len - 1.0).abs() < 1e-5 || len == 0.0,
+            "normals are unit or zero: {p:?}"
+        );
+    }
+    // The back wall's albedo and normal, at the image centre column, top half.
+    let alb = luxest_core::exr_io::read_rgb(&dir.path().join("img_000004spp.alb.exr")).unwrap();
+    let c = alb.pixels[3 * 16 + 8];
+    assert!(
+        (c[0] - 0.725).abs() < 1e-6 && (c[1] - 0.71).abs() < 1e-6,
+        "{c:?}"
+    );
+    let n = nrm.pixels[3 * 16 + 8];
+    assert!((n[2] + 1.0).abs() < 1e-5, "back wall faces -z: {n:?}");
+}
+
+#[test]
+fn scene_without_camera_is_an_error() {
+    let dir = TempDir::new("nocam");
+    let text = std::fs::read_to_string(repo_root().join("scenes/sobolev.ron")).unwrap();
+    let lxs = compile_text(&dir, "s", &text);
+    let argv = ["trace", lxs.to_str().unwrap(), "--spp", "1"];
+    let a = luxest_core::cli::parse::<trace::Args>(argv)
+        .unwrap()
+        .unwrap();
+    let e = trace::run(a).unwrap_err();
+    assert_eq!(e.exit_code(), 1);
+    assert!(e.to_string().contains("s.lxs: scene has no camera"), "{e}");
+}
