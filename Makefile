@@ -2,16 +2,16 @@
 # for their own program (e.g. `make scenes SCENE_COMPILE=./my-compiler`), as long as it honours
 # the contracts in ARCHITECTURE.md.
 #
-#   make run       the main job on the default scene (cornell-box): compile, local estimate
-#                  at its sensors, double-local-estimate image
+#   make run       the main job on the default scene (cornell-box): compile, path-traced
+#                  snapshots + AOVs, local estimate at its sensors, double-local-estimate image
 #   make scenes    compile every scene in scenes/ into build/<name>/scene.lxs
 #   make test      formatting, lints and all tests
 #   make validate  local estimate vs exact solutions, direct-simulation baseline
 #   make singularity  kernel regularisation at Cornell-box corners (bias, variance vs eps)
 #   make bench     benchmarks (1M-triangle compile + load, local estimate, image)
 #
-# Stages of later milestones (trace, aov-write, denoise, evaluate; `make reference noisy train
-# eval`) are added with their crates; they are not faked here.
+# Stages of later milestones (datasets, denoise, evaluate; `make reference noisy train eval`)
+# are added with their crates; they are not faked here.
 
 PRESET ?= quick
 CARGO ?= cargo
@@ -20,6 +20,8 @@ DEFAULT_SCENE ?= cornell-box
 
 SCENE_COMPILE ?= $(RELEASE)/scene-compile
 ESTIMATE ?= $(RELEASE)/estimate
+TRACE ?= $(RELEASE)/trace
+AOV_WRITE ?= $(RELEASE)/aov-write
 
 SCENES := $(basename $(notdir $(wildcard scenes/*.ron)))
 COMPILED := $(patsubst %,build/%/scene.lxs,$(SCENES))
@@ -30,8 +32,10 @@ MESHES := $(wildcard scenes/meshes/*)
 
 # The main job on the default scene: compile it, estimate illuminance at its sensors (local
 # estimate), render its double-local-estimate luminance image with a PNG preview.
-run: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE)
+run: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE) $(TRACE) $(AOV_WRITE)
 	$(SCENE_COMPILE) --info $< > build/$(DEFAULT_SCENE)/scene.info.ron
+	$(TRACE) $< --spp 64 --snapshots 1,4,16 --resolution 256x256 --preview build/$(DEFAULT_SCENE)/$(DEFAULT_SCENE)_000064spp.png
+	$(AOV_WRITE) $< --spp 64 --snapshots 1,4,16 --resolution 256x256
 	$(ESTIMATE) sensors $< --paths 200000 --csv build/$(DEFAULT_SCENE)/$(DEFAULT_SCENE).sensors.csv
 	$(ESTIMATE) image $< --paths 1000 --resolution 256x256 --preview build/$(DEFAULT_SCENE)/$(DEFAULT_SCENE)_001000le.png
 
@@ -43,6 +47,14 @@ $(RELEASE)/scene-compile: $(RUST_SOURCES)
 
 $(RELEASE)/estimate: $(RUST_SOURCES)
 	$(CARGO) build --release -p estimate
+	@touch $@
+
+$(RELEASE)/trace: $(RUST_SOURCES)
+	$(CARGO) build --release -p trace
+	@touch $@
+
+$(RELEASE)/aov-write: $(RUST_SOURCES)
+	$(CARGO) build --release -p aov-write
 	@touch $@
 
 # The local estimate against exact solutions (Sobolev, integrating sphere, CIE 171 5.8) and
@@ -64,9 +76,15 @@ lint:
 test: lint
 	$(CARGO) test --workspace
 
-bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs
+bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs
 	$(CARGO) bench -p scene-compile --bench compile_1m
 	$(CARGO) bench -p estimate --bench estimate
+	$(CARGO) bench -p trace --bench trace
+
+# A 1M-triangle scene for the trace benchmark.
+build/bench-1m/scene.lxs: pipelines/bench_scene.py $(SCENE_COMPILE)
+	python3 pipelines/bench_scene.py
+	$(SCENE_COMPILE) build/bench-1m/scene.ron -o $@
 
 clean:
 	rm -rf build

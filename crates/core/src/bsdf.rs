@@ -149,6 +149,20 @@ pub fn pdf(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> f64 {
     }
 }
 
+/// `(eval, pdf)` in one pass (next-event estimation with MIS needs both).
+pub fn eval_and_pdf(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> (Rgb, f64) {
+    match m {
+        Material::Lambertian { reflectance } => {
+            let (g, n) = facing(wo, ng, ns);
+            if wi.dot(g) <= 0.0 {
+                return (Rgb::BLACK, 0.0);
+            }
+            (*reflectance * (1.0 / PI), wi.dot(n).max(0.0) / PI)
+        }
+        _ => (eval(m, wo, wi, ng, ns), pdf(m, wo, wi, ng, ns)),
+    }
+}
+
 /// Local direction around unit `n` from tangent-space coordinates.
 fn to_world(n: Vec3, local: Vec3) -> Vec3 {
     let (t, b) = n.orthonormal_basis();

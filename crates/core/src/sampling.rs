@@ -127,12 +127,58 @@ pub fn uniform_triangle(u1: f64, u2: f64) -> (f64, f64) {
     (s * (1.0 - u2), s * u2)
 }
 
-/// A direction on the hemisphere around +z with density cos(theta)/pi (Malley's method).
+/// sin and cos of x for |x| <= π/4 by their Taylor polynomials to x^15 / x^16 (truncation
+/// error below 5e-17): a hot path of the samplers, several times faster than libm's sincos.
+#[inline]
+pub fn sin_cos_quarter(x: f64) -> (f64, f64) {
+    // Coefficients (−1)^k/(2k+1)! and (−1)^k/(2k)!, Horner form in x².
+    let x2 = x * x;
+    let s = x
+        * (1.0
+            + x2 * (-0.16666666666666666
+                + x2 * (0.008333333333333333
+                    + x2 * (-0.0001984126984126984
+                        + x2 * (2.7557319223985893e-06
+                            + x2 * (-2.505210838544172e-08
+                                + x2 * (1.6059043836821613e-10
+                                    + x2 * (-7.647163731819816e-13))))))));
+    let c = 1.0
+        + x2 * (-0.5
+            + x2 * (0.041666666666666664
+                + x2 * (-0.001388888888888889
+                    + x2 * (2.48015873015873e-05
+                        + x2 * (-2.755731922398589e-07
+                            + x2 * (2.08767569878681e-09
+                                + x2 * (-1.1470745597729725e-11
+                                    + x2 * (4.779477332387385e-14))))))));
+    (s, c)
+}
+
+/// A uniformly distributed point on the unit disk by Shirley and Chiu's concentric mapping
+/// ("A Low Distortion Map Between Disk and Square", 1997).
+#[inline]
+pub fn concentric_disk(u1: f64, u2: f64) -> (f64, f64) {
+    let (a, b) = (2.0 * u1 - 1.0, 2.0 * u2 - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    if a.abs() > b.abs() {
+        let (s, c) = sin_cos_quarter(PI / 4.0 * (b / a));
+        (a * c, a * s)
+    } else {
+        // φ = π/2 − θ: cos φ = sin θ, sin φ = cos θ.
+        let (s, c) = sin_cos_quarter(PI / 4.0 * (a / b));
+        (b * s, b * c)
+    }
+}
+
+/// A direction on the hemisphere around +z with density cos(theta)/pi (Malley's method on the
+/// concentric disk).
+#[inline]
 pub fn cosine_hemisphere(u1: f64, u2: f64) -> Vec3 {
-    let r = u1.sqrt();
-    let phi = 2.0 * PI * u2;
-    let z = (1.0 - u1).max(0.0).sqrt();
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (x, y) = concentric_disk(u1, u2);
+    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    Vec3::new(x, y, z)
 }
 
 /// A direction uniformly distributed on the unit sphere (density 1/(4 pi)).
@@ -247,6 +293,18 @@ mod tests {
         }
         let expected = vec![n as f64 / (nt * np) as f64; nt * np];
         assert_chi_square_ok(&counts, &expected);
+    }
+
+    #[test]
+    fn polynomial_sin_cos_is_exact_to_rounding() {
+        for i in 0..=1000 {
+            let x = (i as f64 / 1000.0 - 0.5) * PI / 2.0;
+            let (s, c) = sin_cos_quarter(x);
+            assert!(
+                (s - x.sin()).abs() < 3e-16 && (c - x.cos()).abs() < 3e-16,
+                "{x}"
+            );
+        }
     }
 
     #[test]

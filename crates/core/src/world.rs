@@ -55,6 +55,14 @@ pub struct World {
     emitter_choice: Distribution1D,
     /// Per area emitter, the distribution of its triangles by area (None for point emitters).
     triangle_choice: Vec<Option<Distribution1D>>,
+    /// Per area emitter, its triangles as (corner, edge 1, edge 2, unit normal), for fast
+    /// sampling of points on lights.
+    emitter_triangles: Vec<Vec<[Vec3; 4]>>,
+    /// Whether any vertex has a shading normal (else shading normals are not interpolated).
+    smooth: bool,
+    /// Unit geometric normal of every triangle (saves a cross product and a square root per
+    /// hit).
+    triangle_normals: Vec<[f32; 3]>,
     /// Absolute offset used to leave surfaces and stop short of targets, from the scene size.
     pub epsilon: f64,
     /// Length of the bounding-box diagonal, m.
@@ -95,6 +103,39 @@ impl World {
                 Emitter::Point { .. } => None,
             })
             .collect();
+        let emitter_triangles = scene
+            .header
+            .emitters
+            .iter()
+            .map(|e| match e {
+                Emitter::Area {
+                    first_triangle,
+                    triangle_count,
+                    ..
+                } => (*first_triangle..first_triangle + triangle_count)
+                    .map(|t| {
+                        let [a, b, c] = scene.triangle(t as usize);
+                        let n = (b - a)
+                            .cross(c - a)
+                            .try_normalize()
+                            .unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+                        [a, b - a, c - a, n]
+                    })
+                    .collect(),
+                Emitter::Point { .. } => Vec::new(),
+            })
+            .collect();
+        let smooth = scene.header.features.smooth_normals;
+        let triangle_normals = (0..scene.triangle_count())
+            .map(|t| {
+                let [a, b, c] = scene.triangle(t);
+                (b - a)
+                    .cross(c - a)
+                    .try_normalize()
+                    .unwrap_or(Vec3::new(0.0, 0.0, 1.0))
+                    .to_f32()
+            })
+            .collect();
         let s = &scene.header.stats;
         let mut lo = s.bounds_min;
         let mut hi = s.bounds_max;
@@ -129,6 +170,9 @@ impl World {
             tracer,
             emitter_choice,
             triangle_choice,
+            emitter_triangles,
+            smooth,
+            triangle_normals,
             epsilon,
             diagonal,
             room_scale,
@@ -146,11 +190,7 @@ impl World {
 
     /// Unit geometric normal of a triangle.
     pub fn geometric_normal(&self, triangle: u32) -> Vec3 {
-        let [a, b, c] = self.scene.triangle(triangle as usize);
-        (b - a)
-            .cross(c - a)
-            .try_normalize()
-            .unwrap_or(Vec3::new(0.0, 0.0, 1.0))
+        Vec3::from(self.triangle_normals[triangle as usize])
     }
 
     /// The surface point of a hit.
@@ -160,15 +200,16 @@ impl World {
         let [a, b, c] = idx.map(|i| Vec3::from(self.scene.positions[i as usize]));
         let (u, v) = (hit.u, hit.v);
         let position = a * (1.0 - u - v) + b * u + c * v;
-        let ng = (b - a)
-            .cross(c - a)
-            .try_normalize()
-            .unwrap_or(Vec3::new(0.0, 0.0, 1.0));
-        let [na, nb, nc] = idx.map(|i| Vec3::from(self.scene.normals[i as usize]));
-        let ns = (na * (1.0 - u - v) + nb * u + nc * v)
-            .try_normalize()
-            .map(|n| if n.dot(ng) < 0.0 { -n } else { n })
-            .unwrap_or(ng);
+        let ng = Vec3::from(self.triangle_normals[t]);
+        let ns = if self.smooth {
+            let [na, nb, nc] = idx.map(|i| Vec3::from(self.scene.normals[i as usize]));
+            (na * (1.0 - u - v) + nb * u + nc * v)
+                .try_normalize()
+                .map(|n| if n.dot(ng) < 0.0 { -n } else { n })
+                .unwrap_or(ng)
+        } else {
+            ng
+        };
         SurfacePoint {
             position,
             ng,
@@ -268,11 +309,9 @@ impl World {
             .as_ref()
             .expect("area emitter has triangles");
         let (ti, _) = dist.sample(rng.next_f64());
-        let t = first_triangle + ti as u32;
-        let [a, b, c] = self.scene.triangle(t as usize);
+        let [a, e1, e2, n] = self.emitter_triangles[ei][ti];
         let (b1, b2) = uniform_triangle(rng.next_f64(), rng.next_f64());
-        let p = a + (b - a) * b1 + (c - a) * b2;
-        (p, self.geometric_normal(t), t)
+        (a + e1 * b1 + e2 * b2, n, first_triangle + ti as u32)
     }
 
     /// A point on a light chosen by flux, for next-event estimation.
@@ -312,6 +351,16 @@ impl World {
         match &self.scene.header.emitters[emitter as usize] {
             Emitter::Area { area_m2, .. } => p_e / area_m2,
             Emitter::Point { .. } => 0.0,
+        }
+    }
+
+    /// The emitter index and luminance of `triangle` towards `w`, if it emits that way.
+    #[inline]
+    pub fn emission(&self, triangle: u32, ng: Vec3, w: Vec3) -> Option<(u32, Rgb)> {
+        let e = self.emitter_of(triangle)?;
+        match &self.scene.header.emitters[e as usize] {
+            Emitter::Area { radiance_rgb, .. } if ng.dot(w) > 0.0 => Some((e, *radiance_rgb)),
+            _ => None,
         }
     }
 

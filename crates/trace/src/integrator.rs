@@ -69,9 +69,8 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
         };
         let wo = -dir;
         if AREA {
-            if let Some(e) = world.emitter_of(sp.triangle) {
-                let le = world.emitted_radiance(sp.triangle, sp.ng, wo);
-                if le.max_component() > 0.0 {
+            if let Some((e, le)) = world.emission(sp.triangle, sp.ng, wo) {
+                {
                     let w = if delta {
                         1.0
                     } else {
@@ -94,14 +93,14 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
             if d2 > 0.0 {
                 let d = d2.sqrt();
                 let w = v / d;
-                let f = bsdf::eval(m, wo, w, sp.ng, sp.ng) * w.dot(sp.ng).abs();
+                let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
+                let f = f * w.dot(sp.ng).abs();
                 if f.max_component() > 0.0 {
                     let contribution = match lp.normal {
                         Some(nl) if AREA => {
                             let cos_l = -nl.dot(w);
                             if cos_l > 0.0 {
                                 let light_pdf = lp.pdf * d2 / cos_l;
-                                let bp = bsdf::pdf(m, wo, w, sp.ng, sp.ng);
                                 f * lp.emitted * (power_heuristic(light_pdf, bp) / light_pdf)
                             } else {
                                 Rgb::BLACK
