@@ -59,8 +59,8 @@ $(RELEASE)/aov-write: $(RUST_SOURCES)
 
 # The local estimate against exact solutions (Sobolev, integrating sphere, CIE 171 5.8) and
 # the direct-simulation baseline; fails if any |z| > 4.
-validate: $(SCENE_COMPILE) $(ESTIMATE)
-	SCENE_COMPILE=$(SCENE_COMPILE) ESTIMATE=$(ESTIMATE) PRESET=$(PRESET) python3 pipelines/validate.py
+validate: $(SCENE_COMPILE) $(ESTIMATE) $(TRACE)
+	SCENE_COMPILE=$(SCENE_COMPILE) ESTIMATE=$(ESTIMATE) TRACE=$(TRACE) PRESET=$(PRESET) python3 pipelines/validate.py
 
 # The compiled scene depends on its source, the meshes it may load and the compiler.
 build/%/scene.lxs: scenes/%.ron $(MESHES) $(SCENE_COMPILE)
