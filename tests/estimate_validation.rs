@@ -16,13 +16,7 @@ fn world_from(text: &str) -> World {
 }
 
 fn sensors(world: &World) -> Vec<SensorPoint> {
-    world
-        .scene
-        .header
-        .sensors
-        .iter()
-        .flat_map(|s| s.points.iter().copied())
-        .collect()
+    estimate::all_sensors(world)
 }
 
 fn config(paths: u64, seed: u64, threads: usize, world: &World) -> LocalConfig {

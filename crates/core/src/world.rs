@@ -72,7 +72,49 @@ pub struct World {
     pub room_scale: f64,
 }
 
+/// Parses a `WIDTHxHEIGHT` resolution override (a usage error otherwise).
+pub fn parse_resolution(r: &str) -> Result<(u32, u32)> {
+    let parsed = r
+        .split_once('x')
+        .and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)));
+    match parsed {
+        Some((a, b)) if a > 0 && b > 0 && a <= 1 << 15 && b <= 1 << 15 => Ok((a, b)),
+        _ => Err(crate::Error::Usage(format!(
+            "--resolution: expected WIDTHxHEIGHT, got '{r}'"
+        ))),
+    }
+}
+
+/// Loads a compiled scene for a camera stage: the world and its pinhole camera, with an
+/// optional `WIDTHxHEIGHT` resolution override. Errors name the scene file.
+pub fn load_with_camera(
+    path: &std::path::Path,
+    resolution: Option<&str>,
+) -> Result<(World, crate::camera::PinholeCamera)> {
+    let compiled = CompiledScene::load(path)?;
+    let mut camera = compiled
+        .header
+        .camera
+        .clone()
+        .ok_or_else(|| crate::Error::input(path, "scene has no camera"))?;
+    if let Some(r) = resolution {
+        camera.resolution = parse_resolution(r)?;
+    }
+    let world = World::load_from(path, compiled)?;
+    let cam = crate::camera::PinholeCamera::new(&camera)
+        .ok_or_else(|| crate::Error::input(path, "degenerate camera"))?;
+    Ok((world, cam))
+}
+
 impl World {
+    /// [`World::new`] with errors attributed to the compiled scene's file.
+    pub fn load_from(path: &std::path::Path, scene: CompiledScene) -> Result<World> {
+        World::new(scene).map_err(|e| match e {
+            crate::Error::Usage(m) => crate::Error::input(path, m),
+            other => other,
+        })
+    }
+
     pub fn new(scene: CompiledScene) -> Result<World> {
         let tracer = RayTracer::for_scene(&scene, true)?;
         let weights: Vec<f64> = scene.header.emitters.iter().map(Emitter::flux_lm).collect();
@@ -82,28 +124,7 @@ impl World {
                 "scene has no emitter with positive flux",
             )
         })?;
-        let triangle_choice = scene
-            .header
-            .emitters
-            .iter()
-            .map(|e| match e {
-                Emitter::Area {
-                    first_triangle,
-                    triangle_count,
-                    ..
-                } => {
-                    let areas: Vec<f64> = (*first_triangle..first_triangle + triangle_count)
-                        .map(|t| {
-                            let [a, b, c] = scene.triangle(t as usize);
-                            0.5 * (b - a).cross(c - a).length()
-                        })
-                        .collect();
-                    Distribution1D::new(&areas)
-                }
-                Emitter::Point { .. } => None,
-            })
-            .collect();
-        let emitter_triangles = scene
+        let emitter_triangles: Vec<Vec<[Vec3; 4]>> = scene
             .header
             .emitters
             .iter()
@@ -123,6 +144,16 @@ impl World {
                     })
                     .collect(),
                 Emitter::Point { .. } => Vec::new(),
+            })
+            .collect();
+        let triangle_choice = emitter_triangles
+            .iter()
+            .map(|tris: &Vec<[Vec3; 4]>| {
+                let areas: Vec<f64> = tris
+                    .iter()
+                    .map(|[_, e1, e2, _]| 0.5 * e1.cross(*e2).length())
+                    .collect();
+                Distribution1D::new(&areas)
             })
             .collect();
         let smooth = scene.header.features.smooth_normals;

@@ -235,13 +235,11 @@ pub fn load_world(path: &Path) -> Result<World> {
             "scene has no sensors (add Points or Grid sensors to the .ron)",
         ));
     }
-    World::new(scene).map_err(|e| match e {
-        Error::Usage(m) => Error::input(path, m),
-        other => other,
-    })
+    World::load_from(path, scene)
 }
 
-fn all_sensors(world: &World) -> Vec<SensorPoint> {
+/// Every sensor point of the scene, set by set.
+pub fn all_sensors(world: &World) -> Vec<SensorPoint> {
     world
         .scene
         .header
@@ -498,34 +496,10 @@ pub fn run(args: Args) -> Result<()> {
             common,
             max_depth,
         } => {
-            let compiled = CompiledScene::load(&scene)?;
-            let mut camera = compiled
-                .header
-                .camera
-                .clone()
-                .ok_or_else(|| Error::input(&scene, "scene has no camera"))?;
-            if let Some(r) = resolution {
-                let parsed = r
-                    .split_once('x')
-                    .and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)));
-                match parsed {
-                    Some((a, b)) if a > 0 && b > 0 => camera.resolution = (a, b),
-                    _ => {
-                        return Err(Error::Usage(format!(
-                            "--resolution: expected WIDTHxHEIGHT, got '{r}'"
-                        )))
-                    }
-                }
-            }
             if paths == 0 {
                 return Err(Error::Usage("--paths must be positive".into()));
             }
-            let world = World::new(compiled).map_err(|e| match e {
-                Error::Usage(m) => Error::input(&scene, m),
-                other => other,
-            })?;
-            let cam = luxest_core::camera::PinholeCamera::new(&camera)
-                .ok_or_else(|| Error::input(&scene, "degenerate camera"))?;
+            let (world, cam) = luxest_core::world::load_with_camera(&scene, resolution.as_deref())?;
             let eps = eps.unwrap_or(DEFAULT_IMAGE_EPS_FRACTION * world.room_scale);
             let sing = match singularity {
                 SingularityMode::Ball => Singularity::Ball { eps },

@@ -12,7 +12,6 @@ use clap::Parser;
 use integrator::{kernel_for, Kernel, RayLog};
 use luxest_core::camera::{pixel_jitter, PinholeCamera};
 use luxest_core::color::Rgb;
-use luxest_core::compiled::CompiledScene;
 use luxest_core::exr_io::RgbImage;
 use luxest_core::meta::{RunInfo, PROGRAM_VERSION};
 use luxest_core::parallel::{run_batches, thread_count};
@@ -212,38 +211,7 @@ pub fn image_path(prefix: &Path, spp: Option<u32>, feature: &str) -> PathBuf {
     prefix.with_file_name(format!("{name}_{tag}.{feature}.exr"))
 }
 
-/// Parses `WIDTHxHEIGHT`.
-pub fn parse_resolution(r: &str) -> Result<(u32, u32)> {
-    let parsed = r
-        .split_once('x')
-        .and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)));
-    match parsed {
-        Some((a, b)) if a > 0 && b > 0 && a <= 1 << 15 && b <= 1 << 15 => Ok((a, b)),
-        _ => Err(Error::Usage(format!(
-            "--resolution: expected WIDTHxHEIGHT, got '{r}'"
-        ))),
-    }
-}
-
-/// Loads a compiled scene with a camera, applying a resolution override.
-pub fn load(scene: &Path, resolution: Option<&str>) -> Result<(World, PinholeCamera)> {
-    let compiled = CompiledScene::load(scene)?;
-    let mut camera = compiled
-        .header
-        .camera
-        .clone()
-        .ok_or_else(|| Error::input(scene, "scene has no camera"))?;
-    if let Some(r) = resolution {
-        camera.resolution = parse_resolution(r)?;
-    }
-    let world = World::new(compiled).map_err(|e| match e {
-        Error::Usage(m) => Error::input(scene, m),
-        other => other,
-    })?;
-    let cam =
-        PinholeCamera::new(&camera).ok_or_else(|| Error::input(scene, "degenerate camera"))?;
-    Ok((world, cam))
-}
+pub use luxest_core::world::{load_with_camera as load, parse_resolution};
 
 fn write_image(
     path: &Path,
