@@ -6,14 +6,16 @@
 #                  snapshots + AOVs, local estimate at its sensors, double-local-estimate image
 #   make scenes    compile every scene in scenes/ into build/<name>/scene.lxs
 #   make test      formatting, lints and all tests
+#   make reference noisy   render the generated denoiser dataset (PRESET=quick|full)
 #   make validate  local estimate vs exact solutions, direct-simulation baseline
 #   make singularity  kernel regularisation at Cornell-box corners (bias, variance vs eps)
 #   make bench     benchmarks (1M-triangle compile + load, local estimate, image)
 #
-# Stages of later milestones (datasets, denoise, evaluate; `make reference noisy train eval`)
-# are added with their crates; they are not faked here.
+# Stages of later milestones (train, denoise, evaluate; `make train eval`) are added with
+# their code; they are not faked here.
 
 PRESET ?= quick
+.DEFAULT_GOAL := run
 CARGO ?= cargo
 RELEASE := target/release
 DEFAULT_SCENE ?= cornell-box
@@ -29,6 +31,8 @@ RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml
 MESHES := $(wildcard scenes/meshes/*)
 
 .PHONY: run scenes test lint bench validate singularity clean
+
+include pipelines/dataset.mk
 
 # The main job on the default scene: compile it, estimate illuminance at its sensors (local
 # estimate), render its double-local-estimate luminance image with a PNG preview.
@@ -87,4 +91,4 @@ build/bench-1m/scene.lxs: pipelines/bench_scene.py $(SCENE_COMPILE)
 	$(SCENE_COMPILE) build/bench-1m/scene.ron -o $@
 
 clean:
-	rm -rf build
+	rm -rf build data
