@@ -221,8 +221,14 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     eprintln!(
-        "wrote {} features ({} spp, {:.2} s)",
-        image_path(&prefix, Some(args.spp), "alb").display(),
+        "wrote {}_{}.{{alb,nrm{}}}.exr ({} spp, {:.2} s)",
+        prefix.display(),
+        if args.reference {
+            "ref".to_string()
+        } else {
+            format!("{:06}spp", args.spp)
+        },
+        if args.depth { ",z" } else { "" },
         args.spp,
         start.elapsed().as_secs_f64()
     );
