@@ -30,7 +30,7 @@ COMPILED := $(patsubst %,build/%/scene.lxs,$(SCENES))
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml Cargo.lock
 MESHES := $(wildcard scenes/meshes/*)
 
-.PHONY: run scenes test lint bench validate singularity clean
+.PHONY: run scenes test lint bench validate singularity clean train pytest
 
 include pipelines/dataset.mk
 
@@ -77,8 +77,38 @@ lint:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 
-test: lint
+test: lint pytest
 	$(CARGO) test --workspace
+
+VENV := .venv
+PYTHON := $(VENV)/bin/python
+
+$(VENV)/.luxest-setup-1: scripts/setup-python.sh training/requirements.txt
+	scripts/setup-python.sh
+
+pytest: $(VENV)/.luxest-setup-1
+	$(PYTHON) -m pytest training/tests -q
+
+# The denoiser: preprocess the dataset, train (TRAIN_STEPS / TRAIN_MINUTES), export ONNX, and
+# score it on the held-out test scenes. PRESET=quick fits 30 minutes on 2 cores.
+TRAIN_STEPS_quick := 6000
+TRAIN_MINUTES_quick := 22
+TRAIN_STEPS_full := 60000
+TRAIN_MINUTES_full := 600
+TRAIN_STEPS ?= $(TRAIN_STEPS_$(PRESET))
+TRAIN_MINUTES ?= $(TRAIN_MINUTES_$(PRESET))
+MODEL := models/$(DATASET).onnx
+
+train: $(MODEL)
+
+$(MODEL): $(VENV)/.luxest-setup-1 $(wildcard training/*.py) | reference noisy
+	cd training && ../$(PYTHON) preprocess.py --data-dir ../$(DATA_DIR) --prep-dir ../build/train/$(DATASET)
+	cd training && ../$(PYTHON) train.py --prep-dir ../build/train/$(DATASET) --run-dir ../runs/$(DATASET) \
+		--steps $(TRAIN_STEPS) --minutes $(TRAIN_MINUTES)
+	cd training && ../$(PYTHON) export.py --run-dir ../runs/$(DATASET) --out ../$@
+	cd training && ../$(PYTHON) compare_image.py --model ../$@ --split-dir ../$(DATA_DIR)/test \
+		--json ../models/$(DATASET).metrics.json
+	cp runs/$(DATASET)/config.json models/$(DATASET).config.json
 
 bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs
 	$(CARGO) bench -p scene-compile --bench compile_1m

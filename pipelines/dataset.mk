@@ -17,13 +17,13 @@ NOISY_MAX := 64
 
 .PHONY: reference noisy dataset-scenes
 
-$(GEN_DIR)/.generated: data-gen/generate.py $(MESHES)
-	python3 data-gen/generate.py --preset $(PRESET) --out $(GEN_DIR)
-	@touch $@
+# The generator writes every scene of the preset but rewrites only files whose text changed,
+# so running it for each out-of-date scene is cheap and keeps untouched scenes' timestamps.
+# The scene files are kept (not deleted as intermediates of the render chain).
+.SECONDARY: $(patsubst %,$(GEN_DIR)/%.ron,$(DATASET_SCENES)) $(patsubst %,build/dataset/$(DATASET)/%.lxs,$(DATASET_SCENES))
 
-# The generator rewrites only scene files whose text changed.
-$(GEN_DIR)/%.ron: $(GEN_DIR)/.generated
-	@test -f $@
+$(GEN_DIR)/%.ron: data-gen/generate.py $(MESHES)
+	@python3 data-gen/generate.py --preset $(PRESET) --out $(GEN_DIR)
 
 build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(SCENE_COMPILE)
 	$(SCENE_COMPILE) -q $< -o $@

@@ -8,14 +8,19 @@
 #     ORT_DYLIB_PATH or that default path;
 #   - a Rust toolchain must already be installed (cargo on PATH, Rust >= 1.85).
 #
-# Usage: scripts/setup.sh [--no-ort]
+#   - the Python environment of training/ in .venv (scripts/setup-python.sh: torch for CPU,
+#     onnx, onnxruntime, pytest; ~4 GB).
+#
+# Usage: scripts/setup.sh [--no-ort] [--no-python]
 set -euo pipefail
 
 want_ort=1
+want_python=1
 for a in "$@"; do
     case "$a" in
         --no-ort) want_ort=0 ;;
-        *) echo "usage: $0 [--no-ort]" >&2; exit 2 ;;
+        --no-python) want_python=0 ;;
+        *) echo "usage: $0 [--no-ort] [--no-python]" >&2; exit 2 ;;
     esac
 done
 
@@ -23,7 +28,7 @@ sudo_cmd=()
 if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
 
 missing=()
-for pkg in libembree-dev pkg-config make gcc python3 python3-pip; do
+for pkg in libembree-dev pkg-config make gcc python3 python3-pip python3-venv; do
     if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
         missing+=("$pkg")
     fi
@@ -64,5 +69,8 @@ PY
         lib="$(ls "$ort_dir"/libonnxruntime.so.1.31.* | head -n1)"
         ln -sf "$(basename "$lib")" "$ort_dir/libonnxruntime.so"
     fi
+fi
+if [ "$want_python" -eq 1 ]; then
+    "$(dirname "$0")/setup-python.sh"
 fi
 echo "setup: ok" >&2

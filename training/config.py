@@ -1,0 +1,48 @@
+"""All options of the training toolkit in one place (as in OIDN's toolkit); every run saves
+its config next to its checkpoints."""
+import argparse
+import json
+from dataclasses import asdict, dataclass, field
+
+
+@dataclass
+class Config:
+    data_dir: str = "data/quick"        # data/<dataset> with train/ valid/ test/
+    prep_dir: str = "build/train/quick"  # preprocessed .npy arrays
+    run_dir: str = "runs/quick"          # checkpoints, config.json, log
+    features: list = field(default_factory=lambda: ["hdr", "alb", "nrm"])
+    noisy_spp: list = field(default_factory=lambda: [1, 2, 4, 8, 16, 32, 64])
+    crop: int = 64                       # training crop side (multiple of 16)
+    batch: int = 16
+    base_width: int = 24                 # U-Net channels of the first level
+    lr: float = 2e-3                     # peak learning rate of the one-cycle schedule
+    minutes: float = 18.0                # training time budget
+    steps: int = 3000                    # schedule length (stops earlier if out of time)
+    ms_ssim_weight: float = 0.2          # loss = (1 - w) L1 + w (1 - MS-SSIM)
+    seed: int = 1
+    threads: int = 2
+    resume: bool = False
+
+    def save(self, path):
+        with open(path, "w") as f:
+            json.dump(asdict(self), f, indent=2)
+
+    @staticmethod
+    def load(path):
+        with open(path) as f:
+            return Config(**json.load(f))
+
+
+def parse(argv=None, description=""):
+    """Config from command-line flags (--data-dir, --minutes, ...)."""
+    ap = argparse.ArgumentParser(description=description)
+    defaults = Config()
+    for k, v in asdict(defaults).items():
+        flag = "--" + k.replace("_", "-")
+        if isinstance(v, bool):
+            ap.add_argument(flag, action="store_true", default=v)
+        elif isinstance(v, list):
+            ap.add_argument(flag, type=type(v[0]), nargs="+", default=v)
+        else:
+            ap.add_argument(flag, type=type(v), default=v)
+    return Config(**vars(ap.parse_args(argv)))

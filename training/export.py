@@ -1,0 +1,53 @@
+#!/usr/bin/env python3
+"""Exports a trained run to ONNX: input `input` (N, 9, H, W) = raw linear hdr + alb + nrm, output
+`output` (N, 3, H, W) linear radiance, dynamic H and W; autoexposure, the log1p transfer and the
+padding to multiples of 16 are inside the graph (transfer.py), and recorded in the metadata."""
+import argparse
+import json
+from dataclasses import asdict
+from pathlib import Path
+
+import onnx
+import torch
+
+import config
+from model import Denoiser
+
+
+def export(run_dir, out_path, metrics=None):
+    cfg = config.Config.load(Path(run_dir) / "config.json")
+    net = Denoiser(width=cfg.base_width)
+    net.load_state_dict(torch.load(Path(run_dir) / "checkpoint.pt", weights_only=False)["model"])
+    net.eval()
+    x = torch.rand(1, 9, 48, 64)
+    h, w = torch.export.Dim("h", min=1, max=16384), torch.export.Dim("w", min=1, max=16384)
+    tmp = Path(str(out_path) + ".tmp")
+    torch.onnx.export(net, (x,), str(tmp), input_names=["input"], output_names=["output"],
+                      dynamic_shapes={"x": {2: h, 3: w}}, external_data=False)
+    model = onnx.load(str(tmp))
+    meta = {
+        "luxest.channels": "hdr,alb,nrm",
+        "luxest.transfer": "log1p(hdr * exposure), exposure = 0.18 / exp(mean log(Y + 1e-4)); in graph",
+        "luxest.padding": "replicate to multiples of 16; in graph",
+        "luxest.config": json.dumps(asdict(cfg)),
+    }
+    if metrics:
+        meta["luxest.metrics"] = json.dumps(metrics)
+    for k, v in meta.items():
+        p = model.metadata_props.add()
+        p.key, p.value = k, v
+    onnx.save(model, str(tmp))
+    tmp.replace(out_path)
+    print(f"export: wrote {out_path}")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--run-dir", required=True)
+    ap.add_argument("--out", required=True)
+    args = ap.parse_args(argv)
+    export(args.run_dir, args.out)
+
+
+if __name__ == "__main__":
+    main()

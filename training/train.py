@@ -1,0 +1,94 @@
+#!/usr/bin/env python3
+"""Trains the denoiser: Adam with a one-cycle schedule on random crops, L1 + MS-SSIM in the
+transferred domain, checkpoints and the run's config in <run_dir>, resumable (--resume), bf16
+autocast with channels_last on CPU. Stops at the step count or the time budget."""
+import json
+import math
+import time
+from pathlib import Path
+
+import torch
+
+import config
+import dataset
+import loss as losses
+from model import Denoiser
+import transfer
+
+
+def validation_loss(net, prep_dir, cfg):
+    """Mean loss on centre crops of the valid split (all noisy levels)."""
+    d = Path(prep_dir) / "valid"
+    import numpy as np
+
+    total, n = 0.0, 0
+    with torch.no_grad():
+        for ref_path in sorted(d.glob("*_ref.npy")):
+            name = ref_path.name[: -len("_ref.npy")]
+            ref = np.load(ref_path)
+            h, w = ref.shape[:2]
+            c = min(h, w) // 16 * 16
+            y0, x0 = (h - c) // 2, (w - c) // 2
+            b = torch.from_numpy(ref[y0:y0 + c, x0:x0 + c].transpose(2, 0, 1).copy())[None]
+            for inp_path in sorted(d.glob(f"{name}_*spp.npy")):
+                a = torch.from_numpy(np.load(inp_path)[y0:y0 + c, x0:x0 + c].transpose(2, 0, 1).copy())[None]
+                pred, exp = net.transferred(a)
+                total += float(losses.loss(pred, transfer.forward(b, exp), cfg.ms_ssim_weight))
+                n += 1
+    return total / max(n, 1)
+
+
+def main(argv=None):
+    cfg = config.parse(argv, __doc__.splitlines()[0])
+    torch.manual_seed(cfg.seed)
+    torch.set_num_threads(cfg.threads)
+    run = Path(cfg.run_dir)
+    run.mkdir(parents=True, exist_ok=True)
+    ckpt = run / "checkpoint.pt"
+    net = Denoiser(width=cfg.base_width).to(memory_format=torch.channels_last)
+    opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=cfg.steps, pct_start=0.15)
+    step = 0
+    if cfg.resume and ckpt.exists():
+        state = torch.load(ckpt, weights_only=False)
+        net.load_state_dict(state["model"])
+        opt.load_state_dict(state["optimizer"])
+        sched.load_state_dict(state["scheduler"])
+        step = state["step"]
+        print(f"resumed at step {step}")
+    cfg.save(run / "config.json")
+    data = dataset.Crops(Path(cfg.prep_dir) / "train", cfg.crop, cfg.seed + step)
+    loader = torch.utils.data.DataLoader(data, batch_size=cfg.batch, num_workers=0)
+    start = time.time()
+    log = open(run / "log.jsonl", "a")
+    net.train()
+    for a, b in loader:
+        if step >= cfg.steps or time.time() - start > cfg.minutes * 60:
+            break
+        a = a.to(memory_format=torch.channels_last)
+        with torch.autocast("cpu", dtype=torch.bfloat16):
+            pred, exp = net.transferred(a)
+        target = transfer.forward(b, exp)
+        value = losses.loss(pred.float(), target, cfg.ms_ssim_weight)
+        opt.zero_grad()
+        value.backward()
+        opt.step()
+        sched.step()
+        step += 1
+        if step % 50 == 0 or step == 1:
+            rec = {"step": step, "loss": float(value.detach()), "lr": sched.get_last_lr()[0], "seconds": time.time() - start}
+            log.write(json.dumps(rec) + "\n")
+            log.flush()
+            print(f"step {step:5d}  loss {rec["loss"]:.4f}  lr {rec['lr']:.2e}  {rec['seconds']:.0f} s", flush=True)
+        if step % 200 == 0:
+            torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(), "step": step}, ckpt)
+    torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(), "step": step}, ckpt)
+    net.eval()
+    v = validation_loss(net, cfg.prep_dir, cfg)
+    summary = {"steps": step, "seconds": time.time() - start, "valid_loss": v}
+    (run / "summary.json").write_text(json.dumps(summary, indent=2))
+    print(f"train: {step} steps in {summary['seconds']:.0f} s, validation loss {v:.4f}")
+
+
+if __name__ == "__main__":
+    main()
