@@ -42,15 +42,17 @@ def main(argv=None):
     cfg = config.parse(argv, __doc__.splitlines()[0])
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(cfg.threads)
+    # A CUDA GPU is used when present (PRESET=full on a GPU machine); CPU otherwise.
+    device = torch.device("cuda" if torch.cuda.is_available() else "cpu")
     run = Path(cfg.run_dir)
     run.mkdir(parents=True, exist_ok=True)
     ckpt = run / "checkpoint.pt"
-    net = Denoiser(width=cfg.base_width).to(memory_format=torch.channels_last)
+    net = Denoiser(width=cfg.base_width).to(device=device, memory_format=torch.channels_last)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=cfg.steps, pct_start=0.15)
     step = 0
     if cfg.resume and ckpt.exists():
-        state = torch.load(ckpt, weights_only=False)
+        state = torch.load(ckpt, weights_only=False, map_location=device)
         net.load_state_dict(state["model"])
         opt.load_state_dict(state["optimizer"])
         sched.load_state_dict(state["scheduler"])
@@ -65,8 +67,9 @@ def main(argv=None):
     for a, b in loader:
         if step >= cfg.steps or time.time() - start > cfg.minutes * 60:
             break
-        a = a.to(memory_format=torch.channels_last)
-        with torch.autocast("cpu", dtype=torch.bfloat16):
+        a = a.to(device=device, memory_format=torch.channels_last)
+        b = b.to(device)
+        with torch.autocast(device.type, dtype=torch.bfloat16):
             pred, exp = net.transferred(a)
         target = transfer.forward(b, exp)
         value = losses.loss(pred.float(), target, cfg.ms_ssim_weight)
@@ -79,12 +82,12 @@ def main(argv=None):
             rec = {"step": step, "loss": float(value.detach()), "lr": sched.get_last_lr()[0], "seconds": time.time() - start}
             log.write(json.dumps(rec) + "\n")
             log.flush()
-            print(f"step {step:5d}  loss {rec["loss"]:.4f}  lr {rec['lr']:.2e}  {rec['seconds']:.0f} s", flush=True)
+            print(f"step {step:5d}  loss {rec['loss']:.4f}  lr {rec['lr']:.2e}  {rec['seconds']:.0f} s", flush=True)
         if step % 200 == 0:
             torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(), "step": step}, ckpt)
     torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(), "step": step}, ckpt)
     net.eval()
-    v = validation_loss(net, cfg.prep_dir, cfg)
+    v = validation_loss(net.cpu(), cfg.prep_dir, cfg)
     summary = {"steps": step, "seconds": time.time() - start, "valid_loss": v}
     (run / "summary.json").write_text(json.dumps(summary, indent=2))
     print(f"train: {step} steps in {summary['seconds']:.0f} s, validation loss {v:.4f}")
