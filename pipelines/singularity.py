@@ -33,6 +33,21 @@ def read(path):
         return [(float(r["value_lx"]), float(r["standard_error_lx"])) for r in csv.DictReader(f)]
 
 
+def measure(estimate_bin, lxs, ref, tag, paths, extra):
+    """Runs the local estimate; returns mean |bias|/ref, se/ref, rms error and seconds."""
+    le_csv = OUT / f"{tag}.csv"
+    r = subprocess.run([estimate_bin, "sensors", lxs, "-o", OUT / f"{tag}.ron", "--csv", le_csv,
+                        "--paths", str(paths), "--seed", "12", *extra],
+                       check=True, stderr=subprocess.PIPE, text=True)
+    seconds = float(r.stderr.strip().split()[-2])
+    le = read(le_csv)
+    bias = [abs(v - rv) / rv for (v, _), (rv, _) in zip(le, ref)]
+    se = [s / rv for (_, s), (rv, _) in zip(le, ref)]
+    rms = [(b * b + s * s) ** 0.5 for b, s in zip(bias, se)]
+    n = len(le)
+    return sum(bias) / n, sum(se) / n, sum(rms) / n, seconds
+
+
 def main():
     preset = os.environ.get("PRESET", "quick")
     paths = 1_000_000 if preset == "quick" else 10_000_000
@@ -53,33 +68,16 @@ def main():
     for frac in [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1]:
         eps = frac * ROOM
         for mode in ["ball", "clamp"]:
-            le_csv = OUT / f"le-{mode}-{frac}.csv"
-            r = subprocess.run([estimate_bin, "sensors", lxs, "-o", OUT / f"le-{mode}-{frac}.ron", "--csv", le_csv,
-                                "--paths", str(paths), "--eps", str(eps), "--singularity", mode, "--near-samples", "0", "--seed", "12"],
-                               check=True, stderr=subprocess.PIPE, text=True)
-            seconds = float(r.stderr.strip().split()[-2])
-            le = read(le_csv)
-            bias = [abs(v - rv) / rv for (v, _), (rv, _) in zip(le, ref)]
-            se = [s / rv for (_, s), (rv, _) in zip(le, ref)]
-            rms = [(b * b + s * s) ** 0.5 for b, s in zip(bias, se)]
-            n = len(le)
-            print(f"{frac:>9.0e} {eps:>9.2e} {mode:>6} {sum(bias) / n:>11.3e} {sum(se) / n:>9.3e} {sum(rms) / n:>9.3e} {seconds:>9.2f}")
+            bias, se, rms, seconds = measure(estimate_bin, lxs, ref, f"le-{mode}-{frac}", paths,
+                                             ["--eps", str(eps), "--singularity", mode, "--near-samples", "0"])
+            print(f"{frac:>9.0e} {eps:>9.2e} {mode:>6} {bias:>11.3e} {se:>9.3e} {rms:>9.3e} {seconds:>9.2f}")
             sys.stdout.flush()
     print("Near-field split (collisions closer than R estimated backwards, 20000 samples/sensor), default eps:")
     print(f"{'R/room':>9} {'R (m)':>9} {'':>6} {'|bias|/ref':>11} {'se/ref':>9} {'rms err':>9} {'time (s)':>9}")
     for frac in [3e-3, 1e-2, 3e-2, 1e-1]:
         radius = frac * ROOM
-        le_csv = OUT / f"le-near-{frac}.csv"
-        r = subprocess.run([estimate_bin, "sensors", lxs, "-o", OUT / f"le-near-{frac}.ron", "--csv", le_csv,
-                            "--paths", str(paths), "--near-radius", str(radius), "--seed", "12"],
-                           check=True, stderr=subprocess.PIPE, text=True)
-        seconds = float(r.stderr.strip().split()[-2])
-        le = read(le_csv)
-        bias = [abs(v - rv) / rv for (v, _), (rv, _) in zip(le, ref)]
-        se = [s / rv for (_, s), (rv, _) in zip(le, ref)]
-        rms = [(b * b + s * s) ** 0.5 for b, s in zip(bias, se)]
-        n = len(le)
-        print(f"{frac:>9.0e} {radius:>9.2e} {'split':>6} {sum(bias) / n:>11.3e} {sum(se) / n:>9.3e} {sum(rms) / n:>9.3e} {seconds:>9.2f}")
+        bias, se, rms, seconds = measure(estimate_bin, lxs, ref, f"le-near-{frac}", paths, ["--near-radius", str(radius)])
+        print(f"{frac:>9.0e} {radius:>9.2e} {'split':>6} {bias:>11.3e} {se:>9.3e} {rms:>9.3e} {seconds:>9.2f}")
         sys.stdout.flush()
 
 
