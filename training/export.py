@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Exports a trained run to ONNX: input `input` (N, 9, H, W) = raw linear hdr + alb + nrm, output
-`output` (N, 3, H, W) linear radiance, dynamic H and W; autoexposure, the log1p transfer and the
-padding to multiples of 16 are inside the graph (transfer.py), and recorded in the metadata."""
+"""Exports a trained run to ONNX: inputs `input` (N, 9, H, W) = raw linear hdr + alb + nrm and
+`exposure` (N,) = transfer.exposure of each whole image, output `output` (N, 3, H, W) linear
+radiance, dynamic H and W; the log1p transfer and the padding to multiples of 16 are inside the
+graph (transfer.py), the exposure formula is recorded in the metadata."""
 import argparse
 import json
 from dataclasses import asdict
@@ -20,14 +21,17 @@ def export(run_dir, out_path, metrics=None):
     net.load_state_dict(torch.load(Path(run_dir) / "checkpoint.pt", weights_only=False)["model"])
     net.eval()
     x = torch.rand(1, 9, 48, 64)
+    e = torch.tensor([0.5])
     h, w = torch.export.Dim("h", min=1, max=16384), torch.export.Dim("w", min=1, max=16384)
     tmp = Path(str(out_path) + ".tmp")
-    torch.onnx.export(net, (x,), str(tmp), input_names=["input"], output_names=["output"],
-                      dynamic_shapes={"x": {2: h, 3: w}}, external_data=False)
+    torch.onnx.export(net, (x, e), str(tmp), input_names=["input", "exposure"],
+                      output_names=["output"], dynamic_shapes={"x": {2: h, 3: w}, "exposure": None},
+                      external_data=False)
     model = onnx.load(str(tmp))
     meta = {
         "luxest.channels": "hdr,alb,nrm",
-        "luxest.transfer": "log1p(hdr * exposure), exposure = 0.18 / exp(mean log(Y + 1e-4)); in graph",
+        "luxest.transfer": "log1p(max(hdr, 0) * exposure) in graph; input exposure (N,) = 0.18 / "
+        "exp(mean over the whole image of log(max(Y, 0) + 1e-4)), Y = Rec. 709 luminance of hdr",
         "luxest.padding": "replicate to multiples of 16; in graph",
         "luxest.config": json.dumps(asdict(cfg)),
     }

@@ -9,11 +9,13 @@ import onnxruntime as ort
 
 import dataset
 import exrio
+import transfer
 
 
 def denoise(session, hdr, alb, nrm):
     x = np.concatenate([hdr, alb, nrm], axis=-1).transpose(2, 0, 1)[None].astype(np.float32)
-    return session.run(None, {"input": x})[0][0].transpose(1, 2, 0)
+    feed = {"input": x, "exposure": transfer.exposure_np(hdr)}
+    return session.run(None, feed)[0][0].transpose(1, 2, 0)
 
 
 def main(argv=None):

@@ -2,7 +2,8 @@
 up-sampling and skip connections, on the transferred hdr + albedo + normal (9 channels).
 
 `Denoiser` wraps it with the contract of transfer.py and the padding to multiples of 16, so the
-exported graph takes raw linear features of any H, W."""
+exported graph takes raw linear features of any H, W, plus the image's exposure (computed by the
+caller over the whole image, so that tiles of one image share it; transfer.exposure)."""
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
@@ -50,10 +51,11 @@ class Denoiser(nn.Module):
         super().__init__()
         self.unet = UNet(width=width)
 
-    def forward(self, x):
+    def forward(self, x, exposure=None):
+        """`exposure` (N,) float: transfer.exposure of the whole image; computed from x if None."""
         h, w = x.shape[2], x.shape[3]
         hdr = x[:, 0:3]
-        exp = transfer.exposure(hdr)
+        exp = transfer.exposure(hdr) if exposure is None else exposure.view(-1, 1, 1, 1)
         inp = torch.cat([transfer.forward(hdr, exp), x[:, 3:9]], 1)
         ph, pw = (16 - h % 16) % 16, (16 - w % 16) % 16
         inp = F.pad(inp, (0, pw, 0, ph), mode="replicate")

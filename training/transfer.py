@@ -4,8 +4,12 @@
   forward   = log1p(hdr * exposure)        (the network sees this, plus albedo and normals as is)
   inverse   = expm1(out) / exposure
 
-Both are inside the exported ONNX graph, with the padding of H and W to multiples of 16, so Rust
-feeds raw linear hdr/alb/nrm and gets linear radiance back."""
+The forward and inverse transfer are inside the exported ONNX graph, with the padding of H and W
+to multiples of 16, so Rust feeds raw linear hdr/alb/nrm and gets linear radiance back. The
+exposure is a second graph input, computed by the caller over the whole image (exposure_np here,
+exposure() in crates/denoise): a large image denoised in tiles then uses one exposure, not one
+per tile."""
+import numpy as np
 import torch
 
 KEY = 0.18
@@ -26,3 +30,10 @@ def forward(hdr, exp):
 
 def inverse(x, exp):
     return torch.expm1(x) / exp
+
+
+def exposure_np(hdr):
+    """exposure() of one (H, W, 3) image as a float32 array of shape (1,), accumulated in f64."""
+    y = hdr[..., 0].astype(np.float64) * LUMA[0] + hdr[..., 1] * LUMA[1] + hdr[..., 2] * LUMA[2]
+    mean_log = np.log(np.maximum(y, 0.0) + EPS).mean()
+    return np.array([KEY / np.exp(mean_log)], dtype=np.float32)

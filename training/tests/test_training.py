@@ -81,7 +81,9 @@ def test_export_matches_onnxruntime(tmp_path):
     for h, w in [(40, 56), (33, 17)]:
         x = torch.rand(1, 9, h, w) * torch.tensor([5.0] * 3 + [1.0] * 6).view(1, 9, 1, 1)
         a = net(x).detach().numpy()
-        b = session.run(None, {"input": x.numpy()})[0]
+        e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
+        assert abs(float(e[0]) - float(transfer.exposure(x[:, 0:3]))) <= 1e-5 * float(e[0])
+        b = session.run(None, {"input": x.numpy(), "exposure": e})[0]
         assert a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-4 * max(1.0, float(np.abs(a).max()))
     meta = {p.key: p.value for p in __import__("onnx").load(str(model)).metadata_props}
