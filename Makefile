@@ -114,6 +114,7 @@ bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scen
 	$(CARGO) bench -p scene-compile --bench compile_1m
 	$(CARGO) bench -p estimate --bench estimate
 	$(CARGO) bench -p trace --bench trace
+	$(CARGO) bench -p denoise --bench denoise
 
 # A 1M-triangle scene for the trace benchmark.
 build/bench-1m/scene.lxs: pipelines/bench_scene.py $(SCENE_COMPILE)

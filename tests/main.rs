@@ -1,6 +1,7 @@
 //! Cross-stage integration tests, compiled as one binary (as in ripgrep).
 //! Helpers live in `util`; each stage has its own module.
 
+mod denoise_cli;
 mod estimate_cli;
 mod estimate_validation;
 mod scene_compile_errors;

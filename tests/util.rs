@@ -86,3 +86,14 @@ pub fn compile_text(dir: &TempDir, name: &str, text: &str) -> PathBuf {
     scene_compile(&[ron.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"]).unwrap();
     out
 }
+
+/// Runs `denoise` in-process, like [`scene_compile`].
+pub fn denoise(args: &[&str]) -> Result<(), (u8, String)> {
+    let argv = std::iter::once("denoise").chain(args.iter().copied());
+    let parsed = luxest_core::cli::parse::<denoise::cli::Args>(argv)
+        .map_err(|e| (e.exit_code(), e.to_string()))?;
+    match parsed {
+        None => Ok(()),
+        Some(a) => denoise::cli::run(a).map_err(|e| (e.exit_code(), e.to_string())),
+    }
+}

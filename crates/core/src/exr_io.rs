@@ -32,6 +32,25 @@ impl RgbImage {
             .find(|(n, _)| n == name)
             .map(|(_, v)| v.as_str())
     }
+    /// The autoexposure shared by the denoiser and the evaluation tonemap (training/transfer.py):
+    /// `0.18 / exp(mean over pixels of ln(max(Y, 0) + 1e-4))`, Y the Rec. 709 luminance,
+    /// accumulated in f64. It maps the image's log-average luminance to middle grey.
+    pub fn autoexposure(&self) -> f64 {
+        const KEY: f64 = 0.18;
+        const EPS: f64 = 1e-4;
+        if self.pixels.is_empty() {
+            return 1.0;
+        }
+        let sum: f64 = self
+            .pixels
+            .iter()
+            .map(|p| {
+                let y = 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
+                (y.max(0.0) + EPS).ln()
+            })
+            .sum();
+        KEY / (sum / self.pixels.len() as f64).exp()
+    }
     /// Position of the first non-finite pixel value, if any.
     pub fn first_non_finite(&self) -> Option<(usize, usize)> {
         self.pixels

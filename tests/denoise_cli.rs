@@ -1,0 +1,208 @@
+//! The denoise stage: inference parity with Python onnxruntime (fixtures from
+//! tests/fixtures/denoise/generate.py), tiling, and its errors on bad input.
+
+use crate::util::{denoise, repo_root, TempDir};
+use luxest_core::exr_io::{read_rgb, write_rgb, RgbImage};
+use std::path::{Path, PathBuf};
+
+fn fixture(name: &str) -> PathBuf {
+    repo_root().join("tests/fixtures/denoise").join(name)
+}
+
+/// Copies the three features of fixture `img` into `dir`, returning the hdr path.
+fn copy_features(dir: &TempDir, img: &str, features: &[&str]) -> PathBuf {
+    for f in features {
+        let name = format!("{img}.{f}.exr");
+        std::fs::copy(fixture(&name), dir.path().join(&name)).unwrap();
+    }
+    dir.path().join(format!("{img}.hdr.exr"))
+}
+
+/// Largest |a - b| relative to max(1, |b|).
+fn max_relative_difference(a: &RgbImage, b: &RgbImage) -> f64 {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    a.pixels
+        .iter()
+        .flatten()
+        .zip(b.pixels.iter().flatten())
+        .map(|(&x, &y)| (x as f64 - y as f64).abs() / (y as f64).abs().max(1.0))
+        .fold(0.0, f64::max)
+}
+
+fn run(args: &[&str]) -> Result<(), (u8, String)> {
+    denoise(args)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn output_equals_python_onnxruntime_to_1e_5() {
+    let dir = TempDir::new("dn-parity");
+    let model = fixture("tiny.onnx");
+    for img in ["odd_000004spp", "tiles_000001spp"] {
+        let hdr = copy_features(&dir, img, &["hdr", "alb", "nrm"]);
+        run(&[s(&hdr), "--model", s(&model), "--threads", "2"]).unwrap();
+        let out = read_rgb(&dir.path().join(format!("{img}.dn.exr"))).unwrap();
+        let expected = read_rgb(&fixture(&format!("{img}.expected.exr"))).unwrap();
+        let d = max_relative_difference(&out, &expected);
+        assert!(d <= 1e-5, "{img}: max relative difference {d:e}");
+        // The input's run metadata travels with the result.
+        assert_eq!(out.attribute("luxest.denoiser"), Some("tiny.onnx"));
+        let t: f64 = out
+            .attribute("luxest.denoiseSeconds")
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(t > 0.0);
+    }
+}
+
+#[test]
+fn tiles_with_enough_context_equal_the_whole_image() {
+    let dir = TempDir::new("dn-tiles");
+    let model = fixture("tiny.onnx");
+    let hdr = copy_features(&dir, "tiles_000001spp", &["hdr", "alb", "nrm"]);
+    let whole = dir.path().join("whole.exr");
+    run(&[s(&hdr), "--model", s(&model), "-o", s(&whole)]).unwrap();
+    let whole = read_rgb(&whole).unwrap();
+    // 160 x 96 in 32-pixel cores: 15 tiles, most of them interior. The U-Net's receptive
+    // field radius is below 96 pixels, so 96 pixels of context reproduce the whole image.
+    let tiled = dir.path().join("tiled.exr");
+    run(&[
+        s(&hdr),
+        "--model",
+        s(&model),
+        "-o",
+        s(&tiled),
+        "--tile",
+        "32",
+        "--overlap",
+        "96",
+    ])
+    .unwrap();
+    let d = max_relative_difference(&read_rgb(&tiled).unwrap(), &whole);
+    assert!(d <= 1e-5, "tiled vs whole: {d:e}");
+    // Without context the tiles visibly disagree: the test can fail.
+    let bare = dir.path().join("bare.exr");
+    run(&[
+        s(&hdr),
+        "--model",
+        s(&model),
+        "-o",
+        s(&bare),
+        "--tile",
+        "32",
+        "--overlap",
+        "0",
+    ])
+    .unwrap();
+    let d = max_relative_difference(&read_rgb(&bare).unwrap(), &whole);
+    assert!(d > 1e-3, "tiles without context should differ, got {d:e}");
+}
+
+#[test]
+fn bad_input_gives_one_line_errors_and_no_output() {
+    let dir = TempDir::new("dn-errors");
+    let model = fixture("tiny.onnx");
+    let check = |args: &[&str], code: u8, needles: &[&str]| {
+        let (c, msg) = run(args).expect_err("must fail");
+        assert_eq!(c, code, "{msg}");
+        assert!(!msg.trim().contains('\n'), "one line: {msg}");
+        for n in needles {
+            assert!(msg.contains(n), "{msg:?} should mention {n:?}");
+        }
+    };
+
+    // A missing feature image.
+    let hdr = copy_features(&dir, "odd_000004spp", &["hdr", "alb"]);
+    check(
+        &[s(&hdr), "--model", s(&model)],
+        1,
+        &["odd_000004spp.nrm.exr", "missing nrm feature"],
+    );
+    // A feature of another size.
+    let nrm = dir.path().join("odd_000004spp.nrm.exr");
+    write_rgb(&nrm, &RgbImage::new(20, 10)).unwrap();
+    check(
+        &[s(&hdr), "--model", s(&model)],
+        1,
+        &["odd_000004spp.nrm.exr", "20x10", "70x45"],
+    );
+    // NaN in the noisy image.
+    std::fs::copy(fixture("odd_000004spp.nrm.exr"), &nrm).unwrap();
+    let mut bad = read_rgb(&hdr).unwrap();
+    bad.pixels[3 * 70 + 5][1] = f32::NAN;
+    let nan = dir.path().join("nan_000004spp.hdr.exr");
+    write_rgb(&nan, &bad).unwrap();
+    check(
+        &[
+            s(&nan),
+            "--model",
+            s(&model),
+            "--alb",
+            s(&hdr),
+            "--nrm",
+            s(&nrm),
+        ],
+        1,
+        &["nan_000004spp.hdr.exr", "pixel (5, 3)"],
+    );
+    // An EXR without R, G, B.
+    let text = dir.write("x_000001spp.hdr.exr", "not an exr");
+    check(
+        &[
+            s(&text),
+            "--model",
+            s(&model),
+            "--alb",
+            s(&hdr),
+            "--nrm",
+            s(&nrm),
+        ],
+        1,
+        &["x_000001spp.hdr.exr", "OpenEXR"],
+    );
+    // Models that do not honour the contract.
+    check(
+        &[s(&hdr), "--model", s(&fixture("bad_inputs.onnx"))],
+        1,
+        &["bad_inputs.onnx", "input named `input`"],
+    );
+    check(
+        &[s(&hdr), "--model", s(&fixture("bad_channels.onnx"))],
+        1,
+        &["bad_channels.onnx", "9 channels", "2 features"],
+    );
+    let junk = dir.write("junk.onnx", "not a model");
+    check(
+        &[s(&hdr), "--model", s(&junk)],
+        1,
+        &["junk.onnx", "not a loadable ONNX model"],
+    );
+    check(
+        &[s(&hdr), "--model", "/nonexistent/m.onnx"],
+        1,
+        &["/nonexistent/m.onnx"],
+    );
+    // Usage errors.
+    check(
+        &[s(&hdr), "--model", s(&model), "--tile", "100"],
+        2,
+        &["multiple of 16"],
+    );
+    check(
+        &[s(&hdr), s(&hdr), "--model", s(&model), "-o", "x.exr"],
+        2,
+        &["exactly one input"],
+    );
+
+    // Nothing but the inputs was written.
+    let outputs: Vec<_> = dir
+        .files()
+        .into_iter()
+        .filter(|p| p.to_string_lossy().contains(".dn."))
+        .collect();
+    assert!(outputs.is_empty(), "{outputs:?}");
+}
