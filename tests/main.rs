@@ -4,6 +4,7 @@
 mod denoise_cli;
 mod estimate_cli;
 mod estimate_validation;
+mod evaluate_cli;
 mod scene_compile_errors;
 mod scene_compile_scenes;
 mod trace_exact;

@@ -97,3 +97,14 @@ pub fn denoise(args: &[&str]) -> Result<(), (u8, String)> {
         Some(a) => denoise::cli::run(a).map_err(|e| (e.exit_code(), e.to_string())),
     }
 }
+
+/// Runs `evaluate` in-process, like [`scene_compile`].
+pub fn evaluate(args: &[&str]) -> Result<(), (u8, String)> {
+    let argv = std::iter::once("evaluate").chain(args.iter().copied());
+    let parsed = luxest_core::cli::parse::<evaluate::cli::Args>(argv)
+        .map_err(|e| (e.exit_code(), e.to_string()))?;
+    match parsed {
+        None => Ok(()),
+        Some(a) => evaluate::cli::run(a).map_err(|e| (e.exit_code(), e.to_string())),
+    }
+}

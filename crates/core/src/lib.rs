@@ -17,6 +17,7 @@ pub mod color;
 pub mod compiled;
 pub mod error;
 pub mod exact;
+pub mod exact_case;
 pub mod exr_io;
 pub mod fsio;
 pub mod math;

@@ -14,8 +14,10 @@ use std::time::Instant;
 ///
 /// Each NOISY file `<img>.hdr.exr` needs the features the model takes next to it
 /// (`<img>.alb.exr`, `<img>.nrm.exr`, as aov-write names them) unless --alb/--nrm name them;
-/// the result is `<img>.dn.exr` with the input's header attributes plus luxest.denoiser and
-/// luxest.denoiseSeconds (wall-clock seconds of inference, excluding I/O).
+/// the result is `<img>.dn.exr` with the input's header attributes plus luxest.denoiser,
+/// luxest.denoiseSeconds (wall-clock seconds of inference, excluding I/O) and
+/// luxest.featureSeconds (the render seconds recorded in the feature images, i.e. what the
+/// albedo and normal cost), so that the image's whole cost can be added up.
 #[derive(Parser, Debug)]
 #[command(name = "denoise", version)]
 pub struct Args {
@@ -135,9 +137,20 @@ pub fn run(args: Args) -> Result<()> {
         let mut result = denoiser.denoise(&refs, tiling)?;
         let seconds = start.elapsed().as_secs_f64();
         result.attributes = images[0].attributes.clone();
+        // The features' cost (aov-write's seconds) is part of the denoised image's cost.
+        let feature_seconds = images[1..]
+            .iter()
+            .filter_map(|i| i.attribute("luxest.seconds")?.parse::<f64>().ok())
+            .fold(0.0, f64::max);
+        result.attributes.retain(|(k, _)| {
+            !matches!(
+                k.as_str(),
+                "luxest.denoiser" | "luxest.denoiseSeconds" | "luxest.featureSeconds"
+            )
+        });
         result
             .attributes
-            .retain(|(k, _)| k != "luxest.denoiser" && k != "luxest.denoiseSeconds");
+            .push(("luxest.featureSeconds".into(), format!("{feature_seconds}")));
         result
             .attributes
             .push(("luxest.denoiser".into(), model_name.clone()));

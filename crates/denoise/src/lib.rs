@@ -72,7 +72,7 @@ impl Default for Tiling {
 
 impl Tiling {
     pub fn validate(&self) -> Result<()> {
-        if self.tile == 0 || self.tile % 16 != 0 || self.overlap % 16 != 0 {
+        if self.tile == 0 || !self.tile.is_multiple_of(16) || !self.overlap.is_multiple_of(16) {
             return Err(Error::Usage(format!(
                 "--tile ({}) must be a positive multiple of 16 and --overlap ({}) a multiple of 16",
                 self.tile, self.overlap

@@ -1,0 +1,3 @@
+fn main() -> std::process::ExitCode {
+    luxest_core::cli::main(evaluate::cli::run)
+}
