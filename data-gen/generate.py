@@ -5,8 +5,10 @@ Each scene is a room (floor, ceiling and four walls with their own reflectances)
 primitives (boxes as tables, cabinets and blocks; spheres) and meshes (the torus and trefoil of
 scenes/meshes), in Lambertian, glossy and, in some scenes, mirror and glass materials, lit by one
 to several emitters of varied size, flux and position: ceiling panels, small very bright spheres
-(the firefly makers) and point sources; the camera stands somewhere in the room looking at
-something. Everything follows from (seed, index), so a scene regenerates byte for byte.
+(the firefly makers) and point sources, white or strongly coloured; about a third of the
+reflectances are saturated colours. The camera stands somewhere in the room looking at
+something, or, in a quarter of the rooms, outside a room open at the front (as the Cornell box
+is seen), so that views include empty background. Everything follows from (seed, index), so a scene regenerates byte for byte.
 
   generate.py --preset quick|full --out DIR     write DIR/<split>/<name>.ron
   generate.py --preset quick --list             print "<split>/<name>" per scene
@@ -46,8 +48,24 @@ def v3(a, b, c):
 
 def color(rng, lo=0.05, hi=0.85):
     base = rng.uniform(lo, hi)
+    if rng.random() < 0.35:
+        # Saturated, like the Cornell box's red (0.63, 0.065, 0.05) and green walls: one
+        # dominant channel, the others 5-60 % of it.
+        factors = [1.0, rng.uniform(0.05, 0.6), rng.uniform(0.05, 0.6)]
+        rng.shuffle(factors)
+        return v3(*[min(hi, max(0.02, max(base, 0.3) * k)) for k in factors])
     tint = [min(hi, max(lo, base * rng.uniform(0.6, 1.4))) for _ in range(3)]
     return v3(*tint)
+
+
+def light_tint(rng):
+    """Mostly warm or neutral white; 40 % strongly coloured (the Cornell light is
+    (1, 0.7, 0.24) in relative RGB)."""
+    if rng.random() < 0.4:
+        t = [1.0, rng.uniform(0.4, 1.0), rng.uniform(0.1, 1.0)]
+        rng.shuffle(t)
+        return v3(*t)
+    return v3(1.0, rng.uniform(0.75, 1.0), rng.uniform(0.5, 1.0))
 
 
 def scene(preset, index, seed, scene_dir=None):
@@ -82,7 +100,12 @@ def scene(preset, index, seed, scene_dir=None):
         ("left", v3(0, 0, 0), v3(0, h, 0), v3(0, 0, d)),
         ("right", v3(w, 0, 0), v3(0, 0, d), v3(0, h, 0)),
     ]
+    # A quarter of the rooms are open at the front and seen from outside, as the Cornell box is:
+    # the views then include empty background (no hit: zero radiance, albedo and normal).
+    open_front = rng.random() < 0.25
     for name, corner, u, v in walls:
+        if open_front and name == "front":
+            continue
         objects.append(f'(name: "{name}", shape: Quad(corner: {corner}, u: {u}, v: {v}), material: "{material("lambert")}")')
 
     # Furniture.
@@ -117,7 +140,7 @@ def scene(preset, index, seed, scene_dir=None):
     emitter_material = material("lambert")
     for k in range(rng.randint(1, 4)):
         kind = rng.choices(["panel", "bulb", "point"], [0.5, 0.3, 0.2])[0]
-        tint = v3(1.0, rng.uniform(0.75, 1.0), rng.uniform(0.5, 1.0))
+        tint = light_tint(rng)
         if kind == "panel":
             pw, pd = rng.uniform(0.2, 1.5), rng.uniform(0.2, 1.5)
             px, pz = rng.uniform(0.2, w - pw - 0.2), rng.uniform(0.2, d - pd - 0.2)
@@ -133,8 +156,13 @@ def scene(preset, index, seed, scene_dir=None):
 
     # The camera looks at a piece of furniture from the front part of the room.
     tx, tz = rng.choice(targets)
-    cam = v3(rng.uniform(0.3, w - 0.3), rng.uniform(0.8, h - 0.5), rng.uniform(0.2, min(0.8, tz - 0.3)))
-    look = v3(tx, rng.uniform(0.2, 1.0), tz)
+    if open_front:
+        # Far enough that the opening does not fill the view, looking into the room.
+        cam = v3(rng.uniform(0.3 * w, 0.7 * w), rng.uniform(0.8, h - 0.3), -rng.uniform(2.0, 6.0))
+        look = v3(rng.uniform(0.4 * w, 0.6 * w), rng.uniform(0.3 * h, 0.6 * h), d / 2)
+    else:
+        cam = v3(rng.uniform(0.3, w - 0.3), rng.uniform(0.8, h - 0.5), rng.uniform(0.2, min(0.8, tz - 0.3)))
+        look = v3(tx, rng.uniform(0.2, 1.0), tz)
     mats = ",\n        ".join(f'"{k}": {v}' for k, v in materials.items())
     objs = ",\n        ".join(objects)
     lts = ",\n        ".join(lights)

@@ -91,6 +91,22 @@ def pareto(points):
     return front
 
 
+def front_text(front):
+    """A Pareto front as runs of one estimator: `path-tracing 64–1024 (3.2–48 s)`."""
+    groups = []
+    for t, _, label in front:
+        est, n = label.rsplit(" ", 1)
+        if groups and groups[-1][0] == est:
+            groups[-1][1].append((n, t))
+        else:
+            groups.append((est, [(n, t)]))
+    parts = []
+    for est, pts in groups:
+        (n0, t0), (n1, t1) = pts[0], pts[-1]
+        parts.append(f"{est} {n0} ({t0:.2g} s)" if len(pts) == 1 else f"{est} {n0}–{n1} ({t0:.2g}–{t1:.2g} s)")
+    return " → ".join(parts)
+
+
 def crossing_time(rows, threshold):
     """First time SSIM >= threshold, interpolated in log time between snapshots; None if never."""
     rows = sorted(rows, key=lambda r: r["total_seconds"])
@@ -118,9 +134,10 @@ def extrapolated_time(rows, threshold):
     if sxx == 0:
         return None
     slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sxx
-    if slope >= 0:
-        return None
-    return math.exp(mx + (math.log(1.0 - threshold) - my) / slope), slope
+    if slope > -0.1:
+        return None  # a plateau: the run is not converging towards the reference
+    t = math.exp(mx + (math.log(1.0 - threshold) - my) / slope)
+    return (t, slope) if t < 100 * pts[-1]["total_seconds"] else None
 
 
 def plot_trade(rows, title, path, x_key="total_seconds", x_label="wall-clock seconds (render + features + denoise)"):
@@ -183,6 +200,7 @@ def main():
     ap.add_argument("--data-dir", default=os.environ.get("DATA_DIR", f"data/{os.environ.get('PRESET', 'quick')}"))
     ap.add_argument("--reports", default=str(ROOT / "reports"))
     ap.add_argument("--threads", type=int, default=None)
+    ap.add_argument("--summary-only", action="store_true", help="rewrite summary.md and the plots from the existing reports/csv")
     args = ap.parse_args()
     p = PRESETS[args.preset]
     bins = {k: stage(k, d) for k, d in [("SCENE_COMPILE", "scene-compile"), ("TRACE", "trace"), ("AOV_WRITE", "aov-write"),
@@ -195,6 +213,9 @@ def main():
         d.mkdir(parents=True, exist_ok=True)
     model = Path(args.model)
     started = time.time()
+    if args.summary_only:
+        write_summary(args, p, reports, plots, *read_existing(reports), model, float("nan"))
+        return
 
     # 1 + 3. Cornell box.
     scene = ROOT / "build/cornell-box/scene.lxs"
@@ -265,13 +286,32 @@ def main():
         run([bins["ESTIMATE"], "sensors", lxs, "-o", res_ron, "--paths", paths, "--seed", 1, *threads], quiet=True)
         out_csv = reports / f"csv/sensors-{name}.csv"
         run([bins["EVALUATE"], "sensors", res_ron, "--case", case, "-o", out_csv, "--ron", reports / f"csv/sensors-{name}.ron"], quiet=True)
-        with open(reports / f"csv/sensors-{name}.ron") as f:
-            text = f.read()
-        get = lambda key: float(text.split(f"{key}: ", 1)[1].split(",", 1)[0])
-        sensor_rows.append([name, case.split(":")[0], int(get("points")), int(get("samples")), f"{get('seconds'):.2f}",
-                            f"{get('max_abs_z'):.2f}", f"{get('mean_z_squared'):.2f}", f"{get('rms_relative_error'):.2e}"])
+        sensor_rows.append(sensor_row(reports / f"csv/sensors-{name}.ron"))
 
     write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, model, time.time() - started)
+
+
+def sensor_row(ron_path):
+    """The summary row of one `evaluate sensors` RON report."""
+    text = Path(ron_path).read_text()
+    get = lambda key: text.split(f"{key}: ", 1)[1].split(",", 1)[0].strip()
+    name = Path(ron_path).name[len("sensors-"):-len(".ron")]
+    return [name, get("case").strip('"').split(":")[0], int(get("points")), int(get("samples")), f"{float(get('seconds')):.2f}",
+            f"{float(get('max_abs_z')):.2f}", f"{float(get('mean_z_squared')):.2f}", f"{float(get('rms_relative_error')):.2e}"]
+
+
+def read_existing(reports):
+    """The reports of an earlier run, for --summary-only."""
+    cb_rows = read_csv(reports / "csv/cornell-box.images.csv")
+    ds_rows, ds_names = [], []
+    for f in sorted((reports / "csv").glob("dataset-*.images.csv")):
+        name = f.name[len("dataset-"):-len(".images.csv")]
+        for r in read_csv(f):
+            r["scene"] = name
+            ds_rows.append(r)
+        ds_names.append(name)
+    sensor_rows = [sensor_row(f) for f in sorted((reports / "csv").glob("sensors-*.ron"))]
+    return cb_rows, ds_rows, ds_names, sensor_rows
 
 
 def level_key(r):
@@ -294,12 +334,16 @@ def write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_ro
         ds_mean.append(m)
     if ds_mean:
         plot_trade(ds_mean, f"Held-out test scenes ({len(ds_names)}), mean — error vs time", plots / "dataset-time.png")
+        plot_trade(ds_mean, f"Held-out test scenes ({len(ds_names)}), mean — error vs samples", plots / "dataset-samples.png",
+                   x_key="samples", x_label="samples per pixel (PT) / light paths (DLE)")
     noisy = [r for r in cb_rows if r["estimator"] == "path-tracing"]
     den = [r for r in cb_rows if r["estimator"] == "path-tracing+denoise"]
     plot_progressive(noisy, den, plots / "cornell-box-progressive.png")
 
     lines = [f"# luxest evaluation summary ({args.preset})", "",
-             f"Written by `make eval` (pipelines/eval.py) in {elapsed / 60:.1f} min on this machine ({os.cpu_count()} cores). "
+             (f"Written by `make eval` (pipelines/eval.py) in {elapsed / 60:.1f} min on this machine ({os.cpu_count()} cores). "
+              if not math.isnan(elapsed) else f"Rewritten by `pipelines/eval.py --summary-only` from reports/csv ({os.cpu_count()} cores). ")
+             + 
              f"Denoiser: `{model.relative_to(ROOT) if model.is_absolute() and ROOT in model.parents else model}`.", "",
              "Metrics (crates/evaluate, each checked against an established implementation to 1e-4): PSNR, SSIM, "
              "MS-SSIM and FLIP on tonemapped images — per channel `x = max(v, 0)·k` with `k` the reference's autoexposure "
@@ -319,8 +363,14 @@ def write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_ro
     lines += [table(["estimator", "spp / paths", "seconds", "PSNR dB", "SSIM", "MS-SSIM", "FLIP", "relMSE", "SMAPE"], rows), ""]
     for key, label in METRICS:
         front = pareto([(r["total_seconds"], r[key], f"{r['estimator']} {int(r['samples'])}") for r in cb_rows])
-        lines.append(f"- Pareto front in {label}: " + ", ".join(f"{l} ({t:.2f} s)" for t, _, l in front))
+        lines.append(f"- Pareto front in {label}: " + front_text(front))
     lines += ["", "![error vs time](plots/cornell-box-time.png)", "", "![error vs samples](plots/cornell-box-samples.png)", ""]
+
+    dn_ms = [1e3 * r["denoise_seconds"] / (256 * 256 / 1e6) for r in cb_rows if r["estimator"].endswith("+denoise")]
+    if dn_ms:
+        dn_ms.sort()
+        lines += [f"Denoising a 256² image: median {dn_ms[len(dn_ms) // 2]:.0f} ms per megapixel (inference only, "
+                  f"{len(dn_ms)} images, threads as the run).", ""]
 
     # Progressive experiment.
     lines += ["## The progressive experiment (the thesis' Fig. done against a converged reference)", "",
@@ -337,7 +387,9 @@ def write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_ro
             else:
                 e = extrapolated_time(rows_, t)
                 best = max(r["ssim"] for r in rows_)
-                row.append(f"not reached (best {best:.4f})" + (f"; power-law extrapolation ≈ {e[0]:.0f} s" if e else ""))
+                last = max(rows_, key=lambda r: r["total_seconds"])
+                row.append(f"not reached in {last['total_seconds']:.0f} s (best {best:.4f})"
+                           + (f"; power-law extrapolation of 1 − SSIM: ≈ {e[0]:.0f} s" if e else "; no longer improving"))
         trow.append(row)
     lines += [table(["threshold", "noisy path tracing", "denoised path tracing"], trow), ""]
     prow = []
@@ -359,8 +411,8 @@ def write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_ro
         lines += [table(["estimator", "spp / paths", "scenes", "seconds", "PSNR dB", "SSIM", "FLIP", "relMSE"], rows), ""]
         for key, label in METRICS:
             front = pareto([(m["total_seconds"], m[key], f"{m['estimator']} {m['samples']}") for m in ds_mean])
-            lines.append(f"- Pareto front in {label}: " + ", ".join(f"{l} ({t:.2f} s)" for t, _, l in front))
-        lines += ["", "![dataset error vs time](plots/dataset-time.png)", ""]
+            lines.append(f"- Pareto front in {label}: " + front_text(front))
+        lines += ["", "![dataset error vs time](plots/dataset-time.png)", "", "![dataset error vs samples](plots/dataset-samples.png)", ""]
 
     # Sensors.
     lines += ["## Local estimate at sensors vs exact solutions", "",
