@@ -1,0 +1,34 @@
+"""The arithmetic of pipelines/eval.py (make eval): Pareto fronts and threshold crossing times."""
+import math
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "pipelines"))
+import eval as ev  # noqa: E402
+
+
+def test_pareto_front_keeps_only_undominated_points():
+    pts = [(1.0, 0.5, "a"), (2.0, 0.6, "b"), (2.0, 0.3, "c"), (3.0, 0.3, "d"), (4.0, 0.1, "e"), (0.5, 0.9, "f")]
+    assert [p[2] for p in ev.pareto(pts)] == ["f", "a", "c", "e"]
+
+
+def test_front_text_groups_runs_of_one_estimator():
+    front = [(0.1, 1.0, "pt 1"), (0.2, 0.5, "pt 2"), (0.3, 0.4, "dn 1"), (4.0, 0.1, "pt 64")]
+    assert ev.front_text(front) == "pt 1–2 (0.1–0.2 s) → dn 1 (0.3 s) → pt 64 (4 s)"
+
+
+def test_crossing_time_interpolates_in_log_time():
+    rows = [{"total_seconds": 1.0, "ssim": 0.90}, {"total_seconds": 4.0, "ssim": 0.96}]
+    t, _ = ev.crossing_time(rows, 0.93)
+    assert math.isclose(t, 2.0, rel_tol=1e-12)  # halfway in SSIM = halfway in log time
+    assert ev.crossing_time(rows, 0.99) is None
+    assert ev.crossing_time(rows, 0.5)[0] == 1.0
+
+
+def test_extrapolation_follows_a_power_law_and_refuses_plateaus():
+    # 1 - SSIM = 0.1 * t^-0.5: reaches 0.02 at t = 25.
+    rows = [{"total_seconds": t, "ssim": 1 - 0.1 * t ** -0.5} for t in (1.0, 2.0, 4.0, 8.0)]
+    t, slope = ev.extrapolated_time(rows, 0.98)
+    assert math.isclose(slope, -0.5, rel_tol=1e-9) and math.isclose(t, 25.0, rel_tol=1e-9)
+    flat = [{"total_seconds": t, "ssim": 0.9 + 1e-4 * t} for t in (1.0, 2.0, 4.0, 8.0)]
+    assert ev.extrapolated_time(flat, 0.98) is None
