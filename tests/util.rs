@@ -56,27 +56,30 @@ pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// Runs `scene-compile` in-process with `args` (program name excluded); returns the error, if
-/// any, rendered as the binary would print it, with its exit code.
-pub fn scene_compile(args: &[&str]) -> Result<(), (u8, String)> {
-    let argv = std::iter::once("scene-compile").chain(args.iter().copied());
-    let parsed = luxest_core::cli::parse::<scene_compile::Args>(argv)
-        .map_err(|e| (e.exit_code(), e.to_string()))?;
+/// Runs a stage's `run` in-process on `args` (program name excluded) after parsing them like
+/// its binary; returns the error, if any, rendered as the binary would print it, with its exit
+/// code.
+fn run_stage<A: clap::Parser>(
+    program: &str,
+    args: &[&str],
+    run: impl FnOnce(A) -> luxest_core::Result<()>,
+) -> Result<(), (u8, String)> {
+    let argv = std::iter::once(program).chain(args.iter().copied());
+    let parsed = luxest_core::cli::parse::<A>(argv).map_err(|e| (e.exit_code(), e.to_string()))?;
     match parsed {
         None => Ok(()),
-        Some(a) => scene_compile::run(a).map_err(|e| (e.exit_code(), e.to_string())),
+        Some(a) => run(a).map_err(|e| (e.exit_code(), e.to_string())),
     }
 }
 
-/// Runs `estimate` in-process, like [`scene_compile`].
+/// Runs `scene-compile` in-process (see [`run_stage`]).
+pub fn scene_compile(args: &[&str]) -> Result<(), (u8, String)> {
+    run_stage("scene-compile", args, scene_compile::run)
+}
+
+/// Runs `estimate` in-process.
 pub fn estimate(args: &[&str]) -> Result<(), (u8, String)> {
-    let argv = std::iter::once("estimate").chain(args.iter().copied());
-    let parsed = luxest_core::cli::parse::<estimate::Args>(argv)
-        .map_err(|e| (e.exit_code(), e.to_string()))?;
-    match parsed {
-        None => Ok(()),
-        Some(a) => estimate::run(a).map_err(|e| (e.exit_code(), e.to_string())),
-    }
+    run_stage("estimate", args, estimate::run)
 }
 
 /// Compiles RON scene text into `dir/name.lxs` through the scene-compile stage.
@@ -87,24 +90,12 @@ pub fn compile_text(dir: &TempDir, name: &str, text: &str) -> PathBuf {
     out
 }
 
-/// Runs `denoise` in-process, like [`scene_compile`].
+/// Runs `denoise` in-process.
 pub fn denoise(args: &[&str]) -> Result<(), (u8, String)> {
-    let argv = std::iter::once("denoise").chain(args.iter().copied());
-    let parsed = luxest_core::cli::parse::<denoise::cli::Args>(argv)
-        .map_err(|e| (e.exit_code(), e.to_string()))?;
-    match parsed {
-        None => Ok(()),
-        Some(a) => denoise::cli::run(a).map_err(|e| (e.exit_code(), e.to_string())),
-    }
+    run_stage("denoise", args, denoise::cli::run)
 }
 
-/// Runs `evaluate` in-process, like [`scene_compile`].
+/// Runs `evaluate` in-process.
 pub fn evaluate(args: &[&str]) -> Result<(), (u8, String)> {
-    let argv = std::iter::once("evaluate").chain(args.iter().copied());
-    let parsed = luxest_core::cli::parse::<evaluate::cli::Args>(argv)
-        .map_err(|e| (e.exit_code(), e.to_string()))?;
-    match parsed {
-        None => Ok(()),
-        Some(a) => evaluate::cli::run(a).map_err(|e| (e.exit_code(), e.to_string())),
-    }
+    run_stage("evaluate", args, evaluate::cli::run)
 }

@@ -72,7 +72,7 @@
 //! fixtures written by `tests/fixtures/metrics/generate.py` (repository root); every value there
 //! matches to 1e-4 (absolute).
 
-use luxest_core::exr_io::RgbImage;
+use luxest_core::exr_io::{srgb_encode, RgbImage};
 
 /// Epsilon in the denominator of [`rel_mse`].
 pub const REL_MSE_EPSILON: f64 = 0.01;
@@ -154,20 +154,11 @@ pub fn autoexposure(reference: &RgbImage) -> f64 {
     reference.autoexposure()
 }
 
-/// sRGB OETF (IEC 61966-2-1) of `t` in [0, 1].
-fn srgb_oetf(t: f64) -> f64 {
-    if t <= 0.0031308 {
-        12.92 * t
-    } else {
-        1.055 * t.powf(1.0 / 2.4) - 0.055
-    }
-}
-
 /// Per channel `x = max(v, 0) * exposure`, `t = x / (1 + x)`, the sRGB OETF, clamped to [0, 1].
 pub fn tonemap(image: &RgbImage, exposure: f64) -> Display {
     let map = |v: f32| {
         let x = (v as f64).max(0.0) * exposure;
-        srgb_oetf(x / (1.0 + x)).clamp(0.0, 1.0)
+        srgb_encode(x / (1.0 + x))
     };
     Display {
         width: image.width,
@@ -920,7 +911,7 @@ mod tests {
         let d = tonemap(&image, 1.0);
         assert_eq!(d.pixels[0][0], 0.0);
         assert_eq!(d.pixels[0][1], 0.0);
-        assert!((d.pixels[0][2] - srgb_oetf(0.5)).abs() < 1e-15);
+        assert!((d.pixels[0][2] - srgb_encode(0.5)).abs() < 1e-15);
         assert!(d.pixels[1][0] <= 1.0 && d.pixels[1][0] > 0.999);
         let x = 0.002f32 as f64;
         let t = x / (1.0 + x);
