@@ -146,6 +146,19 @@ pub fn write_preview_png_auto(path: &Path, image: &RgbImage) -> Result<()> {
     write_preview_png(path, image, if p99 > 0.0 { 1.0 / p99 } else { 1.0 })
 }
 
+/// [`read_rgb`] for stage inputs that must be finite: a NaN or infinity is an error naming the
+/// file and the pixel.
+pub fn read_rgb_finite(path: &Path) -> Result<RgbImage> {
+    let image = read_rgb(path)?;
+    if let Some((x, y)) = image.first_non_finite() {
+        return Err(Error::input(
+            path,
+            format!("non-finite value (NaN or infinity) at pixel ({x}, {y})"),
+        ));
+    }
+    Ok(image)
+}
+
 /// Reads an EXR that must contain R, G and B channels (f32 or f16; other channels ignored).
 pub fn read_rgb(path: &Path) -> Result<RgbImage> {
     let bytes = crate::fsio::read_bytes(path)?;

@@ -4,7 +4,7 @@
 use crate::{feature_path, output_path, Denoiser, Feature, Tiling};
 use clap::Parser;
 use luxest_core::cli::CommonArgs;
-use luxest_core::exr_io::{read_rgb, write_preview_png_auto, write_rgb, RgbImage};
+use luxest_core::exr_io::{read_rgb_finite, write_preview_png_auto, write_rgb, RgbImage};
 use luxest_core::parallel::thread_count;
 use luxest_core::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -178,17 +178,11 @@ fn names(features: &[Feature]) -> String {
         .join(", ")
 }
 
-/// Reads an input image and rejects non-finite values, naming the pixel.
+/// Reads an input image: finite and not empty, naming the file otherwise.
 fn read_checked(path: &Path) -> Result<RgbImage> {
-    let image = read_rgb(path)?;
+    let image = read_rgb_finite(path)?;
     if image.width == 0 || image.height == 0 {
         return Err(Error::input(path, "image is empty"));
-    }
-    if let Some((x, y)) = image.first_non_finite() {
-        return Err(Error::input(
-            path,
-            format!("non-finite value (NaN or infinity) at pixel ({x}, {y})"),
-        ));
     }
     Ok(image)
 }

@@ -3,7 +3,7 @@
 
 use crate::metrics;
 use luxest_core::exact_case::Case;
-use luxest_core::exr_io::{read_rgb, RgbImage};
+use luxest_core::exr_io::{read_rgb_finite, RgbImage};
 use luxest_core::fsio::{write_atomically, write_ron};
 use luxest_core::sensors::SensorResults;
 use luxest_core::{Error, Result};
@@ -49,16 +49,12 @@ pub struct ImageReport {
     pub rows: Vec<ImageRow>,
 }
 
-/// Reads an image that must be finite, naming the file and pixel otherwise.
-pub fn read_finite(path: &Path) -> Result<RgbImage> {
-    let image = read_rgb(path)?;
-    if let Some((x, y)) = image.first_non_finite() {
-        return Err(Error::input(
-            path,
-            format!("non-finite value (NaN or infinity) at pixel ({x}, {y})"),
-        ));
-    }
-    Ok(image)
+/// luxest.samples of an image header, 0 when absent.
+fn samples(image: &RgbImage) -> u64 {
+    image
+        .attribute("luxest.samples")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0)
 }
 
 fn attr_f64(image: &RgbImage, key: &str) -> f64 {
@@ -74,13 +70,13 @@ pub fn score_images(
     tests: &[impl AsRef<Path>],
     mut flip_map: impl FnMut(&Path, &RgbImage) -> Result<()>,
 ) -> Result<ImageReport> {
-    let reference = read_finite(reference_path)?;
+    let reference = read_rgb_finite(reference_path)?;
     let exposure = reference.autoexposure();
     let reference_display = metrics::tonemap(&reference, exposure);
     let mut rows = Vec::new();
     for test_path in tests {
         let test_path = test_path.as_ref();
-        let test = read_finite(test_path)?;
+        let test = read_rgb_finite(test_path)?;
         if (test.width, test.height) != (reference.width, reference.height) {
             return Err(Error::input(
                 test_path,
@@ -119,10 +115,7 @@ pub fn score_images(
             } else {
                 estimator.to_string()
             },
-            samples: test
-                .attribute("luxest.samples")
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(0),
+            samples: samples(&test),
             render_seconds,
             feature_seconds,
             denoise_seconds,
@@ -137,10 +130,7 @@ pub fn score_images(
     }
     Ok(ImageReport {
         reference: reference_path.display().to_string(),
-        reference_samples: reference
-            .attribute("luxest.samples")
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(0),
+        reference_samples: samples(&reference),
         exposure,
         tonemap: TONEMAP.to_string(),
         rel_mse_epsilon: metrics::REL_MSE_EPSILON,
