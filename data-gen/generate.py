@@ -200,7 +200,7 @@ def main():
         text = scene(args.preset, i, args.seed, path.parent.resolve())
         # Rewrite only what changed, so make rebuilds only what changed.
         if not path.exists() or path.read_text() != text:
-            tmp = path.with_suffix(".ron.tmp")
+            tmp = path.with_suffix(f".ron.{os.getpid()}.tmp")  # unique: make -j may run two generators
             tmp.write_text(text)
             tmp.replace(path)
     print(f"{len(names(args.preset))} scenes in {args.out}", file=sys.stderr)

@@ -1,50 +1,35 @@
 #!/usr/bin/env python3
-"""`make eval`: the speed/accuracy trade of every image estimator, the progressive Cornell-box
-experiment, and sensor results against exact values; writes reports/summary.md with tables and
-plots (reports/plots/*.png), and the CSV/RON reports of `evaluate` they come from.
+"""`make eval`'s summary: reports/summary.md with tables and plots (reports/plots/*.png) drawn
+from the CSV/RON reports of the `evaluate` stage that the rules of pipelines/eval.mk write
+(every stage run is a Make rule; this file only reads reports and draws).
 
-Every program is called through the Makefile's stage variables (TRACE, AOV_WRITE, ESTIMATE,
-DENOISE, EVALUATE, SCENE_COMPILE), so a swapped stage is measured the same way. Work files go
-to build/eval/<preset>/.
+  eval.py summary --reports reports --cornell CSV --dataset CSV... --sensors CSV... [values of
+                  pipelines/presets.mk: --preset --model --ref-spp --ref-seed --noisy-seed
+                  --dataset-ref-spp --sensor-scale]
 
-1. Cornell box (256 x 256): a converged reference (REF_SPP, its own seed), one progressive path-
-   traced run with snapshots at 1, 2, 4, ... and every 64 spp, its albedo/normal features at the
-   same snapshots, every snapshot denoised; double-local-estimate images at several path counts,
-   each also denoised (with the 64-spp features). Error vs wall-clock time and vs samples for
-   the four estimators, and the Pareto front over all of them.
-2. The held-out test scenes of the dataset (data/<preset>/test, references of the dataset's
-   REF_SPP): noisy levels as rendered by `make noisy`, denoised; local-estimate images.
+1. Cornell box (256 x 256): error vs wall-clock time and vs samples for path tracing, + denoise,
+   double local estimate, + denoise, and the Pareto front over all of them.
+2. The held-out test scenes of the dataset: the same, means over the scenes.
 3. The seed's experiment done right: PSNR/SSIM/FLIP of the noisy and the denoised progressive
    snapshots against the converged reference over time, and the time at which each reaches
    SSIM 0.95 and 0.98.
 4. Sensor results of the local estimate against exact solutions (the cases of `make validate`).
 
-Times are wall-clock seconds on this machine: render (trace/estimate) + features (aov-write)
-+ inference (denoise), excluding file I/O and process start."""
+Times are wall-clock seconds recorded in the images' headers: render (trace/estimate) +
+features (aov-write) + inference (denoise), excluding file I/O and process start."""
 import argparse
-import csv
 import math
 import os
-import shutil
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "pipelines"))
-import validate  # noqa: E402  (the exact cases of `make validate`)
+import luxest_contract as contract  # noqa: E402
 
 import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-PRESETS = {
-    # ref_spp, progressive max spp, cornell DLE paths, dataset DLE paths, sensor path scale
-    "quick": dict(ref_spp=4096, prog_spp=1024, dle=[100, 300, 1000, 3000], data_dle=[100, 1000], sensor_scale=0.25),
-    "full": dict(ref_spp=65536, prog_spp=8192, dle=[100, 300, 1000, 3000, 10000, 30000], data_dle=[100, 1000, 10000], sensor_scale=1.0),
-}
 THRESHOLDS = (0.95, 0.98)
 METRICS = [("rel_mse", "relMSE (linear)"), ("one_minus_ssim", "1 - SSIM (tonemapped)"), ("flip", "FLIP (LDR)")]
 STYLE = {
@@ -55,28 +40,10 @@ STYLE = {
 }
 
 
-def stage(name, default):
-    return os.environ.get(name) or str(ROOT / "target/release" / default)
-
-
-def run(cmd, quiet=False):
-    cmd = [str(c) for c in cmd]
-    print("+ " + " ".join(cmd), flush=True)
-    r = subprocess.run(cmd, stdout=subprocess.PIPE if quiet else None, stderr=subprocess.PIPE if quiet else None, text=True)
-    if r.returncode != 0:
-        if quiet:
-            sys.stderr.write((r.stdout or "") + (r.stderr or ""))
-        sys.exit(f"eval: command failed ({r.returncode}): {' '.join(cmd)}")
-    return r
-
-
 def read_csv(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
+    """`evaluate images`' report, with 1 − SSIM added."""
+    rows = contract.read_image_report(path)
     for r in rows:
-        for k in ("samples", "render_seconds", "feature_seconds", "denoise_seconds", "total_seconds",
-                  "psnr_db", "ssim", "ms_ssim", "flip", "rel_mse", "smape"):
-            r[k] = float(r[k]) if r.get(k) not in (None, "") else float("nan")
         r["one_minus_ssim"] = 1.0 - r["ssim"]
     return rows
 
@@ -193,132 +160,55 @@ def table(header, rows):
     return "\n".join(out)
 
 
-def main():
+def sensor_row(csv_path):
+    """The summary row of one `evaluate sensors` CSV report: case, kind, points, paths, seconds
+    (from the results' run metadata), max |z|, mean z², RMS relative error."""
+    rows, _ = contract.read_sensor_report(csv_path)
+    zs = [r["z"] for r in rows]
+    rel = [r["relative_error"] for r in rows]
+    run = contract.read_sensor_run(rows[0]["results"])
+    name = Path(csv_path).name[len("sensors-"):-len(".csv")]
+    return [name, rows[0]["case"].split(":")[0], len(rows), run["samples"], f"{run['seconds']:.2f}",
+            f"{max(abs(z) for z in zs):.2f}", f"{sum(z * z for z in zs) / len(zs):.2f}",
+            f"{math.sqrt(sum(e * e for e in rel) / len(rel)):.2e}"]
+
+
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--preset", default=os.environ.get("PRESET", "quick"), choices=sorted(PRESETS))
-    ap.add_argument("--model", default=os.environ.get("MODEL", str(ROOT / "models/default.onnx")))
-    ap.add_argument("--data-dir", default=os.environ.get("DATA_DIR", f"data/{os.environ.get('PRESET', 'quick')}"))
-    ap.add_argument("--reports", default=str(ROOT / "reports"))
-    ap.add_argument("--threads", type=int, default=None)
-    ap.add_argument("--summary-only", action="store_true", help="rewrite summary.md and the plots from the existing reports/csv")
-    args = ap.parse_args()
-    p = PRESETS[args.preset]
-    bins = {k: stage(k, d) for k, d in [("SCENE_COMPILE", "scene-compile"), ("TRACE", "trace"), ("AOV_WRITE", "aov-write"),
-                                         ("ESTIMATE", "estimate"), ("DENOISE", "denoise"), ("EVALUATE", "evaluate")]}
-    threads = ["--threads", str(args.threads)] if args.threads else []
-    work = ROOT / "build/eval" / args.preset
+    sub = ap.add_subparsers(dest="command", required=True)
+    c = sub.add_parser("summary")
+    c.add_argument("--reports", required=True)
+    c.add_argument("--cornell", required=True)
+    c.add_argument("--dataset", nargs="*", default=[])
+    c.add_argument("--sensors", nargs="*", default=[])
+    c.add_argument("--preset", required=True)
+    c.add_argument("--model", required=True)
+    c.add_argument("--ref-spp", type=int, required=True)
+    c.add_argument("--ref-seed", type=int, required=True)
+    c.add_argument("--noisy-seed", type=int, required=True)
+    c.add_argument("--dataset-ref-spp", type=int, required=True)
+    c.add_argument("--sensor-scale", type=float, required=True)
+    args = ap.parse_args(argv)
     reports = Path(args.reports)
     plots = reports / "plots"
-    for d in (work, plots, reports / "csv"):
-        d.mkdir(parents=True, exist_ok=True)
-    model = Path(args.model)
-    started = time.time()
-    if args.summary_only:
-        write_summary(args, p, reports, plots, *read_existing(reports), model, float("nan"))
-        return
-
-    # 1 + 3. Cornell box.
-    scene = ROOT / "build/cornell-box/scene.lxs"
-    cb = work / "cornell-box"
-    if cb.exists():
-        shutil.rmtree(cb)
-    cb.mkdir()
-    res = ["--resolution", "256x256"]
-    run([bins["TRACE"], scene, "--spp", p["ref_spp"], "--reference", "--seed", 1001, *res, *threads, "-o", cb / "cb"])
-    snaps = sorted(set([2 ** k for k in range(11) if 2 ** k <= p["prog_spp"]] + list(range(64, p["prog_spp"] + 1, 64))))
-    snap_arg = ",".join(map(str, snaps))
-    run([bins["TRACE"], scene, "--spp", p["prog_spp"], "--snapshots", snap_arg, "--seed", 1, *res, *threads, "-o", cb / "cb"])
-    run([bins["AOV_WRITE"], scene, "--spp", p["prog_spp"], "--snapshots", snap_arg, "--seed", 1, *res, *threads, "-o", cb / "cb"])
-    noisy = [cb / f"cb_{s:06d}spp.hdr.exr" for s in snaps]
-    run([bins["DENOISE"], *noisy, "--model", model, *threads])
-    dle, dle_dn = [], []
-    for n in p["dle"]:
-        out = cb / f"cb_{n:06d}le.hdr.exr"
-        run([bins["ESTIMATE"], "image", scene, "--paths", n, "--seed", 1, *res, *threads, "-o", out])
-        run([bins["DENOISE"], out, "--model", model, "--alb", cb / "cb_000064spp.alb.exr", "--nrm", cb / "cb_000064spp.nrm.exr", *threads])
-        dle.append(out)
-        dle_dn.append(cb / f"cb_{n:06d}le.dn.exr")
-    denoised = [cb / f"cb_{s:06d}spp.dn.exr" for s in snaps]
-    cb_csv = reports / "csv/cornell-box.images.csv"
-    (work / "flip").mkdir(exist_ok=True)
-    run([bins["EVALUATE"], "images", "--reference", cb / "cb_ref.hdr.exr", *noisy, *denoised, *dle, *dle_dn,
-         "-o", cb_csv, "--ron", reports / "csv/cornell-box.images.ron", "--flip-maps", work / "flip"], quiet=True)
-    cb_rows = read_csv(cb_csv)
-
-    # 2. Held-out dataset scenes.
-    data_test = Path(args.data_dir) / "test"
+    plots.mkdir(parents=True, exist_ok=True)
+    cb_rows = read_csv(args.cornell)
     ds_rows, ds_names = [], []
-    if data_test.is_dir():
-        ds = work / "dataset"
-        if ds.exists():
-            shutil.rmtree(ds)
-        ds.mkdir()
-        names = sorted(f.name[: -len("_ref.hdr.exr")] for f in data_test.glob("*_ref.hdr.exr"))
-        for name in names:
-            noisy_files = sorted(data_test.glob(f"{name}_*spp.hdr.exr"))
-            run([bins["DENOISE"], *noisy_files, "--model", model, "--out-dir", ds, *threads])
-            tests = noisy_files + [ds / f.name.replace(".hdr.exr", ".dn.exr") for f in noisy_files]
-            lxs = ROOT / "build/dataset" / args.preset / "test" / f"{name}.lxs"
-            if lxs.is_file():
-                for n in p["data_dle"]:
-                    out = ds / f"{name}_{n:06d}le.hdr.exr"
-                    run([bins["ESTIMATE"], "image", lxs, "--paths", n, "--seed", 1, *threads, "-o", out])
-                    run([bins["DENOISE"], out, "--model", model, "--alb", data_test / f"{name}_000064spp.alb.exr",
-                         "--nrm", data_test / f"{name}_000064spp.nrm.exr", *threads])
-                    tests += [out, ds / f"{name}_{n:06d}le.dn.exr"]
-            out_csv = reports / f"csv/dataset-{name}.images.csv"
-            run([bins["EVALUATE"], "images", "--reference", data_test / f"{name}_ref.hdr.exr", *tests, "-o", out_csv,
-                 "--ron", reports / f"csv/dataset-{name}.images.ron"], quiet=True)
-            for r in read_csv(out_csv):
-                r["scene"] = name
-                ds_rows.append(r)
-            ds_names.append(name)
-
-    # 4. Sensors against exact values.
-    sensor_rows = []
-    sd = work / "sensors"
-    sd.mkdir(exist_ok=True)
-    for name, text, paths, case, _ in validate.cases(args.preset):
-        paths = max(10_000, int(paths * p["sensor_scale"]))
-        ron, lxs, res_ron = sd / f"{name}.ron", sd / f"{name}.lxs", sd / f"{name}.sensors.ron"
-        ron.write_text(text)
-        run([bins["SCENE_COMPILE"], ron, "-o", lxs, "-q"])
-        run([bins["ESTIMATE"], "sensors", lxs, "-o", res_ron, "--paths", paths, "--seed", 1, *threads], quiet=True)
-        out_csv = reports / f"csv/sensors-{name}.csv"
-        run([bins["EVALUATE"], "sensors", res_ron, "--case", case, "-o", out_csv, "--ron", reports / f"csv/sensors-{name}.ron"], quiet=True)
-        sensor_rows.append(sensor_row(reports / f"csv/sensors-{name}.ron"))
-
-    write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, model, time.time() - started)
-
-
-def sensor_row(ron_path):
-    """The summary row of one `evaluate sensors` RON report."""
-    text = Path(ron_path).read_text()
-    get = lambda key: text.split(f"{key}: ", 1)[1].split(",", 1)[0].strip()
-    name = Path(ron_path).name[len("sensors-"):-len(".ron")]
-    return [name, get("case").strip('"').split(":")[0], int(get("points")), int(get("samples")), f"{float(get('seconds')):.2f}",
-            f"{float(get('max_abs_z')):.2f}", f"{float(get('mean_z_squared')):.2f}", f"{float(get('rms_relative_error')):.2e}"]
-
-
-def read_existing(reports):
-    """The reports of an earlier run, for --summary-only."""
-    cb_rows = read_csv(reports / "csv/cornell-box.images.csv")
-    ds_rows, ds_names = [], []
-    for f in sorted((reports / "csv").glob("dataset-*.images.csv")):
-        name = f.name[len("dataset-"):-len(".images.csv")]
+    for f in sorted(args.dataset):
+        name = Path(f).name[len("dataset-"):-len(".images.csv")]
         for r in read_csv(f):
             r["scene"] = name
             ds_rows.append(r)
         ds_names.append(name)
-    sensor_rows = [sensor_row(f) for f in sorted((reports / "csv").glob("sensors-*.ron"))]
-    return cb_rows, ds_rows, ds_names, sensor_rows
+    sensor_rows = [sensor_row(f) for f in args.sensors]
+    write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, Path(args.model))
 
 
 def level_key(r):
     return (r["estimator"], int(r["samples"]))
 
 
-def write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, model, elapsed):
+def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, model):
     plot_trade(cb_rows, "Cornell box 256² — error vs time", plots / "cornell-box-time.png")
     plot_trade(cb_rows, "Cornell box 256² — error vs samples (spp or light paths)", plots / "cornell-box-samples.png",
                x_key="samples", x_label="samples per pixel (PT) / light paths (DLE)")
@@ -341,10 +231,8 @@ def write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_ro
     plot_progressive(noisy, den, plots / "cornell-box-progressive.png")
 
     lines = [f"# luxest evaluation summary ({args.preset})", "",
-             (f"Written by `make eval` (pipelines/eval.py) in {elapsed / 60:.1f} min on this machine ({os.cpu_count()} cores). "
-              if not math.isnan(elapsed) else f"Rewritten by `pipelines/eval.py --summary-only` from reports/csv ({os.cpu_count()} cores). ")
-             + 
-             f"Denoiser: `{model.relative_to(ROOT) if model.is_absolute() and ROOT in model.parents else model}`.", "",
+             f"Written by `make eval` (pipelines/eval.mk; this summary by pipelines/eval.py) on this machine "
+             f"({os.cpu_count()} cores). Denoiser: `{model.relative_to(ROOT) if model.is_absolute() and ROOT in model.parents else model}`.", "",
              "Metrics (crates/evaluate, each checked against an established implementation to 1e-4): PSNR, SSIM, "
              "MS-SSIM and FLIP on tonemapped images — per channel `x = max(v, 0)·k` with `k` the reference's autoexposure "
              "`0.18 / exp(mean ln(Y + 1e-4))`, Reinhard `x / (1 + x)`, sRGB OETF, clamped to [0, 1]; FLIP is LDR-FLIP at "
@@ -353,8 +241,8 @@ def write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_ro
 
     # Cornell trade table.
     lines += ["## Cornell box: the speed/accuracy trade", "",
-              f"Reference: {p['ref_spp']} spp path tracing (seed 1001, independent of the runs scored). Path tracing is one "
-              "progressive run (seed 1) whose snapshots are denoised with the albedo/normal features of the same snapshot; "
+              f"Reference: {args.ref_spp} spp path tracing (seed {args.ref_seed}, independent of the runs scored). Path tracing "
+              f"is one progressive run (seed {args.noisy_seed}) whose snapshots are denoised with the albedo/normal features of the same snapshot; "
               "double-local-estimate (DLE) images (one camera sample per pixel) are denoised with the 64-spp features.", ""]
     show = [r for r in cb_rows if r["estimator"].startswith("double") or int(r["samples"]) in (1, 4, 16, 64, 256, 1024, 4096)]
     rows = [[r["estimator"], int(r["samples"]), f"{r['total_seconds']:.2f}", f"{r['psnr_db']:.2f}", f"{r['ssim']:.4f}",
@@ -404,8 +292,9 @@ def write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_ro
     # Dataset.
     if ds_mean:
         lines += [f"## Held-out test scenes ({', '.join(ds_names)})", "",
-                  "Noisy levels and references as rendered by `make reference noisy` (references: the dataset's REF_SPP, so the "
-                  "error floor at high spp is partly the reference's own noise). Means over the scenes.", ""]
+                  f"Noisy levels and references as rendered by `make reference noisy` (references: {args.dataset_ref_spp} spp "
+                  "with their own seed, so the error floor at high spp is partly the reference's own noise). Means over the "
+                  "scenes.", ""]
         rows = [[m["estimator"], m["samples"], m["scenes"], f"{m['total_seconds']:.2f}", f"{m['psnr_db']:.2f}", f"{m['ssim']:.4f}",
                  f"{m['flip']:.4f}", f"{m['rel_mse']:.3e}"] for m in ds_mean]
         lines += [table(["estimator", "spp / paths", "scenes", "seconds", "PSNR dB", "SSIM", "FLIP", "relMSE"], rows), ""]
@@ -416,7 +305,7 @@ def write_summary(args, p, reports, plots, cb_rows, ds_rows, ds_names, sensor_ro
 
     # Sensors.
     lines += ["## Local estimate at sensors vs exact solutions", "",
-              f"The cases of `make validate` at {p['sensor_scale']:g}× its path counts; z = (estimate − exact) / standard error, "
+              f"The cases of `make validate` at {args.sensor_scale:g}× its path counts; z = (estimate − exact) / standard error, "
               "mean z² ≈ 1 for an unbiased estimate with honest errors (the 5.8 row compares one area-weighted mean).", "",
               table(["case", "kind", "points", "paths", "seconds", "max abs z", "mean z²", "RMS rel. error"], sensor_rows), ""]
     lines += ["Per-image and per-point numbers: `reports/csv/*.csv` and `*.ron`.", ""]

@@ -1,23 +1,39 @@
 #!/usr/bin/env python3
-"""`make singularity`: bias and variance of the local estimate's kernel regularisation at the
-corners and edges of the Cornell box, against eps, for `ball` and `clamp`.
+"""`make singularity` (pipelines/singularity.mk): bias and variance of the local estimate's
+kernel regularisation at the corners and edges of the Cornell box, against eps, for `ball` and
+`clamp`, and of the near-field split against its radius. Make runs the stages; this file
+defines the runs, writes the scene and the summary.
 
-For each eps (as a fraction of the room scale, the box height 0.5488 m); the sensors on
-corners/edges are evaluated at the default edge offset (1e-3 of the room scale) off the adjacent
+  singularity.py runs -o runs.mk        the runs as Make variables (estimate arguments)
+  singularity.py scene -o corners.ron   the Cornell box with only its corner/edge sensors
+  singularity.py summary --dir DIR -o summary.md
+
+eps and radii are fractions of the room scale, the box height 0.5488 m; the sensors on corners
+and edges are evaluated at the default edge offset (1e-3 of the room scale) off the adjacent
 surfaces (see estimate/src/placement.rs), and the reference at the same points is the backward
-`gather` estimator, which has no singularity.
-Reported per eps and mode: mean |bias| / reference, mean relative standard error, and the
-relative RMS error sqrt(bias² + se²) at a fixed number of light paths. Standard library only.
-"""
-import csv
-import os
-import subprocess
+`gather` estimator, which has no singularity. Reported per run: mean |bias| / reference, mean
+relative standard error, the relative RMS error sqrt(bias² + se²), and the run's seconds (from
+its results' metadata). Standard library + the contract module."""
+import argparse
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-OUT = ROOT / "build" / "singularity"
 ROOM = 0.5488
+EPS_FRACTIONS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1)
+MODES = ("ball", "clamp")
+NEAR_FRACTIONS = (3e-3, 1e-2, 3e-2, 1e-1)
+
+
+def runs():
+    """[(run name, estimate sensors arguments)] in the order of the summary."""
+    out = []
+    for frac in EPS_FRACTIONS:
+        for mode in MODES:
+            out.append((f"le-{mode}-{frac:g}", ["--eps", f"{frac * ROOM:.6g}", "--singularity", mode, "--near-samples", "0"]))
+    for frac in NEAR_FRACTIONS:
+        out.append((f"le-near-{frac:g}", ["--near-radius", f"{frac * ROOM:.6g}"]))
+    return out
 
 
 def corners_scene():
@@ -29,57 +45,73 @@ def corners_scene():
 
 
 def read(path):
-    with open(path) as f:
-        return [(float(r["value_lx"]), float(r["standard_error_lx"])) for r in csv.DictReader(f)]
+    """[(value, standard error)] per sensor point of a sensor-results CSV."""
+    import luxest_contract as contract
+
+    rows, _ = contract.read_sensors_csv(path)
+    return [(r["value"], r["standard_error"]) for r in rows]
 
 
-def measure(estimate_bin, lxs, ref, tag, paths, extra):
-    """Runs the local estimate; returns mean |bias|/ref, se/ref, rms error and seconds."""
-    le_csv = OUT / f"{tag}.csv"
-    r = subprocess.run([estimate_bin, "sensors", lxs, "-o", OUT / f"{tag}.ron", "--csv", le_csv,
-                        "--paths", str(paths), "--seed", "12", *extra],
-                       check=True, stderr=subprocess.PIPE, text=True)
-    seconds = float(r.stderr.strip().split()[-2])
-    le = read(le_csv)
+def errors(le, ref):
+    """Mean |bias|/ref, mean se/ref, mean relative RMS error of a run against the reference."""
     bias = [abs(v - rv) / rv for (v, _), (rv, _) in zip(le, ref)]
     se = [s / rv for (_, s), (rv, _) in zip(le, ref)]
     rms = [(b * b + s * s) ** 0.5 for b, s in zip(bias, se)]
     n = len(le)
-    return sum(bias) / n, sum(se) / n, sum(rms) / n, seconds
+    return sum(bias) / n, sum(se) / n, sum(rms) / n
 
 
-def main():
-    preset = os.environ.get("PRESET", "quick")
-    paths = 1_000_000 if preset == "quick" else 10_000_000
-    samples = 200_000 if preset == "quick" else 2_000_000
-    compile_bin = os.environ.get("SCENE_COMPILE", str(ROOT / "target/release/scene-compile"))
-    estimate_bin = os.environ.get("ESTIMATE", str(ROOT / "target/release/estimate"))
-    OUT.mkdir(parents=True, exist_ok=True)
-    ron, lxs = OUT / "cornell-corners.ron", OUT / "cornell-corners.lxs"
-    ron.write_text(corners_scene())
-    subprocess.run([compile_bin, ron, "-o", lxs, "-q"], check=True)
-    print(f"Cornell box corner/edge sensors: local estimate ({paths} paths) vs gather reference ({samples} samples/sensor)")
-    print(f"{'eps/room':>9} {'eps (m)':>9} {'mode':>6} {'|bias|/ref':>11} {'se/ref':>9} {'rms err':>9} {'time (s)':>9}")
-    ref_csv = OUT / "gather.csv"
-    subprocess.run([estimate_bin, "gather", lxs, "-o", OUT / "gather.ron", "--csv", ref_csv,
-                    "--samples", str(samples), "--seed", "11"], check=True, stderr=subprocess.DEVNULL)
-    ref = read(ref_csv)
-    print("reference (lx): " + ", ".join(f"{v:.4f}±{s:.4f}" for v, s in ref))
-    for frac in [1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1]:
-        eps = frac * ROOM
-        for mode in ["ball", "clamp"]:
-            bias, se, rms, seconds = measure(estimate_bin, lxs, ref, f"le-{mode}-{frac}", paths,
-                                             ["--eps", str(eps), "--singularity", mode, "--near-samples", "0"])
-            print(f"{frac:>9.0e} {eps:>9.2e} {mode:>6} {bias:>11.3e} {se:>9.3e} {rms:>9.3e} {seconds:>9.2f}")
-            sys.stdout.flush()
-    print("Near-field split (collisions closer than R estimated backwards, 20000 samples/sensor), default eps:")
-    print(f"{'R/room':>9} {'R (m)':>9} {'':>6} {'|bias|/ref':>11} {'se/ref':>9} {'rms err':>9} {'time (s)':>9}")
-    for frac in [3e-3, 1e-2, 3e-2, 1e-1]:
-        radius = frac * ROOM
-        bias, se, rms, seconds = measure(estimate_bin, lxs, ref, f"le-near-{frac}", paths, ["--near-radius", str(radius)])
-        print(f"{frac:>9.0e} {radius:>9.2e} {'split':>6} {bias:>11.3e} {se:>9.3e} {rms:>9.3e} {seconds:>9.2f}")
-        sys.stdout.flush()
+def cmd_runs(args):
+    lines = ["# Generated by pipelines/singularity.py runs.", "SINGULARITY_RUNS := " + " ".join(r for r, _ in runs())]
+    lines += [f"SINGULARITY_ARGS_{r} := {' '.join(a)}" for r, a in runs()]
+    write(args.out, "\n".join(lines) + "\n")
+
+
+def cmd_summary(args):
+    import luxest_contract as contract
+
+    d = Path(args.dir)
+    ref = read(d / "gather.sensors.csv")
+    gather = contract.read_sensor_run(d / "gather.sensors.ron")
+    le0 = contract.read_sensor_run(d / f"{runs()[0][0]}.sensors.ron")
+    out = [f"Cornell box corner/edge sensors: local estimate ({le0['samples']} paths) vs gather reference "
+           f"({gather['samples']} samples/sensor)", "",
+           "reference (lx): " + ", ".join(f"{v:.4f}±{s:.4f}" for v, s in ref), "",
+           "| run | eps or R / room | mean abs bias / ref | se / ref | rms error | seconds |", "|---|---|---|---|---|---|"]
+    for name, _ in runs():
+        bias, se, rms = errors(read(d / f"{name}.sensors.csv"), ref)
+        seconds = contract.read_sensor_run(d / f"{name}.sensors.ron")["seconds"]
+        kind, frac = name[len("le-"):].rsplit("-", 1)
+        out.append(f"| {kind} | {frac} | {bias:.3e} | {se:.3e} | {rms:.3e} | {seconds:.2f} |")
+    text = "\n".join(out) + "\n"
+    write(args.out, text)
+    print(text)
+
+
+def write(path, text):
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    c = sub.add_parser("runs")
+    c.add_argument("-o", "--out", required=True)
+    c = sub.add_parser("scene")
+    c.add_argument("-o", "--out", required=True)
+    c = sub.add_parser("summary")
+    c.add_argument("--dir", required=True)
+    c.add_argument("-o", "--out", required=True)
+    args = ap.parse_args(argv)
+    if args.command == "scene":
+        write(args.out, corners_scene())
+    else:
+        {"runs": cmd_runs, "summary": cmd_summary}[args.command](args)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

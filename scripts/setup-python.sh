@@ -12,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 venv=.venv
-stamp="$venv/.luxest-setup-2"
+stamp="$venv/.luxest-setup-3"
 if [ -f "$stamp" ]; then
     exit 0
 fi
@@ -27,6 +27,10 @@ pip=("$venv/bin/pip" install --quiet --disable-pip-version-check)
     "nvidia-cusparse==12.7.10.12.*" nvidia-cudnn-cu13==9.26.0.51 nvidia-cusparselt-cu13==0.8.1 \
     nvidia-nccl-cu13==2.30.7 nvidia-nvshmem-cu13==3.7.2
 "${pip[@]}" -r training/requirements.txt
-"$venv/bin/python" -c "import torch, onnxruntime; torch.nn.Conv2d(3, 3, 3)(torch.rand(1, 3, 8, 8)).sum().backward()"
+# The contract module (python/luxest_contract.py: naming, header keys, EXR I/O, exposure) is
+# importable from every script run with the venv's python, through a .pth file.
+site=$("$venv/bin/python" -c "import sysconfig; print(sysconfig.get_paths()['purelib'])")
+echo "$PWD/python" > "$site/luxest.pth"
+"$venv/bin/python" -c "import torch, onnxruntime, OpenEXR, luxest_contract; torch.nn.Conv2d(3, 3, 3)(torch.rand(1, 3, 8, 8)).sum().backward()"
 touch "$stamp"
 echo "setup-python: ok ($venv)" >&2

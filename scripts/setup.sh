@@ -10,17 +10,21 @@
 #
 #   - the Python environment of training/ in .venv (scripts/setup-python.sh: torch for CPU,
 #     onnx, onnxruntime, pytest; ~4 GB).
+#   - with --peers: the optional peer programs in .venv-peers (PyPI pyradiance, which bundles the
+#     Radiance binaries ies2rad, oconv, rtrace; ~40 MB), used by `make lighting-radiance`.
 #
-# Usage: scripts/setup.sh [--no-ort] [--no-python]
+# Usage: scripts/setup.sh [--no-ort] [--no-python] [--peers]
 set -euo pipefail
 
 want_ort=1
 want_python=1
+want_peers=0
 for a in "$@"; do
     case "$a" in
         --no-ort) want_ort=0 ;;
         --no-python) want_python=0 ;;
-        *) echo "usage: $0 [--no-ort] [--no-python]" >&2; exit 2 ;;
+        --peers) want_peers=1 ;;
+        *) echo "usage: $0 [--no-ort] [--no-python] [--peers]" >&2; exit 2 ;;
     esac
 done
 
@@ -72,5 +76,13 @@ PY
 fi
 if [ "$want_python" -eq 1 ]; then
     "$(dirname "$0")/setup-python.sh"
+fi
+if [ "$want_peers" -eq 1 ]; then
+    peers="$(cd "$(dirname "$0")/.." && pwd)/.venv-peers"
+    if ! "$peers/bin/python" -c "import pyradiance" >/dev/null 2>&1; then
+        echo "setup: creating $peers with pyradiance (Radiance binaries)" >&2
+        python3 -m venv "$peers"
+        "$peers/bin/pip" install --quiet "pyradiance==1.3.*"
+    fi
 fi
 echo "setup: ok" >&2

@@ -1,8 +1,9 @@
 //! The denoise stage: inference parity with Python onnxruntime (fixtures from
 //! tests/fixtures/denoise/generate.py), tiling, and its errors on bad input.
 
-use crate::util::{denoise, repo_root, TempDir};
-use luxest_core::exr_io::{read_rgb, write_rgb, RgbImage};
+use crate::util::{denoise, repo_root, StageResult, TempDir};
+use luxest_io::exr_io::{read_rgb, write_rgb, RgbImage};
+use luxest_io::header;
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> PathBuf {
@@ -29,7 +30,7 @@ fn max_relative_difference(a: &RgbImage, b: &RgbImage) -> f64 {
         .fold(0.0, f64::max)
 }
 
-fn run(args: &[&str]) -> Result<(), (u8, String)> {
+fn run(args: &[&str]) -> StageResult {
     denoise(args)
 }
 
@@ -49,9 +50,9 @@ fn output_equals_python_onnxruntime_to_1e_5() {
         let d = max_relative_difference(&out, &expected);
         assert!(d <= 1e-5, "{img}: max relative difference {d:e}");
         // The input's run metadata travels with the result.
-        assert_eq!(out.attribute("luxest.denoiser"), Some("tiny.onnx"));
+        assert_eq!(out.attribute(header::DENOISER), Some("tiny.onnx"));
         let t: f64 = out
-            .attribute("luxest.denoiseSeconds")
+            .attribute(header::DENOISE_SECONDS)
             .unwrap()
             .parse()
             .unwrap();
@@ -173,7 +174,7 @@ fn bad_input_gives_one_line_errors_and_no_output() {
     check(
         &[s(&hdr), "--model", s(&fixture("bad_channels.onnx"))],
         1,
-        &["bad_channels.onnx", "9 channels", "2 features"],
+        &["bad_channels.onnx", "9 channels", "hdr, alb need 6"],
     );
     let junk = dir.write("junk.onnx", "not a model");
     check(

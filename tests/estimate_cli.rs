@@ -1,9 +1,10 @@
 //! The estimate stage's command line: outputs, metadata, errors; and the double local estimate
 //! image against an exact solution.
 
-use crate::util::{compile_text, estimate, TempDir};
-use luxest_core::exact::Sobolev;
-use luxest_core::sensors::SensorResults;
+use crate::util::{compile_text, estimate, evaluate, TempDir};
+use luxest_exact::solutions::Sobolev;
+use luxest_io::header;
+use luxest_io::sensors::SensorResults;
 
 const SOBOLEV: &str = r#"Scene(
     camera: Camera(position: (0.0, 0.0, 0.0), look_at: (0.0, -1.0, 0.0), up: (0.0, 0.0, 1.0),
@@ -56,16 +57,15 @@ fn sensors_write_ron_and_csv_with_metadata() {
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), 3);
     assert!(text.starts_with("set,index,x,y,z,nx,ny,nz,value_lx,standard_error_lx,r,g,b"));
-    // compare passes on correct results and fails (exit 1) against a wrong case.
+    // The z-test of `evaluate sensors` passes on correct results and fails (exit 1) against a
+    // wrong case.
+    let out = out.to_str().unwrap();
     let case = "sobolev:I=100,h1=1,h2=1,rho1=0.5,rho2=0.5";
-    estimate(&["compare", out.to_str().unwrap(), "--case", case]).unwrap();
+    evaluate(&["sensors", out, "--case", case, "--max-z", "4"]).unwrap();
     let wrong = "sobolev:I=100,h1=1,h2=1,rho1=0.9,rho2=0.9";
-    let (code, msg) = estimate(&["compare", out.to_str().unwrap(), "--case", wrong]).unwrap_err();
+    let (code, msg) = evaluate(&["sensors", out, "--case", wrong, "--max-z", "4"]).unwrap_err();
     assert_eq!(code, 1);
     assert!(msg.contains("validation failed"), "{msg}");
-    let (code, _) =
-        estimate(&["compare", out.to_str().unwrap(), "--case", "sobolev:I=1"]).unwrap_err();
-    assert_eq!(code, 2);
 }
 
 #[test]
@@ -124,18 +124,18 @@ fn double_local_estimate_image_matches_the_exact_luminance() {
         "16",
     ])
     .unwrap();
-    let img = luxest_core::exr_io::read_rgb(&out).unwrap();
-    let se = luxest_core::exr_io::read_rgb(&se_out).unwrap();
+    let img = luxest_io::exr_io::read_rgb(&out).unwrap();
+    let se = luxest_io::exr_io::read_rgb(&se_out).unwrap();
     assert_eq!((img.width, img.height), (12, 10));
     assert_eq!(
-        img.attribute("luxest.estimator"),
+        img.attribute(header::ESTIMATOR),
         Some("double-local-estimate")
     );
-    assert_eq!(img.attribute("luxest.samples"), Some("4000"));
-    let cam = luxest_core::camera::PinholeCamera::new(&luxest_core::scene::Camera {
-        position: luxest_core::math::Vec3::ZERO,
-        look_at: luxest_core::math::Vec3::new(0.0, -1.0, 0.0),
-        up: luxest_core::math::Vec3::new(0.0, 0.0, 1.0),
+    assert_eq!(img.attribute(header::SAMPLES), Some("4000"));
+    let cam = luxest_render::camera::PinholeCamera::new(&luxest_render::scene::Camera {
+        position: luxest_io::math::Vec3::ZERO,
+        look_at: luxest_io::math::Vec3::new(0.0, -1.0, 0.0),
+        up: luxest_io::math::Vec3::new(0.0, 0.0, 1.0),
         vfov_deg: 60.0,
         resolution: (12, 10),
     })
@@ -157,7 +157,7 @@ fn double_local_estimate_image_matches_the_exact_luminance() {
                 }
             }
             let i = y * 12 + x;
-            let v = luxest_core::color::Rgb(img.pixels[i].map(|c| c as f64)).luminance();
+            let v = luxest_io::color::Rgb(img.pixels[i].map(|c| c as f64)).luminance();
             let sigma = se.pixels[i][0] as f64;
             // 16 stratified samples per pixel: the sampling error of the pixel footprint is
             // below 0.5% (the direct term varies by < 8% across a pixel).

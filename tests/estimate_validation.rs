@@ -3,13 +3,13 @@
 
 use crate::util::repo_root;
 use estimate::local::{self, Detector, LocalConfig, LocalResult, NearField, Singularity};
-use luxest_core::exact::{self, Sobolev};
-use luxest_core::scene::SensorPoint;
-use luxest_core::world::World;
+use luxest_exact::solutions::{self, Sobolev};
+use luxest_render::scene::SensorPoint;
+use luxest_render::world::World;
 
 fn world_from(text: &str) -> World {
-    let scene: luxest_core::scene::Scene =
-        luxest_core::fsio::parse_ron(std::path::Path::new("test.ron"), text).unwrap();
+    let scene: luxest_render::scene::Scene =
+        luxest_io::fsio::parse_ron(std::path::Path::new("test.ron"), text).unwrap();
     let (compiled, _) =
         scene_compile::compile(&scene, &repo_root().join("scenes/test.ron")).unwrap();
     World::new(compiled).unwrap()
@@ -260,16 +260,18 @@ fn cie_room_mean_indirect_matches() {
     let near = vec![false; s.len()];
     let r = local::estimate(&w, &s, &near, &config(20_000, 3, 2, &w));
     let i = 10_000.0 / (4.0 * std::f64::consts::PI);
-    let centre = luxest_core::math::Vec3::splat(2.0);
+    let centre = luxest_io::math::Vec3::splat(2.0);
     let n = s.len() as f64;
     let mean: f64 = s
         .iter()
         .enumerate()
-        .map(|(k, p)| r.value[k] - exact::point_source_illuminance(i, centre, p.position, p.normal))
+        .map(|(k, p)| {
+            r.value[k] - solutions::point_source_illuminance(i, centre, p.position, p.normal)
+        })
         .sum::<f64>()
         / n;
     let se = (r.standard_error.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
-    let expected = exact::cie171_mean_indirect_illuminance(10_000.0, 96.0, 0.5);
+    let expected = solutions::cie171_mean_indirect_illuminance(10_000.0, 96.0, 0.5);
     assert!(
         (mean - expected).abs() <= 4.0 * se + 0.005 * expected,
         "{mean} ± {se} vs {expected}"

@@ -3,10 +3,11 @@
 //! closed-form exact value, and errors on bad input.
 
 use crate::util::{evaluate, repo_root, TempDir};
-use luxest_core::exr_io::{read_rgb, write_rgb, RgbImage};
-use luxest_core::math::Vec3;
-use luxest_core::meta::RunInfo;
-use luxest_core::sensors::{SensorResults, SensorSetResult, SensorValue};
+use luxest_io::exr_io::{read_rgb, write_rgb, RgbImage};
+use luxest_io::header;
+use luxest_io::math::Vec3;
+use luxest_io::meta::RunInfo;
+use luxest_io::sensors::{SensorResults, SensorSetResult, SensorValue};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -65,19 +66,16 @@ fn image_report_matches_the_reference_implementations_and_adds_up_costs() {
     let reference = metrics_fixture("hdr_ref.exr");
     // The fixture's test image, once as a noisy render and once as a denoised one.
     let mut noisy = read_rgb(&metrics_fixture("hdr_test.exr")).unwrap();
-    noisy.attributes = vec![
-        ("luxest.estimator".into(), "path-tracing".into()),
-        ("luxest.samples".into(), "16".into()),
-        ("luxest.seconds".into(), "2".into()),
-    ];
+    noisy.attributes.clear();
+    noisy.set_attribute(header::ESTIMATOR, "path-tracing");
+    noisy.set_attribute(header::SAMPLES, 16);
+    noisy.set_attribute(header::SECONDS, 2);
     let noisy_path = dir.path().join("x_000016spp.hdr.exr");
     write_rgb(&noisy_path, &noisy).unwrap();
     let mut denoised = noisy.clone();
-    denoised.attributes.extend([
-        ("luxest.denoiser".to_string(), "m.onnx".to_string()),
-        ("luxest.featureSeconds".into(), "1.25".into()),
-        ("luxest.denoiseSeconds".into(), "0.5".into()),
-    ]);
+    denoised.set_attribute(header::DENOISER, "m.onnx");
+    denoised.set_attribute(header::FEATURE_SECONDS, 1.25);
+    denoised.set_attribute(header::DENOISE_SECONDS, 0.5);
     let dn_path = dir.path().join("x_000016spp.dn.exr");
     write_rgb(&dn_path, &denoised).unwrap();
 
@@ -116,7 +114,7 @@ fn image_report_matches_the_reference_implementations_and_adds_up_costs() {
     assert_eq!(num(&rows[0], "total_seconds"), 2.0);
     assert_eq!(num(&rows[1], "total_seconds"), 3.75);
     assert_eq!(num(&rows[1], "samples"), 16.0);
-    let report: evaluate::report::ImageReport = luxest_core::fsio::read_ron(&ron).unwrap();
+    let report: evaluate::images::ImageReport = luxest_io::fsio::read_ron(&ron).unwrap();
     assert_eq!(report.rows.len(), 2);
     assert!((report.exposure - expected("hdr.autoexposure")).abs() < 1e-9);
     let map = read_rgb(&maps.join("x_000016spp.hdr.flip.exr")).unwrap();
@@ -143,18 +141,14 @@ fn sensor_report_gives_z_scores_against_the_exact_value() {
     };
     let results = SensorResults {
         scene: "sphere".into(),
-        run: RunInfo {
-            samples: 1000,
-            seed: 1,
-            seconds: 0.5,
-            estimator: "local-estimate".into(),
-            scene_hash: "0".into(),
-            program_version: "test".into(),
-        },
+        run: RunInfo::new("local-estimate", 1000, 1, 0.5, "0"),
         unit: "lx".into(),
         singularity: "ball".into(),
         sets: vec![SensorSetResult {
             name: "wall".into(),
+            grid: None,
+            kind: None,
+            batches: Vec::new(),
             points: vec![
                 point(Vec3::new(1.0, 0.0, 0.0), 202.0, 1.0),
                 point(Vec3::new(0.0, -1.0, 0.0), 199.0, 0.5),
@@ -182,12 +176,31 @@ fn sensor_report_gives_z_scores_against_the_exact_value() {
     assert!((num(&rows[0], "z") - 2.0).abs() < 1e-9);
     assert!((num(&rows[1], "z") + 2.0).abs() < 1e-9);
     assert!((num(&rows[1], "relative_error") + 0.005).abs() < 1e-12);
-    let report: evaluate::report::SensorReport = luxest_core::fsio::read_ron(&ron).unwrap();
+    let report: evaluate::sensors::SensorReport = luxest_io::fsio::read_ron(&ron).unwrap();
     assert_eq!(report.points, 2);
     assert!((report.max_abs_z - 2.0).abs() < 1e-9);
     assert!((report.mean_z_squared - 4.0).abs() < 1e-9);
     let rms = ((0.01f64.powi(2) + 0.005f64.powi(2)) / 2.0).sqrt();
     assert!((report.rms_relative_error - rms).abs() < 1e-12);
+
+    // The z-test: |z| = 2 passes --max-z 2.5 and fails --max-z 1.5 with one line naming the file.
+    let case = "sphere:I=100,R=1,rho=0.5";
+    evaluate(&["sensors", s(&ron_in), "--case", case, "--max-z", "2.5"]).unwrap();
+    let (code, msg) =
+        evaluate(&["sensors", s(&ron_in), "--case", case, "--max-z", "1.5"]).unwrap_err();
+    assert_eq!(code, 1);
+    assert!(
+        msg.contains("s.sensors.ron") && msg.contains("validation failed: 2 of 2 values"),
+        "{msg}"
+    );
+    // --sets restricts the comparison and names a missing set.
+    evaluate(&["sensors", s(&ron_in), "--case", case, "--sets", "wall"]).unwrap();
+    let (code, msg) =
+        evaluate(&["sensors", s(&ron_in), "--case", case, "--sets", "floor"]).unwrap_err();
+    assert_eq!(code, 1);
+    assert!(msg.contains("no sensor set named \"floor\""), "{msg}");
+    let (code, _) = evaluate(&["sensors", s(&ron_in), "--case", "sphere:I=1"]).unwrap_err();
+    assert_eq!(code, 2);
 }
 
 #[test]

@@ -1,10 +1,16 @@
 //! Cross-stage integration tests, compiled as one binary (as in ripgrep).
 //! Helpers live in `util`; each stage has its own module.
 
+mod architecture;
+mod contract;
 mod denoise_cli;
 mod estimate_cli;
 mod estimate_validation;
 mod evaluate_cli;
+mod lighting;
+mod luminaires;
+mod metrics_parity;
+mod reliability;
 mod scene_compile_errors;
 mod scene_compile_scenes;
 mod trace_exact;

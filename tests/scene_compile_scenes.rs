@@ -2,9 +2,9 @@
 //! checked against closed-form values.
 
 use crate::util::{repo_root, scene_compile, TempDir};
-use luxest_core::compiled::{CompiledScene, Emitter};
-use luxest_core::math::Vec3;
-use luxest_core::rt::RayTracer;
+use luxest_io::math::Vec3;
+use luxest_render::compiled::{CompiledScene, Emitter};
+use luxest_render::rt::RayTracer;
 use std::f64::consts::PI;
 
 fn compile(name: &str) -> CompiledScene {
@@ -25,7 +25,7 @@ fn area_and_volume(s: &CompiledScene, first: u32, count: u32, centre: Vec3) -> (
     (area, vol)
 }
 
-fn object<'a>(s: &'a CompiledScene, name: &str) -> &'a luxest_core::compiled::ObjectRange {
+fn object<'a>(s: &'a CompiledScene, name: &str) -> &'a luxest_render::compiled::ObjectRange {
     s.header.objects.iter().find(|o| o.name == name).unwrap()
 }
 

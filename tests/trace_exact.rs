@@ -2,9 +2,10 @@
 //! mirror, glass slab; energy bounds; determinism; outputs and errors.
 
 use crate::util::{compile_text, repo_root, TempDir};
-use luxest_core::bsdf::fresnel_dielectric;
-use luxest_core::compiled::CompiledScene;
-use luxest_core::world::World;
+use luxest_io::header;
+use luxest_render::bsdf::fresnel_dielectric;
+use luxest_render::compiled::CompiledScene;
+use luxest_render::world::World;
 use trace::{Film, Renderer};
 
 fn render(scene: &std::path::Path, spp: u32, threads: usize) -> (World, Film) {
@@ -91,8 +92,8 @@ fn point_source_over_a_lambertian_plane() {
     let scene = compile_text(&dir, "pp", text);
     let (_, film) = render(&scene, 64, 2);
     let compiled = CompiledScene::load(&scene).unwrap();
-    let cam =
-        luxest_core::camera::PinholeCamera::new(compiled.header.camera.as_ref().unwrap()).unwrap();
+    let cam = luxest_render::camera::PinholeCamera::new(compiled.header.camera.as_ref().unwrap())
+        .unwrap();
     check(&film, 0.002, |x, y| {
         // Box filter by an 8 x 8 midpoint rule over the pixel.
         let mut acc = 0.0;
@@ -104,7 +105,7 @@ fn point_source_over_a_lambertian_plane() {
                 );
                 let t = -cam.position.y / d.y;
                 let p = cam.position + d * t;
-                let l = luxest_core::math::Vec3::new(0.3, 1.0, 0.2) - p;
+                let l = luxest_io::math::Vec3::new(0.3, 1.0, 0.2) - p;
                 acc += 0.6 / std::f64::consts::PI * 50.0 * (l.y / l.length()) / l.length_squared();
             }
         }
@@ -125,7 +126,7 @@ fn mirror_shows_the_emitter_times_its_reflectance() {
         ])"#;
     let scene = compile_text(&dir, "mirror", text);
     let (_, film) = render(&scene, 16, 2);
-    let y = luxest_core::color::Rgb([0.9, 0.8, 0.7]).luminance() * 2.0;
+    let y = luxest_io::color::Rgb([0.9, 0.8, 0.7]).luminance() * 2.0;
     check(&film, 1e-9, |_, _| y);
 }
 
@@ -145,8 +146,8 @@ fn glass_slab_transmits_one_minus_r_over_one_plus_r() {
     let scene = compile_text(&dir, "slab", text);
     let (_, film) = render(&scene, 2048, 2);
     let compiled = CompiledScene::load(&scene).unwrap();
-    let cam =
-        luxest_core::camera::PinholeCamera::new(compiled.header.camera.as_ref().unwrap()).unwrap();
+    let cam = luxest_render::camera::PinholeCamera::new(compiled.header.camera.as_ref().unwrap())
+        .unwrap();
     check(&film, 0.002, |x, y| {
         let d = cam.direction(x as f64 + 0.5, y as f64 + 0.5);
         let (r, _) = fresnel_dielectric(-d.z, 1.5);
@@ -192,9 +193,7 @@ fn cli_writes_snapshots_references_and_features() {
     let prefix = dir.path().join("img");
     let run = |args: &[&str]| {
         let argv = std::iter::once("trace").chain(args.iter().copied());
-        let a = luxest_core::cli::parse::<trace::Args>(argv)
-            .unwrap()
-            .unwrap();
+        let a = luxest_io::cli::parse::<trace::Args>(argv).unwrap().unwrap();
         trace::run(a)
     };
     run(&[
@@ -211,14 +210,14 @@ fn cli_writes_snapshots_references_and_features() {
     ])
     .unwrap();
     for spp in ["000001", "000002", "000004"] {
-        let img = luxest_core::exr_io::read_rgb(&dir.path().join(format!("img_{spp}spp.hdr.exr")))
-            .unwrap();
+        let img =
+            luxest_io::exr_io::read_rgb(&dir.path().join(format!("img_{spp}spp.hdr.exr"))).unwrap();
         assert_eq!((img.width, img.height), (16, 12));
         assert_eq!(
-            img.attribute("luxest.samples"),
+            img.attribute(header::SAMPLES),
             Some(spp.trim_start_matches('0'))
         );
-        assert_eq!(img.attribute("luxest.estimator"), Some("path-tracing"));
+        assert_eq!(img.attribute(header::ESTIMATOR), Some("path-tracing"));
         assert!(dir.path().join(format!("img_{spp}spp.se.exr")).is_file());
     }
     run(&[
@@ -243,12 +242,18 @@ fn cli_writes_snapshots_references_and_features() {
         "16x12",
     ])
     .unwrap();
-    let err = run(&[lxs.to_str().unwrap(), "--spp", "0"]).unwrap_err();
+    // --spp 0 is a usage error (exit 2) stating the range.
+    let argv = ["trace", lxs.to_str().unwrap(), "--spp", "0"];
+    let err = luxest_io::cli::parse::<trace::Args>(argv).unwrap_err();
     assert_eq!(err.exit_code(), 2);
+    assert!(
+        err.to_string().contains("must be a whole number in [1, "),
+        "{err}"
+    );
     // Features with the same pixel sampling.
     let aov = |args: &[&str]| {
         let argv = std::iter::once("aov-write").chain(args.iter().copied());
-        let a = luxest_core::cli::parse::<aov_write::Args>(argv)
+        let a = luxest_io::cli::parse::<aov_write::Args>(argv)
             .unwrap()
             .unwrap();
         aov_write::run(a)
@@ -275,7 +280,7 @@ fn cli_writes_snapshots_references_and_features() {
     ] {
         assert!(dir.path().join(format!("img_{f}.exr")).is_file(), "{f}");
     }
-    let nrm = luxest_core::exr_io::read_rgb(&dir.path().join("img_000004spp.nrm.exr")).unwrap();
+    let nrm = luxest_io::exr_io::read_rgb(&dir.path().join("img_000004spp.nrm.exr")).unwrap();
     for p in &nrm.pixels {
         // Unit where a surface is seen, zero where the ray leaves the open box.
         let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
@@ -285,7 +290,7 @@ fn cli_writes_snapshots_references_and_features() {
         );
     }
     // The back wall's albedo and normal, at the image centre column, top half.
-    let alb = luxest_core::exr_io::read_rgb(&dir.path().join("img_000004spp.alb.exr")).unwrap();
+    let alb = luxest_io::exr_io::read_rgb(&dir.path().join("img_000004spp.alb.exr")).unwrap();
     let c = alb.pixels[3 * 16 + 8];
     assert!(
         (c[0] - 0.725).abs() < 1e-6 && (c[1] - 0.71).abs() < 1e-6,
@@ -301,9 +306,7 @@ fn scene_without_camera_is_an_error() {
     let text = std::fs::read_to_string(repo_root().join("scenes/sobolev.ron")).unwrap();
     let lxs = compile_text(&dir, "s", &text);
     let argv = ["trace", lxs.to_str().unwrap(), "--spp", "1"];
-    let a = luxest_core::cli::parse::<trace::Args>(argv)
-        .unwrap()
-        .unwrap();
+    let a = luxest_io::cli::parse::<trace::Args>(argv).unwrap().unwrap();
     let e = trace::run(a).unwrap_err();
     assert_eq!(e.exit_code(), 1);
     assert!(e.to_string().contains("s.lxs: scene has no camera"), "{e}");

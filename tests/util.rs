@@ -52,6 +52,9 @@ impl Drop for TempDir {
 }
 
 /// The repository root (this package's manifest directory).
+/// What an in-process stage run returns: `Ok` or its exit code and one-line message.
+pub type StageResult = Result<(), (u8, String)>;
+
 pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -62,10 +65,10 @@ pub fn repo_root() -> PathBuf {
 fn run_stage<A: clap::Parser>(
     program: &str,
     args: &[&str],
-    run: impl FnOnce(A) -> luxest_core::Result<()>,
-) -> Result<(), (u8, String)> {
+    run: impl FnOnce(A) -> luxest_io::Result<()>,
+) -> StageResult {
     let argv = std::iter::once(program).chain(args.iter().copied());
-    let parsed = luxest_core::cli::parse::<A>(argv).map_err(|e| (e.exit_code(), e.to_string()))?;
+    let parsed = luxest_io::cli::parse::<A>(argv).map_err(|e| (e.exit_code(), e.to_string()))?;
     match parsed {
         None => Ok(()),
         Some(a) => run(a).map_err(|e| (e.exit_code(), e.to_string())),
@@ -73,12 +76,12 @@ fn run_stage<A: clap::Parser>(
 }
 
 /// Runs `scene-compile` in-process (see [`run_stage`]).
-pub fn scene_compile(args: &[&str]) -> Result<(), (u8, String)> {
+pub fn scene_compile(args: &[&str]) -> StageResult {
     run_stage("scene-compile", args, scene_compile::run)
 }
 
 /// Runs `estimate` in-process.
-pub fn estimate(args: &[&str]) -> Result<(), (u8, String)> {
+pub fn estimate(args: &[&str]) -> StageResult {
     run_stage("estimate", args, estimate::run)
 }
 
@@ -91,11 +94,11 @@ pub fn compile_text(dir: &TempDir, name: &str, text: &str) -> PathBuf {
 }
 
 /// Runs `denoise` in-process.
-pub fn denoise(args: &[&str]) -> Result<(), (u8, String)> {
+pub fn denoise(args: &[&str]) -> StageResult {
     run_stage("denoise", args, denoise::cli::run)
 }
 
 /// Runs `evaluate` in-process.
-pub fn evaluate(args: &[&str]) -> Result<(), (u8, String)> {
+pub fn evaluate(args: &[&str]) -> StageResult {
     run_stage("evaluate", args, evaluate::cli::run)
 }

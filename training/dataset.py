@@ -1,48 +1,53 @@
-"""The OIDN training-toolkit naming: `<name>_<spp, digits>spp.<feature>.exr` and
-`<name>_ref.<feature>.exr`, features hdr, alb, nrm. Preprocessed arrays live in
-`<prep_dir>/<split>/<name>_<tag>.npy` with the 9 channels hdr+alb+nrm (H, W, 9) for inputs and
-hdr (H, W, 3) for references."""
-import re
+"""The preprocessed dataset and its training crops.
+
+preprocess.py turns each rendered image set (named as in luxest_contract: the OIDN training-
+toolkit layout) into `<prep_dir>/<split>/<name>_<tag>.npy` — inputs (H, W, 9) hdr+alb+nrm per
+noisy level (`tag` = `000004spp`), references (H, W, 3) hdr (`tag` = `ref`) — and, per input, a
+`<name>_<tag>.json` with what the headers and the whole image say: samples, seed (of the input
+and of its reference) and the whole-image exposure under each of the six RGB channel orders
+(`exposures`, in the order of `PERMUTATIONS`), so that a crop, even channel-shuffled, is
+transferred with the exposure its whole image has at inference."""
+import itertools
+import json
 from pathlib import Path
 
 import numpy as np
 import torch
 
-NAME = re.compile(r"^(?P<name>.+)_(?:(?P<spp>\d+)spp|ref)\.(?P<feature>[a-z]+)\.exr$")
+import luxest_contract as contract
+
+PERMUTATIONS = list(itertools.permutations(range(3)))
+"""RGB channel orders, the index into a preprocessed input's `exposures`."""
 
 
-def parse_name(filename):
-    """(name, spp or None for the reference, feature), or None if it is not a dataset file."""
-    m = NAME.match(filename)
-    if not m:
-        return None
-    spp = m.group("spp")
-    return m.group("name"), (int(spp) if spp is not None else None), m.group("feature")
+def prep_name(name, spp):
+    """`<name>_<tag>.npy` of a preprocessed array (spp None: the reference)."""
+    return f"{name}_{'ref' if spp is None else contract.count_tag(spp)}.npy"
 
 
-def scan(split_dir):
-    """{name: {spp or None: {feature: path}}} for one split directory."""
-    out = {}
-    for p in sorted(Path(split_dir).glob("*.exr")):
-        parsed = parse_name(p.name)
-        if parsed:
-            name, spp, feature = parsed
-            out.setdefault(name, {}).setdefault(spp, {})[feature] = p
+def whole_image_exposures(hdr):
+    """contract.exposure of an (H, W, 3) image under each channel order of PERMUTATIONS."""
+    return [contract.exposure(hdr[..., list(p)]) for p in PERMUTATIONS]
+
+
+def pairs(prep_split_dir):
+    """[(input path, reference path, metadata dict)] of one preprocessed split."""
+    out = []
+    d = Path(prep_split_dir)
+    for meta_path in sorted(d.glob("*spp.json")):
+        meta = json.loads(meta_path.read_text())
+        out.append((meta_path.with_suffix(".npy"), d / prep_name(meta["name"], None), meta))
     return out
 
 
 class Crops(torch.utils.data.Dataset):
-    """Random training crops: (input 9xHxW, reference 3xHxW) with flips, transposes and a
-    random permutation of the RGB channels applied alike to hdr, albedo and reference."""
+    """Random training crops: (input 9xHxW, reference 3xHxW, exposure) with flips, transposes
+    and a random permutation of the RGB channels applied alike to hdr, albedo and reference;
+    the exposure is the stored whole-image exposure of the input under that permutation."""
 
     def __init__(self, prep_split_dir, crop, seed, length=100_000):
-        self.pairs = []
-        d = Path(prep_split_dir)
-        for ref in sorted(d.glob("*_ref.npy")):
-            name = ref.name[: -len("_ref.npy")]
-            target = np.load(ref, mmap_mode="r")
-            for inp in sorted(d.glob(f"{name}_*spp.npy")):
-                self.pairs.append((np.load(inp, mmap_mode="r"), target))
+        self.pairs = [(np.load(i, mmap_mode="r"), np.load(r, mmap_mode="r"), m["exposures"])
+                      for i, r, m in pairs(prep_split_dir)]
         if not self.pairs:
             raise FileNotFoundError(f"{prep_split_dir}: no preprocessed pairs (run preprocess.py)")
         self.crop, self.seed, self.length = crop, seed, length
@@ -52,7 +57,7 @@ class Crops(torch.utils.data.Dataset):
 
     def __getitem__(self, i):
         rng = np.random.default_rng((self.seed, i))
-        inp, ref = self.pairs[rng.integers(len(self.pairs))]
+        inp, ref, exposures = self.pairs[rng.integers(len(self.pairs))]
         h, w = ref.shape[:2]
         c = self.crop
         y, x = rng.integers(0, h - c + 1), rng.integers(0, w - c + 1)
@@ -64,8 +69,9 @@ class Crops(torch.utils.data.Dataset):
             a, b = a[::-1], b[::-1]
         if rng.random() < 0.5:
             a, b = a.transpose(1, 0, 2), b.transpose(1, 0, 2)
-        perm = rng.permutation(3)
+        k = int(rng.integers(len(PERMUTATIONS)))
+        perm = np.array(PERMUTATIONS[k])
         a = np.concatenate([a[..., perm], a[..., 3 + perm], a[..., 6:9]], axis=-1)
         b = b[..., perm]
         to = lambda t: torch.from_numpy(np.ascontiguousarray(t.transpose(2, 0, 1)))
-        return to(a), to(b)
+        return to(a), to(b), torch.tensor(exposures[k], dtype=torch.float32)

@@ -12,6 +12,7 @@ import onnx
 import torch
 
 import config
+import luxest_contract as contract
 from model import Denoiser
 
 
@@ -29,14 +30,14 @@ def export(run_dir, out_path, metrics=None):
                       external_data=False)
     model = onnx.load(str(tmp))
     meta = {
-        "luxest.channels": "hdr,alb,nrm",
-        "luxest.transfer": "log1p(max(hdr, 0) * exposure) in graph; input exposure (N,) = 0.18 / "
+        contract.CHANNELS: ",".join(contract.FEATURES),
+        contract.MODEL_TRANSFER: "log1p(max(hdr, 0) * exposure) in graph; input exposure (N,) = 0.18 / "
         "exp(mean over the whole image of log(max(Y, 0) + 1e-4)), Y = Rec. 709 luminance of hdr",
-        "luxest.padding": "replicate to multiples of 16; in graph",
-        "luxest.config": json.dumps(asdict(cfg)),
+        contract.MODEL_PADDING: "replicate to multiples of 16; in graph",
+        contract.MODEL_CONFIG: json.dumps(asdict(cfg)),
     }
     if metrics:
-        meta["luxest.metrics"] = json.dumps(metrics)
+        meta[contract.MODEL_METRICS] = json.dumps(metrics)
     for k, v in meta.items():
         p = model.metadata_props.add()
         p.key, p.value = k, v

@@ -1,14 +1,14 @@
 #!/usr/bin/env python3
 """Denoises images of a dataset split with an exported ONNX model (onnxruntime), writing
-<out_dir>/<name>_<spp>spp.dn.exr."""
+<out_dir>/<name>_<spp>spp.dn.exr with the noisy image's header plus luxest.denoiser (names and
+keys from luxest_contract; spp from the headers)."""
 import argparse
 from pathlib import Path
 
 import numpy as np
 import onnxruntime as ort
 
-import dataset
-import exrio
+import luxest_contract as contract
 import transfer
 
 
@@ -18,23 +18,37 @@ def denoise(session, hdr, alb, nrm):
     return session.run(None, feed)[0][0].transpose(1, 2, 0)
 
 
+def denoise_split(model, split_dir, out_dir, spp_levels=None):
+    """Denoises every noisy level (or those in spp_levels) of a split; returns
+    [(name, spp, noisy hdr path, denoised path)]."""
+    session = ort.InferenceSession(str(model), providers=["CPUExecutionProvider"])
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    done = []
+    for name, levels in contract.scan(split_dir).items():
+        for feats in (v for k, v in sorted(levels.items(), key=lambda kv: kv[0] or 0) if k is not None):
+            noisy = contract.read(feats["hdr"])
+            spp = noisy.value(contract.SAMPLES, required=True)
+            if spp_levels and spp not in spp_levels:
+                continue
+            dn = denoise(session, noisy.pixels, *(contract.read_rgb(feats[k]) for k in contract.FEATURES[1:]))
+            header = dict(noisy.header)
+            header[contract.DENOISER] = Path(model).name
+            path = out / contract.image_name(name, "dn", spp)
+            contract.write(path, dn, header)
+            done.append((name, spp, feats["hdr"], path))
+    return done
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--model", required=True)
     ap.add_argument("--split-dir", required=True)
     ap.add_argument("--out-dir", required=True)
-    ap.add_argument("--spp", type=int, nargs="+", default=[1, 4, 16, 64])
+    ap.add_argument("--spp", type=int, nargs="+")
     args = ap.parse_args(argv)
-    session = ort.InferenceSession(args.model, providers=["CPUExecutionProvider"])
-    out = Path(args.out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    for name, levels in dataset.scan(args.split_dir).items():
-        for spp in args.spp:
-            if spp in levels:
-                f = levels[spp]
-                dn = denoise(session, *(exrio.read(f[k]) for k in ("hdr", "alb", "nrm")))
-                exrio.write(out / f"{name}_{spp:06d}spp.dn.exr", dn)
-    print(f"infer: wrote denoised images to {out}")
+    denoise_split(args.model, args.split_dir, args.out_dir, args.spp)
+    print(f"infer: wrote denoised images to {args.out_dir}")
 
 
 if __name__ == "__main__":

@@ -3,7 +3,9 @@ up-sampling and skip connections, on the transferred hdr + albedo + normal (9 ch
 
 `Denoiser` wraps it with the contract of transfer.py and the padding to multiples of 16, so the
 exported graph takes raw linear features of any H, W, plus the image's exposure (computed by the
-caller over the whole image, so that tiles of one image share it; transfer.exposure)."""
+caller over the whole image, so that tiles of one image share it: luxest_contract.exposure).
+Training passes the stored whole-image exposure of each crop's image (preprocess.py), so the
+network is trained on exactly the inputs it sees at inference."""
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
@@ -52,19 +54,23 @@ class Denoiser(nn.Module):
         self.unet = UNet(width=width)
 
     def forward(self, x, exposure=None):
-        """`exposure` (N,) float: transfer.exposure of the whole image; computed from x if None."""
+        """`exposure` (N,) float: the exposure of each whole image; if None, x must hold whole
+        images and it is computed from them (transfer.exposure_of)."""
         h, w = x.shape[2], x.shape[3]
         hdr = x[:, 0:3]
-        exp = transfer.exposure(hdr) if exposure is None else exposure.view(-1, 1, 1, 1)
+        if exposure is None:
+            exposure = transfer.exposure_of(hdr).to(x.device)
+        exp = exposure.view(-1, 1, 1, 1)
         inp = torch.cat([transfer.forward(hdr, exp), x[:, 3:9]], 1)
         ph, pw = (16 - h % 16) % 16, (16 - w % 16) % 16
         inp = F.pad(inp, (0, pw, 0, ph), mode="replicate")
         out = self.unet(inp)[:, :, :h, :w]
         return transfer.inverse(out, exp)
 
-    def transferred(self, x):
-        """The network output in the transferred domain (for the loss), and the exposure."""
+    def transferred(self, x, exposure):
+        """The network output in the transferred domain (for the loss), and the exposure as
+        (N, 1, 1, 1). `exposure` (N,): that of each crop's whole image (never the crop's own)."""
         hdr = x[:, 0:3]
-        exp = transfer.exposure(hdr)
+        exp = exposure.view(-1, 1, 1, 1).to(x.dtype)
         inp = torch.cat([transfer.forward(hdr, exp), x[:, 3:9]], 1)
         return self.unet(inp), exp

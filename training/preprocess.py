@@ -1,45 +1,97 @@
 #!/usr/bin/env python3
 """Converts a rendered dataset (data/<dataset>/<split>/*.exr) into float32 arrays for training:
-inputs (H, W, 9) = hdr + alb + nrm per noisy level, references (H, W, 3). Incremental."""
+inputs (H, W, 9) = hdr + alb + nrm per noisy level, references (H, W, 3), and per input a JSON
+of its samples, seeds and whole-image exposures (dataset.py). Incremental.
+
+Samples and seeds come from the EXR headers (luxest_contract), not from file names. A pair whose
+reference has the noisy image's seed is refused: a sample depends only on (seed, pixel, sample
+index), so such a reference would contain the input's samples and the target would be
+correlated with its input."""
+import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
 import config
 import dataset
-import exrio
+import luxest_contract as contract
+
+
+def check_pair(ref, noisy):
+    """ContractError unless the reference and the noisy hdr image have different seeds."""
+    r, n = ref.value(contract.SEED, required=True), noisy.value(contract.SEED, required=True)
+    if r == n:
+        raise contract.ContractError(
+            f"{ref.path} and {noisy.path}: reference and noisy image share {contract.SEED} = {r} "
+            "(the reference must be rendered with an independent seed)")
+
+
+def samples_of(image, expected):
+    """The image's samples from its header; an error if the file name says otherwise."""
+    spp = image.value(contract.SAMPLES, required=True)
+    if expected is not None and spp != expected:
+        raise contract.ContractError(f"{image.path}: header {contract.SAMPLES} = {spp} but the file name says {expected}")
+    return spp
+
+
+def preprocess_split(src, dst, noisy_spp):
+    """Writes the arrays of one split directory; returns the number written."""
+    n = 0
+    dst.mkdir(parents=True, exist_ok=True)
+    for name, levels in contract.scan(src).items():
+        if None not in levels or "hdr" not in levels[None]:
+            raise contract.ContractError(f"{src}: {name} has no reference image")
+        ref = contract.read(levels[None]["hdr"])
+        ref_out = dst / dataset.prep_name(name, None)
+        for spp_in_name, feats in sorted((k, v) for k, v in levels.items() if k is not None):
+            missing = [f for f in contract.FEATURES if f not in feats]
+            if missing:
+                raise contract.ContractError(f"{src}: {name} at {spp_in_name} spp lacks {', '.join(missing)}")
+            noisy = contract.read(feats["hdr"])
+            spp = samples_of(noisy, spp_in_name)
+            check_pair(ref, noisy)
+            if spp not in noisy_spp:
+                continue
+            out = dst / dataset.prep_name(name, spp)
+            meta_out = out.with_suffix(".json")
+            newest = max([p.stat().st_mtime for p in feats.values()] + [levels[None]["hdr"].stat().st_mtime])
+            if meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists():
+                continue
+            arr = np.concatenate([noisy.pixels] + [contract.read_rgb(feats[f]) for f in contract.FEATURES[1:]], axis=-1)
+            if not np.isfinite(arr).all():
+                raise contract.ContractError(f"{feats['hdr']}: non-finite values")
+            meta = {"name": name, "samples": spp, "seed": noisy.value(contract.SEED),
+                    "reference_seed": ref.value(contract.SEED), "reference_samples": ref.value(contract.SAMPLES),
+                    "exposures": dataset.whole_image_exposures(noisy.pixels)}
+            _save(out, arr)
+            tmp = meta_out.with_name(meta_out.name + ".tmp")
+            tmp.write_text(json.dumps(meta, indent=1))
+            tmp.replace(meta_out)
+            n += 1
+        if not ref_out.exists() or ref_out.stat().st_mtime < levels[None]["hdr"].stat().st_mtime:
+            if not np.isfinite(ref.pixels).all():
+                raise contract.ContractError(f"{ref.path}: non-finite values")
+            _save(ref_out, ref.pixels)
+            n += 1
+    return n
+
+
+def _save(out, arr):
+    tmp = out.with_suffix(".tmp.npy")
+    np.save(tmp, arr)
+    tmp.replace(out)
 
 
 def main(argv=None):
     cfg = config.parse(argv, __doc__.splitlines()[0])
     n = 0
-    for split in ["train", "valid", "test"]:
-        src, dst = Path(cfg.data_dir) / split, Path(cfg.prep_dir) / split
-        dst.mkdir(parents=True, exist_ok=True)
-        for name, levels in dataset.scan(src).items():
-            if None not in levels or "hdr" not in levels[None]:
-                raise SystemExit(f"{src}: {name} has no reference image")
-            for spp, feats in levels.items():
-                tag = "ref" if spp is None else f"{spp:06d}spp"
-                out = dst / f"{name}_{tag}.npy"
-                if spp is not None and spp not in cfg.noisy_spp:
-                    continue
-                newest = max(p.stat().st_mtime for p in feats.values())
-                if out.exists() and out.stat().st_mtime >= newest:
-                    continue
-                if spp is None:
-                    arr = exrio.read(feats["hdr"])
-                else:
-                    missing = [f for f in ("hdr", "alb", "nrm") if f not in feats]
-                    if missing:
-                        raise SystemExit(f"{src}: {name} at {spp} spp lacks {', '.join(missing)}")
-                    arr = np.concatenate([exrio.read(feats[f]) for f in ("hdr", "alb", "nrm")], axis=-1)
-                if not np.isfinite(arr).all():
-                    raise SystemExit(f"{feats.get('hdr')}: non-finite values")
-                tmp = out.with_suffix(".tmp.npy")
-                np.save(tmp, arr)
-                tmp.replace(out)
-                n += 1
+    try:
+        for split in ["train", "valid", "test"]:
+            n += preprocess_split(Path(cfg.data_dir) / split, Path(cfg.prep_dir) / split, cfg.noisy_spp)
+    except contract.ContractError as e:
+        print(f"preprocess: error: {e}", file=sys.stderr)
+        sys.exit(1)
     print(f"preprocess: {n} arrays written to {cfg.prep_dir}")
 
 

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Trains the denoiser: Adam with a one-cycle schedule on random crops, L1 + MS-SSIM in the
-transferred domain, checkpoints and the run's config in <run_dir>, resumable (--resume), bf16
+transferred domain (each crop with its whole image's exposure, stored by preprocess.py),
+checkpoints and the run's config in <run_dir>, resumable (--resume), bf16
 autocast with channels_last on CPU. Stops at the step count or the time budget."""
 import json
-import math
 import time
 from pathlib import Path
 
@@ -17,24 +17,23 @@ import transfer
 
 
 def validation_loss(net, prep_dir, cfg):
-    """Mean loss on centre crops of the valid split (all noisy levels)."""
-    d = Path(prep_dir) / "valid"
+    """Mean loss on centre crops of the valid split (all noisy levels), each transferred with
+    its whole image's stored exposure."""
     import numpy as np
 
     total, n = 0.0, 0
+    to = lambda arr: torch.from_numpy(arr.transpose(2, 0, 1).copy())[None]
     with torch.no_grad():
-        for ref_path in sorted(d.glob("*_ref.npy")):
-            name = ref_path.name[: -len("_ref.npy")]
+        for inp_path, ref_path, meta in dataset.pairs(Path(prep_dir) / "valid"):
             ref = np.load(ref_path)
             h, w = ref.shape[:2]
             c = min(h, w) // 16 * 16
             y0, x0 = (h - c) // 2, (w - c) // 2
-            b = torch.from_numpy(ref[y0:y0 + c, x0:x0 + c].transpose(2, 0, 1).copy())[None]
-            for inp_path in sorted(d.glob(f"{name}_*spp.npy")):
-                a = torch.from_numpy(np.load(inp_path)[y0:y0 + c, x0:x0 + c].transpose(2, 0, 1).copy())[None]
-                pred, exp = net.transferred(a)
-                total += float(losses.loss(pred, transfer.forward(b, exp), cfg.ms_ssim_weight))
-                n += 1
+            a = to(np.load(inp_path)[y0:y0 + c, x0:x0 + c])
+            b = to(ref[y0:y0 + c, x0:x0 + c])
+            pred, exp = net.transferred(a, torch.tensor([meta["exposures"][0]]))
+            total += float(losses.loss(pred, transfer.forward(b, exp), cfg.ms_ssim_weight))
+            n += 1
     return total / max(n, 1)
 
 
@@ -64,13 +63,13 @@ def main(argv=None):
     start = time.time()
     log = open(run / "log.jsonl", "a")
     net.train()
-    for a, b in loader:
+    for a, b, e in loader:
         if step >= cfg.steps or time.time() - start > cfg.minutes * 60:
             break
         a = a.to(device=device, memory_format=torch.channels_last)
-        b = b.to(device)
+        b, e = b.to(device), e.to(device)
         with torch.autocast(device.type, dtype=torch.bfloat16):
-            pred, exp = net.transferred(a)
+            pred, exp = net.transferred(a, e)
         target = transfer.forward(b, exp)
         value = losses.loss(pred.float(), target, cfg.ms_ssim_weight)
         opt.zero_grad()

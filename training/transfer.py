@@ -1,27 +1,25 @@
-"""The HDR contract shared by training, export and every runtime (ARCHITECTURE.md, Models):
+"""The HDR transfer shared by training, export and every runtime (docs/architecture.md, Models):
 
-  exposure  = 0.18 / exp(mean over pixels of log(Y + 1e-4)),  Y the Rec. 709 luminance of hdr
-  forward   = log1p(hdr * exposure)        (the network sees this, plus albedo and normals as is)
+  forward   = log1p(max(hdr, 0) * exposure)  (the network sees this, plus albedo and normals as is)
   inverse   = expm1(out) / exposure
 
-The forward and inverse transfer are inside the exported ONNX graph, with the padding of H and W
-to multiples of 16, so Rust feeds raw linear hdr/alb/nrm and gets linear radiance back. The
-exposure is a second graph input, computed by the caller over the whole image (exposure_np here,
-exposure() in crates/denoise): a large image denoised in tiles then uses one exposure, not one
-per tile."""
+`exposure` is the autoexposure of the *whole* image, `luxest_contract.exposure` (the one Python
+copy of the formula, tied to Rust's `RgbImage::autoexposure` by tests/fixtures/contract). The
+forward and inverse transfer are inside the exported ONNX graph, with the padding of H and W to
+multiples of 16, so Rust feeds raw linear hdr/alb/nrm plus the exposure and gets linear radiance
+back; a large image denoised in tiles uses one exposure, not one per tile. Training uses the
+exposure preprocess.py stored for each whole image, never one computed from a crop."""
 import numpy as np
 import torch
 
-KEY = 0.18
-EPS = 1e-4
-LUMA = (0.2126, 0.7152, 0.0722)
+import luxest_contract as contract
 
 
-def exposure(hdr):
-    """Per-image autoexposure of an (N, 3, H, W) tensor, shape (N, 1, 1, 1)."""
-    y = hdr[:, 0:1] * LUMA[0] + hdr[:, 1:2] * LUMA[1] + hdr[:, 2:3] * LUMA[2]
-    mean_log = torch.log(y.clamp(min=0) + EPS).mean(dim=(1, 2, 3), keepdim=True)
-    return KEY / torch.exp(mean_log)
+def exposure_of(hdr):
+    """The whole-image exposure of each image of an (N, 3, H, W) tensor, as (N,) float32 —
+    for callers holding whole images as tensors (tests, parity checks)."""
+    a = hdr.detach().to("cpu", torch.float64).permute(0, 2, 3, 1).numpy()
+    return torch.tensor([contract.exposure(img) for img in a], dtype=torch.float32)
 
 
 def forward(hdr, exp):
@@ -33,7 +31,5 @@ def inverse(x, exp):
 
 
 def exposure_np(hdr):
-    """exposure() of one (H, W, 3) image as a float32 array of shape (1,), accumulated in f64."""
-    y = hdr[..., 0].astype(np.float64) * LUMA[0] + hdr[..., 1] * LUMA[1] + hdr[..., 2] * LUMA[2]
-    mean_log = np.log(np.maximum(y, 0.0) + EPS).mean()
-    return np.array([KEY / np.exp(mean_log)], dtype=np.float32)
+    """The exposure of one whole (H, W, 3) image as the model's `exposure` input, (1,) float32."""
+    return np.array([contract.exposure(hdr)], dtype=np.float32)

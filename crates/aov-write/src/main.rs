@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    luxest_core::cli::main(aov_write::run)
+    luxest_io::cli::main(aov_write::run)
 }

@@ -4,7 +4,7 @@
 //! the right statistics (inference time does not depend on the values).
 
 use denoise::{Denoiser, Tiling};
-use luxest_core::exr_io::RgbImage;
+use luxest_io::exr_io::RgbImage;
 use std::path::Path;
 use std::time::Instant;
 

@@ -1,12 +1,15 @@
 //! The `denoise` command line: one or more noisy `<img>_<spp>spp.hdr.exr` in, each
 //! `<img>_<spp>spp.dn.exr` out, features found next to them by the OIDN naming.
 
+use crate::feature::names;
 use crate::{feature_path, output_path, Denoiser, Feature, Tiling};
 use clap::Parser;
-use luxest_core::cli::CommonArgs;
-use luxest_core::exr_io::{read_rgb_finite, write_preview_png_auto, write_rgb, RgbImage};
-use luxest_core::parallel::thread_count;
-use luxest_core::{Error, Result};
+use luxest_io::cli::CommonArgs;
+use luxest_io::exr_io::{read_rgb_finite, write_preview_png_auto_to, write_rgb_to, RgbImage};
+use luxest_io::header;
+use luxest_io::naming::preview_path;
+use luxest_io::outputs::OutputPlan;
+use luxest_io::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -53,6 +56,14 @@ pub struct Args {
     pub common: CommonArgs,
 }
 
+/// One input image's denoising: where its features are and where its result goes.
+struct Job {
+    noisy: PathBuf,
+    features: Vec<PathBuf>,
+    out: PathBuf,
+    preview: Option<PathBuf>,
+}
+
 pub fn run(args: Args) -> Result<()> {
     let tiling = Tiling {
         tile: args.tile,
@@ -65,61 +76,33 @@ pub fn run(args: Args) -> Result<()> {
             "-o/--out, --alb and --nrm need exactly one input image".into(),
         ));
     }
-    let mut denoiser = Denoiser::load(&args.model, thread_count(args.common.threads))?;
+    let mut denoiser = Denoiser::load(&args.model, args.common.thread_count())?;
     let model_name = args
         .model
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    for noisy in &args.noisy {
-        let out = match (&args.out, &args.out_dir) {
-            (Some(o), _) => o.clone(),
-            (None, dir) => {
-                let o = output_path(noisy).ok_or_else(|| {
-                    Error::Usage(format!(
-                        "{}: input name must end in .hdr.exr (or give -o)",
-                        noisy.display()
-                    ))
-                })?;
-                match dir {
-                    Some(d) => d.join(o.file_name().unwrap_or_default()),
-                    None => o,
-                }
-            }
-        };
-        let mut images = Vec::new();
-        let mut paths = Vec::new();
-        for &feature in denoiser.features() {
-            let path = match feature {
-                Feature::Hdr => Some(noisy.clone()),
-                Feature::Alb => args.alb.clone().or_else(|| feature_path(noisy, feature)),
-                Feature::Nrm => args.nrm.clone().or_else(|| feature_path(noisy, feature)),
-            };
-            let path = path.ok_or_else(|| {
-                Error::input(
-                    noisy,
-                    format!(
-                        "the model needs the {} feature; name it with --{}",
-                        feature.name(),
-                        feature.name()
-                    ),
-                )
-            })?;
-            if !path.is_file() {
-                return Err(Error::input(
-                    &path,
-                    format!(
-                        "missing {} feature image (the model {model_name} takes {})",
-                        feature.name(),
-                        names(denoiser.features())
-                    ),
-                ));
-            }
-            images.push(read_checked(&path)?);
-            paths.push(path);
-        }
+    let jobs = args
+        .noisy
+        .iter()
+        .map(|noisy| job(&args, &denoiser, &model_name, noisy))
+        .collect::<Result<Vec<Job>>>()?;
+    // Every input (model, images, features) and every output of the run, checked before
+    // anything is written: no output may replace an input or another output.
+    let inputs = std::iter::once(args.model.clone())
+        .chain(jobs.iter().flat_map(|j| j.features.iter().cloned()));
+    let outputs = jobs
+        .iter()
+        .flat_map(|j| std::iter::once(j.out.clone()).chain(j.preview.clone()));
+    let mut plan = OutputPlan::new(inputs, outputs)?;
+    for job in &jobs {
+        let images = job
+            .features
+            .iter()
+            .map(|p| read_checked(p))
+            .collect::<Result<Vec<RgbImage>>>()?;
         let (w, h) = (images[0].width, images[0].height);
-        for (image, path) in images.iter().zip(&paths).skip(1) {
+        for (image, path) in images.iter().zip(&job.features).skip(1) {
             if (image.width, image.height) != (w, h) {
                 return Err(Error::input(
                     path,
@@ -127,55 +110,101 @@ pub fn run(args: Args) -> Result<()> {
                         "size {}x{} differs from the noisy image's {w}x{h} ({})",
                         image.width,
                         image.height,
-                        noisy.display()
+                        job.noisy.display()
                     ),
                 ));
             }
         }
         let start = Instant::now();
         let refs: Vec<&RgbImage> = images.iter().collect();
-        let mut result = denoiser.denoise(&refs, tiling)?;
+        let mut result = denoiser.denoise(&refs, tiling).map_err(|e| match e {
+            Error::Usage(m) => Error::input(&job.noisy, m),
+            e => e,
+        })?;
         let seconds = start.elapsed().as_secs_f64();
         result.attributes = images[0].attributes.clone();
         // The features' cost (aov-write's seconds) is part of the denoised image's cost.
-        let feature_seconds = images[1..]
-            .iter()
-            .filter_map(|i| i.attribute("luxest.seconds")?.parse::<f64>().ok())
-            .fold(0.0, f64::max);
-        result.attributes.retain(|(k, _)| {
-            !matches!(
-                k.as_str(),
-                "luxest.denoiser" | "luxest.denoiseSeconds" | "luxest.featureSeconds"
-            )
-        });
-        result
-            .attributes
-            .push(("luxest.featureSeconds".into(), format!("{feature_seconds}")));
-        result
-            .attributes
-            .push(("luxest.denoiser".into(), model_name.clone()));
-        result
-            .attributes
-            .push(("luxest.denoiseSeconds".into(), format!("{seconds}")));
-        write_rgb(&out, &result)?;
-        if args.preview {
-            write_preview_png_auto(&out.with_extension("png"), &result)?;
+        let mut feature_seconds = 0.0f64;
+        for (image, path) in images.iter().zip(&job.features).skip(1) {
+            let s = header::parse::<f64>(path, &image.attributes, header::SECONDS)?;
+            feature_seconds = feature_seconds.max(s.unwrap_or(0.0));
+        }
+        result.set_attribute(header::FEATURE_SECONDS, feature_seconds);
+        result.set_attribute(header::DENOISER, &model_name);
+        result.set_attribute(header::DENOISE_SECONDS, seconds);
+        write_rgb_to(&mut plan, &job.out, &result)?;
+        if let Some(p) = &job.preview {
+            write_preview_png_auto_to(&mut plan, p, &result)?;
         }
         eprintln!(
-            "denoise: wrote {} ({w}x{h}, {:.1} ms/megapixel)",
-            out.display(),
+            "denoise: {} ({w}x{h}, {:.1} ms/megapixel)",
+            job.out.display(),
             1e3 * seconds / (w * h) as f64 * 1e6
         );
     }
-    Ok(())
+    // All outputs of the run appear together, or none (a later failure leaves nothing).
+    plan.commit()
 }
 
-fn names(features: &[Feature]) -> String {
-    features
-        .iter()
-        .map(|f| f.name())
-        .collect::<Vec<_>>()
-        .join(", ")
+/// Where `noisy`'s features are (checked to be files) and where its outputs go.
+fn job(args: &Args, denoiser: &Denoiser, model_name: &str, noisy: &Path) -> Result<Job> {
+    let out = match (&args.out, &args.out_dir) {
+        (Some(o), _) => o.clone(),
+        (None, dir) => {
+            let o = output_path(noisy).ok_or_else(|| {
+                Error::Usage(format!(
+                    "{}: input name must end in .hdr.exr (or give -o)",
+                    noisy.display()
+                ))
+            })?;
+            match dir {
+                Some(d) => d.join(o.file_name().unwrap_or_default()),
+                None => o,
+            }
+        }
+    };
+    let mut features = Vec::new();
+    for &feature in denoiser.features() {
+        let path = match feature {
+            Feature::Hdr => Some(noisy.to_path_buf()),
+            Feature::Alb => args.alb.clone().or_else(|| feature_path(noisy, feature)),
+            Feature::Nrm => args.nrm.clone().or_else(|| feature_path(noisy, feature)),
+        };
+        let path = path.ok_or_else(|| {
+            Error::input(
+                noisy,
+                format!(
+                    "the model needs the {} feature; name it with --{}",
+                    feature.name(),
+                    feature.name()
+                ),
+            )
+        })?;
+        if path.is_dir() {
+            return Err(Error::input(
+                &path,
+                format!("is a directory, not the {} feature image", feature.name()),
+            ));
+        }
+        if !path.is_file() {
+            return Err(Error::input(
+                &path,
+                format!(
+                    "missing {} feature image (the model {model_name} takes {})",
+                    feature.name(),
+                    names(denoiser.features())
+                ),
+            ));
+        }
+        features.push(path);
+    }
+    let preview = args.preview.then(|| preview_path(&out));
+    Ok(Job {
+        noisy: noisy.to_path_buf(),
+        features,
+        out,
+        preview,
+    })
 }
 
 /// Reads an input image: finite and not empty, naming the file otherwise.

@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    luxest_core::cli::main(denoise::cli::run)
+    luxest_io::cli::main(denoise::cli::run)
 }

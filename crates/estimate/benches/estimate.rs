@@ -7,9 +7,9 @@
 //! 3. The double local estimate image of `cornell-box` at 256²: shadow rays/s.
 
 use estimate::local::{self, Detector, LocalConfig, Singularity};
-use luxest_core::compiled::CompiledScene;
-use luxest_core::scene::SensorPoint;
-use luxest_core::world::World;
+use luxest_render::compiled::CompiledScene;
+use luxest_render::scene::SensorPoint;
+use luxest_render::world::World;
 use std::path::PathBuf;
 
 fn world(name: &str) -> World {
@@ -34,7 +34,7 @@ fn cfg(paths: u64, detector: Detector) -> LocalConfig {
         paths,
         batches: 32,
         seed: 1,
-        threads: estimate::parallel::thread_count(None),
+        threads: luxest_io::cli::thread_count(None),
         detector,
         max_depth: 100_000,
         near_field: None,
@@ -63,7 +63,7 @@ fn main() {
     let le = Detector::LocalEstimate(Singularity::Ball { eps: 1e-3 });
     println!(
         "estimate benchmark ({} threads)",
-        estimate::parallel::thread_count(None)
+        luxest_io::cli::thread_count(None)
     );
 
     for (name, paths) in [("sobolev", 1_000_000u64), ("cie171-5.8", 50_000)] {
@@ -104,12 +104,12 @@ fn main() {
     let w = world("cornell-box");
     let mut camera = w.scene.header.camera.clone().unwrap();
     camera.resolution = (256, 256);
-    let cam = luxest_core::camera::PinholeCamera::new(&camera).unwrap();
+    let cam = luxest_render::camera::PinholeCamera::new(&camera).unwrap();
     let icfg = estimate::image::ImageConfig {
         paths: 1000,
         pixel_samples: 1,
         seed: 1,
-        threads: estimate::parallel::thread_count(None),
+        threads: luxest_io::cli::thread_count(None),
         singularity: Singularity::Clamp {
             eps: 1e-2 * w.room_scale,
         },

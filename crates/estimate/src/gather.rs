@@ -8,14 +8,14 @@
 //! the estimator needs a scene without specular paths, and is unbiased with bounded variance
 //! wherever the sensor is.
 
-use crate::local::point_source_direct;
-use crate::parallel::{mean_and_standard_error, run_batches};
-use luxest_core::bsdf::{self, Transport};
-use luxest_core::color::Rgb;
-use luxest_core::math::Vec3;
-use luxest_core::sampling::{cosine_hemisphere, Rng};
-use luxest_core::scene::SensorPoint;
-use luxest_core::world::{SurfacePoint, World};
+use crate::transport::{point_source_direct, scatter};
+use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
+use luxest_render::bsdf::{self, Transport};
+use luxest_render::parallel::{mean_and_standard_error, run_batches};
+use luxest_render::sampling::{cosine_hemisphere, Rng};
+use luxest_render::scene::SensorPoint;
+use luxest_render::world::{SurfacePoint, World};
 use std::f64::consts::PI;
 
 #[derive(Clone, Debug)]
@@ -39,7 +39,7 @@ fn next_event(
     response: impl Fn(Vec3) -> Rgb,
     skip_points: bool,
 ) -> Rgb {
-    let l = world.sample_light_point(rng);
+    let l = world.sample_light_point(rng, x);
     let v = l.position - x;
     let d2 = v.length_squared();
     if d2 <= 0.0 {
@@ -95,7 +95,7 @@ fn reflected_radiance(
         );
         l = l + beta * radiance;
         let Some((next_beta, origin, next_dir)) =
-            crate::local::scatter(world, &sp, dir, beta, Transport::Radiance, rng)
+            scatter(world, &sp, dir, beta, Transport::Radiance, rng)
         else {
             break;
         };

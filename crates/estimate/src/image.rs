@@ -12,17 +12,17 @@
 //! a tile are independent and collisions are visited in a fixed order, so the image is
 //! bit-identical at any thread count. Per-pixel standard errors come from 8 batches of paths.
 
-use crate::local::point_source_direct_to;
-use crate::parallel::run_batches;
 use crate::singularity::Singularity;
-use luxest_core::bsdf::{self, Transport};
-use luxest_core::camera::PinholeCamera;
-use luxest_core::color::Rgb;
-use luxest_core::math::Vec3;
-use luxest_core::rt::Ray;
-use luxest_core::sampling::Rng;
-use luxest_core::scene::Material;
-use luxest_core::world::World;
+use crate::transport::{point_source_direct_to, scatter};
+use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
+use luxest_render::bsdf::{self, Transport};
+use luxest_render::camera::{stratified_pixel_jitter, PinholeCamera};
+use luxest_render::parallel::run_batches;
+use luxest_render::rt::Ray;
+use luxest_render::sampling::Rng;
+use luxest_render::scene::Material;
+use luxest_render::world::World;
 
 pub const TILE: usize = 16;
 /// Batches for the per-pixel standard error.
@@ -75,6 +75,11 @@ struct Record {
     triangle: Option<u32>,
 }
 
+/// Salt of the seed of the view points' random streams (one per pixel, for sampling the
+/// specular bounces between the camera and the first non-specular surface), so that they never
+/// coincide with the light paths' streams (the run's seed, streams 1..=batches).
+const VIEW_POINT_SEED_SALT: u64 = 0x5eed_0f1e;
+
 fn view_points(
     world: &World,
     cam: &PinholeCamera,
@@ -83,15 +88,15 @@ fn view_points(
 ) -> Vec<ViewPoint> {
     let (w, h) = (cam.width as usize, cam.height as usize);
     let spp = cfg.pixel_samples.max(1);
-    let grid = (spp as f64).sqrt().ceil() as u32;
     let mut out = Vec::with_capacity(w * h);
     for (pixel, emitted_px) in emitted.iter_mut().enumerate() {
-        let mut rng = Rng::new(cfg.seed ^ 0x5eed_0f1e, pixel as u64);
+        let mut rng = Rng::new(cfg.seed ^ VIEW_POINT_SEED_SALT, pixel as u64);
         for k in 0..spp {
-            // Stratified jitter inside the pixel (box filter).
-            let (gx, gy) = ((k % grid) as f64, (k / grid) as f64);
-            let sx = (pixel % w) as f64 + (gx + rng.next_f64()) / grid as f64;
-            let sy = (pixel / w) as f64 + (gy + rng.next_f64()) / grid as f64;
+            // Stratified over the pixel (box filter): the view points are fixed for the run, so
+            // their footprint error is not in the batches' standard error.
+            let (u, v) = stratified_pixel_jitter(cfg.seed, pixel as u64, k, spp);
+            let sx = (pixel % w) as f64 + u;
+            let sy = (pixel / w) as f64 + v;
             let mut dir = cam.direction(sx, sy);
             let mut origin = cam.position;
             let mut weight = Rgb::splat(1.0 / spp as f64);
@@ -166,7 +171,7 @@ fn light_records(world: &World, cfg: &ImageConfig, batch: usize, paths: u64) -> 
                 });
             }
             let Some((next_q, next_origin, next_dir)) =
-                crate::local::scatter(world, &sp, dir, q, Transport::Flux, &mut rng)
+                scatter(world, &sp, dir, q, Transport::Flux, &mut rng)
             else {
                 break;
             };
@@ -314,7 +319,7 @@ pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageRes
         let ys: Vec<f64> = (0..BATCHES)
             .map(|b| batch_pixels[b][p].luminance())
             .collect();
-        let (_, se) = crate::parallel::mean_and_standard_error(&ys);
+        let (_, se) = luxest_render::parallel::mean_and_standard_error(&ys);
         let mut m = Rgb::BLACK;
         for bp in &batch_pixels {
             m = m + bp[p] * (1.0 / BATCHES as f64);

@@ -10,25 +10,32 @@
 //! Specular collisions (mirror, dielectric) continue the path without a connection: a delta
 //! BSDF has no value towards a given sensor.
 //!
-//! Direct light: for point sources it is computed exactly (`I cos_p / d² V`, no variance); for
-//! area emitters the emission point is the zeroth collision, with kernel `cos_e cos_p/(π d²)`.
+//! Direct light: for delta lights (point sources and goniometric luminaires) it is computed
+//! exactly (`I(ω) cos_p / d² V`, no variance); for area emitters the emission point is the
+//! zeroth collision, with kernel `cos_e cos_p/(π d²)`. Luminaires start light paths with
+//! directions from their intensity table ([`luxest_render::luminaire`]).
 //!
-//! Scattering uses the geometric normal: interpolated shading normals are a rendering device
-//! that breaks energy conservation (a cosine lobe about a tilted normal dips below the
-//! surface), which would bias illuminance.
+//! Sensor kinds: everywhere above, `cos_p` is the sensor's response g(ω) to light arriving from
+//! ω — the cosine for planar sensors, `sin ε / π` for cylindrical and `(|ω_h| + f·ω_h)/π` for
+//! semi-cylindrical ones (`SensorPoint::response`) — since every kind is E = ∫ L(ω) g(ω) dω and
+//! the local estimate's connection estimates L(ω) dω. The near-field split (a backward estimate
+//! sampling the cosine about the normal) applies to planar sensors only.
 //!
-//! Standard errors come from independent batches (see [`crate::parallel`]). All sums are f64.
+//! The walk's step and the exact point-source term are shared with the other estimators
+//! ([`crate::transport`]): scattering uses the geometric normal.
+//!
+//! Standard errors come from independent batches (see [`luxest_render::parallel`]). All sums are f64.
 
-use crate::parallel::{mean_and_standard_error, run_batches};
 pub use crate::singularity::Singularity;
-use luxest_core::bsdf::{self, Transport};
-use luxest_core::color::Rgb;
-use luxest_core::compiled::Emitter;
-use luxest_core::math::Vec3;
-use luxest_core::rt::Ray;
-use luxest_core::sampling::Rng;
-use luxest_core::scene::SensorPoint;
-use luxest_core::world::{SurfacePoint, World};
+use crate::transport::{point_source_direct, scatter};
+use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
+use luxest_render::bsdf::{self, Transport};
+use luxest_render::parallel::{mean_and_standard_error, run_batches};
+use luxest_render::rt::Ray;
+use luxest_render::sampling::Rng;
+use luxest_render::scene::SensorPoint;
+use luxest_render::world::World;
 
 /// How sensors receive light from the random walk.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,11 +78,24 @@ pub struct LocalResult {
     /// Mean photometric illuminance Y and its standard error, lx.
     pub value: Vec<f64>,
     pub standard_error: Vec<f64>,
-    /// The exact direct part from point sources (included in `value`).
+    /// The exact direct part from delta lights (point sources, luminaires; included in
+    /// `value`).
     pub direct_point: Vec<f64>,
+    /// `batch_values[b][i]`: batch b's estimate of Y at sensor i (the exact direct part
+    /// included), lx; `value` is their mean, `standard_error` their standard deviation / √B.
+    pub batch_values: Vec<Vec<f64>>,
     pub seconds: f64,
     pub collisions: u64,
     pub shadow_rays: u64,
+}
+
+impl LocalResult {
+    /// Per sensor: (RGB, Y, standard error of Y), the results contract's values.
+    pub fn estimates(&self) -> Vec<(Rgb, f64, f64)> {
+        (0..self.value.len())
+            .map(|i| (self.rgb[i], self.value[i], self.standard_error[i]))
+            .collect()
+    }
 }
 
 /// Per-thread scratch buffers, reused across collisions.
@@ -92,31 +112,6 @@ struct BatchSums {
     shadow_rays: u64,
 }
 
-/// One step of a random walk: samples the BSDF (with geometric normals) at `sp` for a path
-/// that arrived along `dir` with throughput `beta`, applies analog Russian roulette (survival
-/// probability = the sample's weight, at most 1), and returns the new throughput, ray origin
-/// and direction; `None` when the path ends.
-pub fn scatter(
-    world: &World,
-    sp: &SurfacePoint,
-    dir: Vec3,
-    beta: Rgb,
-    mode: Transport,
-    rng: &mut Rng,
-) -> Option<(Rgb, Vec3, Vec3)> {
-    let m = world.material(sp.triangle);
-    let s = bsdf::sample(m, -dir, sp.ng, sp.ng, rng.next_2d(), rng.next_f64(), mode)?;
-    let survival = s.weight.max_component().min(1.0);
-    if survival <= 0.0 || rng.next_f64() >= survival {
-        return None;
-    }
-    Some((
-        beta * s.weight * (1.0 / survival),
-        world.offset(sp.position, sp.ng, s.wi),
-        s.wi,
-    ))
-}
-
 /// Adds an RGB contribution to an f64 accumulator.
 fn add(acc: &mut [f64; 3], c: Rgb) {
     for (a, v) in acc.iter_mut().zip(c.0) {
@@ -127,7 +122,7 @@ fn add(acc: &mut [f64; 3], c: Rgb) {
 /// Where a connection starts: a scattering collision or a point on an area emitter.
 enum Source<'a> {
     Collision {
-        material: &'a luxest_core::scene::Material,
+        material: &'a luxest_render::scene::Material,
         wo: Vec3,
         ng: Vec3,
         ns: Vec3,
@@ -165,7 +160,8 @@ fn connect(
         }
         let d = d2.sqrt();
         let w = v / d;
-        let cos_p = -s.normal.dot(w);
+        // The sensor's response to light arriving from −w (the cosine −n·w for planar sensors).
+        let cos_p = s.response(-w);
         if cos_p <= 0.0 {
             continue;
         }
@@ -220,36 +216,6 @@ fn connect(
     }
 }
 
-/// Exact direct illuminance from the point sources (RGB), with visibility.
-pub fn point_source_direct(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
-    sensors
-        .iter()
-        .map(|s| {
-            let mut e = Rgb::BLACK;
-            for em in &world.scene.header.emitters {
-                if let Emitter::Point {
-                    position,
-                    intensity_rgb,
-                    ..
-                } = em
-                {
-                    let v = *position - s.position;
-                    let d2 = v.length_squared();
-                    let cos = s.normal.dot(v) / d2.sqrt();
-                    if cos > 0.0 && d2 > 0.0 {
-                        let from = *position;
-                        let blocked = world.occluded(from, s.position);
-                        if !blocked {
-                            e = e + *intensity_rgb * (cos / d2);
-                        }
-                    }
-                }
-            }
-            e
-        })
-        .collect()
-}
-
 /// Direct simulation: the photon arriving at `x` (travelling along `dir`) on a surface with
 /// normal `ng` deposits its flux `q` into every bin it lands in.
 fn deposit(
@@ -274,39 +240,6 @@ fn deposit(
     }
 }
 
-/// Exact point-source luminance towards the camera at view points given as (position,
-/// geometric normal, direction to the camera, triangle, weight).
-pub fn point_source_direct_to(world: &World, points: &[(Vec3, Vec3, Vec3, u32, Rgb)]) -> Vec<Rgb> {
-    points
-        .iter()
-        .map(|&(x, ng, wo, triangle, weight)| {
-            let m = world.material(triangle);
-            let mut l = Rgb::BLACK;
-            for em in &world.scene.header.emitters {
-                if let Emitter::Point {
-                    position,
-                    intensity_rgb,
-                    ..
-                } = em
-                {
-                    let v = *position - x;
-                    let d2 = v.length_squared();
-                    if d2 <= 0.0 {
-                        continue;
-                    }
-                    let w = v / d2.sqrt();
-                    let f = bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
-                    if f.max_component() > 0.0 && !world.occluded(world.offset(x, ng, w), *position)
-                    {
-                        l = l + *intensity_rgb * f * (1.0 / d2);
-                    }
-                }
-            }
-            l * weight
-        })
-        .collect()
-}
-
 fn run_batch(
     world: &World,
     sensors: &[SensorPoint],
@@ -317,8 +250,10 @@ fn run_batch(
 ) -> BatchSums {
     let skip_within: Vec<f64> = near
         .iter()
-        .map(|&n| match (n, cfg.near_field) {
-            (true, Some(nf)) => nf.radius,
+        .enumerate()
+        .map(|(i, &n)| match (n, cfg.near_field) {
+            // The backward near-field estimate samples the cosine about the normal: planar only.
+            (true, Some(nf)) if sensors[i].kind.is_planar() => nf.radius,
             _ => 0.0,
         })
         .collect();
@@ -439,6 +374,7 @@ pub fn estimate(
     let mut rgb = vec![Rgb::BLACK; n];
     let mut value = vec![0.0; n];
     let mut standard_error = vec![0.0; n];
+    let mut batch_values = vec![vec![0.0; n]; batches];
     for i in 0..n {
         let mut ys = Vec::with_capacity(batches);
         let mut acc = [0.0; 3];
@@ -449,6 +385,9 @@ pub fn estimate(
             ys.push(Rgb(e).luminance());
         }
         let (m, se) = mean_and_standard_error(&ys);
+        for (b, y) in ys.iter().enumerate() {
+            batch_values[b][i] = y + direct[i].luminance();
+        }
         rgb[i] = Rgb(acc) + direct[i];
         value[i] = m + direct[i].luminance();
         standard_error[i] = se;
@@ -458,6 +397,7 @@ pub fn estimate(
         value,
         standard_error,
         direct_point: direct.iter().map(Rgb::luminance).collect(),
+        batch_values,
         seconds: start.elapsed().as_secs_f64(),
         collisions: results.iter().map(|r| r.collisions).sum(),
         shadow_rays: results.iter().map(|r| r.shadow_rays).sum(),

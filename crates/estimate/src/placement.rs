@@ -9,9 +9,9 @@
 //! normals (twice, for corners). The bias this adds is of the order of the illuminance
 //! gradient times delta; the estimators use delta = their regularisation radius eps.
 
-use luxest_core::math::Vec3;
-use luxest_core::scene::SensorPoint;
-use luxest_core::world::World;
+use luxest_io::math::Vec3;
+use luxest_render::scene::SensorPoint;
+use luxest_render::world::World;
 
 /// Sensors as evaluated.
 pub struct Placement {
@@ -39,6 +39,16 @@ fn probe_directions(n: Vec3) -> Vec<Vec3> {
         }
     }
     v
+}
+
+/// Whether the sensor's own surface (normal ±`n`) lies under the point `delta` from `p` along
+/// `m`: a short ray down from just above that point hits a surface parallel to the sensor's.
+fn own_surface_continues(world: &World, p: Vec3, n: Vec3, m: Vec3, delta: f64, lift: f64) -> bool {
+    let q = p + m * delta + n * lift;
+    world
+        .tracer
+        .intersect(q, -n, 0.0, 2.0 * lift)
+        .is_some_and(|h| world.surface(&h).ng.dot(n).abs() > 0.999)
 }
 
 /// Moves edge/corner sensors `delta` off the adjacent surfaces and flags sensors that have a
@@ -89,7 +99,23 @@ pub fn separate_from_adjacent_surfaces(
                     if let Some(h) = world.tracer.intersect(origin, d, 0.0, 2.0 * delta) {
                         let sp = world.surface(&h);
                         // Normal of the hit surface, facing the sensor.
-                        let m = if sp.ng.dot(d) < 0.0 { sp.ng } else { -sp.ng };
+                        let mut m = if sp.ng.dot(d) < 0.0 { sp.ng } else { -sp.ng };
+                        if (p - sp.position).dot(m).abs() < lift {
+                            // The surface passes through the sensor (an edge): the ray's side
+                            // is rounding's choice (a probe heading into the room can be hit
+                            // at t = 0 and then "faces" the outside; on two walls of a Box
+                            // room that pushed edge sensors out, where they read 0). The
+                            // open side is the one where the sensor's own surface goes on.
+                            match (
+                                own_surface_continues(world, p, n, m, delta, lift),
+                                own_surface_continues(world, p, n, -m, delta, lift),
+                            ) {
+                                (false, true) => m = -m,
+                                (true, false) => {}
+                                // A free edge, or no own surface: no side is better.
+                                _ => continue,
+                            }
+                        }
                         let dist = (p - sp.position).dot(m);
                         if dist < delta && m.dot(n) < 0.999 {
                             let need = (delta - dist) * m;
@@ -122,10 +148,7 @@ pub fn separate_from_adjacent_surfaces(
                 changed = true;
             }
             moved += usize::from(changed);
-            SensorPoint {
-                position: p,
-                normal: n,
-            }
+            SensorPoint { position: p, ..*s }
         })
         .collect();
     (out, moved)

@@ -89,7 +89,7 @@ mod tests {
         } else {
             1.0
         };
-        let (v, _) = luxest_core::quadrature::integrate(&mut chord, -1.0, upper, 1e-13);
+        let (v, _) = luxest_exact::quadrature::integrate(&mut chord, -1.0, upper, 1e-13);
         2.0 * std::f64::consts::PI * v / (4.0 / 3.0 * std::f64::consts::PI * eps.powi(3))
     }
 

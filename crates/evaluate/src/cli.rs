@@ -1,11 +1,15 @@
 //! The `evaluate` command line.
 
-use crate::report::{score_images, score_sensors};
+use crate::images::score_images;
+use crate::sensors::score_sensors;
 use clap::{Parser, Subcommand};
-use luxest_core::cli::CommonArgs;
-use luxest_core::exr_io::{write_preview_png, write_rgb};
-use luxest_core::{Error, Result};
-use std::path::{Path, PathBuf};
+use luxest_io::cli::CommonArgs;
+use luxest_io::exr_io::{write_preview_png_to, write_rgb_to};
+use luxest_io::naming::{flip_map_path, preview_path};
+use luxest_io::num::Real;
+use luxest_io::outputs::OutputPlan;
+use luxest_io::{Error, Result};
+use std::path::PathBuf;
 
 /// Error of images against a reference, and of sensor results against exact values.
 #[derive(Parser, Debug)]
@@ -40,31 +44,31 @@ pub enum Command {
         #[command(flatten)]
         common: CommonArgs,
     },
-    /// Per-point error, z-score and summary of sensor RESULTS against an exact case
-    /// (the case syntax of `estimate compare --case`).
+    /// Per-point error, z-score and summary of sensor RESULTS against an exact case; prints the
+    /// table, writes it as CSV (and RON), and with --max-z fails if any |z| exceeds it.
     Sensors {
         /// Sensor results (.sensors.ron).
         results: PathBuf,
-        /// e.g. `sobolev:I=100,h1=1,h2=1,rho1=0.5,rho2=0.5`, `sphere:I=100,R=1,rho=0.5`.
+        /// Case and parameters, e.g. `sobolev:I=100,h1=1,h2=1,rho1=0.5,rho2=0.5[,bin=R]` (bin:
+        /// compare direct-simulation results with the mean over their counting disks),
+        /// `sphere:I=100,R=1,rho=0.5[,x=..,y=..,z=..]`, `cie171-5.8:flux=1e4,area=96,rho=0.5,x=2,y=2,z=2`.
         #[arg(long)]
         case: String,
         /// CSV report.
         #[arg(short, long)]
-        out: PathBuf,
+        out: Option<PathBuf>,
+        /// The z-test: exit 1 if any point's |z| exceeds this.
+        #[arg(long, value_parser = Real::positive("standard errors"))]
+        max_z: Option<f64>,
+        /// Compare only these sensor sets (comma-separated names) [default: all].
+        #[arg(long, value_delimiter = ',')]
+        sets: Vec<String>,
         /// Also write the report as RON.
         #[arg(long)]
         ron: Option<PathBuf>,
         #[command(flatten)]
         common: CommonArgs,
     },
-}
-
-fn stem(path: &Path) -> String {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    name.strip_suffix(".exr").unwrap_or(&name).to_string()
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -77,18 +81,28 @@ pub fn run(args: Args) -> Result<()> {
             flip_maps,
             common: _,
         } => {
+            // Every output of the run, checked against the images before any is written.
+            let maps: Vec<PathBuf> = flip_maps
+                .iter()
+                .flat_map(|dir| tests.iter().map(move |t| flip_map_path(dir, t)))
+                .flat_map(|p| [preview_path(&p), p])
+                .collect();
+            let outputs = std::iter::once(out.clone()).chain(ron.clone()).chain(maps);
+            let inputs = std::iter::once(&reference).chain(&tests);
+            let mut plan = OutputPlan::new(inputs, outputs)?;
             let report = score_images(&reference, &tests, |test, map| match &flip_maps {
                 Some(dir) => {
-                    let base = stem(test);
-                    write_rgb(&dir.join(format!("{base}.flip.exr")), map)?;
-                    write_preview_png(&dir.join(format!("{base}.flip.png")), map, 1.0)
+                    let path = flip_map_path(dir, test);
+                    write_rgb_to(&mut plan, &path, map)?;
+                    write_preview_png_to(&mut plan, &preview_path(&path), map, 1.0)
                 }
                 None => Ok(()),
             })?;
-            report.write_csv(&out)?;
-            if let Some(r) = ron {
-                report.write_ron(&r)?;
+            report.write_csv_to(&mut plan, &out)?;
+            if let Some(r) = &ron {
+                report.write_ron_to(&mut plan, r)?;
             }
+            plan.commit()?;
             for r in &report.rows {
                 eprintln!(
                     "evaluate: {}: PSNR {:.2} dB, SSIM {:.4}, FLIP {:.4}, relMSE {:.3e}",
@@ -101,14 +115,24 @@ pub fn run(args: Args) -> Result<()> {
             results,
             case,
             out,
+            max_z,
+            sets,
             ron,
             common: _,
         } => {
-            let report = score_sensors(&results, &case)?;
-            report.write_csv(&out)?;
-            if let Some(r) = ron {
-                report.write_ron(&r)?;
+            if max_z.is_some_and(|z| z.is_nan() || z <= 0.0) {
+                return Err(Error::Usage("--max-z must be positive".into()));
             }
+            let mut plan = OutputPlan::new([&results], out.iter().chain(&ron))?;
+            let report = score_sensors(&results, &case, &sets)?;
+            if let Some(out) = &out {
+                report.write_csv_to(&mut plan, out)?;
+            }
+            if let Some(r) = &ron {
+                report.write_ron_to(&mut plan, r)?;
+            }
+            plan.commit()?;
+            print!("{}", report.table(max_z));
             eprintln!(
                 "evaluate: {}: {} points, max |z| {:.2}, RMS relative error {:.3e}",
                 results.display(),
@@ -116,10 +140,10 @@ pub fn run(args: Args) -> Result<()> {
                 report.max_abs_z,
                 report.rms_relative_error
             );
-            if report.points == 0 {
-                return Err(Error::input(&results, "no points"));
+            match max_z {
+                Some(z) => report.z_test(z),
+                None => Ok(()),
             }
-            Ok(())
         }
     }
 }

@@ -134,10 +134,10 @@ fn main() {
         let (t_write, _) = best_of(3, || compiled.save(&out).unwrap());
         let size = std::fs::metadata(&out).unwrap().len();
         let (t_load, loaded) = best_of(3, || {
-            luxest_core::compiled::CompiledScene::load(&out).unwrap()
+            luxest_render::compiled::CompiledScene::load(&out).unwrap()
         });
         let (t_bvh, rt) = best_of(3, || {
-            luxest_core::rt::RayTracer::for_scene(&loaded, false).unwrap()
+            luxest_render::rt::RayTracer::for_scene(&loaded, false).unwrap()
         });
         assert_eq!(rt.triangle_count(), 2 * NX * NZ);
         println!(

@@ -1,46 +1,34 @@
 //! scene-compile: authored scene (RON + mesh files) → one compiled scene file.
 //!
-//! The compiled scene ([`luxest_core::compiled`]) is world space, self-contained (no references
+//! The compiled scene ([`luxest_render::compiled`]) is world space, self-contained (no references
 //! to source files), carries a schema version, a content hash and a features manifest. This
 //! crate owns everything about *reading authored input*: RON parsing, validation, tessellation
 //! of analytic shapes, OBJ and glTF loading, transforms, dropping degenerate triangles, the
-//! emitter table and the sensor expansion.
+//! emitter table (with luminaires from photometric files, [`luminaires`]) and the sensor
+//! expansion (with calculation surfaces, [`surfaces`]).
+//!
+//! Modules: [`cli`] (arguments and run), [`validate`], [`shapes`] (tessellation), [`meshes`]
+//! (OBJ and glTF), [`luminaires`], [`surfaces`]; this file assembles the world-space scene.
 
+pub mod cli;
+pub mod luminaires;
 pub mod meshes;
 pub mod shapes;
+pub mod surfaces;
 pub mod validate;
 
-use clap::Parser;
-use luxest_core::compiled::{
-    CompiledScene, Emitter, Features, NamedMaterial, ObjectRange, SceneHeader, SensorSet, Stats,
-    NO_EMITTER,
+pub use cli::{run, Args};
+
+use luxest_io::math::Vec3;
+use luxest_io::{Error, Result};
+use luxest_render::compiled::{
+    CompiledScene, Emitter, Features, GridLayout, NamedMaterial, ObjectRange, SceneHeader,
+    SensorSet, Stats, NO_EMITTER,
 };
-use luxest_core::math::Vec3;
-use luxest_core::scene::{Emission, Material, PointPower, Scene, Sensor, SensorPoint, Shape};
-use luxest_core::{Error, Result};
+use luxest_render::scene::{Emission, Material, PointPower, Scene, Sensor, SensorPoint, Shape};
 use shapes::LocalMesh;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
-
-/// Compile an authored luxest scene into one self-contained scene file.
-#[derive(Parser, Debug)]
-#[command(name = "scene-compile", version, about)]
-pub struct Args {
-    /// The authored scene (.ron), or with --info a compiled scene.
-    pub input: PathBuf,
-    /// Output file [default: build/<scene name>/scene.lxs].
-    #[arg(short, long)]
-    pub out: Option<PathBuf>,
-    /// Validate and load everything, print the summary, write nothing.
-    #[arg(long)]
-    pub check: bool,
-    /// Print the header (features manifest, emitters, sensors, stats) of a compiled scene.
-    #[arg(long, conflicts_with_all = ["out", "check"])]
-    pub info: bool,
-    /// No warnings or summary on stderr.
-    #[arg(short, long)]
-    pub quiet: bool,
-}
 
 /// What compiling produced besides the scene.
 #[derive(Debug, Default)]
@@ -49,59 +37,31 @@ pub struct Report {
     pub warnings: Vec<String>,
 }
 
-/// Runs the command line.
-pub fn run(args: Args) -> Result<()> {
-    if args.info {
-        let scene = CompiledScene::load(&args.input)?;
-        println!("{}", luxest_core::fsio::to_ron_string(&scene.header));
-        println!("// content hash {}", scene.content_hash);
-        return Ok(());
-    }
-    let (mut scene, report) = compile_file(&args.input)?;
-    if !args.quiet {
-        for w in &report.warnings {
-            eprintln!("warning: {w}");
-        }
-    }
-    let bytes = scene.encode();
-    let summary = {
-        let s = &scene.header.stats;
-        format!(
-            "{}: {} triangles, {} vertices, {} emitters, {} sensor points, hash {}",
-            scene.header.name,
-            s.triangles,
-            s.vertices,
-            scene.header.emitters.len(),
-            scene
-                .header
-                .sensors
-                .iter()
-                .map(|x| x.points.len())
-                .sum::<usize>(),
-            scene.content_hash
-        )
-    };
-    if args.check {
-        if !args.quiet {
-            eprintln!("ok {summary}");
-        }
-        return Ok(());
-    }
-    let out = args.out.unwrap_or_else(|| {
-        Path::new("build")
-            .join(&scene.header.name)
-            .join("scene.lxs")
+/// The scene's name: its `name`, or the file stem. It names the default output directory
+/// `build/<name>/`, so [`validate::check_scene`] refuses a `name` that is not a plain file name.
+pub fn scene_name(scene: &Scene, path: &Path) -> String {
+    scene.name.clone().unwrap_or_else(|| {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scene".into())
+    })
+}
+
+/// The files a scene refers to (meshes, photometric files), resolved as compiling resolves
+/// them: relative to the scene file's directory. A compile's output must be none of them.
+pub fn referenced_files(scene: &Scene, path: &Path) -> Vec<PathBuf> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let meshes = scene.objects.iter().filter_map(|o| match &o.shape {
+        Shape::Obj { path } | Shape::Gltf { path } => Some(dir.join(path)),
+        _ => None,
     });
-    luxest_core::fsio::write_bytes_atomically(&out, &bytes)?;
-    if !args.quiet {
-        eprintln!("wrote {} ({summary})", out.display());
-    }
-    Ok(())
+    let photometry = scene.luminaires.iter().map(|l| dir.join(&l.file));
+    meshes.chain(photometry).collect()
 }
 
 /// Reads, validates and compiles an authored scene file.
 pub fn compile_file(path: &Path) -> Result<(CompiledScene, Report)> {
-    let scene: Scene = luxest_core::fsio::read_ron(path)?;
+    let scene: Scene = luxest_io::fsio::read_ron(path)?;
     compile(&scene, path)
 }
 
@@ -127,7 +87,7 @@ const DEGENERATE_SINE: f64 = 1e-9;
 struct Placement<'a> {
     /// Where the object is in the scene file, for messages.
     place: &'a str,
-    transform: luxest_core::math::Affine,
+    transform: luxest_io::math::Affine,
     flip: bool,
     material: u32,
     emitter: u32,
@@ -201,6 +161,12 @@ fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMes
         let full = scene_path.parent().unwrap_or(Path::new(".")).join(p);
         if full.is_file() {
             Ok(full)
+        } else if full.is_dir() {
+            Err(Error::at(
+                scene_path,
+                format!("{place}.shape.path"),
+                format!("{} is a directory, not a mesh file", full.display()),
+            ))
         } else {
             Err(Error::at(
                 scene_path,
@@ -222,18 +188,28 @@ fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMes
     })
 }
 
-fn expand_sensor(s: &Sensor) -> SensorSet {
-    match s {
+fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
+    let c = validate::Check { path };
+    Ok(match s {
         Sensor::Points { name, points } => SensorSet {
             name: name.clone(),
             grid: None,
             points: points
                 .iter()
-                .map(|p| SensorPoint {
-                    position: p.position,
-                    normal: p.normal.try_normalize().expect("validated"),
+                .enumerate()
+                .map(|(i, p)| {
+                    Ok(SensorPoint {
+                        position: p.position,
+                        normal: p.normal.try_normalize().expect("validated"),
+                        kind: surfaces::normalised_kind(
+                            &c,
+                            &format!("{place}.points[{i}].kind"),
+                            &p.kind,
+                        )?,
+                    })
                 })
-                .collect(),
+                .collect::<Result<Vec<_>>>()?,
+            calculation_grid: None,
         },
         Sensor::Grid {
             name,
@@ -253,19 +229,26 @@ fn expand_sensor(s: &Sensor) -> SensorSet {
                 for i in 0..nu {
                     let s = (i as f64 + 0.5) / nu as f64;
                     let t = (j as f64 + 0.5) / nv as f64;
-                    points.push(SensorPoint {
-                        position: *corner + *u * s + *v * t,
-                        normal: n,
-                    });
+                    points.push(SensorPoint::planar(*corner + *u * s + *v * t, n));
                 }
             }
+            // A rectangular grid's layout, for reports (a parallelogram has none).
+            let rectangular = u.dot(*v).abs() <= 1e-12 * u.length() * v.length();
             SensorSet {
                 name: name.clone(),
                 grid: Some(*counts),
                 points,
+                calculation_grid: rectangular.then_some(GridLayout {
+                    origin: *corner,
+                    u: *u,
+                    v: *v,
+                    margin_m: 0.0,
+                    nu: counts.0,
+                    nv: counts.1,
+                }),
             }
         }
-    }
+    })
 }
 
 /// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
@@ -360,8 +343,11 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             flux_rgb: intensity_rgb * (4.0 * PI),
         });
     }
+    let lum = luminaires::compile(path, &scene.luminaires)?;
+    report.warnings.extend(lum.warnings);
+    emitters.extend(lum.emitters);
     let fluxes: Vec<f64> = emitters.iter().map(Emitter::flux_lm).collect();
-    let emitter_cdf = luxest_core::sampling::Distribution1D::new(&fluxes)
+    let emitter_cdf = luxest_render::sampling::Distribution1D::new(&fluxes)
         .ok_or_else(|| Error::input(path, "emitters have no finite positive total flux"))?
         .cdf()
         .to_vec();
@@ -384,6 +370,30 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             ));
         }
     }
+    for &i in &used {
+        let m = &materials[i as usize];
+        let albedo = |c: usize| match &m.model {
+            Material::Lambertian { reflectance } | Material::Mirror { reflectance } => {
+                reflectance.0[c]
+            }
+            Material::Glossy {
+                diffuse, specular, ..
+            } => diffuse.0[c] + specular.0[c],
+            // A dielectric absorbs nothing by design; its light leaves through other surfaces.
+            _ => 0.0,
+        };
+        if let Some(c) = (0..3).find(|&c| albedo(c) >= 1.0) {
+            // Choice (issue 15): reflectance 1 stays allowed (an ideal mirror or white is a
+            // legitimate test), but its dependence on the path-depth cap is stated.
+            report.warnings.push(format!(
+                "{}: materials[\"{}\"]: reflectance 1 in channel {c} absorbs no light; in a \
+                 closed room paths then end only at the depth cap (--max-depth) and the result \
+                 depends on it",
+                path.display(),
+                m.name
+            ));
+        }
+    }
     let used_models: Vec<&Material> = used.iter().map(|&i| &materials[i as usize].model).collect();
     let mut material_kinds: Vec<_> = used_models.iter().map(|m| m.kind()).collect();
     material_kinds.sort();
@@ -399,13 +409,10 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         smooth_normals: b.normals.iter().any(|n| *n != [0.0; 3]),
         spectral: false,
         camera: scene.camera.is_some(),
-        sensors: !scene.sensors.is_empty(),
+        sensors: !scene.sensors.is_empty() || !scene.calculation_surfaces.is_empty(),
+        goniometric_luminaires: !scene.luminaires.is_empty(),
     };
-    let name = scene.name.clone().unwrap_or_else(|| {
-        path.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "scene".into())
-    });
+    let name = scene_name(scene, path);
     let stats = Stats {
         vertices: b.positions.len() as u64,
         triangles: b.indices.len() as u64,
@@ -414,15 +421,27 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         bounds_max: b.bounds_max,
         total_area_m2: b.total_area,
     };
+    let mut sensors = Vec::new();
+    for (i, s) in scene.sensors.iter().enumerate() {
+        sensors.push(expand_sensor(path, &format!("sensors[{i}]"), s)?);
+    }
+    for (i, s) in scene.calculation_surfaces.iter().enumerate() {
+        sensors.push(surfaces::expand(
+            path,
+            &format!("calculation_surfaces[{i}]"),
+            s,
+        )?);
+    }
     let header = SceneHeader {
         name,
-        compiler_version: luxest_core::meta::PROGRAM_VERSION.to_string(),
+        compiler_version: luxest_io::meta::PROGRAM_VERSION.to_string(),
         camera: scene.camera.clone(),
         materials,
         emitters,
         emitter_cdf,
         objects,
-        sensors: scene.sensors.iter().map(expand_sensor).collect(),
+        sensors,
+        photometries: lum.tables,
         features,
         stats,
     };

@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    luxest_core::cli::main(scene_compile::run)
+    luxest_io::cli::main(scene_compile::run)
 }

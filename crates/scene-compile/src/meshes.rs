@@ -4,8 +4,8 @@
 //! Errors name the mesh file and, for OBJ syntax errors, the line.
 
 use crate::shapes::LocalMesh;
-use luxest_core::math::{Affine, Vec3};
-use luxest_core::{Error, Result};
+use luxest_io::math::{Affine, Vec3};
+use luxest_io::{Error, Result};
 use std::io::{BufRead, Read};
 use std::path::Path;
 
@@ -41,9 +41,14 @@ impl<R: BufRead> BufRead for LineCounter<R> {
 
 /// Loads every model of an OBJ file as one mesh (polygons triangulated, OBJ materials ignored).
 pub fn load_obj(path: &Path) -> Result<LocalMesh> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let bytes = luxest_io::fsio::read_bytes(path)?;
+    load_obj_bytes(path, &bytes)
+}
+
+/// [`load_obj`] of the file's content `bytes`; `path` names it in errors.
+pub fn load_obj_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
     let mut reader = LineCounter {
-        inner: std::io::BufReader::with_capacity(1 << 20, file),
+        inner: bytes,
         newlines: 0,
     };
     let options = tobj::LoadOptions {
@@ -62,7 +67,8 @@ pub fn load_obj(path: &Path) -> Result<LocalMesh> {
             use tobj::LoadError::*;
             let per_line = matches!(
                 e,
-                UnrecognizedCharacter
+                ReadError
+                    | UnrecognizedCharacter
                     | PositionParseError
                     | NormalParseError
                     | TexcoordParseError
@@ -76,8 +82,15 @@ pub fn load_obj(path: &Path) -> Result<LocalMesh> {
                 Error::at(
                     path,
                     format!("line {}", reader.newlines.max(1)),
-                    format!("malformed OBJ: {e}"),
+                    if matches!(e, ReadError) {
+                        "malformed OBJ: not text (binary data or invalid UTF-8)".to_string()
+                    } else {
+                        format!("malformed OBJ: {e}")
+                    },
                 )
+            } else if let (FaceVertexOutOfBounds, Some(line)) = (&e, face_line_out_of_range(bytes))
+            {
+                Error::at(path, format!("line {line}"), format!("malformed OBJ: {e}"))
             } else {
                 Error::input(path, format!("malformed OBJ: {e}"))
             });
@@ -109,10 +122,11 @@ pub fn load_obj(path: &Path) -> Result<LocalMesh> {
                 .collect::<Vec<_>>()
         });
         if m.indices.iter().any(|&i| i as usize >= nv) {
-            return Err(Error::input(
-                path,
-                format!("object '{}' has a face index out of range", model.name),
-            ));
+            let message = format!("object '{}' has a face index out of range", model.name);
+            return Err(match face_line_out_of_range(bytes) {
+                Some(line) => Error::at(path, format!("line {line}"), message),
+                None => Error::input(path, message),
+            });
         }
         let triangles = m
             .indices
@@ -129,6 +143,83 @@ pub fn load_obj(path: &Path) -> Result<LocalMesh> {
         return Err(Error::input(path, "OBJ file contains no faces"));
     }
     Ok(mesh)
+}
+
+/// The line (1-based) of the first OBJ face that refers to a vertex the file does not have: an
+/// index 0, beyond the file's vertex count, or a negative (relative) index before its first
+/// vertex. Used to place the error when `tobj` reports an index out of range without a line.
+fn face_line_out_of_range(bytes: &[u8]) -> Option<usize> {
+    let text = String::from_utf8_lossy(bytes);
+    let total = text
+        .lines()
+        .filter(|l| l.split_whitespace().next() == Some("v"))
+        .count() as i64;
+    let mut seen = 0i64;
+    for (n, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => seen += 1,
+            Some("f") => {
+                for w in words {
+                    let Ok(i) = w.split('/').next().unwrap_or("").parse::<i64>() else {
+                        return Some(n + 1);
+                    };
+                    let index = if i < 0 { seen + i + 1 } else { i };
+                    if index < 1 || index > total {
+                        return Some(n + 1);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// The byte range an accessor reads must lie in its buffer view, and the view in its buffer:
+/// otherwise the reader silently yields nothing and the error would blame a missing attribute.
+fn check_accessor(
+    path: &Path,
+    place: &str,
+    what: &str,
+    accessor: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+) -> Result<()> {
+    // Sparse or zero-filled accessors have no view; the reader handles them.
+    let Some(view) = accessor.view() else {
+        return Ok(());
+    };
+    let (count, size) = (accessor.count() as u128, accessor.size() as u128);
+    let stride = view.stride().map_or(size, |s| s as u128);
+    let need = if count == 0 {
+        0
+    } else {
+        accessor.offset() as u128 + stride * (count - 1) + size
+    };
+    if need > view.length() as u128 {
+        return Err(Error::at(
+            path,
+            format!("{place} {what} (accessor {})", accessor.index()),
+            format!(
+                "{count} elements need {need} bytes, but buffer view {} has {}",
+                view.index(),
+                view.length()
+            ),
+        ));
+    }
+    let buffer_len = buffers.get(view.buffer().index()).map_or(0, Vec::len) as u128;
+    let view_end = view.offset() as u128 + view.length() as u128;
+    if view_end > buffer_len {
+        return Err(Error::at(
+            path,
+            format!("buffer view {}", view.index()),
+            format!(
+                "ends at byte {view_end}, beyond the {buffer_len} bytes of buffer {}",
+                view.buffer().index()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Decodes standard base64 (RFC 4648), as used by glTF data URIs.
@@ -165,8 +256,14 @@ fn decode_base64(s: &str) -> Option<Vec<u8>> {
 
 /// Loads all triangle meshes of a glTF file's default scene, node transforms applied.
 pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
-    let bytes = luxest_core::fsio::read_bytes(path)?;
-    let gltf = gltf::Gltf::from_slice(&bytes)
+    let bytes = luxest_io::fsio::read_bytes(path)?;
+    load_gltf_bytes(path, &bytes)
+}
+
+/// [`load_gltf`] of the file's content `bytes`; `path` names it in errors and locates external
+/// buffers.
+pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
+    let gltf = gltf::Gltf::from_slice(bytes)
         .map_err(|e| Error::input(path, format!("malformed glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
     let mut buffers: Vec<Vec<u8>> = Vec::new();
@@ -223,7 +320,18 @@ pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
     };
     let mut stack: Vec<(gltf::Node, Affine)> =
         scene.nodes().map(|n| (n, Affine::IDENTITY)).collect();
+    // The node hierarchy must be a forest (glTF 2.0, 3.5.3): a node reached twice is a cycle
+    // (0 -> 1 -> 0, or its own child) or a node with two parents, either of which would make
+    // this walk endless or duplicate geometry.
+    let mut visited = vec![false; gltf.document.nodes().count()];
     while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut visited[node.index()], true) {
+            return Err(Error::at(
+                path,
+                format!("node {}", node.index()),
+                "is reached twice in the node hierarchy (a cycle, or a node with two parents)",
+            ));
+        }
         let world = parent.compose(&Affine::from_cols4(node.transform().matrix()));
         for child in node.children() {
             stack.push((child, world));
@@ -240,6 +348,12 @@ pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
                         prim.mode()
                     ),
                 ));
+            }
+            for (semantic, accessor) in prim.attributes() {
+                check_accessor(path, &place, &format!("{semantic:?}"), &accessor, &buffers)?;
+            }
+            if let Some(indices) = prim.indices() {
+                check_accessor(path, &place, "indices", &indices, &buffers)?;
             }
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
             let positions: Vec<Vec3> = reader

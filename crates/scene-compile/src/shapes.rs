@@ -1,6 +1,6 @@
 //! Tessellation of the analytic shapes into local-frame triangle meshes.
 
-use luxest_core::math::Vec3;
+use luxest_io::math::Vec3;
 use std::collections::HashMap;
 
 /// A triangle mesh in an object's local frame. `normals`, when present, are per-vertex

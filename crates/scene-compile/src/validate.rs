@@ -1,12 +1,13 @@
 //! Checks on the authored scene that serde cannot express: finiteness, ranges, references.
 //! Each failure names the scene file and the place (`materials["white"].reflectance`).
 
-use luxest_core::color::Rgb;
-use luxest_core::math::Vec3;
-use luxest_core::scene::{
+use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
+use luxest_io::num::show;
+use luxest_io::{Error, Result};
+use luxest_render::scene::{
     Camera, Emission, Material, PointLight, PointPower, Scene, Sensor, Shape,
 };
-use luxest_core::{Error, Result};
 use std::path::Path;
 
 /// Largest icosphere subdivision level (20 * 4^8 = 1.3 M triangles).
@@ -14,52 +15,61 @@ pub const MAX_SPHERE_SUBDIVISIONS: u32 = 8;
 /// Largest image side accepted for the camera.
 pub const MAX_RESOLUTION: u32 = 1 << 15;
 
-struct Check<'a> {
-    path: &'a Path,
+/// Largest radiance (cd/m² or W/(sr m²) per channel), intensity (cd) and flux (lm) an emitter
+/// may have. Images are written as f32 (largest 3.4e38), and the estimators multiply the power by
+/// geometric kernels (1/r² for r down to a millimetre: 1e6) and sum it over up to 2^53 samples in
+/// f64; 1e25 keeps all of these finite with margins of ten orders of magnitude.
+pub const MAX_EMISSION: f64 = 1e25;
+
+pub(crate) struct Check<'a> {
+    pub(crate) path: &'a Path,
 }
 
 impl Check<'_> {
-    fn fail(&self, place: &str, msg: impl Into<String>) -> Error {
+    pub(crate) fn fail(&self, place: &str, msg: impl Into<String>) -> Error {
         Error::at(self.path, place, msg)
     }
-    fn finite(&self, place: &str, v: f64) -> Result<()> {
+    pub(crate) fn finite(&self, place: &str, v: f64) -> Result<()> {
         if v.is_finite() {
             Ok(())
         } else {
             Err(self.fail(place, format!("{v} is not a finite number")))
         }
     }
-    fn vec(&self, place: &str, v: Vec3) -> Result<()> {
+    pub(crate) fn vec(&self, place: &str, v: Vec3) -> Result<()> {
         for (i, c) in [v.x, v.y, v.z].into_iter().enumerate() {
             self.finite(&format!("{place}[{i}]"), c)?;
         }
         Ok(())
     }
-    fn nonzero_vec(&self, place: &str, v: Vec3) -> Result<Vec3> {
+    pub(crate) fn nonzero_vec(&self, place: &str, v: Vec3) -> Result<Vec3> {
         self.vec(place, v)?;
         v.try_normalize()
             .ok_or_else(|| self.fail(place, "must not be the zero vector"))
     }
-    fn rgb_in(&self, place: &str, c: Rgb, lo: f64, hi: f64, what: &str) -> Result<()> {
+    pub(crate) fn rgb_in(&self, place: &str, c: Rgb, lo: f64, hi: f64, what: &str) -> Result<()> {
         for (i, v) in c.0.into_iter().enumerate() {
             self.finite(&format!("{place}[{i}]"), v)?;
             if !(lo..=hi).contains(&v) {
-                return Err(self.fail(place, format!("{what} {v} is outside [{lo}, {hi}]")));
+                return Err(self.fail(
+                    place,
+                    format!("{what} {} is outside [{}, {}]", show(v), show(lo), show(hi)),
+                ));
             }
         }
         Ok(())
     }
-    fn positive(&self, place: &str, v: f64, what: &str) -> Result<()> {
+    pub(crate) fn positive(&self, place: &str, v: f64, what: &str) -> Result<()> {
         self.finite(place, v)?;
         if v > 0.0 {
             Ok(())
         } else {
-            Err(self.fail(place, format!("{what} must be positive, got {v}")))
+            Err(self.fail(place, format!("{what} must be positive, got {}", show(v))))
         }
     }
     /// A tint or radiance: finite, non-negative, with positive luminance.
-    fn emission_rgb(&self, place: &str, c: Rgb) -> Result<()> {
-        self.rgb_in(place, c, 0.0, f64::MAX, "emission component")?;
+    pub(crate) fn emission_rgb(&self, place: &str, c: Rgb) -> Result<()> {
+        self.rgb_in(place, c, 0.0, MAX_EMISSION, "emission component")?;
         if c.luminance() > 0.0 {
             Ok(())
         } else {
@@ -160,7 +170,17 @@ fn check_point_light(c: &Check, place: &str, l: &PointLight) -> Result<()> {
     if v <= 0.0 {
         return Err(c.fail(
             &format!("{place}.power"),
-            format!("emitter power must be positive, got {v}"),
+            format!("emitter power must be positive, got {}", show(v)),
+        ));
+    }
+    if v > MAX_EMISSION {
+        return Err(c.fail(
+            &format!("{place}.power"),
+            format!(
+                "{} exceeds {}, beyond which the estimators' arithmetic and f32 images overflow",
+                show(v),
+                show(MAX_EMISSION)
+            ),
         ));
     }
     c.emission_rgb(&format!("{place}.color"), l.color)
@@ -175,6 +195,7 @@ fn check_sensor(c: &Check, place: &str, s: &Sensor) -> Result<()> {
             for (i, p) in points.iter().enumerate() {
                 c.vec(&format!("{place}.points[{i}].position"), p.position)?;
                 c.nonzero_vec(&format!("{place}.points[{i}].normal"), p.normal)?;
+                crate::surfaces::normalised_kind(c, &format!("{place}.points[{i}].kind"), &p.kind)?;
             }
         }
         Sensor::Grid {
@@ -208,6 +229,11 @@ fn check_sensor(c: &Check, place: &str, s: &Sensor) -> Result<()> {
 /// Validates everything that does not need the mesh files.
 pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
     let c = Check { path };
+    if let Some(name) = &scene.name {
+        // The name becomes the default output directory build/<name>/.
+        luxest_io::outputs::path_component(name, path, "name")?;
+    }
+    check_unique_names(&c, scene)?;
     if let Some(cam) = &scene.camera {
         check_camera(&c, cam)?;
     }
@@ -248,6 +274,7 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
                 for (k, v) in vertices.iter().enumerate() {
                     c.vec(&format!("{place}.shape.vertices[{k}]"), *v)?;
                 }
+                check_planar_convex(&c, &format!("{place}.shape.vertices"), vertices)?;
             }
             Shape::Box { size } => {
                 c.vec(&format!("{place}.shape.size"), *size)?;
@@ -280,7 +307,18 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
                 if *lumens <= 0.0 {
                     return Err(c.fail(
                         &format!("{place}.emission.lumens"),
-                        format!("emitter power must be positive, got {lumens}"),
+                        format!("emitter power must be positive, got {}", show(*lumens)),
+                    ));
+                }
+                if *lumens > MAX_EMISSION {
+                    return Err(c.fail(
+                        &format!("{place}.emission.lumens"),
+                        format!(
+                            "{} lm exceeds {} lm, beyond which the estimators' arithmetic and \
+                             f32 images overflow",
+                            show(*lumens),
+                            show(MAX_EMISSION)
+                        ),
                     ));
                 }
                 c.emission_rgb(&format!("{place}.emission.color"), *color)?;
@@ -290,10 +328,16 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
     for (i, l) in scene.point_lights.iter().enumerate() {
         check_point_light(&c, &format!("point_lights[{i}]"), l)?;
     }
-    if scene.point_lights.is_empty() && scene.objects.iter().all(|o| o.emission.is_none()) {
+    for (i, l) in scene.luminaires.iter().enumerate() {
+        crate::luminaires::check(&c, &format!("luminaires[{i}]"), l)?;
+    }
+    if scene.point_lights.is_empty()
+        && scene.luminaires.is_empty()
+        && scene.objects.iter().all(|o| o.emission.is_none())
+    {
         return Err(Error::input(
             path,
-            "scene has no emitter (no point light and no object with emission)",
+            "scene has no emitter (no point light, luminaire or object with emission)",
         ));
     }
     let mut names = std::collections::BTreeSet::new();
@@ -309,6 +353,122 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
             ));
         }
         check_sensor(&c, &place, s)?;
+    }
+    for (i, s) in scene.calculation_surfaces.iter().enumerate() {
+        let place = format!("calculation_surfaces[{i}]");
+        if !names.insert(s.name.clone()) {
+            return Err(c.fail(
+                &format!("{place}.name"),
+                format!("duplicate sensor name \"{}\"", s.name),
+            ));
+        }
+        crate::surfaces::check(&c, &place, s)?;
+    }
+    Ok(())
+}
+
+/// Object and point-light names name the emitters in compiled scenes and reports: each may be
+/// given once (unnamed ones are named by their place).
+fn check_unique_names(c: &Check, scene: &Scene) -> Result<()> {
+    let mut seen: std::collections::BTreeMap<&str, String> = std::collections::BTreeMap::new();
+    let objects = scene
+        .objects
+        .iter()
+        .enumerate()
+        .filter_map(|(i, o)| Some((o.name.as_deref()?, format!("objects[{i}].name"))));
+    let lights = scene
+        .point_lights
+        .iter()
+        .enumerate()
+        .filter_map(|(i, l)| Some((l.name.as_deref()?, format!("point_lights[{i}].name"))));
+    for (name, place) in objects.chain(lights) {
+        if let Some(first) = seen.get(name) {
+            return Err(c.fail(
+                &place,
+                format!("duplicate name \"{name}\" (already used by {first})"),
+            ));
+        }
+        seen.insert(name, place);
+    }
+    Ok(())
+}
+
+/// How far a polygon's vertex may be from its plane, as a fraction of the polygon's size. Measured
+/// geometry is not exactly planar (the Cornell box's walls are off by up to 1.5e-3 of their size);
+/// its fan triangulation is still a faithful surface. Beyond 1 % the triangulation would depend on
+/// the order of the vertices.
+const PLANARITY_TOLERANCE: f64 = 1e-2;
+/// Relative tolerance of the convexity test (collinear vertices are allowed).
+const POLYGON_TOLERANCE: f64 = 1e-9;
+
+/// A polygon must be planar and convex (it is triangulated as a fan): every vertex within
+/// `POLYGON_TOLERANCE` of the polygon's size from the plane of its Newell normal, and every turn
+/// between consecutive edges the same way round, turning once in all.
+fn check_planar_convex(c: &Check, place: &str, vertices: &[Vec3]) -> Result<()> {
+    let n = vertices.len();
+    // Newell's method: a robust normal for any simple polygon (Sutherland et al. 1974).
+    let mut normal = Vec3::splat(0.0);
+    for i in 0..n {
+        let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+        normal += Vec3::new(
+            (a.y - b.y) * (a.z + b.z),
+            (a.z - b.z) * (a.x + b.x),
+            (a.x - b.x) * (a.y + b.y),
+        );
+    }
+    let size = vertices
+        .iter()
+        .map(|v| (*v - vertices[0]).length())
+        .fold(0.0, f64::max);
+    let Some(normal) = normal.try_normalize().filter(|_| size > 0.0) else {
+        return Err(c.fail(place, "polygon has zero area (all vertices on a line)"));
+    };
+    let centroid = vertices.iter().fold(Vec3::splat(0.0), |s, v| s + *v) * (1.0 / n as f64);
+    for (k, v) in vertices.iter().enumerate() {
+        let off = (*v - centroid).dot(normal);
+        if off.abs() > PLANARITY_TOLERANCE * size {
+            return Err(c.fail(
+                &format!("{place}[{k}]"),
+                format!(
+                    "polygon is not planar: this vertex is {} m off the polygon's plane, more \
+                     than 1 % of its size {} m (polygons must be planar and convex)",
+                    show(off.abs()),
+                    show(size)
+                ),
+            ));
+        }
+    }
+    // Convexity in the polygon's plane: project onto an orthonormal basis (t1, t2) of it.
+    let t1 = (vertices[1] - vertices[0] - normal * (vertices[1] - vertices[0]).dot(normal))
+        .try_normalize()
+        .unwrap_or_else(|| normal.cross(Vec3::new(1.0, 0.0, 0.0)));
+    let t2 = normal.cross(t1);
+    let flat: Vec<(f64, f64)> = vertices
+        .iter()
+        .map(|v| ((*v - centroid).dot(t1), (*v - centroid).dot(t2)))
+        .collect();
+    let mut turning = 0.0;
+    for k in 0..n {
+        let (a, b, d) = (flat[(k + n - 1) % n], flat[k], flat[(k + 1) % n]);
+        let (e0, e1) = ((b.0 - a.0, b.1 - a.1), (d.0 - b.0, d.1 - b.1));
+        let cross = e0.0 * e1.1 - e0.1 * e1.0;
+        let dot = e0.0 * e1.0 + e0.1 * e1.1;
+        if cross < -POLYGON_TOLERANCE * size * size {
+            return Err(c.fail(
+                &format!("{place}[{k}]"),
+                "polygon is not convex: it turns the other way at this vertex \
+                 (polygons must be planar and convex)",
+            ));
+        }
+        turning += cross.atan2(dot);
+    }
+    // A convex polygon turns by 2π in all; a star (self-intersecting) one by a multiple of it.
+    if (turning - 2.0 * std::f64::consts::PI).abs() > 1e-6 {
+        return Err(c.fail(
+            place,
+            "polygon is not convex: its edges cross or it winds more than once \
+             (polygons must be planar and convex)",
+        ));
     }
     Ok(())
 }

@@ -5,15 +5,16 @@
 //! share of the raw ray rate the full path tracer sustains (target: at least 60 % on
 //! cornell-box).
 
-use luxest_core::parallel::{run_batches, thread_count};
-use luxest_core::rt::Ray;
+use luxest_io::cli::thread_count;
+use luxest_render::parallel::run_batches;
+use luxest_render::rt::Ray;
 use std::path::PathBuf;
 use std::time::Instant;
 use trace::{Film, Renderer};
 
 /// Raw Embree time for the recorded rays, split over `threads`.
 fn raw_seconds(
-    world: &luxest_core::world::World,
+    world: &luxest_render::world::World,
     closest: &[Ray],
     shadow: &[Ray],
     threads: usize,

@@ -2,20 +2,22 @@
 //!
 //! Unidirectional path tracing with next-event estimation (one light point per vertex, chosen
 //! by flux) combined with BSDF sampling by multiple importance sampling (power heuristic) for
-//! area emitters; point sources, being deltas, are reached by next-event estimation only.
-//! Russian roulette from the fourth vertex on, with survival probability min(0.95, max
-//! throughput). Scattering uses geometric normals (interpolated shading normals are kept for
-//! the normal AOV only: they break energy conservation, which the furnace test would catch).
+//! area emitters; point sources and goniometric luminaires, being deltas, are reached by
+//! next-event estimation only (a luminaire's light point carries its intensity towards the
+//! shading point). Russian roulette from the fourth vertex on, with survival probability
+//! min(0.95, max throughput). Scattering uses geometric normals (interpolated shading normals
+//! are kept for the normal AOV only: they break energy conservation, which the furnace test
+//! would catch).
 //!
 //! The features manifest selects a monomorphised variant: the code for point sources, area
 //! emitters and specular materials is compiled out of the variants of scenes without them.
 
-use luxest_core::bsdf::{self, Transport};
-use luxest_core::color::Rgb;
-use luxest_core::math::Vec3;
-use luxest_core::rt::Ray;
-use luxest_core::sampling::Rng;
-use luxest_core::world::World;
+use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
+use luxest_render::bsdf::{self, Transport};
+use luxest_render::rt::Ray;
+use luxest_render::sampling::Rng;
+use luxest_render::world::World;
 
 /// Rays traced, for rates; optionally every ray, to time raw Embree on the same rays.
 #[derive(Default)]
@@ -87,7 +89,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
         let is_delta = SPECULAR && bsdf::is_delta(m);
         if !is_delta && (POINT || AREA) {
             // Next-event estimation.
-            let lp = world.sample_light_point(rng);
+            let lp = world.sample_light_point(rng, sp.position);
             let v = lp.position - sp.position;
             let d2 = v.length_squared();
             if d2 > 0.0 {
@@ -160,7 +162,10 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
 /// The kernel variant for a scene's features.
 pub fn kernel_for(world: &World) -> Kernel {
     let f = &world.scene.header.features;
-    match (f.point_emitters, f.area_emitters, f.specular_paths) {
+    // A luminaire is a delta light like an isotropic point: the same next-event code serves
+    // it (`sample_light_point` returns its intensity towards the receiver).
+    let delta_lights = f.point_emitters || f.goniometric_luminaires;
+    match (delta_lights, f.area_emitters, f.specular_paths) {
         (true, true, true) => radiance::<true, true, true>,
         (true, true, false) => radiance::<true, true, false>,
         (true, false, true) => radiance::<true, false, true>,

@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    luxest_core::cli::main(trace::run)
+    luxest_io::cli::main(trace::run)
 }

@@ -1,0 +1,355 @@
+//! The ONNX model through ONNX Runtime: loading it (once per process, the library found at run
+//! time), checking it against the model contract, and running it over an image in tiles.
+
+use luxest_io::exr_io::RgbImage;
+use luxest_io::header;
+
+use luxest_io::{Error, Result};
+use ort::environment::Environment;
+use ort::session::Session;
+use ort::value::{Tensor, ValueType};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use crate::feature::{names, Feature};
+use crate::tiling::{spans, Tiling};
+
+/// The ONNX Runtime library: `ORT_DYLIB_PATH`, else the copy scripts/setup.sh installs.
+pub fn runtime_library_path() -> PathBuf {
+    match std::env::var_os("ORT_DYLIB_PATH") {
+        Some(p) if !p.is_empty() => PathBuf::from(p),
+        _ => {
+            let home = std::env::var_os("HOME").unwrap_or_default();
+            Path::new(&home).join(".cache/luxest/onnxruntime/libonnxruntime.so")
+        }
+    }
+}
+
+/// Loads ONNX Runtime once per process.
+fn environment() -> Result<&'static Environment> {
+    static ENV: OnceLock<std::result::Result<Environment, String>> = OnceLock::new();
+    let path = runtime_library_path();
+    ENV.get_or_init(|| {
+        if !path.is_file() {
+            return Err(
+                "ONNX Runtime library not found (run scripts/setup.sh, or set ORT_DYLIB_PATH)"
+                    .to_string(),
+            );
+        }
+        let builder =
+            ort::init_from(&path).map_err(|e| format!("cannot load ONNX Runtime: {e}"))?;
+        builder
+            .with_name("luxest-denoise")
+            .build()
+            .map_err(|e| format!("cannot start ONNX Runtime: {e}"))
+    })
+    .as_ref()
+    .map_err(|m| Error::input(&path, m.clone()))
+}
+
+/// A loaded denoising model.
+pub struct Denoiser {
+    session: Session,
+    features: Vec<Feature>,
+    path: PathBuf,
+}
+
+fn tensor_shape(v: &ValueType) -> Option<Vec<i64>> {
+    match v {
+        ValueType::Tensor { ty, shape, .. } if *ty == ort::value::TensorElementType::Float32 => {
+            Some(shape.to_vec())
+        }
+        _ => None,
+    }
+}
+
+impl Denoiser {
+    /// Loads `model` and checks it against the contract above; `threads` is ONNX Runtime's
+    /// intra-op thread count.
+    pub fn load(model: &Path, threads: usize) -> Result<Denoiser> {
+        let env = environment()?;
+        let bytes = luxest_io::fsio::read_bytes(model)?;
+        let ort_err = |e: &dyn std::fmt::Display| Error::input(model, format!("{e}"));
+        let session = Session::builder(env)
+            .map_err(|e| ort_err(&e))?
+            .with_intra_threads(threads.max(1))
+            .map_err(|e| ort_err(&e))?
+            .with_inter_threads(1)
+            .map_err(|e| ort_err(&e))?
+            .commit_from_memory(&bytes)
+            .map_err(|e| load_error(model, &bytes, &e.to_string()))?;
+
+        let input = session.inputs().iter().find(|o| o.name() == "input");
+        let input_shape = input
+            .and_then(|o| tensor_shape(o.dtype()))
+            .filter(|s| s.len() == 4)
+            .ok_or_else(|| {
+                Error::input(
+                    model,
+                    "model has no float32 NCHW input named `input` (see models/README.md)",
+                )
+            })?;
+        let exposure_ok = session
+            .inputs()
+            .iter()
+            .find(|o| o.name() == "exposure")
+            .and_then(|o| tensor_shape(o.dtype()))
+            .is_some_and(|s| s.len() == 1);
+        if !exposure_ok {
+            return Err(Error::input(
+                model,
+                "model has no float32 (N,) input named `exposure` (exported before the \
+                 whole-image exposure contract? re-export it with training/export.py)",
+            ));
+        }
+        if let Some(extra) = session
+            .inputs()
+            .iter()
+            .find(|o| o.name() != "input" && o.name() != "exposure")
+        {
+            return Err(Error::input(
+                model,
+                format!("model has an unexpected input `{}`", extra.name()),
+            ));
+        }
+        let output_ok = session
+            .outputs()
+            .iter()
+            .find(|o| o.name() == "output")
+            .and_then(|o| tensor_shape(o.dtype()))
+            .is_some_and(|s| s.len() == 4 && (s[1] == 3 || s[1] < 0));
+        if !output_ok {
+            return Err(Error::input(
+                model,
+                "model has no float32 N×3×H×W output named `output`",
+            ));
+        }
+
+        let channels = session
+            .metadata()
+            .ok()
+            .and_then(|m| m.custom(header::CHANNELS));
+        let features: Vec<Feature> = match channels {
+            Some(list) => list
+                .split(',')
+                .map(|s| {
+                    Feature::parse(s).ok_or_else(|| {
+                        Error::input(
+                            model,
+                            format!(
+                                "metadata {} names an unknown feature `{s}`",
+                                header::CHANNELS
+                            ),
+                        )
+                    })
+                })
+                .collect::<Result<_>>()?,
+            None => match input_shape[1] {
+                3 => vec![Feature::Hdr],
+                6 => vec![Feature::Hdr, Feature::Alb],
+                9 => vec![Feature::Hdr, Feature::Alb, Feature::Nrm],
+                _ => {
+                    return Err(Error::input(
+                        model,
+                        "model metadata lacks luxest.channels and its input has no fixed \
+                         3, 6 or 9 channels",
+                    ))
+                }
+            },
+        };
+        if features.first() != Some(&Feature::Hdr) {
+            return Err(Error::input(
+                model,
+                "metadata luxest.channels must start with hdr",
+            ));
+        }
+        if input_shape[1] >= 0 && input_shape[1] as usize != 3 * features.len() {
+            return Err(Error::input(
+                model,
+                format!(
+                    "input has {} channels, but its features {} need {} (3 per feature)",
+                    input_shape[1],
+                    names(&features),
+                    3 * features.len()
+                ),
+            ));
+        }
+        Ok(Denoiser {
+            session,
+            features,
+            path: model.to_path_buf(),
+        })
+    }
+
+    /// The features the model takes, in channel order (always starting with hdr).
+    pub fn features(&self) -> &[Feature] {
+        &self.features
+    }
+
+    /// Denoises one image. `inputs` holds one image per feature of [`Denoiser::features`], in
+    /// that order, all of the same size and finite (the caller checks and names the files).
+    pub fn denoise(&mut self, inputs: &[&RgbImage], tiling: Tiling) -> Result<RgbImage> {
+        assert_eq!(inputs.len(), self.features.len());
+        let (width, height) = (inputs[0].width, inputs[0].height);
+        // Radiance near the f32 limit (finite, valid input) would overflow inside the model's
+        // f32 arithmetic, and its exposure (0.18 / 3.4e38) is subnormal. The model is
+        // scale-equivariant through its exposure input (it sees hdr x exposure and returns its
+        // result / exposure), so the hdr image is scaled by an exact power of two 2^-k into
+        // range and the exposure by 2^k: the model's input is bit-identical, and the result is
+        // scaled back by 2^k in f64.
+        let peak = inputs[0]
+            .pixels
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max((*v as f64).abs()));
+        let k = if peak > LARGEST_MODEL_INPUT {
+            (peak / LARGEST_MODEL_INPUT).log2().ceil() as i32
+        } else {
+            0
+        };
+        let hdr_scale = 2f64.powi(-k);
+        let exposure = (inputs[0].autoexposure() / hdr_scale) as f32;
+        let mut out = RgbImage::new(width, height);
+        for (y0, y1) in spans(height, tiling.tile) {
+            for (x0, x1) in spans(width, tiling.tile) {
+                // The core [x0, x1) × [y0, y1) with its context, clipped to the image.
+                let (cx0, cy0) = (
+                    x0.saturating_sub(tiling.overlap),
+                    y0.saturating_sub(tiling.overlap),
+                );
+                let cx1 = (x1 + tiling.overlap).min(width);
+                let cy1 = (y1 + tiling.overlap).min(height);
+                let tile = self.run(inputs, hdr_scale as f32, exposure, (cx0, cy0, cx1, cy1))?;
+                let tw = cx1 - cx0;
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        out.pixels[y * width + x] = tile[(y - cy0) * tw + (x - cx0)];
+                    }
+                }
+            }
+        }
+        if let Some((x, y)) = out.first_non_finite() {
+            return Err(Error::input(
+                &self.path,
+                format!("model produced a non-finite value at pixel ({x}, {y})"),
+            ));
+        }
+        if k > 0 {
+            for (i, p) in out.pixels.iter_mut().enumerate() {
+                for c in p.iter_mut() {
+                    let v = *c as f64 / hdr_scale;
+                    if v.abs() > f32::MAX as f64 {
+                        // Usage carries no file; the caller names the input image.
+                        return Err(Error::Usage(format!(
+                            "the denoised value {v:.3e} at pixel ({}, {}) exceeds the largest \
+                             32-bit float (3.403e38): the input's radiance reaches {peak:.3e}, \
+                             too close to the limit of the EXR format to denoise",
+                            i % width,
+                            i / width
+                        )));
+                    }
+                    *c = v as f32;
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Runs the model on the region (x0, y0, x1, y1) of the inputs; returns its pixels.
+    fn run(
+        &mut self,
+        inputs: &[&RgbImage],
+        hdr_scale: f32,
+        exposure: f32,
+        (x0, y0, x1, y1): (usize, usize, usize, usize),
+    ) -> Result<Vec<[f32; 3]>> {
+        let (w, h) = (x1 - x0, y1 - y0);
+        let plane = w * h;
+        let mut data = vec![0f32; 3 * inputs.len() * plane];
+        for (f, image) in inputs.iter().enumerate() {
+            for y in 0..h {
+                let row = &image.pixels[(y0 + y) * image.width + x0..][..w];
+                // Only the radiance is scaled (by a power of two: exact); features are not.
+                let scale = if f == 0 { hdr_scale } else { 1.0 };
+                for (x, p) in row.iter().enumerate() {
+                    for c in 0..3 {
+                        data[(3 * f + c) * plane + y * w + x] = p[c] * scale;
+                    }
+                }
+            }
+        }
+        let err =
+            |e: &dyn std::fmt::Display| Error::input(&self.path, format!("inference failed: {e}"));
+        let input =
+            Tensor::from_array(([1usize, 3 * inputs.len(), h, w], data)).map_err(|e| err(&e))?;
+        let exposure = Tensor::from_array(([1usize], vec![exposure])).map_err(|e| err(&e))?;
+        let outputs = self
+            .session
+            .run(ort::inputs!["input" => input, "exposure" => exposure])
+            .map_err(|e| err(&e))?;
+        let (shape, values) = outputs["output"]
+            .try_extract_tensor::<f32>()
+            .map_err(|e| err(&e))?;
+        if **shape != [1, 3, h as i64, w as i64] {
+            return Err(Error::input(
+                &self.path,
+                format!(
+                    "model output has shape {:?}, expected [1, 3, {h}, {w}]",
+                    &**shape
+                ),
+            ));
+        }
+        Ok((0..plane)
+            .map(|i| [values[i], values[plane + i], values[2 * plane + i]])
+            .collect())
+    }
+}
+
+/// The feature names, comma-separated.
+/// The `ir_version` of an ONNX ModelProto: protobuf field 1, a varint, written first.
+fn onnx_ir_version(bytes: &[u8]) -> Option<u64> {
+    if bytes.first() != Some(&0x08) {
+        return None;
+    }
+    let mut v = 0u64;
+    for (i, b) in bytes[1..].iter().take(10).enumerate() {
+        v |= ((b & 0x7f) as u64) << (7 * i);
+        if b & 0x80 == 0 {
+            return Some(v);
+        }
+    }
+    None
+}
+
+/// One line for a model ONNX Runtime cannot load. Its own message for a too new IR version is a
+/// C++ signature of hundreds of characters; name the file's IR version and the supported one.
+fn load_error(model: &Path, bytes: &[u8], message: &str) -> Error {
+    if message.contains("IR version") {
+        let supported = message
+            .split("max supported IR version:")
+            .nth(1)
+            .and_then(|t| {
+                t.trim_start()
+                    .split(|c: char| !c.is_ascii_digit())
+                    .next()
+                    .map(str::to_string)
+            })
+            .filter(|t| !t.is_empty());
+        let found = onnx_ir_version(bytes).map_or("unknown".to_string(), |v| v.to_string());
+        return Error::input(
+            model,
+            format!(
+                "ONNX IR version {found} is not supported by this ONNX Runtime (it reads IR \
+                 versions up to {}); re-export the model with training/export.py",
+                supported.as_deref().unwrap_or("an older one")
+            ),
+        );
+    }
+    let first = message.lines().next().unwrap_or(message);
+    let short: String = first.chars().take(200).collect();
+    Error::input(model, format!("not a loadable ONNX model: {short}"))
+}
+
+/// Largest radiance handed to the model unscaled: 2^100 (1.3e30), eight orders of magnitude
+/// below the f32 maximum, room for the network's intermediate sums and products.
+const LARGEST_MODEL_INPUT: f64 = 1.2676506002282294e30;

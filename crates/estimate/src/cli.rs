@@ -1,0 +1,515 @@
+//! The `estimate` command line: its arguments, and each subcommand's run from arguments to
+//! output files. The estimators themselves are [`crate::local`], [`crate::gather`] and
+//! [`crate::image`].
+
+use crate::image::{self, ImageConfig};
+use crate::local::{self, Detector, LocalConfig, NearField};
+use crate::sensors::{all_sensors, evaluation_points, load_world, results, Estimate};
+use crate::singularity::Singularity;
+use crate::{exact_table, gather};
+use clap::{Parser, Subcommand, ValueEnum};
+use luxest_io::cli::CommonArgs;
+use luxest_io::exr_io::{write_preview_png_auto, write_rgb, RgbImage};
+use luxest_io::header;
+use luxest_io::meta::RunInfo;
+use luxest_io::naming::{self, image_path, Kind, Level};
+use luxest_io::{Error, Result};
+use luxest_render::world::{load_with_camera, World};
+use std::path::{Path, PathBuf};
+
+/// Local estimates of illuminance, exact solutions and validation.
+#[derive(Parser, Debug)]
+#[command(name = "estimate", version, about)]
+pub struct Args {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct RunArgs {
+    /// Compiled scene (build/<name>/scene.lxs).
+    pub scene: PathBuf,
+    /// Output sensor results (.ron) [default: <scene dir>/<name>.sensors.ron].
+    #[arg(short, long)]
+    pub out: Option<PathBuf>,
+    /// Also write the results as CSV to this file.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Independent batches (for the standard error).
+    #[arg(long, default_value_t = 32)]
+    pub batches: usize,
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Safety bound on path length (the bias it causes is below q^max_depth for survival q).
+    #[arg(long, default_value_t = 100_000)]
+    pub max_depth: u32,
+    /// Sensors on edges or in corners are evaluated this far off the adjacent surfaces, m
+    /// [default: 1e-3 of the room scale, the smallest non-flat side of the bounding box].
+    #[arg(long)]
+    pub edge_offset: Option<f64>,
+}
+
+impl RunArgs {
+    fn check(&self) -> Result<()> {
+        if self.batches < 2 {
+            return Err(Error::Usage(
+                "--batches must be at least 2 (the standard error needs them)".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The run metadata of an estimate of this run.
+    fn info(&self, world: &World, estimator: &str, samples: u64, seconds: f64) -> RunInfo {
+        RunInfo::new(
+            estimator,
+            samples,
+            self.common.seed,
+            seconds,
+            &world.scene.content_hash,
+        )
+    }
+
+    fn edge_offset(&self, world: &World) -> Result<f64> {
+        let d = self
+            .edge_offset
+            .unwrap_or(DEFAULT_EDGE_OFFSET_FRACTION * world.room_scale);
+        if d > 0.0 && d.is_finite() {
+            Ok(d)
+        } else {
+            Err(Error::Usage(format!(
+                "--edge-offset must be positive, got {d}"
+            )))
+        }
+    }
+}
+
+/// Default kernel clamp radius for images, as a fraction of the room scale (images have no
+/// near-field split, so a larger radius keeps pixels near edges from sparkling).
+pub const DEFAULT_IMAGE_EPS_FRACTION: f64 = 1e-2;
+
+/// Default near-field radius, as a fraction of the room scale.
+pub const DEFAULT_NEAR_FRACTION: f64 = 1e-2;
+
+/// Default distance of edge/corner sensors from the adjacent surfaces, as a fraction of the
+/// room scale.
+pub const DEFAULT_EDGE_OFFSET_FRACTION: f64 = 1e-3;
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub enum SingularityMode {
+    Ball,
+    Clamp,
+    None,
+}
+
+impl SingularityMode {
+    /// The singularity treatment with regularisation radius `eps` (m), which must be positive.
+    fn with_eps(self, eps: f64) -> Result<Singularity> {
+        if !(eps > 0.0 && eps.is_finite()) {
+            return Err(Error::Usage(format!("--eps must be positive, got {eps}")));
+        }
+        Ok(match self {
+            SingularityMode::Ball => Singularity::Ball { eps },
+            SingularityMode::Clamp => Singularity::Clamp { eps },
+            SingularityMode::None => Singularity::None,
+        })
+    }
+}
+
+/// Default kernel regularisation radius, as a fraction of the scene's room scale (the smallest
+/// non-flat side of its bounding box; chosen from the corner measurement in the README).
+pub const DEFAULT_EPS_FRACTION: f64 = 1e-3;
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Local estimate of illuminance at all sensor points of a scene.
+    Sensors {
+        #[command(flatten)]
+        run: RunArgs,
+        /// Number of light paths.
+        #[arg(long, default_value_t = 100_000)]
+        paths: u64,
+        /// How the kernel singularity near sensor points is controlled.
+        #[arg(long, value_enum, default_value_t = SingularityMode::Ball)]
+        singularity: SingularityMode,
+        /// Regularisation radius in m [default: 1e-3 of the room scale, the smallest non-flat
+        /// side of the scene's bounding box].
+        #[arg(long)]
+        eps: Option<f64>,
+        /// Near-field radius, m: for sensors with another surface this close, collisions
+        /// nearer than this are estimated backwards instead [default: 1e-2 of the room scale].
+        #[arg(long)]
+        near_radius: Option<f64>,
+        /// Backward samples per near-field sensor (0 disables the split).
+        #[arg(long, default_value_t = 20_000)]
+        near_samples: u64,
+        /// Also write every batch's estimate per point (`batches[b][k]` of each set), from
+        /// which statistics over several points (a grid's Emin, U0) get their uncertainty.
+        #[arg(long)]
+        batch_values: bool,
+    },
+    /// Double local estimate: a luminance image from the scene's camera (EXR, like trace's).
+    Image {
+        /// Compiled scene (build/<name>/scene.lxs).
+        scene: PathBuf,
+        /// Output [default: <scene dir>/<name>_<paths, 6 digits>le.hdr.exr].
+        #[arg(short, long)]
+        out: Option<PathBuf>,
+        /// Also write the per-pixel standard error of Y as an EXR (R = G = B).
+        #[arg(long)]
+        stderr_out: Option<PathBuf>,
+        /// Also write an sRGB PNG preview (exposure: 1 / the 99th percentile of Y).
+        #[arg(long)]
+        preview: Option<PathBuf>,
+        /// Number of light paths.
+        #[arg(long, default_value_t = 1_000)]
+        paths: u64,
+        /// Camera samples per pixel (stratified over the pixel, box filter).
+        #[arg(long, default_value_t = 1)]
+        pixel_samples: u32,
+        /// Override the camera resolution, WIDTHxHEIGHT.
+        #[arg(long)]
+        resolution: Option<String>,
+        #[arg(long, value_enum, default_value_t = SingularityMode::Clamp)]
+        singularity: SingularityMode,
+        /// Regularisation radius in m [default: 1e-2 of the room scale].
+        #[arg(long)]
+        eps: Option<f64>,
+        #[command(flatten)]
+        common: CommonArgs,
+        #[arg(long, default_value_t = 100_000)]
+        max_depth: u32,
+    },
+    /// Direct simulation baseline: photons counted in disks around the sensor points.
+    Direct {
+        #[command(flatten)]
+        run: RunArgs,
+        #[arg(long, default_value_t = 100_000)]
+        paths: u64,
+        /// Radius of the counting disk around each sensor, m.
+        #[arg(long)]
+        bin_radius: f64,
+    },
+    /// Backward (gathering) estimate at the sensor points: an independent reference that has
+    /// no kernel singularity (scenes without specular paths).
+    Gather {
+        #[command(flatten)]
+        run: RunArgs,
+        /// Samples per sensor point.
+        #[arg(long, default_value_t = 10_000)]
+        samples: u64,
+    },
+    /// Print exact solutions.
+    Exact {
+        #[command(subcommand)]
+        case: ExactCase,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+pub enum ExactCase {
+    /// Point source between two parallel Lambertian planes: E1(r), E2(r).
+    Sobolev {
+        #[arg(long, default_value_t = 100.0)]
+        intensity: f64,
+        #[arg(long, default_value_t = 1.0)]
+        h1: f64,
+        #[arg(long, default_value_t = 1.0)]
+        h2: f64,
+        #[arg(long, default_value_t = 0.5)]
+        rho1: f64,
+        #[arg(long, default_value_t = 0.5)]
+        rho2: f64,
+        /// Distances from the foot of the source, m.
+        #[arg(long, value_delimiter = ',', default_value = "0,0.5,1,2,4,8")]
+        r: Vec<f64>,
+    },
+    /// Integrating sphere with a central source: direct, indirect and total at the wall.
+    Sphere {
+        #[arg(long, default_value_t = 100.0)]
+        intensity: f64,
+        #[arg(long, default_value_t = 1.0)]
+        radius: f64,
+        #[arg(long, default_value_t = 0.5)]
+        rho: f64,
+    },
+    /// CIE 171:2006 case 5.8: mean indirect illuminance in a closed room.
+    Cie171 {
+        #[arg(long, default_value_t = 10_000.0)]
+        flux: f64,
+        #[arg(long, default_value_t = 96.0)]
+        area: f64,
+        #[arg(long, default_value_t = 0.5)]
+        rho: f64,
+    },
+}
+
+/// Estimator names recorded in the results' run metadata.
+pub mod estimator {
+    pub const LOCAL_ESTIMATE: &str = "local-estimate";
+    pub const DIRECT_SIMULATION: &str = "direct-simulation";
+    pub const GATHER: &str = "gather";
+    pub const DOUBLE_LOCAL_ESTIMATE: &str = "double-local-estimate";
+}
+
+/// Runs the command line.
+pub fn run(args: Args) -> Result<()> {
+    match args.command {
+        Command::Sensors {
+            run,
+            paths,
+            singularity,
+            eps,
+            near_radius,
+            near_samples,
+            batch_values,
+        } => sensors(
+            &run,
+            paths,
+            singularity,
+            eps,
+            (near_radius, near_samples),
+            batch_values,
+        ),
+        Command::Direct {
+            run,
+            paths,
+            bin_radius,
+        } => direct(&run, paths, bin_radius),
+        Command::Gather { run, samples } => gather(&run, samples),
+        Command::Image {
+            scene,
+            out,
+            stderr_out,
+            preview,
+            paths,
+            pixel_samples,
+            resolution,
+            singularity,
+            eps,
+            common,
+            max_depth,
+        } => {
+            if paths == 0 {
+                return Err(Error::Usage("--paths must be positive".into()));
+            }
+            let (world, cam) = load_with_camera(&scene, resolution.as_deref())?;
+            let eps = eps.unwrap_or(DEFAULT_IMAGE_EPS_FRACTION * world.room_scale);
+            let cfg = ImageConfig {
+                paths,
+                pixel_samples,
+                seed: common.seed,
+                threads: common.thread_count(),
+                singularity: singularity.with_eps(eps)?,
+                max_depth,
+            };
+            let prefix = scene.with_file_name(&world.scene.header.name);
+            let out =
+                out.unwrap_or_else(|| image_path(&prefix, Level::LightPaths(paths), Kind::Hdr));
+            write_image(
+                &scene,
+                &world,
+                &cam,
+                &cfg,
+                &out,
+                stderr_out.as_deref(),
+                preview.as_deref(),
+            )
+        }
+        Command::Exact { case } => exact_table::print(case),
+    }
+}
+
+/// `estimate sensors`: the local estimate at every sensor point.
+fn sensors(
+    run: &RunArgs,
+    paths: u64,
+    singularity: SingularityMode,
+    eps: Option<f64>,
+    (near_radius, near_samples): (Option<f64>, u64),
+    batch_values: bool,
+) -> Result<()> {
+    run.check()?;
+    if paths < run.batches as u64 {
+        return Err(Error::Usage("--paths must be at least --batches".into()));
+    }
+    let world = load_world(&run.scene)?;
+    let sing = singularity.with_eps(eps.unwrap_or(DEFAULT_EPS_FRACTION * world.room_scale))?;
+    let near_radius = near_radius.unwrap_or(DEFAULT_NEAR_FRACTION * world.room_scale);
+    let placed = evaluation_points(&world, run.edge_offset(&world)?, near_radius);
+    let cfg = LocalConfig {
+        paths,
+        batches: run.batches,
+        seed: run.common.seed,
+        threads: run.common.thread_count(),
+        detector: Detector::LocalEstimate(sing),
+        max_depth: run.max_depth,
+        near_field: (near_samples > 0).then_some(NearField {
+            radius: near_radius,
+            samples: near_samples,
+        }),
+    };
+    let r = local::estimate(&world, &placed.points, &placed.near, &cfg);
+    let info = run.info(&world, estimator::LOCAL_ESTIMATE, paths, r.seconds);
+    let batches = batch_values.then_some(r.batch_values.as_slice());
+    let out = write_results(&world, run, info, sing.to_string(), &r.estimates(), batches)?;
+    eprintln!(
+        "wrote {}: {} paths, {} collisions, {} shadow rays, {:.2} s",
+        out.display(),
+        paths,
+        r.collisions,
+        r.shadow_rays,
+        r.seconds
+    );
+    Ok(())
+}
+
+/// `estimate direct`: the direct-simulation baseline, photons counted in disks.
+fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
+    run.check()?;
+    if !(bin_radius > 0.0 && bin_radius.is_finite()) {
+        return Err(Error::Usage(format!(
+            "--bin-radius must be positive, got {bin_radius}"
+        )));
+    }
+    let world = load_world(&run.scene)?;
+    crate::sensors::require_planar(&run.scene, &world, "estimate direct")?;
+    let sensors = all_sensors(&world);
+    let cfg = LocalConfig {
+        paths,
+        batches: run.batches,
+        seed: run.common.seed,
+        threads: run.common.thread_count(),
+        detector: Detector::Bins { radius: bin_radius },
+        max_depth: run.max_depth,
+        near_field: None,
+    };
+    let r = local::estimate(&world, &sensors, &vec![false; sensors.len()], &cfg);
+    let info = run.info(&world, estimator::DIRECT_SIMULATION, paths, r.seconds);
+    let singularity = format!("bins(radius={bin_radius:e} m)");
+    let out = write_results(&world, run, info, singularity, &r.estimates(), None)?;
+    eprintln!(
+        "wrote {}: {} paths, {:.2} s",
+        out.display(),
+        paths,
+        r.seconds
+    );
+    Ok(())
+}
+
+/// `estimate gather`: the backward reference estimator.
+fn gather(run: &RunArgs, samples: u64) -> Result<()> {
+    run.check()?;
+    let world = load_world(&run.scene)?;
+    crate::sensors::require_planar(&run.scene, &world, "estimate gather")?;
+    if world.scene.header.features.specular_paths {
+        return Err(Error::input(
+            &run.scene,
+            "gather needs a scene without mirrors or dielectrics",
+        ));
+    }
+    let sensors = evaluation_points(&world, run.edge_offset(&world)?, 0.0).points;
+    let cfg = gather::GatherConfig {
+        samples,
+        batches: run.batches,
+        seed: run.common.seed,
+        threads: run.common.thread_count(),
+        max_depth: run.max_depth,
+    };
+    let start = std::time::Instant::now();
+    let values = gather::estimate(&world, &sensors, &cfg);
+    let info = run.info(
+        &world,
+        estimator::GATHER,
+        samples,
+        start.elapsed().as_secs_f64(),
+    );
+    let out = write_results(
+        &world,
+        run,
+        info,
+        "none (backward estimator)".into(),
+        &values,
+        None,
+    )?;
+    eprintln!("wrote {}", out.display());
+    Ok(())
+}
+
+/// Writes the sensor results as RON (at `--out` or `<scene dir>/<name>.sensors.ron`), with
+/// the per-batch estimates when given, and, on request, CSV; returns the RON path.
+fn write_results(
+    world: &World,
+    run: &RunArgs,
+    info: RunInfo,
+    singularity: String,
+    values: &[Estimate],
+    batches: Option<&[Vec<f64>]>,
+) -> Result<PathBuf> {
+    let mut results = results(&run.scene, world, info, singularity, values)?;
+    if let Some(b) = batches {
+        crate::sensors::attach_batches(&mut results, b);
+    }
+    let out = run.out.clone().unwrap_or_else(|| {
+        naming::sensors_path(
+            run.scene.parent().unwrap_or(Path::new("")),
+            &world.scene.header.name,
+        )
+    });
+    results.write_ron(&out)?;
+    if let Some(csv) = &run.csv {
+        results.write_csv(csv)?;
+    }
+    Ok(out)
+}
+
+/// `estimate image`: renders the double local estimate and writes it (with its standard error
+/// and a preview on request).
+fn write_image(
+    scene: &Path,
+    world: &World,
+    cam: &luxest_render::camera::PinholeCamera,
+    cfg: &ImageConfig,
+    out: &Path,
+    stderr_out: Option<&Path>,
+    preview: Option<&Path>,
+) -> Result<()> {
+    let r = image::render(world, cam, cfg);
+    if let Some(i) = r.rgb.iter().position(|c| !c.is_finite()) {
+        return Err(Error::input(scene, format!("pixel {i} is not finite")));
+    }
+    let info = RunInfo::new(
+        estimator::DOUBLE_LOCAL_ESTIMATE,
+        cfg.paths,
+        cfg.seed,
+        r.seconds,
+        &world.scene.content_hash,
+    );
+    let mut img = RgbImage::new(r.width, r.height);
+    img.pixels = r.rgb.iter().map(|c| c.0.map(|v| v as f32)).collect();
+    img.attributes = info.to_attributes();
+    img.set_attribute(header::SINGULARITY, cfg.singularity);
+    img.set_attribute(header::PIXEL_SAMPLES, cfg.pixel_samples);
+    write_rgb(out, &img)?;
+    if let Some(p) = preview {
+        write_preview_png_auto(p, &img)?;
+    }
+    if let Some(p) = stderr_out {
+        let mut se = RgbImage::new(r.width, r.height);
+        se.pixels = r.standard_error.iter().map(|&v| [v as f32; 3]).collect();
+        se.attributes = img.attributes.clone();
+        write_rgb(p, &se)?;
+    }
+    eprintln!(
+        "wrote {}: {}x{}, {} paths, {} collisions, {} shadow rays, {:.2} s ({:.1} M shadow rays/s)",
+        out.display(),
+        r.width,
+        r.height,
+        cfg.paths,
+        r.collisions,
+        r.shadow_rays,
+        r.seconds,
+        r.shadow_rays as f64 / r.seconds / 1e6
+    );
+    Ok(())
+}

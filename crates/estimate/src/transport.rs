@@ -1,0 +1,107 @@
+//! What the forward (local estimate, double local estimate) and backward (gather) estimators
+//! share: one step of a random walk, and the exact direct light of point sources.
+//!
+//! A walk scatters with the geometric normal: interpolated shading normals are a rendering
+//! device that breaks energy conservation (a cosine lobe about a tilted normal dips below the
+//! surface), which would bias illuminance. Delta lights — isotropic point sources and
+//! goniometric luminaires ([`luxest_render::luminaire`]) — are never hit by a walk, so their
+//! direct contribution is always computed exactly, with a visibility ray: `I(ω) g(ω) / d²` for a
+//! sensor of response g (the cosine for planar sensors), `f I(ω) cos / d²` for reflected light.
+
+use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
+use luxest_render::bsdf::{self, Transport};
+use luxest_render::sampling::Rng;
+use luxest_render::scene::IlluminanceKind;
+use luxest_render::scene::SensorPoint;
+use luxest_render::world::{SurfacePoint, World};
+
+/// One step of a random walk: samples the BSDF (with geometric normals) at `sp` for a path
+/// that arrived along `dir` with throughput `beta`, applies analog Russian roulette (survival
+/// probability = the sample's weight, at most 1), and returns the new throughput, ray origin
+/// and direction; `None` when the path ends.
+pub fn scatter(
+    world: &World,
+    sp: &SurfacePoint,
+    dir: Vec3,
+    beta: Rgb,
+    mode: Transport,
+    rng: &mut Rng,
+) -> Option<(Rgb, Vec3, Vec3)> {
+    let m = world.material(sp.triangle);
+    let s = bsdf::sample(m, -dir, sp.ng, sp.ng, rng.next_2d(), rng.next_f64(), mode)?;
+    let survival = s.weight.max_component().min(1.0);
+    if survival <= 0.0 || rng.next_f64() >= survival {
+        return None;
+    }
+    Some((
+        beta * s.weight * (1.0 / survival),
+        world.offset(sp.position, sp.ng, s.wi),
+        s.wi,
+    ))
+}
+
+/// The response of sensor `s` to light from `v` (not normalised, length `d`): for planar
+/// sensors computed as `n·v / d`, as it always was, so their results do not change by a bit.
+fn response_toward(s: &SensorPoint, v: Vec3, d: f64) -> f64 {
+    match s.kind {
+        IlluminanceKind::Planar => s.normal.dot(v) / d,
+        _ => s.response(v / d),
+    }
+}
+
+/// Exact direct illuminance from the delta lights (point sources, luminaires), RGB, with
+/// visibility.
+pub fn point_source_direct(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
+    let emitters = world.scene.header.emitters.len();
+    sensors
+        .iter()
+        .map(|s| {
+            let mut e = Rgb::BLACK;
+            for ei in 0..emitters {
+                world.for_each_delta_source(ei, s.position, |position, intensity_rgb| {
+                    let v = position - s.position;
+                    let d2 = v.length_squared();
+                    let cos = response_toward(s, v, d2.sqrt());
+                    if cos > 0.0 && d2 > 0.0 {
+                        let from = position;
+                        let blocked = world.occluded(from, s.position);
+                        if !blocked {
+                            e = e + intensity_rgb * (cos / d2);
+                        }
+                    }
+                });
+            }
+            e
+        })
+        .collect()
+}
+
+/// Exact delta-light (point source, luminaire) luminance towards the camera at view points
+/// given as (position, geometric normal, direction to the camera, triangle, weight).
+pub fn point_source_direct_to(world: &World, points: &[(Vec3, Vec3, Vec3, u32, Rgb)]) -> Vec<Rgb> {
+    let emitters = world.scene.header.emitters.len();
+    points
+        .iter()
+        .map(|&(x, ng, wo, triangle, weight)| {
+            let m = world.material(triangle);
+            let mut l = Rgb::BLACK;
+            for ei in 0..emitters {
+                world.for_each_delta_source(ei, x, |position, intensity_rgb| {
+                    let v = position - x;
+                    let d2 = v.length_squared();
+                    if d2 <= 0.0 {
+                        return;
+                    }
+                    let w = v / d2.sqrt();
+                    let f = bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+                    if f.max_component() > 0.0 && !world.occluded(world.offset(x, ng, w), position)
+                    {
+                        l = l + intensity_rgb * f * (1.0 / d2);
+                    }
+                });
+            }
+            l * weight
+        })
+        .collect()
+}

@@ -1,0 +1,179 @@
+//! `evaluate images`: every metric of [`crate::metrics`] for test images against one reference,
+//! with each image's cost read from its header; written as CSV and RON.
+
+use crate::metrics;
+use luxest_io::exr_io::{read_rgb_finite, RgbImage};
+use luxest_io::fsio::write_ron_to;
+use luxest_io::header;
+use luxest_io::outputs::OutputPlan;
+use luxest_io::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The tonemap every display-referred metric (PSNR, SSIM, MS-SSIM, FLIP) sees, as recorded in
+/// reports.
+pub const TONEMAP: &str = "x = max(v, 0) * k per channel, k = the reference's autoexposure \
+    0.18 / exp(mean ln(Y + 1e-4)); t = x / (1 + x); sRGB OETF; clamp [0, 1]";
+
+/// Errors of one test image against the reference.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImageRow {
+    pub image: String,
+    /// The estimator recorded in the image header, with `+denoise` appended for denoised images.
+    pub estimator: String,
+    /// Samples per pixel (path tracing) or light paths (local estimates).
+    pub samples: u64,
+    pub render_seconds: f64,
+    /// Seconds of the albedo/normal features a denoised image used (0 for other images).
+    pub feature_seconds: f64,
+    pub denoise_seconds: f64,
+    /// render + features + denoise: the wall-clock cost of the image.
+    pub total_seconds: f64,
+    pub psnr_db: f64,
+    pub ssim: f64,
+    /// None when the image is too small for even one MS-SSIM level.
+    pub ms_ssim: Option<f64>,
+    pub flip: f64,
+    pub rel_mse: f64,
+    pub smape: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ImageReport {
+    pub reference: String,
+    pub reference_samples: u64,
+    pub exposure: f64,
+    pub tonemap: String,
+    pub rel_mse_epsilon: f64,
+    pub smape_epsilon: f64,
+    pub rows: Vec<ImageRow>,
+}
+
+/// The samples (spp or light paths) of an image header; 0 when absent.
+fn samples(path: &Path, image: &RgbImage) -> Result<u64> {
+    Ok(header::parse(path, &image.attributes, header::SAMPLES)?.unwrap_or(0))
+}
+
+/// A seconds attribute of an image header; NaN when absent (an empty CSV cell).
+fn seconds(path: &Path, image: &RgbImage, key: &str) -> Result<f64> {
+    Ok(header::parse(path, &image.attributes, key)?.unwrap_or(f64::NAN))
+}
+
+/// Scores `tests` against `reference`; `flip_maps` receives each FLIP error map when given.
+pub fn score_images(
+    reference_path: &Path,
+    tests: &[impl AsRef<Path>],
+    mut flip_map: impl FnMut(&Path, &RgbImage) -> Result<()>,
+) -> Result<ImageReport> {
+    let reference = read_rgb_finite(reference_path)?;
+    let exposure = reference.autoexposure();
+    let reference_display = metrics::tonemap(&reference, exposure);
+    let mut rows = Vec::new();
+    for test_path in tests {
+        let test_path = test_path.as_ref();
+        let test = read_rgb_finite(test_path)?;
+        if (test.width, test.height) != (reference.width, reference.height) {
+            return Err(Error::input(
+                test_path,
+                format!(
+                    "size {}x{} differs from the reference's {}x{} ({})",
+                    test.width,
+                    test.height,
+                    reference.width,
+                    reference.height,
+                    reference_path.display()
+                ),
+            ));
+        }
+        let display = metrics::tonemap(&test, exposure);
+        let flip = metrics::flip(&reference_display, &display);
+        let mut map = RgbImage::new(test.width, test.height);
+        for (p, &e) in map.pixels.iter_mut().zip(&flip.map) {
+            *p = [e; 3];
+        }
+        flip_map(test_path, &map)?;
+        let denoised = test.attribute(header::DENOISER).is_some();
+        let render_seconds = seconds(test_path, &test, header::SECONDS)?;
+        let (feature_seconds, denoise_seconds) = if denoised {
+            (
+                seconds(test_path, &test, header::FEATURE_SECONDS)?,
+                seconds(test_path, &test, header::DENOISE_SECONDS)?,
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        let estimator = test.attribute(header::ESTIMATOR).unwrap_or("unknown");
+        rows.push(ImageRow {
+            image: test_path.display().to_string(),
+            estimator: if denoised {
+                format!("{estimator}+denoise")
+            } else {
+                estimator.to_string()
+            },
+            samples: samples(test_path, &test)?,
+            render_seconds,
+            feature_seconds,
+            denoise_seconds,
+            total_seconds: render_seconds + feature_seconds + denoise_seconds,
+            psnr_db: metrics::psnr(&reference_display, &display),
+            ssim: metrics::ssim(&reference_display, &display),
+            ms_ssim: metrics::ms_ssim(&reference_display, &display),
+            flip: flip.mean,
+            rel_mse: metrics::rel_mse(&reference, &test),
+            smape: metrics::smape(&reference, &test),
+        });
+    }
+    Ok(ImageReport {
+        reference: reference_path.display().to_string(),
+        reference_samples: samples(reference_path, &reference)?,
+        exposure,
+        tonemap: TONEMAP.to_string(),
+        rel_mse_epsilon: metrics::REL_MSE_EPSILON,
+        smape_epsilon: metrics::SMAPE_EPSILON,
+        rows,
+    })
+}
+
+fn csv_number(v: f64) -> String {
+    if v.is_nan() {
+        String::new()
+    } else {
+        format!("{v:e}")
+    }
+}
+
+impl ImageReport {
+    /// Writes the report as CSV, the planned output `path`.
+    pub fn write_csv_to(&self, plan: &mut OutputPlan, path: &Path) -> Result<()> {
+        plan.write(path, |w| {
+            let io = |e| Error::io(path, e);
+            writeln!(w, "image,reference,estimator,samples,render_seconds,feature_seconds,denoise_seconds,total_seconds,psnr_db,ssim,ms_ssim,flip,rel_mse,smape").map_err(io)?;
+            for r in &self.rows {
+                writeln!(
+                    w,
+                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    r.image,
+                    self.reference,
+                    r.estimator,
+                    r.samples,
+                    csv_number(r.render_seconds),
+                    csv_number(r.feature_seconds),
+                    csv_number(r.denoise_seconds),
+                    csv_number(r.total_seconds),
+                    csv_number(r.psnr_db),
+                    csv_number(r.ssim),
+                    r.ms_ssim.map(csv_number).unwrap_or_default(),
+                    csv_number(r.flip),
+                    csv_number(r.rel_mse),
+                    csv_number(r.smape)
+                )
+                .map_err(io)?;
+            }
+            Ok(())
+        })
+    }
+    /// Writes the report as RON, the planned output `path`.
+    pub fn write_ron_to(&self, plan: &mut OutputPlan, path: &Path) -> Result<()> {
+        write_ron_to(plan, path, self)
+    }
+}

@@ -1,0 +1,101 @@
+//! The bodies of the fuzz targets: every parser of untrusted input, as a function of the raw
+//! bytes that must return (an `Ok` or a one-line error) and never panic, abort or hang.
+//!
+//! `fuzz/` (its own workspace, cargo-fuzz and libFuzzer) wraps each function in a
+//! `fuzz_target!`; `tests/smoke.rs` here runs them on stable over the repository's own files and
+//! a few thousand deterministic mutations of each, so `cargo test` (and `make test`) exercises
+//! them without libFuzzer. See docs/fuzzing.md.
+
+use std::path::Path;
+
+/// Where the inputs "are", for messages and for relative references (mesh and photometric
+/// files of a scene, external glTF buffers): a directory that does not exist, so a fuzzed
+/// reference reads nothing.
+const NOWHERE: &str = "/nonexistent-luxest-fuzz";
+
+/// A fuzz target's body: any bytes in, nothing out, no panic.
+pub type Target = fn(&[u8]);
+
+/// The targets by name, as `fuzz/fuzz_targets/<name>.rs` and the smoke run know them.
+pub const TARGETS: [(&str, Target); 7] = [
+    ("scene", scene),
+    ("obj", obj),
+    ("gltf", gltf),
+    ("compiled", compiled),
+    ("exr", exr),
+    ("ies", ies),
+    ("ldt", ldt),
+];
+
+/// A scene file: RON parsing, validation and, for scenes whose tessellation is small, the whole
+/// compile (a fuzzer would otherwise spend its time on legitimately large spheres and grids).
+pub fn scene(data: &[u8]) {
+    use luxest_render::scene::{Scene, Sensor, Shape};
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let path = Path::new(NOWHERE).join("scene.ron");
+    let Ok(scene) = luxest_io::fsio::parse_ron::<Scene>(&path, text) else {
+        return;
+    };
+    if scene_compile::validate::check_scene(&path, &scene).is_err() {
+        return;
+    }
+    let small = scene.calculation_surfaces.is_empty()
+        && scene.objects.iter().all(|o| match o.shape {
+            Shape::Sphere { subdivisions, .. } => subdivisions <= 4,
+            _ => true,
+        })
+        && scene.sensors.iter().all(|s| match s {
+            Sensor::Grid { counts, .. } => counts.0 as u64 * counts.1 as u64 <= 4096,
+            _ => true,
+        });
+    if small {
+        let _ = scene_compile::compile(&scene, &path);
+    }
+}
+
+/// A Wavefront OBJ mesh.
+pub fn obj(data: &[u8]) {
+    let _ = scene_compile::meshes::load_obj_bytes(&Path::new(NOWHERE).join("m.obj"), data);
+}
+
+/// A glTF 2.0 file (JSON `.gltf` or binary `.glb`).
+pub fn gltf(data: &[u8]) {
+    let _ = scene_compile::meshes::load_gltf_bytes(&Path::new(NOWHERE).join("m.glb"), data);
+}
+
+/// A compiled scene file (magic, schema, hash, header, arrays).
+pub fn compiled(data: &[u8]) {
+    let _ = luxest_render::compiled::CompiledScene::decode(&Path::new(NOWHERE).join("s.lxs"), data);
+}
+
+/// An OpenEXR image as the stages read it.
+pub fn exr(data: &[u8]) {
+    let _ = luxest_io::exr_io::read_rgb_bytes(&Path::new(NOWHERE).join("i.exr"), data.to_vec());
+}
+
+/// An IES LM-63 photometric file, then what the compiler asks of it.
+pub fn ies(data: &[u8]) {
+    let text = String::from_utf8_lossy(data);
+    if let Ok(p) = luxest_photometry::ies::parse_ies_str("f.ies", &text) {
+        use_photometry(&p);
+    }
+}
+
+/// A EULUMDAT photometric file, then what the compiler asks of it.
+pub fn ldt(data: &[u8]) {
+    let text = String::from_utf8_lossy(data);
+    if let Ok(p) = luxest_photometry::ldt::parse_ldt_str("f.ldt", &text) {
+        use_photometry(&p);
+    }
+}
+
+/// The queries the compiler and the estimators make of a parsed photometric file.
+fn use_photometry(p: &luxest_photometry::Photometry) {
+    let _ = p.flux_from_table_lm();
+    let _ = p.max_cd();
+    for (c, g) in [(0.0, 0.0), (90.0, 45.0), (359.9, 180.0), (-10.0, 200.0)] {
+        let _ = p.intensity_cd(c, g);
+    }
+}

@@ -1,0 +1,159 @@
+//! The fuzz targets on stable: each runs over its seed files (the repository's own scenes,
+//! meshes, images and photometric files, and the regression inputs in `regressions/<target>/`)
+//! and a fixed number of deterministic mutations of them. A panic fails the test; an abort or a
+//! hang fails the test binary. The real fuzzing (libFuzzer, coverage-guided) is `fuzz/`.
+
+use std::path::{Path, PathBuf};
+
+/// Mutated inputs per target.
+const MUTATIONS: usize = 3000;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Files under `dir` (relative to the repository root) whose names end in one of `exts`.
+fn files(dir: &str, exts: &[&str]) -> Vec<Vec<u8>> {
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(root().join(dir))
+        .map(|d| d.flatten().map(|e| e.path()).collect())
+        .unwrap_or_default();
+    paths.sort();
+    paths
+        .into_iter()
+        .filter(|p| {
+            let name = p.to_string_lossy().to_ascii_lowercase();
+            exts.iter().any(|e| name.ends_with(e))
+        })
+        .filter_map(|p| std::fs::read(p).ok())
+        .collect()
+}
+
+/// The seeds of `target`: the repository's files of its kind and its regression inputs.
+fn seeds(target: &str) -> Vec<Vec<u8>> {
+    let mut s = match target {
+        "scene" => files("scenes", &[".ron"]),
+        "obj" => files("scenes/meshes", &[".obj"]),
+        "gltf" => files("scenes/meshes", &[".glb", ".gltf"]),
+        "compiled" => vec![compiled_seed()],
+        "exr" => files(
+            "tests/fixtures/denoise",
+            &["spp.alb.exr", "odd_000004spp.hdr.exr"],
+        ),
+        "ies" => [
+            files("scenes/photometry", &[".ies"]),
+            files("crates/photometry/tests/fixtures", &[".ies"]),
+        ]
+        .concat(),
+        "ldt" => [
+            files("scenes/photometry", &[".ldt"]),
+            files("crates/photometry/tests/fixtures", &[".ldt"]),
+        ]
+        .concat(),
+        _ => unreachable!("unknown target {target}"),
+    };
+    s.extend(files(&format!("crates/fuzz/regressions/{target}"), &[""]));
+    assert!(!s.is_empty(), "no seeds for {target}");
+    s
+}
+
+/// A small compiled scene (the Cornell box), as scene-compile writes it.
+fn compiled_seed() -> Vec<u8> {
+    let (mut scene, _) =
+        scene_compile::compile_file(&root().join("scenes/cornell-box.ron")).expect("compiles");
+    scene.encode()
+}
+
+/// xorshift64*: deterministic mutations, the same on every machine.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+/// Bytes a parser of numbers and text is most sensitive to.
+const INTERESTING: &[&[u8]] = &[
+    b"0",
+    b"-1",
+    b"1e308",
+    b"-1e308",
+    b"NaN",
+    b"inf",
+    b"4294967295",
+    b"18446744073709551616",
+    b"\0",
+    b"\xff",
+    b"(",
+    b")",
+    b"[",
+    b"]",
+    b",",
+    b"\n",
+    b"\"",
+    b"e",
+    b".",
+    b"-",
+    b"99999999",
+];
+
+/// One mutation of `seed`: a few random edits (byte changes, interesting tokens, deletions,
+/// duplications, truncation).
+fn mutate(rng: &mut Rng, seed: &[u8]) -> Vec<u8> {
+    let mut v = seed.to_vec();
+    for _ in 0..1 + rng.below(4) {
+        let at = rng.below(v.len() + 1);
+        match rng.below(6) {
+            0 if !v.is_empty() => {
+                let i = at.min(v.len() - 1);
+                v[i] = rng.next() as u8;
+            }
+            1 => {
+                let t = INTERESTING[rng.below(INTERESTING.len())];
+                v.splice(at..at, t.iter().copied());
+            }
+            2 if !v.is_empty() => {
+                let end = (at + 1 + rng.below(16)).min(v.len());
+                v.drain(at.min(end)..end);
+            }
+            3 if !v.is_empty() => {
+                let start = rng.below(v.len());
+                let end = (start + 1 + rng.below(64)).min(v.len());
+                let chunk: Vec<u8> = v[start..end].to_vec();
+                v.splice(at..at, chunk);
+            }
+            4 => v.truncate(at),
+            _ => {
+                // Replace a digit run by an interesting number: the parsers' ranges.
+                if let Some(i) = (at..v.len()).find(|&i| v[i].is_ascii_digit()) {
+                    let end = (i..v.len())
+                        .find(|&j| !v[j].is_ascii_digit())
+                        .unwrap_or(v.len());
+                    let t = INTERESTING[rng.below(7)];
+                    v.splice(i..end, t.iter().copied());
+                }
+            }
+        }
+    }
+    v
+}
+
+#[test]
+fn every_target_survives_its_seeds_and_their_mutations() {
+    for (name, target) in luxest_fuzz::TARGETS {
+        let seeds = seeds(name);
+        for s in &seeds {
+            target(s);
+        }
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ name.len() as u64);
+        for k in 0..MUTATIONS {
+            let input = mutate(&mut rng, &seeds[k % seeds.len()]);
+            target(&input);
+        }
+    }
+}

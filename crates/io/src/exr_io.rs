@@ -1,0 +1,436 @@
+//! OpenEXR images as the pipeline exchanges them: one 3-channel feature per file (R, G, B as
+//! 32-bit float, linear), ZIP scanline compression, string attributes for run metadata.
+//!
+//! Half floats are never written: photometric values (1e5 cd/m² and more) overflow f16.
+
+use crate::error::{Error, Result};
+use crate::outputs::OutputPlan;
+use exr::prelude::*;
+use std::path::Path;
+
+/// A linear RGB image, row-major from the top-left, interleaved `[r, g, b]` per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 3]>,
+    /// Header attributes (name, value) beyond the standard ones.
+    pub attributes: Vec<(String, String)>,
+}
+
+impl RgbImage {
+    pub fn new(width: usize, height: usize) -> RgbImage {
+        RgbImage {
+            width,
+            height,
+            pixels: vec![[0.0; 3]; width * height],
+            attributes: Vec::new(),
+        }
+    }
+    /// The header attribute `key` (one of [`crate::header`]'s keys), if present.
+    pub fn attribute(&self, key: &str) -> Option<&str> {
+        crate::header::get(&self.attributes, key)
+    }
+    /// Sets the header attribute `key`, replacing an earlier value.
+    pub fn set_attribute(&mut self, key: &str, value: impl std::fmt::Display) {
+        crate::header::set(&mut self.attributes, key, value)
+    }
+    /// The autoexposure shared by the denoiser and the evaluation tonemap (training/transfer.py):
+    /// `0.18 / exp(mean over pixels of ln(max(Y, 0) + 1e-4))`, Y the Rec. 709 luminance,
+    /// accumulated in f64. It maps the image's log-average luminance to middle grey.
+    pub fn autoexposure(&self) -> f64 {
+        const KEY: f64 = 0.18;
+        const EPS: f64 = 1e-4;
+        if self.pixels.is_empty() {
+            return 1.0;
+        }
+        let sum: f64 = self
+            .pixels
+            .iter()
+            .map(|p| {
+                let y = 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
+                (y.max(0.0) + EPS).ln()
+            })
+            .sum();
+        KEY / (sum / self.pixels.len() as f64).exp()
+    }
+    /// Position of the first non-finite pixel value, if any.
+    pub fn first_non_finite(&self) -> Option<(usize, usize)> {
+        self.pixels
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+            .map(|i| (i % self.width, i / self.width))
+    }
+}
+
+/// Writes `image` as the planned output `path` of a stage's run (see [`crate::outputs`]).
+pub fn write_rgb_to(plan: &mut OutputPlan, path: &Path, image: &RgbImage) -> Result<()> {
+    let bytes = encode_rgb(path, image)?;
+    plan.write_bytes(path, &bytes)
+}
+
+/// Writes `image` alone, atomically (tools and tests; a stage plans all its outputs and uses
+/// [`write_rgb_to`]).
+pub fn write_rgb(path: &Path, image: &RgbImage) -> Result<()> {
+    let bytes = encode_rgb(path, image)?;
+    crate::fsio::write_bytes_atomically(path, &bytes)
+}
+
+/// `image` as a ZIP-compressed scanline EXR with f32 R, G, B channels; `path` is named in errors.
+pub fn encode_rgb(path: &Path, image: &RgbImage) -> Result<Vec<u8>> {
+    if image.pixels.len() != image.width * image.height || image.width == 0 || image.height == 0 {
+        return Err(Error::input(
+            path,
+            format!(
+                "refusing to write a {}x{} image with {} pixels",
+                image.width,
+                image.height,
+                image.pixels.len()
+            ),
+        ));
+    }
+    let (w, pixels) = (image.width, &image.pixels);
+    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+        let [r, g, b] = pixels[p.y() * w + p.x()];
+        (r, g, b)
+    });
+    let mut attributes = LayerAttributes::default();
+    for (k, v) in &image.attributes {
+        attributes.other.insert(
+            Text::from(k.as_str()),
+            AttributeValue::Text(Text::from(v.as_str())),
+        );
+    }
+    attributes.software_name = Some(Text::from(
+        format!("luxest {}", crate::meta::PROGRAM_VERSION).as_str(),
+    ));
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new((image.width, image.height), attributes, encoding, channels);
+    let mut buffer = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .non_parallel()
+        .to_buffered(&mut buffer)
+        .map_err(|e| Error::input(path, format!("cannot encode EXR: {e}")))?;
+    let mut bytes = buffer.into_inner();
+    sort_header_attributes(&mut bytes);
+    Ok(bytes)
+}
+
+/// Puts the header attributes of a single-part EXR in name order, in place.
+///
+/// The `exr` crate writes custom attributes in `HashMap` order, which changes from run to run;
+/// sorted, the same image and attributes always give the same bytes (the contract fixtures of
+/// `tests/fixtures/contract` rely on it). The header keeps its length, so the chunk offsets after
+/// it stay valid. Anything unexpected (multi-part files, a malformed header) is left as it is.
+fn sort_header_attributes(bytes: &mut [u8]) {
+    const MULTIPART: u32 = 1 << 12;
+    if bytes.len() < 8 || bytes[..4] != [0x76, 0x2f, 0x31, 0x01] {
+        return;
+    }
+    if u32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]) & MULTIPART != 0 {
+        return;
+    }
+    let cstr_end = |from: usize| bytes[from..].iter().position(|&b| b == 0).map(|i| from + i);
+    // (name, whole attribute) spans from byte 8 to the header's terminating empty name.
+    let mut attributes: Vec<(std::ops::Range<usize>, std::ops::Range<usize>)> = Vec::new();
+    let mut at = 8;
+    let end = loop {
+        let Some(name_end) = cstr_end(at) else { return };
+        if name_end == at {
+            break at;
+        }
+        let Some(type_end) = cstr_end(name_end + 1) else {
+            return;
+        };
+        let Some(size) = bytes.get(type_end + 1..type_end + 5) else {
+            return;
+        };
+        let size = u32::from_le_bytes([size[0], size[1], size[2], size[3]]) as usize;
+        let next = type_end + 5 + size;
+        if next > bytes.len() {
+            return;
+        }
+        attributes.push((at..name_end, at..next));
+        at = next;
+    };
+    let mut sorted = attributes.clone();
+    sorted.sort_by(|a, b| bytes[a.0.clone()].cmp(&bytes[b.0.clone()]));
+    let header: Vec<u8> = sorted
+        .iter()
+        .flat_map(|(_, whole)| bytes[whole.clone()].iter().copied())
+        .collect();
+    bytes[8..end].copy_from_slice(&header);
+}
+
+/// sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
+pub fn srgb_encode(v: f64) -> f64 {
+    let v = v.clamp(0.0, 1.0);
+    if v <= 0.0031308 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Writes an 8-bit sRGB PNG preview as the planned output `path`: linear values times
+/// `exposure`, clipped, sRGB-encoded.
+pub fn write_preview_png_to(
+    plan: &mut OutputPlan,
+    path: &Path,
+    image: &RgbImage,
+    exposure: f64,
+) -> Result<()> {
+    let bytes = encode_preview_png(path, image, exposure)?;
+    plan.write_bytes(path, &bytes)
+}
+
+/// Writes a PNG preview alone, atomically (tools and tests; stages use [`write_preview_png_to`]).
+pub fn write_preview_png(path: &Path, image: &RgbImage, exposure: f64) -> Result<()> {
+    let bytes = encode_preview_png(path, image, exposure)?;
+    crate::fsio::write_bytes_atomically(path, &bytes)
+}
+
+/// Writes an auto-exposed PNG preview alone, atomically (tools and tests; stages use
+/// [`write_preview_png_auto_to`]).
+pub fn write_preview_png_auto(path: &Path, image: &RgbImage) -> Result<()> {
+    write_preview_png(path, image, preview_exposure(image))
+}
+
+/// The PNG bytes of [`write_preview_png_to`].
+pub fn encode_preview_png(path: &Path, image: &RgbImage, exposure: f64) -> Result<Vec<u8>> {
+    let mut buf = image::RgbImage::new(image.width as u32, image.height as u32);
+    for (i, p) in image.pixels.iter().enumerate() {
+        let c = p.map(|v| (srgb_encode(v as f64 * exposure) * 255.0 + 0.5) as u8);
+        buf.put_pixel(
+            (i % image.width) as u32,
+            (i / image.width) as u32,
+            image::Rgb(c),
+        );
+    }
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    buf.write_to(&mut bytes, image::ImageFormat::Png)
+        .map_err(|e| Error::input(path, format!("cannot encode PNG: {e}")))?;
+    Ok(bytes.into_inner())
+}
+
+/// Writes a PNG preview as the planned output `path`, exposed so that the 99th percentile of
+/// luminance maps to white.
+pub fn write_preview_png_auto_to(
+    plan: &mut OutputPlan,
+    path: &Path,
+    image: &RgbImage,
+) -> Result<()> {
+    write_preview_png_to(plan, path, image, preview_exposure(image))
+}
+
+/// The exposure of [`write_preview_png_auto_to`]: the 99th percentile of luminance maps to white.
+pub fn preview_exposure(image: &RgbImage) -> f64 {
+    let mut ys: Vec<f64> = image
+        .pixels
+        .iter()
+        .map(|p| crate::color::Rgb(p.map(|v| v as f64)).luminance())
+        .filter(|y| y.is_finite())
+        .collect();
+    ys.sort_by(f64::total_cmp);
+    let p99 = ys
+        .get((ys.len() * 99 / 100).min(ys.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(1.0);
+    if p99 > 0.0 && (1.0 / p99).is_finite() {
+        1.0 / p99
+    } else {
+        1.0
+    }
+}
+
+/// [`read_rgb`] for stage inputs that must be finite: a NaN or infinity is an error naming the
+/// file and the pixel.
+pub fn read_rgb_finite(path: &Path) -> Result<RgbImage> {
+    let image = read_rgb(path)?;
+    if let Some((x, y)) = image.first_non_finite() {
+        return Err(Error::input(
+            path,
+            format!("non-finite value (NaN or infinity) at pixel ({x}, {y})"),
+        ));
+    }
+    Ok(image)
+}
+
+/// Checks an EXR's header before its pixels are read: the image it claims must fit in the memory
+/// available (with the RGB copy this reader makes), and the file must be long enough to hold at
+/// least the table of chunk offsets the header implies (8 bytes per chunk). A few hundred bytes
+/// claiming 100000² pixels are refused here instead of aborting in the allocator.
+fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
+    let meta = exr::meta::MetaData::read_from_buffered(bytes, false)
+        .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
+    let mut chunks: u128 = 0;
+    for header in &meta.headers {
+        let (w, h) = (
+            header.layer_size.width() as u128,
+            header.layer_size.height() as u128,
+        );
+        let sample_bytes: u128 = header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample() as u128)
+            .sum();
+        // All channels as stored, plus the f32 RGB image built from them.
+        crate::limits::check_allocation(
+            &format!("the {w}x{h} image of its header"),
+            w * h,
+            sample_bytes + 12,
+        )
+        .map_err(|m| Error::input(path, m))?;
+        chunks += header.chunk_count as u128;
+    }
+    if chunks.saturating_mul(8) > bytes.len() as u128 {
+        let (w, h) = meta
+            .headers
+            .first()
+            .map_or((0, 0), |h| (h.layer_size.width(), h.layer_size.height()));
+        return Err(Error::input(
+            path,
+            format!(
+                "truncated or corrupt OpenEXR file: its header claims {w}x{h} pixels in {chunks} \
+                 chunks, but the file has only {} bytes",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Reads an EXR that must contain R, G and B channels (f32 or f16; other channels ignored).
+pub fn read_rgb(path: &Path) -> Result<RgbImage> {
+    let bytes = crate::fsio::read_bytes(path)?;
+    read_rgb_bytes(path, bytes)
+}
+
+/// [`read_rgb`] of a file's content `bytes`; `path` names it in errors.
+pub fn read_rgb_bytes(path: &Path, bytes: Vec<u8>) -> Result<RgbImage> {
+    check_exr_size(path, &bytes)?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
+    let layer = &image.layer_data;
+    let (width, height) = (layer.size.width(), layer.size.height());
+    let names: Vec<String> = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
+    let find = |want: &str| {
+        layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == want)
+            .ok_or_else(|| {
+                Error::input(
+                    path,
+                    format!("expected channels R, G, B; found {}", names.join(", ")),
+                )
+            })
+    };
+    let mut pixels = vec![[0f32; 3]; width * height];
+    for (k, name) in ["R", "G", "B"].iter().enumerate() {
+        let channel = find(name)?;
+        let values: Vec<f32> = match &channel.sample_data {
+            FlatSamples::F32(v) => v.clone(),
+            FlatSamples::F16(v) => v.iter().map(|h| h.to_f32()).collect(),
+            FlatSamples::U32(_) => {
+                return Err(Error::input(
+                    path,
+                    format!("channel {name} holds integers, expected float"),
+                ))
+            }
+        };
+        for (p, v) in pixels.iter_mut().zip(values) {
+            p[k] = v;
+        }
+    }
+    let mut attributes: Vec<(String, String)> = layer
+        .attributes
+        .other
+        .iter()
+        .chain(image.attributes.other.iter())
+        .filter_map(|(k, v)| match v {
+            AttributeValue::Text(t) => Some((k.to_string(), t.to_string())),
+            _ => None,
+        })
+        .collect();
+    attributes.sort();
+    Ok(RgbImage {
+        width,
+        height,
+        pixels,
+        attributes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_keeps_values_and_metadata() {
+        let dir = std::env::temp_dir().join(format!("luxest-exr-{}", std::process::id()));
+        let path = dir.join("a_000004spp.hdr.exr");
+        let mut img = RgbImage::new(5, 3);
+        for (i, p) in img.pixels.iter_mut().enumerate() {
+            // Values far outside the f16 range must survive.
+            *p = [i as f32 * 1.0e5, -(i as f32) * 1e-7, 3.0e9];
+        }
+        img.set_attribute(crate::header::SEED, 42);
+        write_rgb(&path, &img).unwrap();
+        let back = read_rgb(&path).unwrap();
+        assert_eq!(back.pixels, img.pixels);
+        assert_eq!(back.attribute(crate::header::SEED), Some("42"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_same_image_gives_the_same_bytes() {
+        let dir = std::env::temp_dir().join(format!("luxest-exr-det-{}", std::process::id()));
+        let mut img = RgbImage::new(3, 2);
+        for (i, key) in crate::header::ALL.iter().enumerate() {
+            img.set_attribute(key, i);
+        }
+        let bytes: Vec<Vec<u8>> = (0..4)
+            .map(|i| {
+                let path = dir.join(format!("{i}.exr"));
+                write_rgb(&path, &img).unwrap();
+                std::fs::read(&path).unwrap()
+            })
+            .collect();
+        assert!(bytes.iter().all(|b| *b == bytes[0]));
+        let back = read_rgb(&dir.join("0.exr")).unwrap();
+        for (i, key) in crate::header::ALL.iter().enumerate() {
+            assert_eq!(back.attribute(key), Some(i.to_string().as_str()));
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn garbage_is_a_clear_error() {
+        let dir = std::env::temp_dir().join(format!("luxest-exr-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("bad.exr");
+        std::fs::write(&path, b"not an exr").unwrap();
+        let e = read_rgb(&path).unwrap_err().to_string();
+        assert!(e.contains("bad.exr: not a readable OpenEXR file"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

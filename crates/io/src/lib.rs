@@ -1,0 +1,35 @@
+//! luxest-io: the I/O and the contracts every luxest stage shares. It links no Embree, so a
+//! stage that never traces a ray (`denoise`, `evaluate`, or a researcher's replacement for one)
+//! builds without it.
+//!
+//! - [`error`], [`cli`]: one-line errors, exit codes and the shared command-line behaviour;
+//! - [`fsio`]: atomic output files, RON reading and writing;
+//! - [`meta`], [`header`]: run metadata carried by every Monte Carlo artifact, and every
+//!   `luxest.*` header key with its typed reading and writing;
+//! - [`naming`]: the file names stages exchange (`<name>_<spp>spp.<kind>.exr`, ...);
+//! - [`outputs`]: the output plan every stage makes before writing (no output over an input,
+//!   another output or a non-regular file; all outputs of a run committed together);
+//! - [`limits`]: image and mesh sizes checked against available memory before allocating;
+//! - [`num`]: validated numbers for command-line options (finite, in range, unit in messages);
+//! - [`exr_io`]: the RGB image type, EXR and PNG I/O, autoexposure;
+//! - [`sensors`]: sensor results (RON + CSV);
+//! - [`math`], [`color`]: f64 vectors and transforms, RGB and luminance.
+//!
+//! Invariant: no stage depends on another stage's crate; whatever two stages exchange is read and
+//! written through this crate.
+
+pub mod cli;
+pub mod color;
+pub mod error;
+pub mod exr_io;
+pub mod fsio;
+pub mod header;
+pub mod limits;
+pub mod math;
+pub mod meta;
+pub mod naming;
+pub mod num;
+pub mod outputs;
+pub mod sensors;
+
+pub use error::{Error, Result};

@@ -1,0 +1,133 @@
+//! Sensor results: the contract between `estimate`, which writes illuminance at points, and
+//! the stages that read it (`evaluate sensors`). RON (always) and CSV (on request).
+
+use crate::color::Rgb;
+use crate::error::{Error, Result};
+use crate::math::Vec3;
+use crate::meta::RunInfo;
+use crate::outputs::OutputPlan;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorResults {
+    pub scene: String,
+    pub run: RunInfo,
+    /// Unit of `value` and `standard_error`: "lx" (photometric: Y of the RGB illuminance).
+    pub unit: String,
+    /// How the kernel singularity was controlled, e.g. `ball(eps=0.001 m)`.
+    pub singularity: String,
+    pub sets: Vec<SensorSetResult>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSetResult {
+    pub name: String,
+    /// For a grid (a `Grid` sensor or a calculation surface): its layout; point k = j · nu + i
+    /// is the centre of cell (i, j), i along u.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grid: Option<SensorGrid>,
+    /// What the points measure when it is not planar illuminance: `cylindrical` or
+    /// `semi-cylindrical` (`None`: planar, on each point's `normal`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+    pub points: Vec<SensorValue>,
+    /// On request (`estimate sensors --batch-values`): `batches[b][k]` is independent batch b's
+    /// estimate of Y (lx) at point k. Each point's `value` is the mean over the batches and its
+    /// `standard_error` their standard deviation / √B, so statistics of several points (a
+    /// grid's Emin, U0) can propagate their uncertainty through the batches, correlations
+    /// between points included.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub batches: Vec<Vec<f64>>,
+}
+
+/// The layout of a sensor grid in world space.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorGrid {
+    /// Points along u and v.
+    pub nu: u32,
+    pub nv: u32,
+    /// Corner of the whole rectangle (a work plane's height included, the margin not), m.
+    pub origin: Vec3,
+    /// The rectangle's full edges, m.
+    pub u: Vec3,
+    pub v: Vec3,
+    /// Border excluded on every side (0 for a `Grid` sensor), m; the points lie at
+    /// origin + (margin + (i + ½)(|u| − 2 margin)/nu) û + (margin + (j + ½)(|v| − 2 margin)/nv) v̂.
+    pub margin_m: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorValue {
+    pub position: Vec3,
+    pub normal: Vec3,
+    /// Illuminance (Y), lx.
+    pub value: f64,
+    /// Standard error of `value` from independent batches, lx.
+    pub standard_error: f64,
+    /// RGB illuminance, lx per channel.
+    pub rgb: Rgb,
+}
+
+impl SensorResults {
+    /// Writes the results alone (tools and tests; stages use [`SensorResults::write_ron_to`]).
+    pub fn write_ron(&self, path: &Path) -> Result<()> {
+        crate::fsio::write_ron(path, self)
+    }
+
+    /// Writes the results as the planned output `path`.
+    pub fn write_ron_to(&self, plan: &mut OutputPlan, path: &Path) -> Result<()> {
+        crate::fsio::write_ron_to(plan, path, self)
+    }
+
+    pub fn read_ron(path: &Path) -> Result<SensorResults> {
+        crate::fsio::read_ron(path)
+    }
+
+    /// The CSV alone, atomically (tools and tests; stages use [`SensorResults::write_csv_to`]).
+    pub fn write_csv(&self, path: &Path) -> Result<()> {
+        let mut plan = OutputPlan::new(Vec::<&Path>::new(), [path])?;
+        self.write_csv_to(&mut plan, path)?;
+        plan.commit()
+    }
+
+    /// One row per sensor point, as the planned output `path`.
+    pub fn write_csv_to(&self, plan: &mut OutputPlan, path: &Path) -> Result<()> {
+        plan.write(path, |w| {
+            let io = |e| Error::io(path, e);
+            writeln!(
+                w,
+                "set,index,x,y,z,nx,ny,nz,value_{u},standard_error_{u},r,g,b",
+                u = self.unit
+            )
+            .map_err(io)?;
+            for s in &self.sets {
+                for (i, p) in s.points.iter().enumerate() {
+                    writeln!(
+                        w,
+                        "{},{},{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e}",
+                        s.name,
+                        i,
+                        p.position.x,
+                        p.position.y,
+                        p.position.z,
+                        p.normal.x,
+                        p.normal.y,
+                        p.normal.z,
+                        p.value,
+                        p.standard_error,
+                        p.rgb.0[0],
+                        p.rgb.0[1],
+                        p.rgb.0[2]
+                    )
+                    .map_err(io)?;
+                }
+            }
+            Ok(())
+        })
+    }
+}

@@ -1,0 +1,543 @@
+//! The compiled scene: one self-contained, versioned file that every rendering stage reads.
+//!
+//! Layout (all integers little-endian):
+//!
+//! ```text
+//! magic    8 bytes  "LUXSCENE"
+//! schema   u32      SCHEMA_VERSION
+//! reserved u32      0
+//! hash     16 bytes xxh3-128 of everything after the header-length field
+//! hlen     u64      length of the RON header
+//! header   hlen bytes of RON: SceneHeader (camera, materials, emitters, sensors, features, stats)
+//! arrays   positions [f32;3] x V, normals [f32;3] x V, indices [u32;3] x T,
+//!          triangle material u32 x T, triangle emitter u32 x T (NO_EMITTER if none)
+//! ```
+//!
+//! Geometry is in world space; the small metadata stays human-readable RON while the bulk arrays
+//! are raw so that a million triangles load in tens of milliseconds.
+//! Conventions: a triangle's front side is along `(b - a) x (c - a)`; a zero vertex normal means
+//! "flat: use the geometric normal".
+
+use crate::scene::{Camera, Material, MaterialKind};
+use luxest_io::color::Rgb;
+use luxest_io::error::{Error, Result};
+use luxest_io::math::Vec3;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+pub const MAGIC: &[u8; 8] = b"LUXSCENE";
+/// Bumped whenever the layout or the meaning of a field changes.
+/// 2: goniometric luminaires (`Emitter::Luminaire`, `photometries`), sensor kinds and
+/// calculation-grid layouts.
+pub const SCHEMA_VERSION: u32 = 2;
+/// `triangle_emitter` value of a triangle that does not emit.
+pub const NO_EMITTER: u32 = u32::MAX;
+/// Fixed part before the RON header: magic, schema, reserved, hash, header length.
+const PREAMBLE_LEN: usize = 8 + 4 + 4 + 16 + 8;
+
+/// Everything but the bulk geometry arrays.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneHeader {
+    pub name: String,
+    /// Version of the `scene-compile` that wrote the file.
+    pub compiler_version: String,
+    pub camera: Option<Camera>,
+    pub materials: Vec<NamedMaterial>,
+    pub emitters: Vec<Emitter>,
+    /// Cumulative distribution for choosing an emitter in proportion to its luminous flux
+    /// (Y of `flux_rgb`); `emitter_cdf[i]` = P(index <= i), last entry 1.
+    pub emitter_cdf: Vec<f64>,
+    pub objects: Vec<ObjectRange>,
+    pub sensors: Vec<SensorSet>,
+    /// Goniometric intensity tables referenced by `Emitter::Luminaire` (one per distinct file).
+    #[serde(default)]
+    pub photometries: Vec<PhotometricTable>,
+    pub features: Features,
+    pub stats: Stats,
+}
+
+/// A luminaire's intensity distribution, expanded to the full C-γ sphere (no reference to the
+/// source file at run time: `source` is for reports).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhotometricTable {
+    /// The file as the scene named it.
+    pub source: String,
+    /// C angles, degrees: 0 first, 360 (a copy of 0) last.
+    pub c_deg: Vec<f64>,
+    /// γ angles, degrees, increasing within [0, 180].
+    pub gamma_deg: Vec<f64>,
+    /// Intensities in cd, row-major: `cd[i * gamma_deg.len() + j]` = I(C_i, γ_j).
+    pub cd: Vec<f64>,
+    /// ∫ I dΩ over the bilinear table (lm): what one luminaire with multiplier 1 emits.
+    pub table_flux_lm: f64,
+    /// The flux the file states (lamp lumens, or EULUMDAT's luminaire flux), if any.
+    pub file_flux_lm: Option<f64>,
+    /// Input power the file states (W), if any.
+    pub input_watts: Option<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NamedMaterial {
+    pub name: String,
+    pub model: Material,
+}
+
+/// A light source in world space with its photometric power.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Emitter {
+    /// Isotropic point source: intensity per RGB channel in cd (Y = luminous intensity).
+    Point {
+        name: String,
+        position: Vec3,
+        intensity_rgb: Rgb,
+        flux_rgb: Rgb,
+    },
+    /// Lambertian area emitter over a contiguous triangle range, emitting from front sides.
+    Area {
+        name: String,
+        first_triangle: u32,
+        triangle_count: u32,
+        /// Luminance per RGB channel, cd/m².
+        radiance_rgb: Rgb,
+        area_m2: f64,
+        /// pi * L * A, lm per channel.
+        flux_rgb: Rgb,
+    },
+    /// A goniometric point source (far field) at `position`: intensity towards the world
+    /// direction ω is `multiplier · I_table(frame⁻¹ ω) · color_rgb` (cd per channel).
+    Luminaire {
+        name: String,
+        position: Vec3,
+        /// Luminaire-to-world rotation, row-major: world = frame · local (C-γ frame).
+        frame: [[f64; 3]; 3],
+        /// Index into `SceneHeader::photometries`.
+        photometry: u32,
+        multiplier: f64,
+        /// Tint with luminance 1.
+        color_rgb: Rgb,
+        /// multiplier · table flux · color, lm per channel.
+        flux_rgb: Rgb,
+        /// Area form: world positions of the point sources that subdivide the luminous
+        /// opening, each radiating 1/len of the intensity; empty for the point form.
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        opening_points: Vec<Vec3>,
+    },
+}
+
+impl Emitter {
+    pub fn name(&self) -> &str {
+        match self {
+            Emitter::Point { name, .. }
+            | Emitter::Area { name, .. }
+            | Emitter::Luminaire { name, .. } => name,
+        }
+    }
+    /// Luminous flux in lm (Y of the RGB flux).
+    pub fn flux_lm(&self) -> f64 {
+        match self {
+            Emitter::Point { flux_rgb, .. }
+            | Emitter::Area { flux_rgb, .. }
+            | Emitter::Luminaire { flux_rgb, .. } => flux_rgb.luminance(),
+        }
+    }
+}
+
+/// The triangles that came from one authored object.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectRange {
+    pub name: String,
+    pub first_triangle: u32,
+    pub triangle_count: u32,
+    pub material: u32,
+    pub emitter: Option<u32>,
+}
+
+/// A named set of sensor points, in world space with unit normals.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSet {
+    pub name: String,
+    /// `Some((nu, nv))` for a grid (points in row-major order, u fastest), `None` for a list.
+    pub grid: Option<(u32, u32)>,
+    pub points: Vec<crate::scene::SensorPoint>,
+    /// For a calculation surface: how its grid was laid out (a report reassembles it from
+    /// this; point k = j · nu + i is cell (i, j)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calculation_grid: Option<GridLayout>,
+}
+
+/// The layout of a calculation surface's grid, in world space.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridLayout {
+    /// Corner of the whole rectangle (offset included, margin not), m.
+    pub origin: Vec3,
+    /// The rectangle's full edges, m.
+    pub u: Vec3,
+    pub v: Vec3,
+    /// Border excluded on every side, m.
+    pub margin_m: f64,
+    /// Points along u and v; the point spacing is (|u| − 2 margin)/nu by (|v| − 2 margin)/nv.
+    pub nu: u32,
+    pub nv: u32,
+}
+
+/// What the scene uses: stages dispatch on this and pay nothing for what is absent.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Features {
+    /// Material models used by at least one triangle, sorted.
+    pub material_kinds: Vec<MaterialKind>,
+    pub point_emitters: bool,
+    pub area_emitters: bool,
+    /// Any ideal mirror or dielectric: delta (specular) paths exist.
+    pub specular_paths: bool,
+    /// Any dielectric: light is transmitted through surfaces.
+    pub transmission: bool,
+    /// Any glossy (microfacet) lobe.
+    pub glossy: bool,
+    /// Any interpolated vertex normals (otherwise all shading is flat).
+    pub smooth_normals: bool,
+    /// Always false: luxest is RGB; kept so the manifest states it.
+    pub spectral: bool,
+    pub camera: bool,
+    pub sensors: bool,
+    /// Any luminaire from a photometric file (`Emitter::Luminaire`).
+    #[serde(default)]
+    pub goniometric_luminaires: bool,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Stats {
+    pub vertices: u64,
+    pub triangles: u64,
+    /// Degenerate triangles dropped while compiling (zero area or non-finite).
+    pub dropped_degenerate: u64,
+    pub bounds_min: Vec3,
+    pub bounds_max: Vec3,
+    pub total_area_m2: f64,
+}
+
+/// A compiled scene in memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompiledScene {
+    pub header: SceneHeader,
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Vec<[f32; 3]>,
+    pub indices: Vec<[u32; 3]>,
+    pub triangle_material: Vec<u32>,
+    pub triangle_emitter: Vec<u32>,
+    /// xxh3-128 content hash as 32 hex digits (set by `encode` / `decode`).
+    pub content_hash: String,
+}
+
+fn push_f32x3(out: &mut Vec<u8>, a: &[[f32; 3]]) {
+    out.reserve(a.len() * 12);
+    for v in a {
+        for c in v {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+}
+fn push_u32x3(out: &mut Vec<u8>, a: &[[u32; 3]]) {
+    out.reserve(a.len() * 12);
+    for v in a {
+        for c in v {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+}
+fn push_u32(out: &mut Vec<u8>, a: &[u32]) {
+    out.reserve(a.len() * 4);
+    for c in a {
+        out.extend_from_slice(&c.to_le_bytes());
+    }
+}
+
+/// A cursor over the array section that reports truncation with the file name.
+struct Reader<'a> {
+    path: &'a Path,
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8]> {
+        let end = self.pos.checked_add(n).filter(|&e| e <= self.bytes.len());
+        let end = end.ok_or_else(|| {
+            Error::input(self.path, format!("truncated compiled scene (in {what})"))
+        })?;
+        let s = &self.bytes[self.pos..end];
+        self.pos = end;
+        Ok(s)
+    }
+    fn u32s(&mut self, n: usize, what: &str) -> Result<Vec<u32>> {
+        let s = self.take(n * 4, what)?;
+        Ok(s.chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect())
+    }
+    fn f32x3(&mut self, n: usize, what: &str) -> Result<Vec<[f32; 3]>> {
+        let s = self.take(n * 12, what)?;
+        Ok(s.chunks_exact(12)
+            .map(|c| {
+                let f = |i: usize| f32::from_le_bytes(c[i..i + 4].try_into().unwrap());
+                [f(0), f(4), f(8)]
+            })
+            .collect())
+    }
+    fn u32x3(&mut self, n: usize, what: &str) -> Result<Vec<[u32; 3]>> {
+        let s = self.take(n * 12, what)?;
+        Ok(s.chunks_exact(12)
+            .map(|c| {
+                let f = |i: usize| u32::from_le_bytes(c[i..i + 4].try_into().unwrap());
+                [f(0), f(4), f(8)]
+            })
+            .collect())
+    }
+}
+
+impl CompiledScene {
+    /// Serialises the scene and sets `content_hash`.
+    pub fn encode(&mut self) -> Vec<u8> {
+        let header = luxest_io::fsio::to_ron_string(&self.header);
+        let nv = self.positions.len();
+        let nt = self.indices.len();
+        let mut body = Vec::with_capacity(8 + header.len() + nv * 24 + nt * 20);
+        body.extend_from_slice(&(header.len() as u64).to_le_bytes());
+        body.extend_from_slice(header.as_bytes());
+        push_f32x3(&mut body, &self.positions);
+        push_f32x3(&mut body, &self.normals);
+        push_u32x3(&mut body, &self.indices);
+        push_u32(&mut body, &self.triangle_material);
+        push_u32(&mut body, &self.triangle_emitter);
+        let hash = xxhash_rust::xxh3::xxh3_128(&body);
+        self.content_hash = format!("{hash:032x}");
+        let mut out = Vec::with_capacity(PREAMBLE_LEN + body.len());
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&SCHEMA_VERSION.to_le_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out.extend_from_slice(&hash.to_le_bytes());
+        out.extend_from_slice(&body);
+        out
+    }
+
+    /// Writes the scene atomically to `path`; returns the content hash.
+    pub fn save(&mut self, path: &Path) -> Result<String> {
+        let bytes = self.encode();
+        luxest_io::fsio::write_bytes_atomically(path, &bytes)?;
+        Ok(self.content_hash.clone())
+    }
+
+    /// Parses a compiled scene; `path` is used only in error messages.
+    pub fn decode(path: &Path, bytes: &[u8]) -> Result<CompiledScene> {
+        if bytes.len() < PREAMBLE_LEN || &bytes[..8] != MAGIC {
+            return Err(Error::input(
+                path,
+                "not a luxest compiled scene (bad magic); run scene-compile on the .ron scene",
+            ));
+        }
+        let schema = u32::from_le_bytes(bytes[8..12].try_into().unwrap());
+        if schema != SCHEMA_VERSION {
+            return Err(Error::input(
+                path,
+                format!("compiled scene has schema version {schema}, this program reads {SCHEMA_VERSION}: recompile it"),
+            ));
+        }
+        let stored_hash = u128::from_le_bytes(bytes[16..32].try_into().unwrap());
+        let body = &bytes[32..];
+        let hash = xxhash_rust::xxh3::xxh3_128(body);
+        if hash != stored_hash {
+            return Err(Error::input(
+                path,
+                "content hash mismatch: the compiled scene is corrupted or truncated",
+            ));
+        }
+        let hlen = u64::from_le_bytes(body[..8].try_into().unwrap()) as usize;
+        let mut r = Reader {
+            path,
+            bytes: body,
+            pos: 8,
+        };
+        let header_bytes = r.take(hlen, "header")?;
+        let text = std::str::from_utf8(header_bytes)
+            .map_err(|_| Error::input(path, "compiled scene header is not UTF-8"))?;
+        let header: SceneHeader = ron::from_str(text).map_err(|e| {
+            Error::at(
+                path,
+                "header",
+                format!("cannot parse compiled scene header: {e}"),
+            )
+        })?;
+        let nv = header.stats.vertices as usize;
+        let nt = header.stats.triangles as usize;
+        let positions = r.f32x3(nv, "positions")?;
+        let normals = r.f32x3(nv, "normals")?;
+        let indices = r.u32x3(nt, "indices")?;
+        let triangle_material = r.u32s(nt, "triangle materials")?;
+        let triangle_emitter = r.u32s(nt, "triangle emitters")?;
+        if r.pos != body.len() {
+            return Err(Error::input(
+                path,
+                "trailing bytes after the compiled scene arrays",
+            ));
+        }
+        let scene = CompiledScene {
+            header,
+            positions,
+            normals,
+            indices,
+            triangle_material,
+            triangle_emitter,
+            content_hash: format!("{hash:032x}"),
+        };
+        scene
+            .check_consistency()
+            .map_err(|m| Error::input(path, m))?;
+        Ok(scene)
+    }
+
+    /// Reads and checks a compiled scene file.
+    pub fn load(path: &Path) -> Result<CompiledScene> {
+        let bytes = luxest_io::fsio::read_bytes(path)?;
+        Self::decode(path, &bytes)
+    }
+
+    /// Index bounds and table sizes, so that no stage can index out of range.
+    pub fn check_consistency(&self) -> std::result::Result<(), String> {
+        let nv = self.positions.len() as u32;
+        if let Some((t, _)) = self
+            .indices
+            .iter()
+            .enumerate()
+            .find(|(_, tri)| tri.iter().any(|&i| i >= nv))
+        {
+            return Err(format!("triangle {t} references a vertex beyond {nv}"));
+        }
+        let nm = self.header.materials.len() as u32;
+        if let Some(t) = self.triangle_material.iter().position(|&m| m >= nm) {
+            return Err(format!("triangle {t} references material beyond {nm}"));
+        }
+        let ne = self.header.emitters.len() as u32;
+        if let Some(t) = self
+            .triangle_emitter
+            .iter()
+            .position(|&e| e != NO_EMITTER && e >= ne)
+        {
+            return Err(format!("triangle {t} references emitter beyond {ne}"));
+        }
+        if self.header.emitter_cdf.len() != self.header.emitters.len() {
+            return Err("emitter table and its distribution differ in length".into());
+        }
+        let np = self.header.photometries.len() as u32;
+        for e in &self.header.emitters {
+            if let Emitter::Luminaire { photometry, .. } = e {
+                if *photometry >= np {
+                    return Err(format!("luminaire references photometry beyond {np}"));
+                }
+            }
+        }
+        for t in &self.header.photometries {
+            let (nc, ng) = (t.c_deg.len(), t.gamma_deg.len());
+            if nc < 2 || ng < 2 || t.cd.len() != nc * ng {
+                return Err(format!(
+                    "photometric table {} has {} values for {nc} x {ng} angles",
+                    t.source,
+                    t.cd.len()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// World-space corners of triangle `t` in double precision.
+    pub fn triangle(&self, t: usize) -> [Vec3; 3] {
+        self.indices[t].map(|i| Vec3::from(self.positions[i as usize]))
+    }
+
+    pub fn material_of(&self, t: usize) -> &Material {
+        &self.header.materials[self.triangle_material[t] as usize].model
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tiny() -> CompiledScene {
+        CompiledScene {
+            header: SceneHeader {
+                name: "tiny".into(),
+                compiler_version: "test".into(),
+                camera: None,
+                materials: vec![NamedMaterial {
+                    name: "w".into(),
+                    model: Material::Lambertian {
+                        reflectance: Rgb::splat(0.5),
+                    },
+                }],
+                emitters: vec![],
+                emitter_cdf: vec![],
+                objects: vec![],
+                sensors: vec![],
+                photometries: vec![],
+                features: Features::default(),
+                stats: Stats {
+                    vertices: 3,
+                    triangles: 1,
+                    ..Stats::default()
+                },
+            },
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            normals: vec![[0.0; 3]; 3],
+            indices: vec![[0, 1, 2]],
+            triangle_material: vec![0],
+            triangle_emitter: vec![NO_EMITTER],
+            content_hash: String::new(),
+        }
+    }
+
+    #[test]
+    fn round_trip_is_exact() {
+        let mut s = tiny();
+        let bytes = s.encode();
+        let back = CompiledScene::decode(Path::new("t.lxs"), &bytes).unwrap();
+        assert_eq!(back, s);
+    }
+
+    #[test]
+    fn corruption_and_truncation_are_detected() {
+        let mut s = tiny();
+        let mut bytes = s.encode();
+        let n = bytes.len();
+        bytes[n - 5] ^= 1;
+        let e = CompiledScene::decode(Path::new("t.lxs"), &bytes)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("t.lxs: content hash mismatch"), "{e}");
+        let e = CompiledScene::decode(Path::new("t.lxs"), b"hello")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a luxest compiled scene"), "{e}");
+    }
+
+    #[test]
+    fn hash_changes_with_content() {
+        let mut a = tiny();
+        let mut b = tiny();
+        b.positions[2][1] = 2.0;
+        a.encode();
+        b.encode();
+        assert_ne!(a.content_hash, b.content_hash);
+    }
+}

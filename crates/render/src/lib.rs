@@ -1,0 +1,21 @@
+//! luxest-render: what the rendering stages (`scene-compile`, `trace`, `aov-write`, `estimate`)
+//! share and the others never need.
+//!
+//! - [`scene`]: the authored scene format (RON) that people and `data-gen` write;
+//! - [`compiled`]: the compiled, world-space scene every rendering stage reads;
+//! - [`sampling`], [`bsdf`], [`camera`]: seeded RNG and sampling routines, material models,
+//!   the pinhole camera and its pixel sampling;
+//! - [`luminaire`]: goniometric luminaires (photometric files) as delta lights and emitters;
+//! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
+//! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
+//!   flush-to-zero mode, hence here and not in `luxest-io`).
+
+pub mod bsdf;
+pub mod camera;
+pub mod compiled;
+pub mod luminaire;
+pub mod parallel;
+pub mod rt;
+pub mod sampling;
+pub mod scene;
+pub mod world;

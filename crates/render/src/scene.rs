@@ -1,0 +1,434 @@
+//! The authored scene format (`scenes/*.ron`), as documented in `docs/scene-format.md`.
+//!
+//! These types are what a person or `data-gen` writes. They may reference mesh files and use
+//! local transforms; `scene-compile` turns them into a [`crate::compiled::CompiledScene`].
+//! Units: metres, degrees, candela, lumen, cd/m² (luminance). Unknown fields are errors.
+
+use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// A whole authored scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Optional display name; defaults to the file stem.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The pinhole camera; scenes used only for sensor estimates may omit it.
+    #[serde(default)]
+    pub camera: Option<Camera>,
+    /// Materials by name, referenced from objects (a name given twice is an error).
+    #[serde(deserialize_with = "luxest_io::fsio::unique_keys")]
+    pub materials: BTreeMap<String, Material>,
+    /// Surfaces: a shape, a transform, a material and optionally an emission.
+    pub objects: Vec<Object>,
+    /// Point sources.
+    #[serde(default)]
+    pub point_lights: Vec<PointLight>,
+    /// Illuminance sensors (point lists and grids).
+    #[serde(default)]
+    pub sensors: Vec<Sensor>,
+    /// Luminaires from photometric files (IES LM-63, EULUMDAT); see [`Luminaire`].
+    #[serde(default)]
+    pub luminaires: Vec<Luminaire>,
+    /// Calculation surfaces (work planes, EN 12464-1 grids); compiled into sensor sets.
+    #[serde(default)]
+    pub calculation_surfaces: Vec<CalculationSurface>,
+}
+
+/// Pinhole camera.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// Eye position, m.
+    pub position: Vec3,
+    /// A point the camera looks at, m.
+    pub look_at: Vec3,
+    /// Up direction (need not be orthogonal to the view direction).
+    #[serde(default = "default_up")]
+    pub up: Vec3,
+    /// Vertical field of view, degrees, in (0, 180).
+    pub vfov_deg: f64,
+    /// Image width and height in pixels.
+    pub resolution: (u32, u32),
+}
+
+fn default_up() -> Vec3 {
+    Vec3::new(0.0, 1.0, 0.0)
+}
+
+/// Surface scattering models. Reflectances are linear RGB in [0, 1].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Material {
+    /// Ideal diffuse reflector: BRDF = reflectance / pi.
+    Lambertian { reflectance: Rgb },
+    /// Ideal specular reflector.
+    Mirror { reflectance: Rgb },
+    /// Smooth dielectric interface (glass, water) with Fresnel reflection and refraction.
+    Dielectric {
+        /// Index of refraction of the inside relative to the outside (the side the normal points to).
+        ior: f64,
+    },
+    /// A diffuse base plus a GGX microfacet specular lobe:
+    /// f = diffuse/pi + specular * D_GGX(alpha = roughness²) G / (4 cos_i cos_o).
+    /// Energy-bounded by requiring diffuse + specular <= 1 per channel.
+    Glossy {
+        diffuse: Rgb,
+        specular: Rgb,
+        roughness: f64,
+    },
+}
+
+/// The kind of a material, as listed in the features manifest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub enum MaterialKind {
+    Lambertian,
+    Mirror,
+    Dielectric,
+    Glossy,
+}
+
+impl Material {
+    pub fn kind(&self) -> MaterialKind {
+        match self {
+            Material::Lambertian { .. } => MaterialKind::Lambertian,
+            Material::Mirror { .. } => MaterialKind::Mirror,
+            Material::Dielectric { .. } => MaterialKind::Dielectric,
+            Material::Glossy { .. } => MaterialKind::Glossy,
+        }
+    }
+}
+
+/// A surface in the scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Object {
+    /// Optional name used in messages and the compiled object table.
+    #[serde(default)]
+    pub name: Option<String>,
+    pub shape: Shape,
+    #[serde(default)]
+    pub transform: Transform,
+    /// Name of an entry of `materials`.
+    pub material: String,
+    /// Makes the object a diffuse area emitter (emitting from its front side).
+    #[serde(default)]
+    pub emission: Option<Emission>,
+    /// Reverses the front side (e.g. a box seen from the inside, a room).
+    #[serde(default)]
+    pub flip_normals: bool,
+}
+
+/// Geometry of an object, in its local frame (before `transform`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Shape {
+    /// The parallelogram `corner + s u + t v`, s, t in [0, 1]; front side along `u x v`.
+    Quad { corner: Vec3, u: Vec3, v: Vec3 },
+    /// A planar convex polygon, fan-triangulated from the first vertex; front side by the
+    /// right-hand rule of the vertex order (counter-clockwise seen from the front).
+    Polygon { vertices: Vec<Vec3> },
+    /// An axis-aligned box centred on the origin with edge lengths `size`; normals point out.
+    Box { size: Vec3 },
+    /// A sphere of `radius` centred on the origin, tessellated as an icosphere with
+    /// `20 * 4^subdivisions` triangles whose vertices lie on the sphere; normals point out.
+    Sphere { radius: f64, subdivisions: u32 },
+    /// A Wavefront OBJ mesh (path relative to the scene file). Polygons are triangulated;
+    /// OBJ materials are ignored (the object's `material` applies).
+    Obj { path: String },
+    /// A glTF 2.0 mesh, `.gltf` (with external or embedded buffers) or `.glb`; every mesh of
+    /// the default scene with its node transforms. glTF materials are ignored.
+    Gltf { path: String },
+}
+
+/// Local-to-world transform: scale, then rotate about x, then y, then z (degrees,
+/// right-handed), then translate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Transform {
+    pub scale: Vec3,
+    pub rotate_deg: Vec3,
+    pub translate: Vec3,
+}
+
+impl Default for Transform {
+    fn default() -> Self {
+        Transform {
+            scale: Vec3::splat(1.0),
+            rotate_deg: Vec3::ZERO,
+            translate: Vec3::ZERO,
+        }
+    }
+}
+
+impl Transform {
+    pub fn to_affine(&self) -> luxest_io::math::Affine {
+        use luxest_io::math::Affine;
+        Affine::translate(self.translate)
+            .compose(&Affine::rotate_axis(2, self.rotate_deg.z))
+            .compose(&Affine::rotate_axis(1, self.rotate_deg.y))
+            .compose(&Affine::rotate_axis(0, self.rotate_deg.x))
+            .compose(&Affine::scale(self.scale))
+    }
+}
+
+/// Emission of a diffuse (Lambertian) area emitter, from the front side only.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Emission {
+    /// Luminance in cd/m² per RGB channel (Y is the photometric luminance).
+    Radiance(Rgb),
+    /// Total flux in lm, spread uniformly over the emitting area: L = flux / (pi A).
+    Flux {
+        lumens: f64,
+        #[serde(default = "white")]
+        color: Rgb,
+    },
+}
+
+/// An isotropic point source.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PointLight {
+    #[serde(default)]
+    pub name: Option<String>,
+    pub position: Vec3,
+    pub power: PointPower,
+    /// Tint; rescaled so that its luminance is 1 (the photometric magnitude is `power`).
+    #[serde(default = "white")]
+    pub color: Rgb,
+}
+
+fn white() -> Rgb {
+    Rgb::WHITE
+}
+
+/// Photometric magnitude of a point source.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum PointPower {
+    /// Luminous intensity in candela (same in every direction).
+    Intensity(f64),
+    /// Total luminous flux in lumen: I = flux / (4 pi).
+    Flux(f64),
+}
+
+/// Where illuminance is wanted.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Sensor {
+    /// Explicit points, each with its own normal.
+    Points {
+        name: String,
+        points: Vec<SensorPoint>,
+    },
+    /// A rectangular grid of `counts.0 x counts.1` cells over the parallelogram
+    /// `corner + s u + t v`; one sensor at each cell centre, facing `normal`
+    /// (default: `u x v`).
+    Grid {
+        name: String,
+        corner: Vec3,
+        u: Vec3,
+        v: Vec3,
+        counts: (u32, u32),
+        #[serde(default)]
+        normal: Option<Vec3>,
+    },
+}
+
+/// A sensor point: position (m), the normal of the receiving surface element, and the kind of
+/// illuminance it measures (planar on `normal` unless stated).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorPoint {
+    pub position: Vec3,
+    pub normal: Vec3,
+    #[serde(default, skip_serializing_if = "IlluminanceKind::is_planar")]
+    pub kind: IlluminanceKind,
+}
+
+impl SensorPoint {
+    /// A planar sensor (the kind every scene had before the other kinds existed).
+    pub fn planar(position: Vec3, normal: Vec3) -> SensorPoint {
+        SensorPoint {
+            position,
+            normal,
+            kind: IlluminanceKind::Planar,
+        }
+    }
+
+    /// The sensor's geometric response g(ω) to light arriving from the unit direction
+    /// `to_source` (pointing from the sensor towards the light): E = ∫ L(ω) g(ω) dω.
+    /// Planar: n·ω (negative behind: callers drop non-positive responses); cylindrical
+    /// (axis a): |ω − (a·ω) a| / π; semi-cylindrical facing f: (|ω_h| + f·ω_h) / π (CIE S 017,
+    /// EN 12464-1 §4.3.5; derivations in `luxest_photometry::illuminance`).
+    #[inline]
+    pub fn response(&self, to_source: Vec3) -> f64 {
+        match self.kind {
+            IlluminanceKind::Planar => self.normal.dot(to_source),
+            IlluminanceKind::Cylindrical { axis } => {
+                (to_source - axis * axis.dot(to_source)).length() / std::f64::consts::PI
+            }
+            IlluminanceKind::SemiCylindrical { axis, facing } => {
+                let h = to_source - axis * axis.dot(to_source);
+                (h.length() + facing.dot(h)) / std::f64::consts::PI
+            }
+        }
+    }
+}
+
+/// What a sensor measures. Cylindrical kinds are defined about a unit `axis` (vertical in a
+/// y-up scene: (0, 1, 0)); a semi-cylinder faces the unit `facing` direction, perpendicular to
+/// the axis (normalised and made perpendicular on compile).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum IlluminanceKind {
+    /// Illuminance on the plane with the sensor's normal (one-sided, cosine law).
+    #[default]
+    Planar,
+    /// Mean illuminance on the curved surface of a vanishingly small cylinder.
+    Cylindrical {
+        #[serde(default = "default_axis")]
+        axis: Vec3,
+    },
+    /// Mean illuminance on the curved surface of a small half cylinder facing `facing`.
+    SemiCylindrical {
+        #[serde(default = "default_axis")]
+        axis: Vec3,
+        facing: Vec3,
+    },
+}
+
+fn default_axis() -> Vec3 {
+    Vec3::new(0.0, 1.0, 0.0)
+}
+
+impl IlluminanceKind {
+    pub fn is_planar(&self) -> bool {
+        matches!(self, IlluminanceKind::Planar)
+    }
+}
+
+/// A luminaire described by a photometric file, placed in the scene.
+///
+/// The file's C-γ frame is placed in luxest's y-up world: with the defaults the luminaire hangs
+/// straight down (γ = 0 along −y), the C = 0° plane contains +x and C = 90° contains −z
+/// (C counter-clockwise seen from above). `aim` turns the nadir by the smallest rotation to the
+/// given direction, after a `tilt_deg` about the luminaire's own x axis (positive tilt swings
+/// the nadir towards the C = 90° side) and a `rotation_deg` about its vertical axis (turns the
+/// C planes); the order is `luxest_photometry::Orientation`'s.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Luminaire {
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The photometric file (`.ies` or `.ldt`), relative to the scene file.
+    pub file: String,
+    /// Photometric centre, m.
+    pub position: Vec3,
+    /// World direction of the nadir (γ = 0); default straight down (0, −1, 0).
+    #[serde(default = "default_aim")]
+    pub aim: Vec3,
+    #[serde(default)]
+    pub tilt_deg: f64,
+    #[serde(default)]
+    pub rotation_deg: f64,
+    /// Multiplies every intensity: maintenance factor × dimming × count of lamps, ≥ 0; default 1.
+    #[serde(default = "one")]
+    pub multiplier: f64,
+    /// Tint, rescaled to luminance 1 (the photometric magnitude is the file's).
+    #[serde(default = "white")]
+    pub color: Rgb,
+    /// The luminous opening: a point (far field, default) or a rectangle.
+    #[serde(default)]
+    pub opening: Opening,
+}
+
+/// The luminous opening of a luminaire.
+///
+/// `Area` models the opening as a rectangle every point of which radiates the file's
+/// distribution scaled to its share of the area: intensity per unit area I(ω)/A, so that from
+/// far away the luminaire is the point form again. The rectangle (centred on `position`, in the
+/// plane through it perpendicular to the nadir; `length` along the C0–C180 axis, `width` along
+/// C90–C270, m) is integrated by the midpoint rule: `cells` point sources at the cell centres,
+/// each radiating I(ω)/(nu·nv). Default size: the file's luminous opening (rectangular or
+/// circular: its bounding square); default cells: ⌈side / 0.05 m⌉ per side.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Opening {
+    /// Far field: a point at the photometric centre.
+    #[default]
+    Point,
+    Area {
+        #[serde(default)]
+        length: Option<f64>,
+        #[serde(default)]
+        width: Option<f64>,
+        #[serde(default)]
+        cells: Option<(u32, u32)>,
+    },
+}
+
+fn default_aim() -> Vec3 {
+    Vec3::new(0.0, -1.0, 0.0)
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A calculation surface: a grid of sensor points laid out as EN 12464-1 prescribes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalculationSurface {
+    /// The name of the compiled sensor set (unique among sensors and surfaces).
+    pub name: String,
+    pub area: SurfaceArea,
+    /// Distance along the rectangle's normal, m (the work-plane height above a floor); default 0.
+    #[serde(default)]
+    pub offset: f64,
+    /// Border excluded on every side, m; default 0.5 (EN 12464-1 for work planes).
+    #[serde(default = "default_margin")]
+    pub margin: f64,
+    /// Grid spacing; default the standard's rule.
+    #[serde(default)]
+    pub spacing: GridSpacing,
+    /// What the points measure; default planar illuminance on the rectangle's normal.
+    #[serde(default)]
+    pub kind: IlluminanceKind,
+}
+
+fn default_margin() -> f64 {
+    0.5
+}
+
+/// The rectangle a calculation surface covers.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum SurfaceArea {
+    /// `origin + s u + t v`, s, t in [0, 1], u ⟂ v; normal along u × v.
+    Rectangle { origin: Vec3, u: Vec3, v: Vec3 },
+    /// A horizontal floor rectangle [min.0, max.0] × [min.1, max.1] in (x, z) at `y`, facing
+    /// up: origin (x0, y, z1), u = (x1 − x0, 0, 0), v = (0, 0, −(z1 − z0)).
+    Floor {
+        min: (f64, f64),
+        max: (f64, f64),
+        y: f64,
+    },
+}
+
+/// Spacing of a calculation grid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum GridSpacing {
+    /// EN 12464-1: p = 0.2 · 5^(log10 d) m (d the longer side), ⌈L/p⌉ points per side.
+    #[default]
+    Standard,
+    /// A maximum spacing in metres (⌈L/p⌉ points per side).
+    Metres(f64),
+    /// Explicit point counts along u and v.
+    Counts(u32, u32),
+}

@@ -1,0 +1,504 @@
+//! A compiled scene ready for Monte Carlo: the Embree tracer plus the queries every estimator
+//! needs — surface interactions at hits, emitter choice by flux, emission sampling, points on
+//! area emitters for next-event estimation, and scale-aware ray offsets.
+
+use crate::compiled::{CompiledScene, Emitter, NO_EMITTER};
+use crate::luminaire::GoniometricLight;
+use crate::rt::{Hit, RayTracer};
+use crate::sampling::{cosine_hemisphere, uniform_sphere, uniform_triangle, Distribution1D, Rng};
+use crate::scene::Material;
+use luxest_io::color::Rgb;
+use luxest_io::error::Result;
+use luxest_io::math::Vec3;
+
+/// A surface point hit by a ray.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    /// Position reconstructed from the triangle's vertices (more accurate than origin + t d).
+    pub position: Vec3,
+    /// Unit geometric normal, front side `(b - a) x (c - a)`.
+    pub ng: Vec3,
+    /// Unit shading normal (interpolated vertex normals, or `ng` for flat triangles), on the
+    /// same side as `ng`.
+    pub ns: Vec3,
+    pub triangle: u32,
+    pub distance: f64,
+}
+
+/// A point on a light source with the flux it carries (for light paths).
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionSample {
+    pub position: Vec3,
+    /// Unit normal of an area emitter; `None` for a point source.
+    pub normal: Option<Vec3>,
+    pub direction: Vec3,
+    /// Flux weight (lm per RGB channel) of the path: emitter flux / selection probability.
+    pub flux: Rgb,
+    pub emitter: u32,
+}
+
+/// A point on an area emitter or a point source, for next-event estimation.
+#[derive(Clone, Copy, Debug)]
+pub struct LightPoint {
+    pub position: Vec3,
+    /// `None` for a point source.
+    pub normal: Option<Vec3>,
+    /// Radiance (area) or intensity (point, luminaire: towards the receiver) per channel.
+    pub emitted: Rgb,
+    /// Area density (area emitters, including the emitter choice) or discrete probability
+    /// (point sources).
+    pub pdf: f64,
+}
+
+pub struct World {
+    pub scene: CompiledScene,
+    pub tracer: RayTracer,
+    emitter_choice: Distribution1D,
+    /// Per area emitter, the distribution of its triangles by area (None for point emitters).
+    triangle_choice: Vec<Option<Distribution1D>>,
+    /// Per area emitter, its triangles as (corner, edge 1, edge 2, unit normal), for fast
+    /// sampling of points on lights.
+    emitter_triangles: Vec<Vec<[Vec3; 4]>>,
+    /// Per emitter, the run-time luminaire (empty unless the scene has luminaires).
+    luminaires: Vec<Option<GoniometricLight>>,
+    /// Whether any vertex has a shading normal (else shading normals are not interpolated).
+    smooth: bool,
+    /// Unit geometric normal of every triangle (saves a cross product and a square root per
+    /// hit).
+    triangle_normals: Vec<[f32; 3]>,
+    /// Absolute offset used to leave surfaces and stop short of targets, from the scene size.
+    pub epsilon: f64,
+    /// Length of the bounding-box diagonal, m.
+    pub diagonal: f64,
+    /// The smallest side of the bounding box that is not flat (the "room size"), m; the
+    /// diagonal for a flat scene. Scale for defaults such as the kernel regularisation radius.
+    pub room_scale: f64,
+}
+
+/// Largest image side of a camera stage (as scene-compile allows for the scene's camera).
+pub const MAX_RESOLUTION: u32 = 1 << 15;
+
+/// Bytes per pixel a camera stage may keep for its film: trace's f64 sums of the radiance and
+/// of its square (48 B) bound aov-write's features and the double local estimate's film. Checked
+/// against the memory available before any film is allocated.
+pub const FILM_BYTES_PER_PIXEL: u64 = 48;
+
+/// Parses a `WIDTHxHEIGHT` resolution override (a usage error otherwise, stating the range).
+pub fn parse_resolution(r: &str) -> Result<(u32, u32)> {
+    let parsed = r
+        .split_once('x')
+        .and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)));
+    match parsed {
+        Some((a, b)) if a > 0 && b > 0 && a <= MAX_RESOLUTION && b <= MAX_RESOLUTION => Ok((a, b)),
+        _ => Err(luxest_io::Error::Usage(format!(
+            "--resolution: expected WIDTHxHEIGHT with each side in 1..={MAX_RESOLUTION}, got '{r}'"
+        ))),
+    }
+}
+
+/// Loads a compiled scene for a camera stage: the world and its pinhole camera, with an
+/// optional `WIDTHxHEIGHT` resolution override. Errors name the scene file.
+pub fn load_with_camera(
+    path: &std::path::Path,
+    resolution: Option<&str>,
+) -> Result<(World, crate::camera::PinholeCamera)> {
+    let compiled = CompiledScene::load(path)?;
+    let mut camera = compiled
+        .header
+        .camera
+        .clone()
+        .ok_or_else(|| luxest_io::Error::input(path, "scene has no camera"))?;
+    if let Some(r) = resolution {
+        camera.resolution = parse_resolution(r)?;
+    }
+    let (w, h) = camera.resolution;
+    luxest_io::limits::check_image("film", w as u64, h as u64, FILM_BYTES_PER_PIXEL)
+        .map_err(luxest_io::Error::Usage)?;
+    let world = World::load_from(path, compiled)?;
+    let cam = crate::camera::PinholeCamera::new(&camera)
+        .ok_or_else(|| luxest_io::Error::input(path, "degenerate camera"))?;
+    Ok((world, cam))
+}
+
+impl World {
+    /// [`World::new`] with errors attributed to the compiled scene's file.
+    pub fn load_from(path: &std::path::Path, scene: CompiledScene) -> Result<World> {
+        World::new(scene).map_err(|e| match e {
+            luxest_io::Error::Usage(m) => luxest_io::Error::input(path, m),
+            other => other,
+        })
+    }
+
+    pub fn new(scene: CompiledScene) -> Result<World> {
+        let tracer = RayTracer::for_scene(&scene, true)?;
+        let weights: Vec<f64> = scene.header.emitters.iter().map(Emitter::flux_lm).collect();
+        let emitter_choice = Distribution1D::new(&weights).ok_or_else(|| {
+            luxest_io::Error::input(
+                &scene.header.name,
+                "scene has no emitter with positive flux",
+            )
+        })?;
+        let emitter_triangles: Vec<Vec<[Vec3; 4]>> = scene
+            .header
+            .emitters
+            .iter()
+            .map(|e| match e {
+                Emitter::Area {
+                    first_triangle,
+                    triangle_count,
+                    ..
+                } => (*first_triangle..first_triangle + triangle_count)
+                    .map(|t| {
+                        let [a, b, c] = scene.triangle(t as usize);
+                        let n = (b - a)
+                            .cross(c - a)
+                            .try_normalize()
+                            .unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+                        [a, b - a, c - a, n]
+                    })
+                    .collect(),
+                Emitter::Point { .. } | Emitter::Luminaire { .. } => Vec::new(),
+            })
+            .collect();
+        let triangle_choice = emitter_triangles
+            .iter()
+            .map(|tris: &Vec<[Vec3; 4]>| {
+                let areas: Vec<f64> = tris
+                    .iter()
+                    .map(|[_, e1, e2, _]| 0.5 * e1.cross(*e2).length())
+                    .collect();
+                Distribution1D::new(&areas)
+            })
+            .collect();
+        let luminaires = if scene.header.features.goniometric_luminaires {
+            GoniometricLight::for_emitters(&scene.header.emitters, &scene.header.photometries)
+                .map_err(|m| luxest_io::Error::input(&scene.header.name, m))?
+        } else {
+            Vec::new()
+        };
+        let smooth = scene.header.features.smooth_normals;
+        let triangle_normals = (0..scene.triangle_count())
+            .map(|t| {
+                let [a, b, c] = scene.triangle(t);
+                (b - a)
+                    .cross(c - a)
+                    .try_normalize()
+                    .unwrap_or(Vec3::new(0.0, 0.0, 1.0))
+                    .to_f32()
+            })
+            .collect();
+        let s = &scene.header.stats;
+        let mut lo = s.bounds_min;
+        let mut hi = s.bounds_max;
+        for e in &scene.header.emitters {
+            if let Emitter::Point { position, .. } | Emitter::Luminaire { position, .. } = e {
+                lo = lo.min(*position);
+                hi = hi.max(*position);
+            }
+            if let Emitter::Luminaire { opening_points, .. } = e {
+                for p in opening_points {
+                    lo = lo.min(*p);
+                    hi = hi.max(*p);
+                }
+            }
+        }
+        for set in &scene.header.sensors {
+            for p in &set.points {
+                lo = lo.min(p.position);
+                hi = hi.max(p.position);
+            }
+        }
+        let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
+        let size = hi - lo;
+        let room_scale = [size.x, size.y, size.z]
+            .into_iter()
+            .filter(|&s| s > 1e-6 * diagonal)
+            .fold(diagonal, f64::min);
+        let extent = lo
+            .max_abs_component()
+            .max(hi.max_abs_component())
+            .max(diagonal);
+        // f32 geometry: positions are accurate to ~6e-8 of their magnitude, so offsets are
+        // taken relative to the local coordinates (see `margin`); this is only the floor for
+        // points near the origin.
+        let epsilon = 1e-9 * extent;
+        Ok(World {
+            scene,
+            tracer,
+            emitter_choice,
+            triangle_choice,
+            emitter_triangles,
+            luminaires,
+            smooth,
+            triangle_normals,
+            epsilon,
+            diagonal,
+            room_scale,
+        })
+    }
+
+    pub fn material(&self, triangle: u32) -> &Material {
+        self.scene.material_of(triangle as usize)
+    }
+
+    pub fn emitter_of(&self, triangle: u32) -> Option<u32> {
+        let e = self.scene.triangle_emitter[triangle as usize];
+        (e != NO_EMITTER).then_some(e)
+    }
+
+    /// Unit geometric normal of a triangle.
+    pub fn geometric_normal(&self, triangle: u32) -> Vec3 {
+        Vec3::from(self.triangle_normals[triangle as usize])
+    }
+
+    /// The surface point of a hit.
+    pub fn surface(&self, hit: &Hit) -> SurfacePoint {
+        let t = hit.triangle as usize;
+        let idx = self.scene.indices[t];
+        let [a, b, c] = idx.map(|i| Vec3::from(self.scene.positions[i as usize]));
+        let (u, v) = (hit.u, hit.v);
+        let position = a * (1.0 - u - v) + b * u + c * v;
+        let ng = Vec3::from(self.triangle_normals[t]);
+        let ns = if self.smooth {
+            let [na, nb, nc] = idx.map(|i| Vec3::from(self.scene.normals[i as usize]));
+            (na * (1.0 - u - v) + nb * u + nc * v)
+                .try_normalize()
+                .map(|n| if n.dot(ng) < 0.0 { -n } else { n })
+                .unwrap_or(ng)
+        } else {
+            ng
+        };
+        SurfacePoint {
+            position,
+            ng,
+            ns,
+            triangle: hit.triangle,
+            distance: hit.t,
+        }
+    }
+
+    /// Closest surface along a ray.
+    pub fn intersect(&self, origin: Vec3, direction: Vec3) -> Option<SurfacePoint> {
+        self.tracer
+            .intersect(origin, direction, 0.0, f64::INFINITY)
+            .map(|h| self.surface(&h))
+    }
+
+    /// Origin for a ray leaving `p` (on a surface with unit normal `ng`) in direction `d`:
+    /// offset to the side `d` points to, proportionally to the coordinates' magnitude.
+    pub fn offset(&self, p: Vec3, ng: Vec3, d: Vec3) -> Vec3 {
+        let eps = self.epsilon.max(2e-6 * p.max_abs_component());
+        if d.dot(ng) >= 0.0 {
+            p + ng * eps
+        } else {
+            p - ng * eps
+        }
+    }
+
+    /// The margin kept at both ends of a segment between two points given in world space.
+    pub fn margin(&self, a: Vec3, b: Vec3) -> f64 {
+        self.epsilon
+            .max(2e-6 * a.max_abs_component().max(b.max_abs_component()))
+    }
+
+    /// Whether the segment from `from` to `to` is blocked, ignoring the margin at both ends:
+    /// both usually lie on surfaces, and a sensor on an edge or in a corner lies on several
+    /// (whose planes pass through the segment's start).
+    pub fn occluded(&self, from: Vec3, to: Vec3) -> bool {
+        let d = to - from;
+        let len = d.length();
+        let eps = self.margin(from, to);
+        if len <= 2.0 * eps {
+            return false;
+        }
+        self.tracer.occluded(from, d / len, eps, len - eps)
+    }
+
+    /// Closest surface within `tfar` along a ray that starts on a sensor point: hits closer
+    /// than the margin (the surfaces the sensor itself lies on) are ignored.
+    pub fn intersect_from_sensor(
+        &self,
+        origin: Vec3,
+        direction: Vec3,
+        tfar: f64,
+    ) -> Option<SurfacePoint> {
+        let eps = self.margin(origin, origin);
+        self.tracer
+            .intersect(origin, direction, eps, tfar)
+            .map(|h| self.surface(&h))
+    }
+
+    /// The run-time luminaire of emitter `ei`, if it is one.
+    #[inline]
+    pub fn luminaire(&self, ei: usize) -> Option<&GoniometricLight> {
+        self.luminaires.get(ei).and_then(Option::as_ref)
+    }
+
+    /// For a delta light (isotropic point or luminaire) `ei`: calls `f(position, intensity)`
+    /// for each of its point sources with the intensity per channel (cd) it radiates towards
+    /// `receiver` (one source, except for a luminaire's area opening); nothing for area
+    /// emitters.
+    #[inline]
+    pub fn for_each_delta_source(&self, ei: usize, receiver: Vec3, mut f: impl FnMut(Vec3, Rgb)) {
+        match &self.scene.header.emitters[ei] {
+            Emitter::Point {
+                position,
+                intensity_rgb,
+                ..
+            } => f(*position, *intensity_rgb),
+            Emitter::Luminaire { .. } => {
+                let l = self
+                    .luminaire(ei)
+                    .expect("luminaires are built for luminaire scenes");
+                for &s in l.sources() {
+                    f(s, l.source_intensity_toward(s, receiver));
+                }
+            }
+            Emitter::Area { .. } => {}
+        }
+    }
+
+    /// Starts a light path: an emitter chosen by flux, a point on it and a direction
+    /// (isotropic for point sources, from the intensity table for luminaires (see
+    /// [`crate::luminaire`]), cosine-distributed from the front of area emitters).
+    pub fn sample_emission(&self, rng: &mut Rng) -> EmissionSample {
+        let (ei, p_e) = self.emitter_choice.sample(rng.next_f64());
+        match &self.scene.header.emitters[ei] {
+            Emitter::Point {
+                position, flux_rgb, ..
+            } => EmissionSample {
+                position: *position,
+                normal: None,
+                direction: uniform_sphere(rng.next_f64(), rng.next_f64()),
+                flux: *flux_rgb * (1.0 / p_e),
+                emitter: ei as u32,
+            },
+            Emitter::Luminaire { .. } => {
+                let l = self
+                    .luminaire(ei)
+                    .expect("luminaires are built for luminaire scenes");
+                let position = if l.sources().len() > 1 {
+                    l.pick_source(rng.next_f64())
+                } else {
+                    l.position
+                };
+                let (direction, weight) = l.sample_emission(rng.next_f64(), rng.next_f64());
+                EmissionSample {
+                    position,
+                    normal: None,
+                    direction,
+                    flux: weight * (1.0 / p_e),
+                    emitter: ei as u32,
+                }
+            }
+            Emitter::Area { flux_rgb, .. } => {
+                let (position, normal, _) = self.sample_area_point(ei, rng);
+                let local = cosine_hemisphere(rng.next_f64(), rng.next_f64());
+                let (t, b) = normal.orthonormal_basis();
+                EmissionSample {
+                    position,
+                    normal: Some(normal),
+                    direction: t * local.x + b * local.y + normal * local.z,
+                    flux: *flux_rgb * (1.0 / p_e),
+                    emitter: ei as u32,
+                }
+            }
+        }
+    }
+
+    /// A uniformly distributed point on area emitter `ei`: (position, unit front normal,
+    /// triangle).
+    fn sample_area_point(&self, ei: usize, rng: &mut Rng) -> (Vec3, Vec3, u32) {
+        let Emitter::Area { first_triangle, .. } = &self.scene.header.emitters[ei] else {
+            unreachable!("sample_area_point on a point emitter")
+        };
+        let dist = self.triangle_choice[ei]
+            .as_ref()
+            .expect("area emitter has triangles");
+        let (ti, _) = dist.sample(rng.next_f64());
+        let [a, e1, e2, n] = self.emitter_triangles[ei][ti];
+        let (b1, b2) = uniform_triangle(rng.next_f64(), rng.next_f64());
+        (a + e1 * b1 + e2 * b2, n, first_triangle + ti as u32)
+    }
+
+    /// A point on a light chosen by flux, for next-event estimation at `receiver` (a
+    /// luminaire's intensity depends on the direction towards it).
+    pub fn sample_light_point(&self, rng: &mut Rng, receiver: Vec3) -> LightPoint {
+        let (ei, p_e) = self.emitter_choice.sample(rng.next_f64());
+        match &self.scene.header.emitters[ei] {
+            Emitter::Luminaire { .. } => {
+                // One source of an area opening, chosen uniformly, with the whole intensity:
+                // the expectation is the sum of the sources' shares.
+                let l = self
+                    .luminaire(ei)
+                    .expect("luminaires are built for luminaire scenes");
+                let position = if l.sources().len() > 1 {
+                    l.pick_source(rng.next_f64())
+                } else {
+                    l.position
+                };
+                LightPoint {
+                    position,
+                    normal: None,
+                    emitted: l.intensity_toward(receiver - position),
+                    pdf: p_e,
+                }
+            }
+            Emitter::Point {
+                position,
+                intensity_rgb,
+                ..
+            } => LightPoint {
+                position: *position,
+                normal: None,
+                emitted: *intensity_rgb,
+                pdf: p_e,
+            },
+            Emitter::Area {
+                radiance_rgb,
+                area_m2,
+                ..
+            } => {
+                let (position, normal, _) = self.sample_area_point(ei, rng);
+                LightPoint {
+                    position,
+                    normal: Some(normal),
+                    emitted: *radiance_rgb,
+                    pdf: p_e / area_m2,
+                }
+            }
+        }
+    }
+
+    /// Area density with which [`World::sample_light_point`] picks a point on the area emitter
+    /// `emitter` (for multiple importance sampling).
+    pub fn light_point_pdf(&self, emitter: u32) -> f64 {
+        let p_e = self.emitter_choice.pmf(emitter as usize);
+        match &self.scene.header.emitters[emitter as usize] {
+            Emitter::Area { area_m2, .. } => p_e / area_m2,
+            Emitter::Point { .. } | Emitter::Luminaire { .. } => 0.0,
+        }
+    }
+
+    /// The emitter index and luminance of `triangle` towards `w`, if it emits that way.
+    #[inline]
+    pub fn emission(&self, triangle: u32, ng: Vec3, w: Vec3) -> Option<(u32, Rgb)> {
+        let e = self.emitter_of(triangle)?;
+        match &self.scene.header.emitters[e as usize] {
+            Emitter::Area { radiance_rgb, .. } if ng.dot(w) > 0.0 => Some((e, *radiance_rgb)),
+            _ => None,
+        }
+    }
+
+    /// Luminance per channel emitted by the surface of `triangle` towards `w` (zero behind
+    /// the emitter or off emitters).
+    pub fn emitted_radiance(&self, triangle: u32, ng: Vec3, w: Vec3) -> Rgb {
+        match self
+            .emitter_of(triangle)
+            .map(|e| &self.scene.header.emitters[e as usize])
+        {
+            Some(Emitter::Area { radiance_rgb, .. }) if ng.dot(w) > 0.0 => *radiance_rgb,
+            _ => Rgb::BLACK,
+        }
+    }
+}

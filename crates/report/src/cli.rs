@@ -1,0 +1,189 @@
+//! The `report` command line: reads sensor results and the compiled scene's header, writes the
+//! tables, isolux plots and Markdown report of every calculation surface (see the crate docs).
+
+use crate::markdown::{self, ReportContext, SurfaceReport};
+use crate::surface::UncertaintyMethod;
+use crate::{input, peer, plot, scene_info, tables};
+use clap::Parser;
+use luxest_io::outputs::{path_component, OutputPlan};
+use luxest_io::sensors::SensorResults;
+use luxest_io::Result;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Lighting report of a scene's calculation surfaces: per surface a CSV and RON table, an
+/// isolux PNG, and one Markdown report with the luminaires, Eavg, Emin, Emax, U0, Ud (each ±
+/// its standard error) and an optional peer comparison.
+#[derive(Parser, Debug)]
+#[command(name = "report", version)]
+pub struct Args {
+    /// Sensor results of `estimate sensors` (.sensors.ron).
+    pub results: PathBuf,
+    /// The compiled scene's header as `scene-compile --info SCENE.lxs` prints it, for the
+    /// luminaire list and the luminaires' marks on the plots.
+    #[arg(long)]
+    pub scene_info: Option<PathBuf>,
+    /// Output directory (default `reports/lighting/<scene>`).
+    #[arg(short, long)]
+    pub out: Option<PathBuf>,
+    /// A peer program's illuminances at the same points (CSV, see `report::peer`), e.g.
+    /// Radiance's from `pipelines/radiance_office.py`.
+    #[arg(long)]
+    pub peer: Option<PathBuf>,
+    /// Fail (exit 1, after writing the report) if any point disagrees with the peer.
+    #[arg(long)]
+    pub require_peer_agreement: bool,
+}
+
+/// Runs the command line.
+pub fn run(args: Args) -> Result<()> {
+    let start = Instant::now();
+    let results = SensorResults::read_ron(&args.results)?;
+    let sources = match &args.scene_info {
+        Some(p) => {
+            let header = scene_info::read(p)?;
+            if header.name != results.scene {
+                return Err(luxest_io::Error::input(
+                    p,
+                    format!(
+                        "describes scene \"{}\" but {} holds results for scene \"{}\"",
+                        header.name,
+                        args.results.display(),
+                        results.scene
+                    ),
+                ));
+            }
+            Some(scene_info::light_sources(p, &header)?)
+        }
+        None => None,
+    };
+    let surfaces = input::surfaces(&args.results, &results)?;
+    let peer = match &args.peer {
+        Some(p) => Some((p, peer::read(p)?)),
+        None => None,
+    };
+
+    let scene = path_component(&results.scene, &args.results, "scene")?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("reports").join("lighting").join(scene));
+    let mut names = Vec::new();
+    for s in &surfaces {
+        let stem = path_component(&s.name, &args.results, "set name")?;
+        names.push((
+            format!("{stem}.csv"),
+            format!("{stem}.ron"),
+            format!("{stem}.isolux.png"),
+        ));
+    }
+    let md_path = dir.join("report.md");
+    let mut outputs = vec![md_path.clone()];
+    for (c, r, p) in &names {
+        outputs.extend([dir.join(c), dir.join(r), dir.join(p)]);
+    }
+    let mut inputs = vec![args.results.clone()];
+    inputs.extend(args.scene_info.clone());
+    if let Some(p) = &args.peer {
+        inputs.push(p.clone());
+    }
+    let mut plan = OutputPlan::new(&inputs, &outputs)?;
+
+    let lum_positions: Vec<[f64; 3]> = sources
+        .iter()
+        .flat_map(|s| s.places.iter().map(|p| p.position))
+        .collect();
+    let mut computed = Vec::new();
+    for (n, (s, (csv, ron, png))) in surfaces.iter().zip(&names).enumerate() {
+        let (stats, method) = s.stats(&args.results)?;
+        let uncertainty = match method {
+            UncertaintyMethod::Jackknife { batches } => format!("jackknife over {batches} batches"),
+            UncertaintyMethod::Independent => "independent points".to_string(),
+        };
+        eprintln!(
+            "report: surface {}/{} \"{}\": {} x {} points, Eavg {:.1} ± {:.1} lx, U0 {:.3} ± {:.3}",
+            n + 1,
+            surfaces.len(),
+            s.name,
+            s.grid.nu,
+            s.grid.nv,
+            stats.e_avg.value,
+            stats.e_avg.std_error,
+            stats.u0.value,
+            stats.u0.std_error
+        );
+        let rows = tables::rows(s);
+        tables::write_csv_to(&mut plan, &dir.join(csv), &rows)?;
+        tables::write_ron_to(
+            &mut plan,
+            &dir.join(ron),
+            &tables::table(&results.scene, s, &stats, &uncertainty),
+        )?;
+        let title = format!("{}: {} {} illuminance (lx)", results.scene, s.name, s.kind);
+        let bytes = plot::isolux_png(s, &stats, &title, &lum_positions, &args.results)?;
+        plan.write_bytes(&dir.join(png), &bytes)?;
+        let comparison = match &peer {
+            Some((path, p)) => peer::compare(path, s, p)?,
+            None => None,
+        };
+        computed.push((stats, method, comparison));
+    }
+
+    let reports: Vec<SurfaceReport> = surfaces
+        .iter()
+        .zip(&names)
+        .zip(&computed)
+        .map(
+            |((s, (csv, ron, png)), (stats, method, cmp))| SurfaceReport {
+                surface: s,
+                stats,
+                method: *method,
+                png: png.clone(),
+                csv: csv.clone(),
+                ron: ron.clone(),
+                comparison: cmp.clone(),
+            },
+        )
+        .collect();
+    let results_name = args.results.display().to_string();
+    let peer_name = args.peer.as_ref().map(|p| p.display().to_string());
+    let ctx = ReportContext {
+        scene: &results.scene,
+        results_file: &results_name,
+        run: &results.run,
+        singularity: &results.singularity,
+        sources: sources.as_ref(),
+        peer: match (&peer_name, &peer) {
+            (Some(n), Some((_, p))) => Some((n.as_str(), p)),
+            _ => None,
+        },
+    };
+    let text = markdown::render(&ctx, &reports);
+    plan.write_bytes(&md_path, text.as_bytes())?;
+    plan.commit()?;
+    eprintln!(
+        "report: wrote {} ({} surface{}, {:.2} s)",
+        md_path.display(),
+        surfaces.len(),
+        if surfaces.len() == 1 { "" } else { "s" },
+        start.elapsed().as_secs_f64()
+    );
+    if args.require_peer_agreement {
+        let failing: Vec<&str> = reports
+            .iter()
+            .filter_map(|r| r.comparison.as_ref())
+            .filter(|c| !c.all_agree())
+            .map(|c| c.surface.as_str())
+            .collect();
+        if !failing.is_empty() {
+            return Err(luxest_io::Error::input(
+                args.peer.as_deref().unwrap_or(Path::new("peer")),
+                format!(
+                    "points outside 1 % + 3 sigma on surface(s) {}",
+                    failing.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}

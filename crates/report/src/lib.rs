@@ -1,0 +1,35 @@
+//! The `report` stage: what a lighting engineer signs, from the sensor results of `estimate
+//! sensors` on a scene with calculation surfaces.
+//!
+//! For every calculation surface (a sensor set that carries its grid layout) it writes into the
+//! output directory
+//!
+//! - `<surface>.csv` and `<surface>.ron`: one row per grid point (index k = j · nu + i, cell
+//!   (i, j), position, illuminance E and its standard error, lx) — [`tables`];
+//! - `<surface>.isolux.png`: the false-colour isolux plot with contours, a legend in lx, the room
+//!   outline and the luminaires' positions (`luxest_photometry::isolux`) — [`plot`];
+//!
+//! and one `report.md` for the scene ([`markdown`]): the luminaire list (file, flux per
+//! luminaire, count, total flux, total input power when the files state it, read from the
+//! compiled scene's header — [`scene_info`]), per surface the grid (points, spacing, margin) and
+//! Eavg, Emin, Emax, U0 = Emin/Eavg, Ud = Emin/Emax each with its standard error, and, when a
+//! peer's results are given ([`peer`], e.g. Radiance's `rtrace -I`), the point-by-point
+//! comparison with the check |E_luxest − E_peer| ≤ 1 % · E_peer + 3 σ_combined.
+//!
+//! **Uncertainties.** When the results carry per-batch estimates (independent batches of light
+//! paths), the figures' standard errors are the delete-one-batch jackknife of
+//! `luxest_photometry::GridStats::from_batches`, which accounts for the correlation between
+//! points that share light paths; otherwise they are propagated from the per-point standard
+//! errors with the points assumed independent (`from_independent`), and the report says so.
+//!
+//! All outputs are planned before anything is written and committed together
+//! (`luxest_io::outputs::OutputPlan`): a run that fails leaves no partial report.
+
+pub mod cli;
+pub mod input;
+pub mod markdown;
+pub mod peer;
+pub mod plot;
+pub mod scene_info;
+pub mod surface;
+pub mod tables;

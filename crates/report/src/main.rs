@@ -1,0 +1,3 @@
+fn main() -> std::process::ExitCode {
+    luxest_io::cli::main(report::cli::run)
+}

@@ -1,0 +1,164 @@
+//! The luminaire list of a scene, read from its compiled header as `scene-compile --info` prints
+//! it (`build/<scene>/scene.info.ron`).
+//!
+//! The header's type lives in `luxest-render`, which a report stage must not depend on (no
+//! stage reaches the renderer's crate; a report needs no Embree). So this module reads the same
+//! RON through a *partial view*: structs of the same names holding only the fields a report
+//! needs; serde skips the others. `tests/lighting.rs` runs `scene-compile --info` on a real
+//! scene and this reader on its output, so a change of the header that breaks the view fails a
+//! test rather than a report.
+
+use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
+use luxest_io::{Error, Result};
+use serde::Deserialize;
+use std::path::Path;
+
+/// The part of `SceneHeader` a report reads.
+#[derive(Clone, Debug, Deserialize)]
+pub struct SceneHeader {
+    pub name: String,
+    pub emitters: Vec<Emitter>,
+    #[serde(default)]
+    pub photometries: Vec<PhotometricTable>,
+}
+
+/// The part of each emitter a report reads.
+#[derive(Clone, Debug, Deserialize)]
+pub enum Emitter {
+    Point {
+        name: String,
+        flux_rgb: Rgb,
+    },
+    Area {
+        name: String,
+        flux_rgb: Rgb,
+    },
+    Luminaire {
+        name: String,
+        position: Vec3,
+        photometry: u32,
+        multiplier: f64,
+        flux_rgb: Rgb,
+    },
+}
+
+/// The part of each photometric table a report reads.
+#[derive(Clone, Debug, Deserialize)]
+pub struct PhotometricTable {
+    /// The file as the scene named it.
+    pub source: String,
+    /// ∫ I dΩ of the table, lm (one luminaire, multiplier 1).
+    pub table_flux_lm: f64,
+    pub file_flux_lm: Option<f64>,
+    pub input_watts: Option<f64>,
+}
+
+/// Luminaires of one kind (same file, same multiplier), as a report lists them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LuminaireGroup {
+    pub file: String,
+    pub multiplier: f64,
+    pub count: usize,
+    /// Flux of one luminaire: multiplier × table flux, lm.
+    pub flux_lm: f64,
+    /// Input power of one luminaire as its file states it, W.
+    pub input_watts: Option<f64>,
+    pub names: Vec<String>,
+}
+
+/// A placed luminaire (for the plots' marks).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LuminairePlace {
+    pub name: String,
+    pub position: [f64; 3],
+}
+
+/// What the report says about a scene's light sources.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct LightSources {
+    pub groups: Vec<LuminaireGroup>,
+    pub places: Vec<LuminairePlace>,
+    /// Emitters that are not goniometric luminaires: (name, flux lm).
+    pub other: Vec<(String, f64)>,
+}
+
+impl LightSources {
+    pub fn total_flux_lm(&self) -> f64 {
+        self.groups
+            .iter()
+            .map(|g| g.flux_lm * g.count as f64)
+            .sum::<f64>()
+            + self.other.iter().map(|o| o.1).sum::<f64>()
+    }
+    /// Total input power when every luminaire's file states it, W.
+    pub fn total_input_watts(&self) -> Option<f64> {
+        self.groups
+            .iter()
+            .map(|g| g.input_watts.map(|w| w * g.count as f64))
+            .sum()
+    }
+}
+
+/// Reads the header printed by `scene-compile --info` (a trailing `// content hash` comment is
+/// RON's).
+pub fn read(path: &Path) -> Result<SceneHeader> {
+    luxest_io::fsio::read_ron(path)
+}
+
+/// The scene's luminaires grouped by file and multiplier; `path` names the file in errors.
+pub fn light_sources(path: &Path, h: &SceneHeader) -> Result<LightSources> {
+    group(path, h)
+}
+
+fn group(path: &Path, h: &SceneHeader) -> Result<LightSources> {
+    let mut out = LightSources::default();
+    for e in &h.emitters {
+        match e {
+            Emitter::Point { name, flux_rgb } | Emitter::Area { name, flux_rgb } => {
+                out.other.push((name.clone(), flux_rgb.luminance()))
+            }
+            Emitter::Luminaire {
+                name,
+                position,
+                photometry,
+                multiplier,
+                ..
+            } => {
+                let t = h.photometries.get(*photometry as usize).ok_or_else(|| {
+                    Error::at(
+                        path,
+                        format!("emitter \"{name}\""),
+                        format!(
+                            "photometry {photometry} does not exist ({} tables)",
+                            h.photometries.len()
+                        ),
+                    )
+                })?;
+                out.places.push(LuminairePlace {
+                    name: name.clone(),
+                    position: [position.x, position.y, position.z],
+                });
+                match out
+                    .groups
+                    .iter_mut()
+                    .find(|g| g.file == t.source && g.multiplier == *multiplier)
+                {
+                    Some(g) => {
+                        g.count += 1;
+                        g.names.push(name.clone());
+                    }
+                    None => out.groups.push(LuminaireGroup {
+                        file: t.source.clone(),
+                        multiplier: *multiplier,
+                        count: 1,
+                        flux_lm: multiplier * t.table_flux_lm,
+                        input_watts: t.input_watts,
+                        names: vec![name.clone()],
+                    }),
+                }
+            }
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,92 @@
+//! The `scene-compile` command line: compile (or `--check`) an authored scene, or print a
+//! compiled scene's header (`--info`).
+
+use crate::{compile, referenced_files, scene_name};
+use clap::Parser;
+use luxest_io::fsio::{read_ron, to_ron_string};
+use luxest_io::outputs::{path_component, OutputPlan};
+use luxest_io::Result;
+use luxest_render::compiled::CompiledScene;
+use luxest_render::scene::Scene;
+use std::path::{Path, PathBuf};
+
+/// Compile an authored luxest scene into one self-contained scene file.
+#[derive(Parser, Debug)]
+#[command(name = "scene-compile", version, about)]
+pub struct Args {
+    /// The authored scene (.ron), or with --info a compiled scene.
+    pub input: PathBuf,
+    /// Output file [default: build/<scene name>/scene.lxs].
+    #[arg(short, long)]
+    pub out: Option<PathBuf>,
+    /// Validate and load everything, print the summary, write nothing.
+    #[arg(long)]
+    pub check: bool,
+    /// Print the header (features manifest, emitters, sensors, stats) of a compiled scene.
+    #[arg(long, conflicts_with_all = ["out", "check"])]
+    pub info: bool,
+    /// No warnings or summary on stderr.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Runs the command line.
+pub fn run(args: Args) -> Result<()> {
+    if args.info {
+        let scene = CompiledScene::load(&args.input)?;
+        println!("{}", to_ron_string(&scene.header));
+        println!("// content hash {}", scene.content_hash);
+        return Ok(());
+    }
+    let authored: Scene = read_ron(&args.input)?;
+    // The output, planned before the work: not the scene file, a mesh or a photometric file it
+    // refers to, nor a directory or device; the default stays inside build/.
+    let out = match &args.out {
+        Some(o) => o.clone(),
+        None => {
+            let name = scene_name(&authored, &args.input);
+            let name = path_component(&name, &args.input, "name")?;
+            Path::new("build").join(name).join("scene.lxs")
+        }
+    };
+    let inputs =
+        std::iter::once(args.input.clone()).chain(referenced_files(&authored, &args.input));
+    let outputs = if args.check { None } else { Some(&out) };
+    let mut plan = OutputPlan::new(inputs, outputs)?;
+    let (mut scene, report) = compile(&authored, &args.input)?;
+    if !args.quiet {
+        for w in &report.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    let bytes = scene.encode();
+    let summary = {
+        let s = &scene.header.stats;
+        format!(
+            "{}: {} triangles, {} vertices, {} emitters, {} sensor points, hash {}",
+            scene.header.name,
+            s.triangles,
+            s.vertices,
+            scene.header.emitters.len(),
+            scene
+                .header
+                .sensors
+                .iter()
+                .map(|x| x.points.len())
+                .sum::<usize>(),
+            scene.content_hash
+        )
+    };
+    if args.check {
+        if !args.quiet {
+            eprintln!("ok {summary}");
+        }
+        return Ok(());
+    }
+    plan.write_bytes(&out, &bytes)?;
+    plan.commit()?;
+    if !args.quiet {
+        eprintln!("wrote {} ({summary})", out.display());
+    }
+    Ok(())
+}

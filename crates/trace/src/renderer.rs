@@ -1,0 +1,108 @@
+//! The renderer: adds samples to a [`Film`] tile by tile on worker threads.
+//!
+//! Pixels are independent (box filter, one random stream per pixel sample: see
+//! [`luxest_render::camera::pixel_jitter`] and [`sample_rng`]), so an image depends only on the
+//! seed and the sample count — not on threads, tiles or how the run was split into passes.
+
+use crate::film::Film;
+use crate::integrator::{kernel_for, Kernel, RayLog};
+use luxest_render::camera::{pixel_jitter, PinholeCamera};
+use luxest_render::parallel::run_batches;
+use luxest_render::sampling::Rng;
+use luxest_render::world::World;
+
+/// Side of the square tiles handed to worker threads.
+pub const TILE: usize = 16;
+
+/// The random stream of sample `sample` of pixel `pixel` (after its camera jitter).
+pub fn sample_rng(seed: u64, pixel: usize, sample: u32) -> Rng {
+    Rng::new(seed, ((pixel as u64) << 24) | sample as u64)
+}
+
+/// A scene prepared for tracing.
+pub struct Renderer<'a> {
+    pub world: &'a World,
+    pub camera: PinholeCamera,
+    pub seed: u64,
+    pub threads: usize,
+    pub max_depth: u32,
+    kernel: Kernel,
+}
+
+impl<'a> Renderer<'a> {
+    pub fn new(
+        world: &'a World,
+        camera: PinholeCamera,
+        seed: u64,
+        threads: usize,
+        max_depth: u32,
+    ) -> Renderer<'a> {
+        Renderer {
+            world,
+            camera,
+            seed,
+            threads,
+            max_depth,
+            kernel: kernel_for(world),
+        }
+    }
+
+    /// Adds samples `film.samples .. target` to every pixel; returns the rays traced.
+    pub fn advance(&self, film: &mut Film, target: u32, record: bool) -> RayLog {
+        let (w, h) = (film.width, film.height);
+        let tiles_x = w.div_ceil(TILE);
+        let tiles = tiles_x * h.div_ceil(TILE);
+        let from = film.samples;
+        let results = run_batches(tiles, self.threads, "trace", |t| {
+            let (tx, ty) = (t % tiles_x, t / tiles_x);
+            let mut log = RayLog {
+                record,
+                ..Default::default()
+            };
+            let mut out = Vec::with_capacity(TILE * TILE);
+            for y in ty * TILE..((ty + 1) * TILE).min(h) {
+                for x in tx * TILE..((tx + 1) * TILE).min(w) {
+                    let pixel = y * w + x;
+                    let (mut sum, mut sum_y2) = ([0.0; 3], 0.0);
+                    for s in from..target {
+                        let (u, v) = pixel_jitter(self.seed, pixel as u64, s as u64);
+                        let dir = self.camera.direction(x as f64 + u, y as f64 + v);
+                        let mut rng = sample_rng(self.seed, pixel, s);
+                        let l = (self.kernel)(
+                            self.world,
+                            self.camera.position,
+                            dir,
+                            &mut rng,
+                            self.max_depth,
+                            &mut log,
+                        );
+                        for (a, c) in sum.iter_mut().zip(l.0) {
+                            *a += c;
+                        }
+                        sum_y2 += l.luminance() * l.luminance();
+                    }
+                    out.push((pixel, sum, sum_y2));
+                }
+            }
+            (out, log)
+        });
+        let mut total = RayLog {
+            record,
+            ..Default::default()
+        };
+        for (pixels, log) in results {
+            for (p, s, s2) in pixels {
+                for (a, c) in film.sum[p].iter_mut().zip(s) {
+                    *a += c;
+                }
+                film.sum_y2[p] += s2;
+            }
+            total.closest += log.closest;
+            total.shadow += log.shadow;
+            total.closest_rays.extend(log.closest_rays);
+            total.shadow_rays.extend(log.shadow_rays);
+        }
+        film.samples = target;
+        total
+    }
+}

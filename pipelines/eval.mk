@@ -1,0 +1,112 @@
+# `make eval`: the speed/accuracy trade of every image estimator, the progressive Cornell-box
+# experiment and sensor results against exact values -> reports/summary.md (+ reports/plots,
+# reports/csv). One rule per output file, every stage through its variable; pipelines/eval.py
+# only draws the summary from the reports. Incremental: change the model and only denoised
+# images, their reports and the summary are redone.
+#
+# The reports record wall-clock seconds per image, so a timing run is `make eval` without -j
+# (parallel jobs share the cores and inflate each other's seconds); -j is for a quick check.
+#
+# Sections: (1) Cornell box 256²: a reference of EVAL_REF_SPP spp (seed REF_SEED), one
+# progressive run (seed NOISY_SEED) with snapshots at 1, 2, 4, ... and every 64 spp up to
+# EVAL_PROG_SPP, its features at the same snapshots, every snapshot denoised; double-local-
+# estimate images at EVAL_DLE light paths, each denoised with the 64-spp features. (2) The
+# held-out test scenes of the dataset: noisy levels of `make noisy` denoised; local-estimate
+# images at EVAL_DATA_DLE paths, denoised with the NOISY_MAX features. (3) The cases of `make validate` at EVAL_SENSOR_SCALE times
+# their paths, against exact values.
+
+EVAL_DIR := build/eval/$(PRESET)
+EVAL_MODEL ?= $(MODEL)
+EVAL_RES := 256x256
+EVAL_CB := $(EVAL_DIR)/cornell-box/cb
+EVAL_CB_SCENE := build/cornell-box/scene.lxs
+REPORTS ?= reports
+EVAL_CSV := $(REPORTS)/csv
+EVAL_DLE_FEATURES_SPP := 64
+
+# (1) Snapshots: powers of two and multiples of 64 up to EVAL_PROG_SPP, ascending.
+EVAL_SNAPSHOTS := $(shell (seq 64 64 $(EVAL_PROG_SPP); p=1; while [ $$p -le $(EVAL_PROG_SPP) ]; do echo $$p; p=$$((p * 2)); done) | sort -n -u)
+EVAL_LAST := $(lastword $(EVAL_SNAPSHOTS))
+eval_cb = $(foreach s,$(EVAL_SNAPSHOTS),$(call lx_image,$(EVAL_CB),$(s),$(1)))
+eval_cb_le = $(foreach n,$(EVAL_DLE),$(call lx_le,$(EVAL_CB),$(n),$(1)))
+
+$(call lx_ref,$(EVAL_CB),hdr): $(EVAL_CB_SCENE) $(TRACE)
+	@mkdir -p $(@D)
+	$(TRACE) $< --spp $(EVAL_REF_SPP) --reference --seed $(REF_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
+
+# One progressive run writes every snapshot; the last marks it complete.
+$(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr): $(EVAL_CB_SCENE) $(TRACE)
+	@mkdir -p $(@D)
+	$(TRACE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
+$(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr),$(call eval_cb,hdr)): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr) ;
+
+$(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm): $(EVAL_CB_SCENE) $(AOV_WRITE)
+	@mkdir -p $(@D)
+	$(AOV_WRITE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
+$(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm),$(call eval_cb,alb) $(call eval_cb,nrm)): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm) ;
+
+$(call lx_image_pattern,$(EVAL_CB),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB),alb) $(call lx_image_pattern,$(EVAL_CB),nrm) $(EVAL_MODEL) $(DENOISE)
+	$(DENOISE) $< --model $(EVAL_MODEL) -o $@
+
+$(call lx_le_pattern,$(EVAL_CB),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
+	@mkdir -p $(@D)
+	$(ESTIMATE) image $< --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
+
+$(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) $(EVAL_MODEL) $(DENOISE)
+	$(DENOISE) $< --model $(EVAL_MODEL) --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
+
+$(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb,hdr) $(call eval_cb,dn) $(call eval_cb_le,hdr) $(call eval_cb_le,dn) $(EVALUATE)
+	@mkdir -p $(@D) $(EVAL_DIR)/flip
+	$(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip
+
+# (2) The held-out test scenes (references and noisy levels from make reference noisy; the
+#    local-estimate images from the scenes compiled for the dataset).
+EVAL_DATA := $(DATA_DIR)/test
+EVAL_DS := $(EVAL_DIR)/dataset
+EVAL_TEST_SCENES := $(patsubst test/%,%,$(filter test/%,$(DATASET_SCENES)))
+
+define eval_test_scene
+# The levels below the last are written by the run whose last normal image marks it.
+$(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm),$(foreach k,hdr alb nrm,$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),$(k))))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) ;
+$(call lx_ref,$(EVAL_DATA)/$(1),hdr): $(call lx_ref,$(EVAL_DATA)/$(1),nrm) ;
+
+$(call lx_image_pattern,$(EVAL_DS)/$(1),dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) $(EVAL_MODEL) $(DENOISE)
+	@mkdir -p $$(@D)
+	$$(DENOISE) $$< --model $(EVAL_MODEL) -o $$@
+
+$(call lx_le_pattern,$(EVAL_DS)/$(1),hdr): build/dataset/$(DATASET)/test/$(1).lxs $(ESTIMATE)
+	@mkdir -p $$(@D)
+	$$(ESTIMATE) image $$< --paths $$* --seed $(NOISY_SEED) -o $$@
+
+$(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) $(EVAL_MODEL) $(DENOISE)
+	$$(DENOISE) $$< --model $(EVAL_MODEL) --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
+
+$(EVAL_CSV)/dataset-$(1).images.csv: $(call lx_ref,$(EVAL_DATA)/$(1),hdr) \
+		$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr) $(call lx_image,$(EVAL_DS)/$(1),$(s),dn)) \
+		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/$(1),$(n),hdr) $(call lx_le,$(EVAL_DS)/$(1),$(n),dn)) $(EVALUATE)
+	@mkdir -p $$(@D)
+	$$(EVALUATE) images --reference $$< $$(filter-out $$< $(EVALUATE),$$^) -o $$@ --ron $$(@:.csv=.ron)
+endef
+$(foreach n,$(EVAL_TEST_SCENES),$(eval $(call eval_test_scene,$(n))))
+
+# (3) Sensors: the scenes of make validate (pipelines/validate.mk), fewer paths, own directory.
+$(EVAL_DIR)/sensors/%.sensors.ron: $(VALIDATE_DIR)/%.lxs $(ESTIMATE) $(VALIDATE_DIR)/cases.mk
+	@mkdir -p $(@D)
+	$(ESTIMATE) sensors $< -o $@ --paths $(EVAL_SENSOR_PATHS_$*) --seed $(NOISY_SEED)
+
+$(EVAL_CSV)/sensors-%.csv: $(EVAL_DIR)/sensors/%.sensors.ron $(EVALUATE)
+	@mkdir -p $(@D)
+	$(EVALUATE) sensors $< --case '$(VALIDATE_CASE_$*)' $(VALIDATE_EXTRA_$*) -o $@ --ron $(@:.csv=.ron)
+
+# The summary: tables and plots from the reports (pipelines/eval.py summary).
+EVAL_REPORTS := $(EVAL_CSV)/cornell-box.images.csv $(patsubst %,$(EVAL_CSV)/dataset-%.images.csv,$(EVAL_TEST_SCENES)) \
+	$(patsubst %,$(EVAL_CSV)/sensors-%.csv,$(VALIDATE_CASES))
+
+$(REPORTS)/summary.md: $(EVAL_REPORTS) pipelines/eval.py python/luxest_contract.py $(VENV)/$(VENV_STAMP)
+	$(PYTHON) pipelines/eval.py summary --reports $(REPORTS) --preset $(PRESET) --model $(EVAL_MODEL) \
+		--cornell $(EVAL_CSV)/cornell-box.images.csv --dataset $(filter $(EVAL_CSV)/dataset-%,$^) \
+		--sensors $(filter $(EVAL_CSV)/sensors-%,$^) \
+		--ref-spp $(EVAL_REF_SPP) --ref-seed $(REF_SEED) --noisy-seed $(NOISY_SEED) \
+		--dataset-ref-spp $(REF_SPP) --sensor-scale $(EVAL_SENSOR_SCALE)
+
+eval: $(REPORTS)/summary.md

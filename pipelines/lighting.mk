@@ -1,0 +1,39 @@
+# `make lighting`: the lighting report of the example office (issue 14), one rule per output
+# file. Compile the scene, print its header (calculation grids, luminaires), estimate the work
+# plane by the local estimate, and write reports/lighting/office/ with the `report` stage:
+# report.md, work-plane.csv/.ron and work-plane.isolux.png. The Radiance results committed
+# beside it (radiance.csv) are compared point by point when present; `make lighting-radiance`
+# recomputes them (needs `scripts/setup.sh --peers`). Every stage is called through its variable.
+
+LIGHTING_SCENE ?= office
+LIGHTING_BUILD := build/$(LIGHTING_SCENE)
+LIGHTING_DIR ?= reports/lighting/$(LIGHTING_SCENE)
+# Light paths: enough for <= 1 % relative standard error on Eavg, Emin and U0 (measured).
+LIGHTING_PATHS ?= 200000
+LIGHTING_SEED ?= 1
+LIGHTING_PEER := $(wildcard $(LIGHTING_DIR)/radiance.csv)
+PEERS_PYTHON ?= .venv-peers/bin/python
+
+.PHONY: lighting lighting-radiance
+
+lighting: $(LIGHTING_DIR)/report.md
+
+# The report stage's binary (REPORT is set in the Makefile with the other stages).
+$(RELEASE)/report: $(RUST_SOURCES)
+	$(CARGO) build --release -p report
+	@touch $@
+
+$(LIGHTING_BUILD)/scene.info.ron: $(LIGHTING_BUILD)/scene.lxs $(SCENE_COMPILE)
+	$(SCENE_COMPILE) --info $< > $@.tmp && mv $@.tmp $@
+
+$(LIGHTING_BUILD)/$(LIGHTING_SCENE).sensors.ron: $(LIGHTING_BUILD)/scene.lxs $(ESTIMATE)
+	$(ESTIMATE) sensors $< -o $@ --paths $(LIGHTING_PATHS) --seed $(LIGHTING_SEED) --batch-values
+
+$(LIGHTING_DIR)/report.md: $(LIGHTING_BUILD)/$(LIGHTING_SCENE).sensors.ron $(LIGHTING_BUILD)/scene.info.ron $(REPORT) $(LIGHTING_PEER)
+	$(REPORT) $< --scene-info $(LIGHTING_BUILD)/scene.info.ron -o $(LIGHTING_DIR) $(if $(LIGHTING_PEER),--peer $(LIGHTING_PEER))
+
+# The peer: Radiance (rtrace -I) on the same room, luminaire tables and points.
+lighting-radiance: $(LIGHTING_BUILD)/scene.info.ron pipelines/radiance_office.py
+	$(PEERS_PYTHON) pipelines/radiance_office.py --scene scenes/$(LIGHTING_SCENE).ron \
+		--info $< -o $(LIGHTING_DIR)/radiance.csv
+	$(MAKE) lighting

@@ -1,0 +1,18 @@
+# The file-naming contract for the Makefile (docs/architecture.md, *File naming*): the same names
+# as luxest-io's naming module and python/luxest_contract.py, checked against Rust's
+# tests/fixtures/contract/naming.json by training/tests/test_contract.py.
+#
+#   $(call lx_count,64)                    000064      a count zero-padded to 6 digits
+#   $(call lx_image,PREFIX,64,hdr)         PREFIX_000064spp.hdr.exr
+#   $(call lx_le,PREFIX,1000,hdr)          PREFIX_001000le.hdr.exr   (double local estimate)
+#   $(call lx_ref,PREFIX,hdr)              PREFIX_ref.hdr.exr
+
+lx_count = $(shell printf '%06d' $(1))
+lx_image = $(1)_$(call lx_count,$(2))spp.$(3).exr
+lx_le = $(1)_$(call lx_count,$(2))le.$(3).exr
+lx_ref = $(1)_ref.$(2).exr
+
+# Pattern forms for rules, the level standing for %: $(call lx_image_pattern,PREFIX,dn) gives
+# PREFIX_%spp.dn.exr (% = 000064), $(call lx_le_pattern,PREFIX,hdr) gives PREFIX_%le.hdr.exr.
+lx_image_pattern = $(1)_%spp.$(2).exr
+lx_le_pattern = $(1)_%le.$(2).exr

@@ -1,0 +1,255 @@
+//! Tidy tests of the workspace's architecture (in the spirit of rust-analyzer's): the crate
+//! graph's invariants and the one-place rule for contracts, checked on every `cargo test`.
+//!
+//! - No stage crate depends on another stage crate: what two stages share lives in
+//!   `luxest-io` (contracts), `luxest-render` (rendering) or `luxest-exact` (exact solutions).
+//! - `denoise` and `evaluate` depend, even transitively, on neither `luxest-render` nor Embree,
+//!   so a researcher who swaps the tracer builds them without Embree installed.
+//! - `luxest-io` and `luxest-exact` link no Embree.
+//! - No Rust source outside `crates/io/src/header.rs` spells a header key (a string literal
+//!   opening with `luxest.`): every reader and writer goes through `luxest_io::header`.
+//! - No library code outside `crates/io/src/naming.rs` composes a file name of the contract
+//!   (`<name>_<spp, 6 digits>spp.<kind>.exr`, `_ref.`, `le.`, `.sensors.ron`): every stage goes
+//!   through `luxest_io::naming`.
+//! - Every stage binary is the three-line `main` over its library and `luxest_io::cli::main`,
+//!   so all stages share one exit-code and error convention.
+//! - Every library source file opens with a `//!` module doc.
+//!
+//! The crate graph is read from `Cargo.lock`, which cargo brings up to date with every
+//! `Cargo.toml` before it builds this test, so the check costs no build and no network.
+
+use crate::util::repo_root;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// The stage crates: one binary each, swappable through the Makefile's variables.
+const STAGES: [&str; 7] = [
+    "scene-compile",
+    "trace",
+    "aov-write",
+    "estimate",
+    "denoise",
+    "evaluate",
+    "report",
+];
+
+/// Package name -> names of its dependencies, from `Cargo.lock`.
+fn lock_graph() -> BTreeMap<String, Vec<String>> {
+    let text = std::fs::read_to_string(repo_root().join("Cargo.lock")).unwrap();
+    let mut graph = BTreeMap::new();
+    for block in text.split("[[package]]").skip(1) {
+        let mut name = None;
+        let mut deps = Vec::new();
+        let mut in_deps = false;
+        for line in block.lines().map(str::trim) {
+            if let Some(v) = line.strip_prefix("name = ") {
+                name = Some(v.trim_matches('"').to_string());
+            } else if line.starts_with("dependencies = [") {
+                in_deps = true;
+            } else if in_deps && line == "]" {
+                in_deps = false;
+            } else if in_deps {
+                // `"name"` or `"name version"` when the lock holds several versions.
+                let entry = line.trim_end_matches(',').trim_matches('"');
+                deps.push(entry.split(' ').next().unwrap().to_string());
+            }
+        }
+        graph
+            .entry(name.expect("every [[package]] has a name"))
+            .or_insert_with(Vec::new)
+            .extend(deps);
+    }
+    graph
+}
+
+/// Every package `root` depends on, directly or not. The lock's lists include dev-dependencies,
+/// so this is, if anything, more than the crate's library and binary link.
+fn closure(graph: &BTreeMap<String, Vec<String>>, root: &str) -> BTreeSet<String> {
+    let mut seen = BTreeSet::new();
+    let mut stack = vec![root.to_string()];
+    while let Some(p) = stack.pop() {
+        for d in graph.get(&p).into_iter().flatten() {
+            if seen.insert(d.clone()) {
+                stack.push(d.clone());
+            }
+        }
+    }
+    seen
+}
+
+#[test]
+fn no_stage_crate_depends_on_another_stage() {
+    let graph = lock_graph();
+    for stage in STAGES {
+        let deps = graph
+            .get(stage)
+            .unwrap_or_else(|| panic!("{stage} missing from Cargo.lock"));
+        let bad: Vec<_> = deps
+            .iter()
+            .filter(|d| STAGES.contains(&d.as_str()))
+            .collect();
+        assert!(
+            bad.is_empty(),
+            "stage {stage} depends on stage(s) {bad:?}: move what they share into luxest-io, \
+             luxest-render or luxest-exact"
+        );
+    }
+}
+
+#[test]
+fn denoise_and_evaluate_build_without_embree() {
+    let graph = lock_graph();
+    for krate in ["denoise", "evaluate", "report", "luxest-io", "luxest-exact"] {
+        let deps = closure(&graph, krate);
+        assert!(
+            !deps.contains("luxest-render"),
+            "{krate} depends on luxest-render (and so on Embree)"
+        );
+        let embree: Vec<_> = deps.iter().filter(|d| d.contains("embree")).collect();
+        assert!(embree.is_empty(), "{krate} links {embree:?}");
+    }
+    // The check can fail: the renderer does link Embree.
+    assert!(closure(&graph, "luxest-render").contains("embree"));
+}
+
+/// The `.rs` files under `dir`, recursively (nothing under `fixtures/`).
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            if path
+                .file_name()
+                .is_some_and(|n| n != "fixtures" && n != "target")
+            {
+                rust_files(&path, out);
+            }
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+}
+
+fn workspace_rust_files() -> Vec<PathBuf> {
+    let root = repo_root();
+    let mut files = Vec::new();
+    rust_files(&root.join("crates"), &mut files);
+    rust_files(&root.join("tests"), &mut files);
+    files.sort();
+    assert!(files.len() > 50, "found only {} Rust files", files.len());
+    files
+}
+
+#[test]
+fn header_keys_are_spelled_only_in_the_header_module() {
+    let root = repo_root();
+    let header = root.join("crates/io/src/header.rs");
+    // The needle is built so that this file does not match itself.
+    let needle = format!("\"{}.", "luxest");
+    let mut offenders = Vec::new();
+    for path in workspace_rust_files() {
+        if path == header {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        for (i, line) in text.lines().enumerate() {
+            if line.contains(&needle) {
+                let rel = path.strip_prefix(&root).unwrap().display().to_string();
+                offenders.push(format!("{rel}:{}: {}", i + 1, line.trim()));
+            }
+        }
+    }
+    assert!(
+        offenders.is_empty(),
+        "header keys spelled outside luxest_io::header (use its constants):\n{}",
+        offenders.join("\n")
+    );
+    assert!(std::fs::read_to_string(&header).unwrap().contains(&needle));
+}
+
+#[test]
+fn every_library_file_opens_with_a_module_doc() {
+    let root = repo_root();
+    let missing: Vec<_> = workspace_rust_files()
+        .into_iter()
+        .filter(|p| p.file_name().is_some_and(|n| n != "main.rs"))
+        .filter(|p| {
+            !std::fs::read_to_string(p)
+                .unwrap()
+                .trim_start()
+                .starts_with("//!")
+        })
+        .map(|p| p.strip_prefix(&root).unwrap().display().to_string())
+        .collect();
+    assert!(missing.is_empty(), "no //! module doc: {missing:?}");
+}
+
+/// The lines of library code in `path` (before its `#[cfg(test)]` module), comments left out.
+fn library_code_lines(path: &Path) -> Vec<(usize, String)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .enumerate()
+        .take_while(|(_, l)| !l.trim_start().starts_with("#[cfg(test)]"))
+        .filter(|(_, l)| !l.trim_start().starts_with("//"))
+        .map(|(i, l)| (i + 1, l.to_string()))
+        .collect()
+}
+
+#[test]
+fn file_names_are_composed_only_in_the_naming_module() {
+    let root = repo_root();
+    let naming = root.join("crates/io/src/naming.rs");
+    // A 6-digit count, the level tags and the sensor-results suffix: what composing a name of
+    // the contract by hand looks like.
+    let patterns = [
+        ":06}",
+        "}spp",
+        "spp.{",
+        "spp.hdr",
+        "_ref.",
+        "le.hdr",
+        ".sensors.ron\"",
+        ".sensors.csv\"",
+    ];
+    let mut offenders = Vec::new();
+    for path in workspace_rust_files() {
+        let in_library = path.components().any(|c| c.as_os_str() == "src");
+        if path == naming || !in_library || !path.starts_with(root.join("crates")) {
+            continue;
+        }
+        for (n, line) in library_code_lines(&path) {
+            if patterns.iter().any(|p| line.contains(p)) {
+                let rel = path.strip_prefix(&root).unwrap().display().to_string();
+                offenders.push(format!("{rel}:{n}: {}", line.trim()));
+            }
+        }
+    }
+    assert!(
+        offenders.is_empty(),
+        "file names composed outside luxest_io::naming:\n{}",
+        offenders.join("\n")
+    );
+    // The check can fail: the naming module itself composes them.
+    let own = library_code_lines(&naming);
+    assert!(own.iter().any(|(_, l)| l.contains(":06}")));
+}
+
+#[test]
+fn every_stage_binary_is_the_three_line_main() {
+    let root = repo_root();
+    for stage in STAGES {
+        let main = root.join("crates").join(stage).join("src/main.rs");
+        let text = std::fs::read_to_string(&main).unwrap();
+        let lines: Vec<_> = text.lines().filter(|l| !l.trim().is_empty()).collect();
+        assert_eq!(lines.len(), 3, "{}: {text}", main.display());
+        assert!(
+            lines[0] == "fn main() -> std::process::ExitCode {"
+                && lines[1].trim().starts_with("luxest_io::cli::main(")
+                && lines[2] == "}",
+            "{} is not the three-line main over luxest_io::cli::main:\n{text}",
+            main.display()
+        );
+    }
+}

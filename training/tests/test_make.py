@@ -1,0 +1,69 @@
+"""The Make rules' data flow (`make -n`, nothing is run): seeds of the dataset and of make eval,
+the noisy target following NOISY_MAX, and every stage called through its variable."""
+import re
+import shlex
+import subprocess
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+# Stand-in stage programs: files make sees as up-to-date prerequisites (no cargo build planned).
+_STAGE_DIR = Path(tempfile.mkdtemp(prefix="luxest-stages-"))
+STAGES = {v: str(_STAGE_DIR / v.lower()) for v in ("SCENE_COMPILE", "TRACE", "AOV_WRITE", "ESTIMATE", "DENOISE", "EVALUATE")}
+for _p in STAGES.values():
+    Path(_p).touch()
+
+
+def dry_run(*targets, **variables):
+    """The commands `make -n` would run, with every stage replaced by a path that does not exist
+    as a make target (so no cargo build is planned) and a dataset that does not exist."""
+    v = {**STAGES, "DATASET": "pytest-dry-run", **variables}
+    args = ["make", "-n", "--no-print-directory", *targets] + [f"{k}={val}" for k, val in v.items()]
+    r = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return [shlex.split(line) for line in r.stdout.splitlines() if line.startswith(str(_STAGE_DIR))]
+
+
+def flag(cmd, name):
+    return cmd[cmd.index(name) + 1]
+
+
+def test_dataset_references_have_their_own_seed_and_features_share_traces():
+    cmds = dry_run("reference", "noisy")
+    traces = [c for c in cmds if c[0] == STAGES["TRACE"]]
+    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"]]
+    assert len(traces) == len(aovs) == 2 * 24  # quick: 24 scenes, a reference and a noisy run each
+    ref_seeds = {flag(c, "--seed") for c in traces if "--reference" in c}
+    noisy_seeds = {flag(c, "--seed") for c in traces if "--reference" not in c}
+    assert len(ref_seeds) == len(noisy_seeds) == 1 and ref_seeds.isdisjoint(noisy_seeds)
+    # aov-write gets exactly trace's arguments for each image set (same seed, spp, snapshots).
+    assert sorted(c[1:] for c in traces) == sorted(c[1:] for c in aovs)
+
+
+def test_noisy_target_follows_noisy_max():
+    cmds = dry_run("noisy", NOISY_LEVELS="1 2 4 8")
+    runs = [c for c in cmds if c[0] == STAGES["TRACE"]]
+    assert runs and all(flag(c, "--spp") == "8" and flag(c, "--snapshots") == "1,2,4,8" for c in runs)
+    out = subprocess.run(["make", "-n", "--no-print-directory", "-p", "noisy", "NOISY_LEVELS=1 2 4 8", "DATASET=pytest-dry-run",
+                          *[f"{k}={v}" for k, v in STAGES.items()]], cwd=ROOT, capture_output=True, text=True).stdout
+    assert re.search(r"^data/pytest-dry-run/%_000008spp\.nrm\.exr:", out, re.M)
+
+
+def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
+    cmds = dry_run("eval", EVAL_MODEL="models/default.onnx")
+    traces = [c for c in cmds if c[0] == STAGES["TRACE"] and "cornell-box" in c[1]]
+    ref = [c for c in traces if "--reference" in c]
+    prog = [c for c in traces if "--reference" not in c]
+    assert len(ref) == len(prog) == 1 and flag(ref[0], "--seed") != flag(prog[0], "--seed")
+    snapshots = flag(prog[0], "--snapshots").split(",")
+    denoised = [c for c in cmds if c[0] == STAGES["DENOISE"] and "/cornell-box/" in c[1]]
+    dle = [c for c in cmds if c[0] == STAGES["ESTIMATE"] and c[1] == "image" and "cornell-box" in c[2]]
+    assert len(denoised) == len(snapshots) + len(dle)
+    assert [c for c in cmds if c[0] == STAGES["EVALUATE"] and c[1] == "images"]
+    # Every program run is a stage variable or the summary: no stage runs behind make's back.
+    r = subprocess.run(["make", "-n", "--no-print-directory", "eval", "EVAL_MODEL=models/default.onnx", "DATASET=pytest-dry-run",
+                        *[f"{k}={v}" for k, v in STAGES.items()]], cwd=ROOT, capture_output=True, text=True)
+    others = [line for line in r.stdout.splitlines()
+              if line.strip() and not line.startswith((str(_STAGE_DIR), "mkdir", "python3 data-gen", "python3 pipelines/validate.py scene",
+                                                       ".venv/bin/python pipelines/eval.py", "\t"))]
+    assert others == [], others

@@ -1,0 +1,95 @@
+"""Data flow of preprocessing (issue 11): independent reference seeds, spp from headers, and the
+whole-image exposure stored for training."""
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+TRAINING = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(TRAINING))
+
+import dataset  # noqa: E402
+import luxest_contract as contract  # noqa: E402
+import preprocess  # noqa: E402
+
+
+def write_set(split_dir, name, spp, seed, rng, h=32, w=48, file_spp=None):
+    """One noisy level (hdr, alb, nrm) with the headers trace / aov-write record."""
+    header = {contract.SAMPLES: spp, contract.SEED: seed, contract.ESTIMATOR: "path-tracing"}
+    # A bright left half, a dim right half: a crop's own exposure differs from the image's.
+    hdr = rng.random((h, w, 3)).astype(np.float32) * np.where(np.arange(w) < w // 2, 10.0, 0.1)[None, :, None].astype(np.float32)
+    contract.write(split_dir / contract.image_name(name, "hdr", file_spp or spp), hdr, header)
+    for kind in ("alb", "nrm"):
+        contract.write(split_dir / contract.image_name(name, kind, file_spp or spp), rng.random((h, w, 3)), header)
+    return hdr
+
+
+def write_ref(split_dir, name, seed, rng, h=32, w=48):
+    contract.write(split_dir / contract.image_name(name, "hdr"), rng.random((h, w, 3)),
+                   {contract.SAMPLES: 256, contract.SEED: seed})
+
+
+def test_refuses_a_reference_with_the_noisy_seed(tmp_path):
+    rng = np.random.default_rng(1)
+    src = tmp_path / "data" / "train"
+    src.mkdir(parents=True)
+    write_ref(src, "gen0000", 1, rng)
+    write_set(src, "gen0000", 4, 1, rng)
+    with pytest.raises(contract.ContractError) as e:
+        preprocess.preprocess_split(src, tmp_path / "prep", [4])
+    msg = str(e.value)
+    assert "gen0000_ref.hdr.exr" in msg and "gen0000_000004spp.hdr.exr" in msg and "luxest.seed = 1" in msg
+    assert "\n" not in msg
+    # The command line: exit 1, one line on stderr naming both files.
+    for split in ("valid", "test"):
+        (tmp_path / "data" / split).mkdir()
+    r = subprocess.run([sys.executable, str(TRAINING / "preprocess.py"), "--data-dir", str(tmp_path / "data"),
+                        "--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4"], capture_output=True, text=True)
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1
+    assert "gen0000_ref.hdr.exr" in r.stderr and "gen0000_000004spp.hdr.exr" in r.stderr
+
+
+def test_spp_comes_from_the_header(tmp_path):
+    rng = np.random.default_rng(2)
+    src = tmp_path / "train"
+    src.mkdir()
+    write_ref(src, "g", 1000001, rng)
+    write_set(src, "g", 8, 1, rng, file_spp=4)  # the name says 4, the header 8
+    with pytest.raises(contract.ContractError, match="luxest.samples = 8 but the file name says 4"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [4, 8])
+
+
+def test_stores_the_whole_image_exposure_for_every_crop(tmp_path):
+    rng = np.random.default_rng(3)
+    src = tmp_path / "train"
+    src.mkdir()
+    write_ref(src, "g", 1000001, rng)
+    h, w = 32, 48
+    # Channel c is (c + 1) times a brightness that is 10 on the left half and 0.1 on the right,
+    # so a crop's channel order shows its permutation, and its own exposure is not the image's.
+    bright = np.where(np.arange(w) < w // 2, 10.0, 0.1)[None, :, None] * (1 + 0.2 * rng.random((h, w, 1)))
+    hdr = (bright * np.array([1.0, 2.0, 3.0])).astype(np.float32)
+    header = {contract.SAMPLES: 4, contract.SEED: 1}
+    contract.write(src / contract.image_name("g", "hdr", 4), hdr, header)
+    for kind in ("alb", "nrm"):
+        contract.write(src / contract.image_name("g", kind, 4), rng.random((h, w, 3)), header)
+    assert preprocess.preprocess_split(src, tmp_path / "prep", [4]) == 2
+    [(inp, ref, meta)] = dataset.pairs(tmp_path / "prep")
+    assert (meta["samples"], meta["seed"], meta["reference_seed"]) == (4, 1, 1000001)
+    assert math.isclose(meta["exposures"][0], contract.exposure(hdr), rel_tol=1e-15)
+    crops = dataset.Crops(tmp_path / "prep", crop=16, seed=5, length=40)
+    seen, differs = set(), 0
+    for i in range(len(crops)):
+        a, b, e = crops[i]
+        perm = tuple(int(r) for r in np.argsort(np.argsort([float(a[j].mean()) for j in range(3)])))
+        seen.add(perm)
+        whole = contract.exposure(hdr[..., list(perm)])
+        assert math.isclose(float(e), whole, rel_tol=1e-6)
+        own = contract.exposure(a[0:3].permute(1, 2, 0).numpy())
+        differs += not math.isclose(float(e), own, rel_tol=0.5)
+    assert len(seen) > 1 and differs > len(crops) // 2  # a per-crop exposure would be wrong
+    # Preprocessing is incremental: nothing to do the second time.
+    assert preprocess.preprocess_split(src, tmp_path / "prep", [4]) == 0
