@@ -118,15 +118,8 @@ fn view_points(
                     });
                     break;
                 }
-                let Some(s) = bsdf::sample(
-                    m,
-                    -dir,
-                    sp.ng,
-                    sp.ng,
-                    rng.next_2d(),
-                    rng.next_f64(),
-                    Transport::Radiance,
-                ) else {
+                let Some(s) = bsdf::sample_flat(m, -dir, sp.ng, &mut rng, Transport::Radiance)
+                else {
                     break;
                 };
                 weight = weight * s.weight;

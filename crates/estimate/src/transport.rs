@@ -29,7 +29,7 @@ pub fn scatter(
     rng: &mut Rng,
 ) -> Option<(Rgb, Vec3, Vec3)> {
     let m = world.material(sp.triangle);
-    let s = bsdf::sample(m, -dir, sp.ng, sp.ng, rng.next_2d(), rng.next_f64(), mode)?;
+    let s = bsdf::sample_flat(m, -dir, sp.ng, rng, mode)?;
     let survival = s.weight.max_component().min(1.0);
     if survival <= 0.0 || rng.next_f64() >= survival {
         return None;

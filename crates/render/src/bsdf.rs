@@ -274,6 +274,22 @@ pub fn sample(
     }
 }
 
+/// [`sample`] on a flat-shaded surface (shading normal = geometric normal `ng`), drawing its
+/// three uniform numbers from `rng` in the order the estimators always have: the 2D direction
+/// sample, then the lobe choice.
+#[inline]
+pub fn sample_flat(
+    m: &Material,
+    wo: Vec3,
+    ng: Vec3,
+    rng: &mut crate::sampling::Rng,
+    mode: Transport,
+) -> Option<BsdfSample> {
+    let u = rng.next_2d();
+    let uc = rng.next_f64();
+    sample(m, wo, ng, ng, u, uc, mode)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

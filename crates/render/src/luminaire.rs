@@ -206,6 +206,17 @@ impl GoniometricLight {
         self.sources[((u * n as f64) as usize).min(n - 1)]
     }
 
+    /// The source a light sample starts from: the only one for the point form (drawing no
+    /// random number), else one chosen uniformly with `rng`.
+    #[inline]
+    pub fn choose_source(&self, rng: &mut crate::sampling::Rng) -> Vec3 {
+        if self.sources.len() > 1 {
+            self.pick_source(rng.next_f64())
+        } else {
+            self.position
+        }
+    }
+
     /// An emission direction (world, unit) from two uniform numbers, and the flux weight
     /// I(ω)/p(ω) per channel (lm) before the emitter-choice probability (see the module docs).
     pub fn sample_emission(&self, u1: f64, u2: f64) -> (Vec3, Rgb) {

@@ -377,11 +377,7 @@ impl World {
                 let l = self
                     .luminaire(ei)
                     .expect("luminaires are built for luminaire scenes");
-                let position = if l.sources().len() > 1 {
-                    l.pick_source(rng.next_f64())
-                } else {
-                    l.position
-                };
+                let position = l.choose_source(rng);
                 let (direction, weight) = l.sample_emission(rng.next_f64(), rng.next_f64());
                 EmissionSample {
                     position,
@@ -432,11 +428,7 @@ impl World {
                 let l = self
                     .luminaire(ei)
                     .expect("luminaires are built for luminaire scenes");
-                let position = if l.sources().len() > 1 {
-                    l.pick_source(rng.next_f64())
-                } else {
-                    l.position
-                };
+                let position = l.choose_source(rng);
                 LightPoint {
                     position,
                     normal: None,

@@ -129,15 +129,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
                 }
             }
         }
-        let Some(s) = bsdf::sample(
-            m,
-            wo,
-            sp.ng,
-            sp.ng,
-            rng.next_2d(),
-            rng.next_f64(),
-            Transport::Radiance,
-        ) else {
+        let Some(s) = bsdf::sample_flat(m, wo, sp.ng, rng, Transport::Radiance) else {
             break;
         };
         beta = beta * s.weight;
