@@ -45,22 +45,8 @@ SINGULARITY_PATHS_full := 10000000
 SINGULARITY_SAMPLES_quick := 200000
 SINGULARITY_SAMPLES_full := 2000000
 
-# The selected preset's values (each overridable on the command line).
-REF_SPP ?= $(REF_SPP_$(PRESET))
-NOISY_LEVELS ?= $(NOISY_LEVELS_$(PRESET))
-TRAIN_STEPS ?= $(TRAIN_STEPS_$(PRESET))
-TRAIN_MINUTES ?= $(TRAIN_MINUTES_$(PRESET))
-EVAL_REF_SPP ?= $(EVAL_REF_SPP_$(PRESET))
-EVAL_PROG_SPP ?= $(EVAL_PROG_SPP_$(PRESET))
-EVAL_DLE ?= $(EVAL_DLE_$(PRESET))
-EVAL_DATA_DLE ?= $(EVAL_DATA_DLE_$(PRESET))
-EVAL_SENSOR_SCALE ?= $(EVAL_SENSOR_SCALE_$(PRESET))
-VALIDATE_SCALE ?= $(VALIDATE_SCALE_$(PRESET))
-SINGULARITY_PATHS ?= $(SINGULARITY_PATHS_$(PRESET))
-SINGULARITY_SAMPLES ?= $(SINGULARITY_SAMPLES_$(PRESET))
-
-# Seeds (docs/architecture.md, *Seeds*). A sample depends only on (seed, pixel, sample index), so
-# a reference rendered with its noisy images' seed would contain their samples: references use
-# their own seed, and preprocess.py refuses a pair whose luxest.seed values are equal.
-NOISY_SEED := 1
-REF_SEED := 1000001
+# The selected preset's values: each NAME above gets NAME ?= NAME_$(PRESET), so every one is
+# also overridable on the command line (`make eval EVAL_DLE="100 1000"`).
+PRESET_VARIABLES := REF_SPP NOISY_LEVELS TRAIN_STEPS TRAIN_MINUTES EVAL_REF_SPP EVAL_PROG_SPP \
+	EVAL_DLE EVAL_DATA_DLE EVAL_SENSOR_SCALE VALIDATE_SCALE SINGULARITY_PATHS SINGULARITY_SAMPLES
+$(foreach v,$(PRESET_VARIABLES),$(eval $(v) ?= $$($(v)_$(PRESET))))
