@@ -50,3 +50,9 @@ SINGULARITY_SAMPLES_full := 2000000
 PRESET_VARIABLES := REF_SPP NOISY_LEVELS TRAIN_STEPS TRAIN_MINUTES EVAL_REF_SPP EVAL_PROG_SPP \
 	EVAL_DLE EVAL_DATA_DLE EVAL_SENSOR_SCALE VALIDATE_SCALE SINGULARITY_PATHS SINGULARITY_SAMPLES
 $(foreach v,$(PRESET_VARIABLES),$(eval $(v) ?= $$($(v)_$(PRESET))))
+
+# Seeds (docs/architecture.md, *Seeds*). A sample depends only on (seed, pixel, sample index), so
+# a reference rendered with its noisy images' seed would contain their samples: references use
+# their own seed, and preprocess.py refuses a pair whose luxest.seed values are equal.
+NOISY_SEED := 1
+REF_SEED := 1000001
