@@ -18,6 +18,8 @@ import argparse
 import sys
 from pathlib import Path
 
+from atomic import write_text as write
+
 ROOT = Path(__file__).resolve().parent.parent
 ROOM = 0.5488
 EPS_FRACTIONS = (1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1)
@@ -86,14 +88,6 @@ def cmd_summary(args):
     text = "\n".join(out) + "\n"
     write(args.out, text)
     print(text)
-
-
-def write(path, text):
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
 
 
 def main(argv=None):

@@ -23,6 +23,8 @@ import math
 import sys
 from pathlib import Path
 
+from atomic import write_text as write
+
 ROOT = Path(__file__).resolve().parent.parent
 MAX_Z = 4.0
 TRACE_RHOS = (0.5, 0.9)
@@ -210,14 +212,6 @@ def cmd_summary(args):
     print(text)
     if failures:
         sys.exit(1)
-
-
-def write(path, text):
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    tmp.replace(path)
 
 
 def main(argv=None):
