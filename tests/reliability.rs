@@ -909,3 +909,338 @@ fn scene_compile_never_overwrites_its_sources() {
         report.warnings
     );
 }
+
+/// Items 5, 6, 7, 8 for estimate, trace and aov-write: no output over the scene or another
+/// output, none over a FIFO or a directory, checked before any work; a run whose later output
+/// cannot be written leaves none of its outputs behind.
+#[test]
+fn camera_and_sensor_stages_never_overwrite_inputs_and_commit_together() {
+    let dir = TempDir::new("rel-est-out");
+    let lxs = cornell(&dir);
+    // A scene file whose name is one of the run's default image names.
+    let alb_named = dir.path().join("p_000001spp.alb.exr");
+    let hdr_named = dir.path().join("s_000001spp.hdr.exr");
+    std::fs::copy(&lxs, &alb_named).unwrap();
+    std::fs::copy(&lxs, &hdr_named).unwrap();
+    let fifo = dir.path().join("fifo.ron");
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    // A regular file where the CSV's directory should be: the CSV cannot be written.
+    dir.write("blocker", "x");
+    std::fs::create_dir(dir.path().join("q_000001spp.nrm.exr")).unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let d = |name: &str| s(&dir.path().join(name));
+    let scene = s(&lxs);
+    let quick = ["--batches", "2", "--threads", "1"];
+    let protected: Vec<&std::path::Path> = vec![&lxs, &alb_named, &hdr_named];
+    type Stage = fn(&[&str]) -> StageResult;
+    let est: Stage = crate::util::estimate;
+    let trace: Stage = trace_stage;
+    let aov: Stage = aov_write_stage;
+    let over = "would overwrite the input";
+    let twice = "two outputs of this run would be the same file";
+    let cases: Vec<(Stage, Vec<String>, &str)> = vec![
+        (
+            est,
+            vec!["sensors".into(), scene.clone(), "-o".into(), scene.clone()],
+            over,
+        ),
+        (
+            est,
+            vec!["gather".into(), scene.clone(), "-o".into(), scene.clone()],
+            over,
+        ),
+        (
+            est,
+            vec![
+                "direct".into(),
+                scene.clone(),
+                "--bin-radius".into(),
+                "0.1".into(),
+                "-o".into(),
+                scene.clone(),
+            ],
+            over,
+        ),
+        (
+            est,
+            vec![
+                "image".into(),
+                scene.clone(),
+                "--resolution".into(),
+                "8x8".into(),
+                "-o".into(),
+                scene.clone(),
+            ],
+            over,
+        ),
+        (
+            est,
+            vec![
+                "image".into(),
+                scene.clone(),
+                "--resolution".into(),
+                "8x8".into(),
+                "-o".into(),
+                d("o.exr"),
+                "--stderr-out".into(),
+                d("o.exr"),
+            ],
+            twice,
+        ),
+        (
+            est,
+            vec![
+                "image".into(),
+                scene.clone(),
+                "--resolution".into(),
+                "8x8".into(),
+                "-o".into(),
+                d("o.exr"),
+                "--preview".into(),
+                d("./o.exr"),
+            ],
+            twice,
+        ),
+        (
+            est,
+            vec![
+                "sensors".into(),
+                scene.clone(),
+                "-o".into(),
+                d("o.ron"),
+                "--csv".into(),
+                d("o.ron"),
+            ],
+            twice,
+        ),
+        (
+            est,
+            vec!["sensors".into(), scene.clone(), "-o".into(), s(&fifo)],
+            "is a FIFO; refusing",
+        ),
+        (
+            est,
+            vec!["gather".into(), scene.clone(), "-o".into(), d("")],
+            "is a directory; refusing",
+        ),
+        // The CSV fails after the estimate: the RON written first must not stay behind.
+        (
+            est,
+            vec![
+                "sensors".into(),
+                scene.clone(),
+                "--paths".into(),
+                "100".into(),
+                "--near-samples".into(),
+                "0".into(),
+                "-o".into(),
+                d("x.ron"),
+                "--csv".into(),
+                d("blocker/x.csv"),
+            ],
+            "blocker",
+        ),
+        (
+            trace,
+            vec![
+                s(&hdr_named),
+                "--spp".into(),
+                "1".into(),
+                "--resolution".into(),
+                "8x8".into(),
+                "-o".into(),
+                d("s"),
+            ],
+            over,
+        ),
+        (
+            trace,
+            vec![
+                scene.clone(),
+                "--spp".into(),
+                "2".into(),
+                "--snapshots".into(),
+                "1".into(),
+                "--resolution".into(),
+                "8x8".into(),
+                "-o".into(),
+                d("t"),
+                "--preview".into(),
+                d("t_000001spp.hdr.exr"),
+            ],
+            twice,
+        ),
+        (
+            aov,
+            vec![
+                s(&alb_named),
+                "--spp".into(),
+                "1".into(),
+                "--resolution".into(),
+                "8x8".into(),
+                "-o".into(),
+                d("p"),
+            ],
+            over,
+        ),
+        // The normal image's path is a directory: the albedo must not be written either.
+        (
+            aov,
+            vec![
+                scene.clone(),
+                "--spp".into(),
+                "1".into(),
+                "--resolution".into(),
+                "8x8".into(),
+                "-o".into(),
+                d("q"),
+            ],
+            "is a directory; refusing",
+        ),
+    ];
+    for (stage, args, want) in cases {
+        let mut argv: Vec<&str> = args.iter().map(String::as_str).collect();
+        if ["sensors", "gather", "direct"].contains(&argv[0]) {
+            argv.extend(quick);
+        } else {
+            argv.extend(["--threads", "1"]);
+        }
+        expect_refusal(stage, &dir, &argv, want, &protected);
+    }
+    // The same runs with distinct outputs succeed and write what they planned.
+    crate::util::estimate(&[
+        "sensors",
+        &scene,
+        "--paths",
+        "100",
+        "--near-samples",
+        "0",
+        "-o",
+        &d("x.ron"),
+        "--csv",
+        &d("x.csv"),
+        "--batches",
+        "2",
+    ])
+    .unwrap();
+    aov_write_stage(&[
+        &scene,
+        "--spp",
+        "2",
+        "--snapshots",
+        "1",
+        "--resolution",
+        "8x8",
+        "-o",
+        &d("r"),
+    ])
+    .unwrap();
+    for f in [
+        "x.ron",
+        "x.csv",
+        "r_000001spp.alb.exr",
+        "r_000002spp.nrm.exr",
+    ] {
+        assert!(dir.path().join(f).is_file(), "{f} not written");
+    }
+}
+
+/// Items 4 and 13: options that silently changed or disabled what they set, or never ended, are
+/// usage errors stating the allowed range and unit.
+#[test]
+fn numeric_options_outside_their_range_are_usage_errors() {
+    let dir = TempDir::new("rel-opts");
+    let lxs = cornell(&dir);
+    let scene = lxs.to_str().unwrap();
+    let o = dir.path().join("o").to_str().unwrap().to_string();
+    let positive_m = "must be a finite number > 0 m";
+    let est = |a: &[&str]| {
+        let mut argv = a.to_vec();
+        argv.insert(1, scene);
+        argv.extend(["-o", &o]);
+        crate::util::estimate(&argv)
+    };
+    let with_scene = |f: fn(&[&str]) -> StageResult, a: &[&str]| {
+        let mut argv = vec![scene];
+        argv.extend(a);
+        argv.extend(["-o", &o]);
+        f(&argv)
+    };
+    let cases: Vec<(StageResult, &str)> = vec![
+        (est(&["sensors", "--near-radius=-0.1"]), positive_m),
+        (est(&["sensors", "--near-radius", "NaN"]), positive_m),
+        (est(&["sensors", "--eps=-0.1"]), positive_m),
+        (est(&["sensors", "--edge-offset", "inf"]), positive_m),
+        (
+            est(&["sensors", "--max-depth", "0"]),
+            "must be a whole number in [1, 1048576] bounces",
+        ),
+        (
+            est(&["sensors", "--batches", "1"]),
+            "must be a whole number in [2, 1048576] batches",
+        ),
+        (
+            est(&["sensors", "--paths", "0"]),
+            "must be a whole number >= 1 paths",
+        ),
+        (
+            est(&["sensors", "--paths", "10"]),
+            "--paths 10 is less than --batches 32",
+        ),
+        (est(&["image", "--eps=-0.1"]), positive_m),
+        (est(&["image", "--eps", "NaN"]), positive_m),
+        (est(&["image", "--pixel-samples", "0"]), "samples per pixel"),
+        (est(&["image", "--max-depth", "0"]), "bounces"),
+        (
+            est(&["gather", "--samples", "0"]),
+            "must be a whole number >= 1 paths",
+        ),
+        (
+            est(&["gather", "--samples", "4"]),
+            "--samples 4 is less than --batches 32",
+        ),
+        (est(&["direct", "--bin-radius=-1"]), positive_m),
+        (
+            est(&["sensors", "--threads", "5000"]),
+            "in [0, 4096] threads (0: all cores)",
+        ),
+        (
+            with_scene(trace_stage, &["--time", "inf"]),
+            "must be a number in (0, 1000000] s",
+        ),
+        (
+            with_scene(trace_stage, &["--spp", "4", "--snapshots", "0"]),
+            "samples per pixel",
+        ),
+        (
+            with_scene(trace_stage, &["--spp", "4", "--snapshots", "2,5"]),
+            "5 exceeds --spp 4",
+        ),
+        (
+            with_scene(trace_stage, &["--spp", "4", "--max-depth", "0"]),
+            "bounces",
+        ),
+        (
+            with_scene(aov_write_stage, &["--spp", "0"]),
+            "samples per pixel",
+        ),
+        (
+            with_scene(aov_write_stage, &["--spp", "4", "--snapshots", "0"]),
+            "samples per pixel",
+        ),
+        (
+            with_scene(aov_write_stage, &["--spp", "4", "--snapshots", "5"]),
+            "5 exceeds --spp 4",
+        ),
+    ];
+    for (i, (r, want)) in cases.into_iter().enumerate() {
+        let (code, msg) = r.expect_err(&format!("case {i} must be refused"));
+        assert_eq!(code, 2, "case {i}: {msg}");
+        assert!(msg.contains(want), "case {i}: expected {want:?} in {msg}");
+    }
+    assert!(dir.files().iter().all(|f| f == &lxs), "{:?}", dir.files());
+}

@@ -4,10 +4,12 @@
 use crate::features::FeatureFilm;
 use clap::Parser;
 use luxest_io::cli::CommonArgs;
-use luxest_io::exr_io::{write_rgb, RgbImage};
+use luxest_io::exr_io::{write_rgb_to, RgbImage};
 use luxest_io::header;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{image_path, Kind, Level};
+use luxest_io::num::Count;
+use luxest_io::outputs::OutputPlan;
 use luxest_io::{Error, Result};
 use luxest_render::world::load_with_camera;
 use std::path::PathBuf;
@@ -25,10 +27,11 @@ pub struct Args {
     #[arg(short, long)]
     pub out: Option<PathBuf>,
     /// Samples per pixel (the final image).
-    #[arg(long)]
+    #[arg(long, value_parser = SPP)]
     pub spp: u32,
-    /// Also write the features at these sample counts (as trace's snapshots).
-    #[arg(long, value_delimiter = ',')]
+    /// Also write the features at these sample counts (as trace's snapshots; each at least 1
+    /// and at most --spp).
+    #[arg(long, value_delimiter = ',', value_parser = SPP)]
     pub snapshots: Vec<u32>,
     /// Write the final images as the reference (_ref).
     #[arg(long)]
@@ -43,22 +46,24 @@ pub struct Args {
     pub common: CommonArgs,
 }
 
+/// Samples per pixel: at least one.
+const SPP: Count<u32> = Count::range(1, u32::MAX as u64, "samples per pixel");
+
 /// Runs the command line.
 pub fn run(args: Args) -> Result<()> {
-    if args.spp == 0 {
-        return Err(Error::Usage("--spp must be positive".into()));
+    if let Some(&s) = args.snapshots.iter().find(|&&s| s > args.spp) {
+        return Err(Error::Usage(format!(
+            "--snapshots: {s} exceeds --spp {}; a snapshot is taken on the way to the final \
+             images",
+            args.spp
+        )));
     }
     let (world, cam) = load_with_camera(&args.scene, args.resolution.as_deref())?;
     let prefix = args
         .out
         .clone()
         .unwrap_or_else(|| args.scene.with_file_name(&world.scene.header.name));
-    let mut counts: Vec<u32> = args
-        .snapshots
-        .iter()
-        .copied()
-        .filter(|&s| s > 0 && s < args.spp)
-        .collect();
+    let mut counts: Vec<u32> = args.snapshots.clone();
     counts.push(args.spp);
     counts.sort_unstable();
     counts.dedup();
@@ -70,13 +75,28 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         Level::Spp(args.spp as u64)
     };
-    for &target in &counts {
-        film.advance(&world, &cam, args.common.seed, threads, target);
-        let level = if target == args.spp {
+    let level_of = |target: u32| {
+        if target == args.spp {
             final_level
         } else {
             Level::Spp(target as u64)
-        };
+        }
+    };
+    let mut kinds = vec![Kind::Alb, Kind::Nrm];
+    if args.depth {
+        kinds.push(Kind::Depth);
+    }
+    // Every image of the run, checked against the scene and each other before any work; all
+    // appear together at the end.
+    let outputs: Vec<PathBuf> = counts
+        .iter()
+        .flat_map(|&t| kinds.iter().map(move |&k| (t, k)))
+        .map(|(t, k)| image_path(&prefix, level_of(t), k))
+        .collect();
+    let mut plan = OutputPlan::new([&args.scene], &outputs)?;
+    for &target in &counts {
+        film.advance(&world, &cam, args.common.seed, threads, target);
+        let level = level_of(target);
         let info = RunInfo::new(
             ESTIMATOR,
             target as u64,
@@ -84,19 +104,19 @@ pub fn run(args: Args) -> Result<()> {
             start.elapsed().as_secs_f64(),
             &world.scene.content_hash,
         );
-        let write = |kind: Kind, pixels: Vec<[f32; 3]>| -> Result<()> {
+        for &kind in &kinds {
             let mut img = RgbImage::new(film.width, film.height);
-            img.pixels = pixels;
+            img.pixels = match kind {
+                Kind::Alb => film.albedo(),
+                Kind::Nrm => film.normal(),
+                _ => film.depth(),
+            };
             img.attributes = info.to_attributes();
             img.set_attribute(header::PIXEL_FILTER, "box");
-            write_rgb(&image_path(&prefix, level, kind), &img)
-        };
-        write(Kind::Alb, film.albedo())?;
-        write(Kind::Nrm, film.normal())?;
-        if args.depth {
-            write(Kind::Depth, film.depth())?;
+            write_rgb_to(&mut plan, &image_path(&prefix, level, kind), &img)?;
         }
     }
+    plan.commit()?;
     eprintln!(
         "wrote {}_{}.{{alb,nrm{}}}.exr ({} spp, {:.2} s)",
         prefix.display(),

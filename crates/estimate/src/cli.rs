@@ -9,10 +9,12 @@ use crate::singularity::Singularity;
 use crate::{exact_table, gather};
 use clap::{Parser, Subcommand, ValueEnum};
 use luxest_io::cli::CommonArgs;
-use luxest_io::exr_io::{write_preview_png_auto, write_rgb, RgbImage};
+use luxest_io::exr_io::{write_preview_png_auto_to, write_rgb_to, RgbImage};
 use luxest_io::header;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{self, image_path, Kind, Level};
+use luxest_io::num::{Count, Real};
+use luxest_io::outputs::OutputPlan;
 use luxest_io::{Error, Result};
 use luxest_render::world::{load_with_camera, World};
 use std::path::{Path, PathBuf};
@@ -35,28 +37,44 @@ pub struct RunArgs {
     /// Also write the results as CSV to this file.
     #[arg(long)]
     pub csv: Option<PathBuf>,
-    /// Independent batches (for the standard error).
-    #[arg(long, default_value_t = 32)]
+    /// Independent batches (for the standard error), 2 to 2^20.
+    #[arg(long, default_value_t = 32, value_parser = Count::<usize>::range(2, 1 << 20, "batches"))]
     pub batches: usize,
     #[command(flatten)]
     pub common: CommonArgs,
-    /// Safety bound on path length (the bias it causes is below q^max_depth for survival q).
-    #[arg(long, default_value_t = 100_000)]
+    /// Safety bound on path length, 1 to 2^20 (the bias it causes is below q^max_depth for
+    /// survival q).
+    #[arg(long, default_value_t = 100_000, value_parser = MAX_DEPTH)]
     pub max_depth: u32,
     /// Sensors on edges or in corners are evaluated this far off the adjacent surfaces, m
     /// [default: 1e-3 of the room scale, the smallest non-flat side of the bounding box].
-    #[arg(long)]
+    #[arg(long, value_parser = Real::positive("m"))]
     pub edge_offset: Option<f64>,
 }
 
 impl RunArgs {
-    fn check(&self) -> Result<()> {
-        if self.batches < 2 {
-            return Err(Error::Usage(
-                "--batches must be at least 2 (the standard error needs them)".into(),
-            ));
+    /// `count` (`--paths` or `--samples`, named `what`) must fill every batch.
+    fn check(&self, what: &str, count: u64) -> Result<()> {
+        if count < self.batches as u64 {
+            return Err(Error::Usage(format!(
+                "{what} {count} is less than --batches {}: every batch needs at least one",
+                self.batches
+            )));
         }
         Ok(())
+    }
+
+    /// The sensor results (at `--out` or `<scene dir>/<name>.sensors.ron`) and the CSV on
+    /// request, planned against the scene before any work: the RON path and the plan.
+    fn plan(&self, world: &World) -> Result<(PathBuf, OutputPlan)> {
+        let out = self.out.clone().unwrap_or_else(|| {
+            naming::sensors_path(
+                self.scene.parent().unwrap_or(Path::new("")),
+                &world.scene.header.name,
+            )
+        });
+        let plan = OutputPlan::new([&self.scene], std::iter::once(&out).chain(&self.csv))?;
+        Ok((out, plan))
     }
 
     /// The run metadata of an estimate of this run.
@@ -83,6 +101,15 @@ impl RunArgs {
         }
     }
 }
+
+/// Path-length bound of every estimator: 0 would give nothing but the direct light, or black.
+pub const MAX_DEPTH: Count<u32> = Count::range(1, 1 << 20, "bounces");
+
+/// Light paths or samples: at least one.
+const PATHS: Count<u64> = Count::at_least_one("paths");
+
+/// A length in m: finite and > 0 (a negative or NaN radius silently disabled what it sets).
+const LENGTH: Real = Real::positive("m");
 
 /// Default kernel clamp radius for images, as a fraction of the room scale (images have no
 /// near-field split, so a larger radius keeps pixels near edges from sparkling).
@@ -126,19 +153,20 @@ pub enum Command {
     Sensors {
         #[command(flatten)]
         run: RunArgs,
-        /// Number of light paths.
-        #[arg(long, default_value_t = 100_000)]
+        /// Number of light paths (at least --batches).
+        #[arg(long, default_value_t = 100_000, value_parser = PATHS)]
         paths: u64,
         /// How the kernel singularity near sensor points is controlled.
         #[arg(long, value_enum, default_value_t = SingularityMode::Ball)]
         singularity: SingularityMode,
         /// Regularisation radius in m [default: 1e-3 of the room scale, the smallest non-flat
         /// side of the scene's bounding box].
-        #[arg(long)]
+        #[arg(long, value_parser = LENGTH)]
         eps: Option<f64>,
         /// Near-field radius, m: for sensors with another surface this close, collisions
-        /// nearer than this are estimated backwards instead [default: 1e-2 of the room scale].
-        #[arg(long)]
+        /// nearer than this are estimated backwards instead [default: 1e-2 of the room scale;
+        /// --near-samples 0 turns the split off].
+        #[arg(long, value_parser = LENGTH)]
         near_radius: Option<f64>,
         /// Backward samples per near-field sensor (0 disables the split).
         #[arg(long, default_value_t = 20_000)]
@@ -162,10 +190,10 @@ pub enum Command {
         #[arg(long)]
         preview: Option<PathBuf>,
         /// Number of light paths.
-        #[arg(long, default_value_t = 1_000)]
+        #[arg(long, default_value_t = 1_000, value_parser = PATHS)]
         paths: u64,
-        /// Camera samples per pixel (stratified over the pixel, box filter).
-        #[arg(long, default_value_t = 1)]
+        /// Camera samples per pixel (stratified over the pixel, box filter), at least 1.
+        #[arg(long, default_value_t = 1, value_parser = Count::<u32>::range(1, u32::MAX as u64, "samples per pixel"))]
         pixel_samples: u32,
         /// Override the camera resolution, WIDTHxHEIGHT.
         #[arg(long)]
@@ -173,21 +201,23 @@ pub enum Command {
         #[arg(long, value_enum, default_value_t = SingularityMode::Clamp)]
         singularity: SingularityMode,
         /// Regularisation radius in m [default: 1e-2 of the room scale].
-        #[arg(long)]
+        #[arg(long, value_parser = LENGTH)]
         eps: Option<f64>,
         #[command(flatten)]
         common: CommonArgs,
-        #[arg(long, default_value_t = 100_000)]
+        /// Safety bound on path length, 1 to 2^20.
+        #[arg(long, default_value_t = 100_000, value_parser = MAX_DEPTH)]
         max_depth: u32,
     },
     /// Direct simulation baseline: photons counted in disks around the sensor points.
     Direct {
         #[command(flatten)]
         run: RunArgs,
-        #[arg(long, default_value_t = 100_000)]
+        /// Number of light paths (at least --batches).
+        #[arg(long, default_value_t = 100_000, value_parser = PATHS)]
         paths: u64,
         /// Radius of the counting disk around each sensor, m.
-        #[arg(long)]
+        #[arg(long, value_parser = LENGTH)]
         bin_radius: f64,
     },
     /// Backward (gathering) estimate at the sensor points: an independent reference that has
@@ -195,8 +225,8 @@ pub enum Command {
     Gather {
         #[command(flatten)]
         run: RunArgs,
-        /// Samples per sensor point.
-        #[arg(long, default_value_t = 10_000)]
+        /// Samples per sensor point (at least --batches).
+        #[arg(long, default_value_t = 10_000, value_parser = PATHS)]
         samples: u64,
     },
     /// Print exact solutions.
@@ -290,9 +320,6 @@ pub fn run(args: Args) -> Result<()> {
             common,
             max_depth,
         } => {
-            if paths == 0 {
-                return Err(Error::Usage("--paths must be positive".into()));
-            }
             let (world, cam) = load_with_camera(&scene, resolution.as_deref())?;
             let eps = eps.unwrap_or(DEFAULT_IMAGE_EPS_FRACTION * world.room_scale);
             let cfg = ImageConfig {
@@ -306,7 +333,11 @@ pub fn run(args: Args) -> Result<()> {
             let prefix = scene.with_file_name(&world.scene.header.name);
             let out =
                 out.unwrap_or_else(|| image_path(&prefix, Level::LightPaths(paths), Kind::Hdr));
+            // All outputs, checked against the scene and each other before the render.
+            let outputs = std::iter::once(&out).chain(&stderr_out).chain(&preview);
+            let mut plan = OutputPlan::new([&scene], outputs)?;
             write_image(
+                &mut plan,
                 &scene,
                 &world,
                 &cam,
@@ -329,11 +360,9 @@ fn sensors(
     (near_radius, near_samples): (Option<f64>, u64),
     batch_values: bool,
 ) -> Result<()> {
-    run.check()?;
-    if paths < run.batches as u64 {
-        return Err(Error::Usage("--paths must be at least --batches".into()));
-    }
+    run.check("--paths", paths)?;
     let world = load_world(&run.scene)?;
+    let (out, mut plan) = run.plan(&world)?;
     let sing = singularity.with_eps(eps.unwrap_or(DEFAULT_EPS_FRACTION * world.room_scale))?;
     let near_radius = near_radius.unwrap_or(DEFAULT_NEAR_FRACTION * world.room_scale);
     let placed = evaluation_points(&world, run.edge_offset(&world)?, near_radius);
@@ -352,7 +381,17 @@ fn sensors(
     let r = local::estimate(&world, &placed.points, &placed.near, &cfg);
     let info = run.info(&world, estimator::LOCAL_ESTIMATE, paths, r.seconds);
     let batches = batch_values.then_some(r.batch_values.as_slice());
-    let out = write_results(&world, run, info, sing.to_string(), &r.estimates(), batches)?;
+    let values = r.estimates();
+    write_results(
+        &mut plan,
+        &out,
+        &world,
+        run,
+        info,
+        sing.to_string(),
+        &values,
+        batches,
+    )?;
     eprintln!(
         "wrote {}: {} paths, {} collisions, {} shadow rays, {:.2} s",
         out.display(),
@@ -366,14 +405,10 @@ fn sensors(
 
 /// `estimate direct`: the direct-simulation baseline, photons counted in disks.
 fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
-    run.check()?;
-    if !(bin_radius > 0.0 && bin_radius.is_finite()) {
-        return Err(Error::Usage(format!(
-            "--bin-radius must be positive, got {bin_radius}"
-        )));
-    }
+    run.check("--paths", paths)?;
     let world = load_world(&run.scene)?;
     crate::sensors::require_planar(&run.scene, &world, "estimate direct")?;
+    let (out, mut plan) = run.plan(&world)?;
     let sensors = all_sensors(&world);
     let cfg = LocalConfig {
         paths,
@@ -387,7 +422,17 @@ fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
     let r = local::estimate(&world, &sensors, &vec![false; sensors.len()], &cfg);
     let info = run.info(&world, estimator::DIRECT_SIMULATION, paths, r.seconds);
     let singularity = format!("bins(radius={bin_radius:e} m)");
-    let out = write_results(&world, run, info, singularity, &r.estimates(), None)?;
+    let values = r.estimates();
+    write_results(
+        &mut plan,
+        &out,
+        &world,
+        run,
+        info,
+        singularity,
+        &values,
+        None,
+    )?;
     eprintln!(
         "wrote {}: {} paths, {:.2} s",
         out.display(),
@@ -399,7 +444,7 @@ fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
 
 /// `estimate gather`: the backward reference estimator.
 fn gather(run: &RunArgs, samples: u64) -> Result<()> {
-    run.check()?;
+    run.check("--samples", samples)?;
     let world = load_world(&run.scene)?;
     crate::sensors::require_planar(&run.scene, &world, "estimate gather")?;
     if world.scene.header.features.specular_paths {
@@ -408,6 +453,7 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
             "gather needs a scene without mirrors or dielectrics",
         ));
     }
+    let (out, mut plan) = run.plan(&world)?;
     let sensors = evaluation_points(&world, run.edge_offset(&world)?, 0.0).points;
     let cfg = gather::GatherConfig {
         samples,
@@ -424,7 +470,9 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
         samples,
         start.elapsed().as_secs_f64(),
     );
-    let out = write_results(
+    write_results(
+        &mut plan,
+        &out,
         &world,
         run,
         info,
@@ -436,36 +484,35 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
     Ok(())
 }
 
-/// Writes the sensor results as RON (at `--out` or `<scene dir>/<name>.sensors.ron`), with
-/// the per-batch estimates when given, and, on request, CSV; returns the RON path.
+/// Writes the sensor results as RON to the planned `out`, with the per-batch estimates when
+/// given, and, on request, CSV; commits both together.
+#[allow(clippy::too_many_arguments)]
 fn write_results(
+    plan: &mut OutputPlan,
+    out: &Path,
     world: &World,
     run: &RunArgs,
     info: RunInfo,
     singularity: String,
     values: &[Estimate],
     batches: Option<&[Vec<f64>]>,
-) -> Result<PathBuf> {
+) -> Result<()> {
     let mut results = results(&run.scene, world, info, singularity, values)?;
     if let Some(b) = batches {
         crate::sensors::attach_batches(&mut results, b);
     }
-    let out = run.out.clone().unwrap_or_else(|| {
-        naming::sensors_path(
-            run.scene.parent().unwrap_or(Path::new("")),
-            &world.scene.header.name,
-        )
-    });
-    results.write_ron(&out)?;
+    results.write_ron_to(plan, out)?;
     if let Some(csv) = &run.csv {
-        results.write_csv(csv)?;
+        results.write_csv_to(plan, csv)?;
     }
-    Ok(out)
+    plan.commit()
 }
 
 /// `estimate image`: renders the double local estimate and writes it (with its standard error
 /// and a preview on request).
+#[allow(clippy::too_many_arguments)]
 fn write_image(
+    plan: &mut OutputPlan,
     scene: &Path,
     world: &World,
     cam: &luxest_render::camera::PinholeCamera,
@@ -490,16 +537,17 @@ fn write_image(
     img.attributes = info.to_attributes();
     img.set_attribute(header::SINGULARITY, cfg.singularity);
     img.set_attribute(header::PIXEL_SAMPLES, cfg.pixel_samples);
-    write_rgb(out, &img)?;
+    write_rgb_to(plan, out, &img)?;
     if let Some(p) = preview {
-        write_preview_png_auto(p, &img)?;
+        write_preview_png_auto_to(plan, p, &img)?;
     }
     if let Some(p) = stderr_out {
         let mut se = RgbImage::new(r.width, r.height);
         se.pixels = r.standard_error.iter().map(|&v| [v as f32; 3]).collect();
         se.attributes = img.attributes.clone();
-        write_rgb(p, &se)?;
+        write_rgb_to(plan, p, &se)?;
     }
+    plan.commit()?;
     eprintln!(
         "wrote {}: {}x{}, {} paths, {} collisions, {} shadow rays, {:.2} s ({:.1} M shadow rays/s)",
         out.display(),

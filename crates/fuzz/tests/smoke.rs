@@ -157,3 +157,19 @@ fn every_target_survives_its_seeds_and_their_mutations() {
         }
     }
 }
+
+/// Not a test: writes every target's seeds to `$LUXEST_FUZZ_SEEDS/<target>/seed-N`, the starting
+/// corpora of the libFuzzer runs (docs/fuzzing.md):
+/// `LUXEST_FUZZ_SEEDS=fuzz/seeds cargo test -p luxest-fuzz --test smoke -- --ignored export_seeds`.
+#[test]
+#[ignore = "exports the seed corpora for cargo fuzz; run on request"]
+fn export_seeds() {
+    let dir = PathBuf::from(std::env::var("LUXEST_FUZZ_SEEDS").expect("set LUXEST_FUZZ_SEEDS"));
+    for (name, _) in luxest_fuzz::TARGETS {
+        let d = dir.join(name);
+        std::fs::create_dir_all(&d).unwrap();
+        for (i, s) in seeds(name).iter().enumerate() {
+            std::fs::write(d.join(format!("seed-{i}")), s).unwrap();
+        }
+    }
+}

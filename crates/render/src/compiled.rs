@@ -375,6 +375,8 @@ impl CompiledScene {
                 format!("cannot parse compiled scene header: {e}"),
             )
         })?;
+        // The name becomes a component of default output paths (trace, estimate, aov-write).
+        luxest_io::outputs::path_component(&header.name, path, "header.name")?;
         let nv = header.stats.vertices as usize;
         let nt = header.stats.triangles as usize;
         let positions = r.f32x3(nv, "positions")?;
