@@ -94,9 +94,9 @@ $(EVAL_DIR)/sensors/%.sensors.ron: $(VALIDATE_DIR)/%.lxs $(ESTIMATE) $(VALIDATE_
 	@mkdir -p $(@D)
 	$(ESTIMATE) sensors $< -o $@ --paths $(EVAL_SENSOR_PATHS_$*) --seed $(NOISY_SEED)
 
-$(EVAL_CSV)/sensors-%.csv: $(EVAL_DIR)/sensors/%.sensors.ron $(EVALUATE)
+$(EVAL_CSV)/sensors-%.csv: $(EVAL_DIR)/sensors/%.sensors.ron $(VALIDATE_DIR)/%.lxs $(EVALUATE)
 	@mkdir -p $(@D)
-	$(EVALUATE) sensors $< --case '$(VALIDATE_CASE_$*)' $(VALIDATE_EXTRA_$*) -o $@ --ron $(@:.csv=.ron)
+	$(EVALUATE) sensors $< --scene $(VALIDATE_DIR)/$*.lxs --case '$(VALIDATE_CASE_$*)' $(VALIDATE_EXTRA_$*) -o $@ --ron $(@:.csv=.ron)
 
 # The summary: tables and plots from the reports (pipelines/eval.py summary).
 EVAL_REPORTS := $(EVAL_CSV)/cornell-box.images.csv $(patsubst %,$(EVAL_CSV)/dataset-%.images.csv,$(EVAL_TEST_SCENES)) \

@@ -95,6 +95,26 @@ fn scene_compile_refuses_wrong_scenes_with_the_place() {
             ),
             &["objects[0].shape.vertices", "not convex"],
         ),
+        // 19: a translation or a scale beyond f32 world coordinates is named as such.
+        (
+            scene(
+                MATERIALS,
+                r#"(name: "floor", shape: Quad(corner: (0.0, 0.0, 0.0), u: (1.0, 0.0, 0.0), v: (0.0, 0.0, -1.0)), material: "w", transform: (translate: (1e308, 0.0, 0.0))),"#,
+                LIGHT,
+            ),
+            &[
+                "objects[0].transform.translate[0]",
+                "1e308 m is outside the f32 range of world coordinates",
+            ],
+        ),
+        (
+            scene(
+                MATERIALS,
+                r#"(name: "floor", shape: Quad(corner: (0.0, 0.0, 0.0), u: (1.0, 0.0, 0.0), v: (0.0, 0.0, -1.0)), material: "w", transform: (scale: (1e300, 1.0, 1.0))),"#,
+                LIGHT,
+            ),
+            &["objects[0]", "vertex 1 is outside the f32 range of world coordinates"],
+        ),
         // 15: flux that overflows the estimators' arithmetic, at compile time.
         (
             scene(MATERIALS, &format!("{FLOOR}\n{}", flux("1e308")), ""),
@@ -630,6 +650,47 @@ fn evaluate_sensors_refuses_wrong_results_and_parameters() {
         assert_eq!(code, 2, "{msg}");
         assert!(msg.contains(want), "{want}: {msg}");
     }
+}
+
+/// Item 11: `evaluate sensors --scene` refuses results whose scene hash is not the given
+/// compiled scene's (results of another scene or an older compile), and a file that is not a
+/// compiled scene; the hash it reads from the preamble is the one the renderer computes.
+#[test]
+fn evaluate_sensors_checks_the_scene_hash_of_the_results() {
+    let dir = TempDir::new("rel-eval-hash");
+    let lxs = cornell(&dir);
+    let hash = luxest_render::compiled::CompiledScene::load(&lxs)
+        .unwrap()
+        .content_hash;
+    assert_eq!(luxest_io::meta::compiled_scene_hash(&lxs).unwrap(), hash);
+    let case = "sphere:I=100,R=1,rho=0.5";
+    let scene = lxs.to_str().unwrap();
+    let right = dir.write("right.sensors.ron", sphere_results("199.0", "1.0", &hash));
+    crate::util::evaluate(&[
+        "sensors",
+        right.to_str().unwrap(),
+        "--case",
+        case,
+        "--scene",
+        scene,
+    ])
+    .unwrap();
+    let other = "0123456789abcdef0123456789abcdef";
+    let wrong = dir.write("wrong.sensors.ron", sphere_results("199.0", "1.0", other));
+    let w = wrong.to_str().unwrap();
+    let (code, msg) = crate::util::evaluate(&["sensors", w, "--case", case, "--scene", scene])
+        .expect_err("results of another scene must be refused");
+    assert_eq!(code, 1, "{msg}");
+    assert!(
+        msg.starts_with(w)
+            && msg.contains(&format!("results are of scene hash {other}, but"))
+            && msg.contains(&hash),
+        "{msg}"
+    );
+    let (code, msg) = crate::util::evaluate(&["sensors", w, "--case", case, "--scene", w])
+        .expect_err("a results file is no compiled scene");
+    assert_eq!(code, 1, "{msg}");
+    assert!(msg.contains("not a luxest compiled scene"), "{msg}");
 }
 
 /// Items 5, 6, 8 for evaluate: no report over an input image, results file or another report;

@@ -63,6 +63,10 @@ pub enum Command {
         /// Compare only these sensor sets (comma-separated names) [default: all].
         #[arg(long, value_delimiter = ',')]
         sets: Vec<String>,
+        /// The compiled scene of the case: refuse results whose scene hash is not this scene's
+        /// (results of another scene, or of an older compile of this one).
+        #[arg(long)]
+        scene: Option<PathBuf>,
         /// Also write the report as RON.
         #[arg(long)]
         ron: Option<PathBuf>,
@@ -117,14 +121,16 @@ pub fn run(args: Args) -> Result<()> {
             out,
             max_z,
             sets,
+            scene,
             ron,
             common: _,
         } => {
             if max_z.is_some_and(|z| z.is_nan() || z <= 0.0) {
                 return Err(Error::Usage("--max-z must be positive".into()));
             }
-            let mut plan = OutputPlan::new([&results], out.iter().chain(&ron))?;
-            let report = score_sensors(&results, &case, &sets)?;
+            let inputs = std::iter::once(&results).chain(&scene);
+            let mut plan = OutputPlan::new(inputs, out.iter().chain(&ron))?;
+            let report = score_sensors(&results, &case, &sets, scene.as_deref())?;
             if let Some(out) = &out {
                 report.write_csv_to(&mut plan, out)?;
             }

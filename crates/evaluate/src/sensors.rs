@@ -42,11 +42,30 @@ pub struct SensorReport {
 
 /// Compares sensor results with the exact values of `case` (see `luxest_exact::cases`); with
 /// `sets` not empty, only the points of those sensor sets.
-pub fn score_sensors(path: &Path, case_spec: &str, sets: &[String]) -> Result<SensorReport> {
+pub fn score_sensors(
+    path: &Path,
+    case_spec: &str,
+    sets: &[String],
+    scene: Option<&Path>,
+) -> Result<SensorReport> {
     let case =
         Case::parse(case_spec).map_err(|m| Error::Usage(format!("--case {case_spec}: {m}")))?;
     let mut results = SensorResults::read_ron(path)?;
     check_results(path, &results)?;
+    if let Some(scene) = scene {
+        let hash = luxest_io::meta::compiled_scene_hash(scene)?;
+        if hash != results.run.scene_hash {
+            return Err(Error::input(
+                path,
+                format!(
+                    "results are of scene hash {}, but {} has hash {hash}: they are of another \
+                     scene or an older compile of it; re-run the estimate",
+                    results.run.scene_hash,
+                    scene.display()
+                ),
+            ));
+        }
+    }
     if !sets.is_empty() {
         if let Some(name) = sets
             .iter()

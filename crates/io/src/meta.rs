@@ -74,6 +74,32 @@ impl RunInfo {
     }
 }
 
+/// The first bytes of a compiled scene (`luxest_render::compiled`, which owns the format).
+pub const COMPILED_MAGIC: &[u8; 8] = b"LUXSCENE";
+
+/// The content hash a compiled scene records in its preamble (magic, schema u32, reserved u32,
+/// xxh3-128 of the body as little-endian u128), as [`RunInfo::scene_hash`] spells it: what the
+/// stages that do not load scenes (`evaluate`) compare results with. The body is not re-hashed
+/// here; the stages that load the scene verify it.
+pub fn compiled_scene_hash(path: &Path) -> Result<String> {
+    use crate::error::Error;
+    use std::io::Read;
+    let mut preamble = [0u8; 32];
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    match f.read_exact(&mut preamble) {
+        Ok(()) if &preamble[..8] == COMPILED_MAGIC => {}
+        Err(e) if e.kind() != std::io::ErrorKind::UnexpectedEof => return Err(Error::io(path, e)),
+        _ => {
+            return Err(Error::input(
+                path,
+                "not a luxest compiled scene (bad magic); run scene-compile on the .ron scene",
+            ))
+        }
+    }
+    let hash = u128::from_le_bytes(preamble[16..32].try_into().expect("16 bytes"));
+    Ok(format!("{hash:032x}"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -25,7 +25,7 @@ use luxest_io::math::Vec3;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-pub const MAGIC: &[u8; 8] = b"LUXSCENE";
+pub const MAGIC: &[u8; 8] = luxest_io::meta::COMPILED_MAGIC;
 /// Bumped whenever the layout or the meaning of a field changes.
 /// 2: goniometric luminaires (`Emitter::Luminaire`, `photometries`), sensor kinds and
 /// calculation-grid layouts.

@@ -113,7 +113,10 @@ impl Builder {
                 return Err(Error::at(
                     path,
                     place,
-                    format!("vertex {i} is not finite in world space (scale overflow)"),
+                    format!(
+                        "vertex {i} is outside the f32 range of world coordinates (±3.4e38 m) \
+                         after the object's transform (scale, rotation, translation)"
+                    ),
                 ));
             }
             self.positions.push(w);

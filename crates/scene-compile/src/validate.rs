@@ -252,6 +252,20 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
         c.vec(&format!("{place}.transform.scale"), t.scale)?;
         c.vec(&format!("{place}.transform.rotate_deg"), t.rotate_deg)?;
         c.vec(&format!("{place}.transform.translate"), t.translate)?;
+        for (i, v) in [t.translate.x, t.translate.y, t.translate.z]
+            .into_iter()
+            .enumerate()
+        {
+            if v.abs() > f32::MAX as f64 {
+                return Err(c.fail(
+                    &format!("{place}.transform.translate[{i}]"),
+                    format!(
+                        "{} m is outside the f32 range of world coordinates (±3.4e38 m)",
+                        luxest_io::num::show(v)
+                    ),
+                ));
+            }
+        }
         if t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0 {
             return Err(c.fail(
                 &format!("{place}.transform.scale"),
