@@ -14,6 +14,8 @@
 #   make eval      the speed/accuracy trade, the progressive experiment and sensor errors:
 #                  reports/summary.md (uses models/$(DATASET).onnx; EVAL_MODEL= to choose)
 #   make bench     benchmarks (1M-triangle compile + load, local estimate, image, denoise)
+#   make lighting  the lighting report of the example office: reports/lighting/office/
+#                  (make lighting-radiance recomputes its Radiance peer; scripts/setup.sh --peers)
 
 .DEFAULT_GOAL := run
 CARGO ?= cargo
@@ -48,8 +50,7 @@ include pipelines/dataset.mk
 include pipelines/validate.mk
 include pipelines/singularity.mk
 include pipelines/eval.mk
-# The lighting report (make lighting); optional until pipelines/lighting.mk is committed.
--include pipelines/lighting.mk
+include pipelines/lighting.mk
 
 # The main job on the default scene: compile it, path-trace snapshots with their albedo and
 # normal features and denoise them (the committed model), estimate illuminance at its sensors
@@ -65,8 +66,8 @@ run: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE) $(TRACE) $(AOV_WRITE) $(DENOIS
 
 scenes: $(COMPILED)
 
-# The stage binaries: one rule (report's is in pipelines/lighting.mk for now).
-$(addprefix $(RELEASE)/,scene-compile trace aov-write estimate denoise evaluate): $(RELEASE)/%: $(RUST_SOURCES)
+# The stage binaries: one rule for all of them.
+$(addprefix $(RELEASE)/,scene-compile trace aov-write estimate denoise evaluate report): $(RELEASE)/%: $(RUST_SOURCES)
 	$(CARGO) build --release -p $*
 	@touch $@
 

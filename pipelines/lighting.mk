@@ -18,10 +18,8 @@ PEERS_PYTHON ?= .venv-peers/bin/python
 
 lighting: $(LIGHTING_DIR)/report.md
 
-# The report stage's binary (REPORT is set in the Makefile with the other stages).
-$(RELEASE)/report: $(RUST_SOURCES)
-	$(CARGO) build --release -p report
-	@touch $@
+# The compiled scene embeds the photometric tables: recompile when a file changes.
+$(LIGHTING_BUILD)/scene.lxs: $(wildcard scenes/photometry/*.ies scenes/photometry/*.ldt)
 
 $(LIGHTING_BUILD)/scene.info.ron: $(LIGHTING_BUILD)/scene.lxs $(SCENE_COMPILE)
 	$(SCENE_COMPILE) --info $< > $@.tmp && mv $@.tmp $@
