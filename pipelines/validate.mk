@@ -1,5 +1,6 @@
 # `make validate`: the local estimate against exact solutions, path tracing against the exact
-# luminance inside the integrating sphere, and the direct-simulation baseline. One rule per
+# luminance inside the integrating sphere, the direct-simulation baseline, and the goniometric
+# luminaire cases (a cosⁿ IES file over a plane, between two planes, in the sphere). One rule per
 # output file in $(VALIDATE_DIR); pipelines/validate.py defines the cases, writes the scene
 # variants, checks the traced pixels and writes the summary (fails if any |z| > 4). Every stage
 # is called through its variable. Incremental and parallel (`make -j2 validate`).
@@ -49,7 +50,12 @@ $(VALIDATE_DIR)/direct-b%.sensors.ron: $(VALIDATE_DIRECT_SCENE) $(ESTIMATE)
 $(VALIDATE_DIR)/direct-b%.exact.csv: $(VALIDATE_DIR)/direct-b%.sensors.ron $(EVALUATE)
 	$(EVALUATE) sensors $< --case '$(VALIDATE_DIRECT_CASE),bin=$*' -o $@
 
-VALIDATE_OUTPUTS := $(patsubst %,$(VALIDATE_DIR)/%.exact.csv,$(VALIDATE_CASES) le $(addprefix direct-b,$(VALIDATE_DIRECT_BINS))) \
+# The cosⁿ luminaire over a black plane: the direct simulation (sampled emission) against the
+# closed-form direct illuminance (the local estimate computes that term deterministically).
+$(VALIDATE_DIR)/cosn-plane.sensors.ron: $(VALIDATE_DIR)/cosn-plane.lxs $(ESTIMATE) $(VALIDATE_DIR)/cases.mk
+	$(ESTIMATE) direct $< -o $@ --paths $(VALIDATE_COSN_PLANE_PATHS) --bin-radius $(VALIDATE_COSN_PLANE_BIN) --seed $(VALIDATE_SEED)
+
+VALIDATE_OUTPUTS := $(patsubst %,$(VALIDATE_DIR)/%.exact.csv,$(VALIDATE_CASES) le cosn-plane $(addprefix direct-b,$(VALIDATE_DIRECT_BINS))) \
 	$(patsubst %,$(VALIDATE_DIR)/trace-sphere-rho%.check.json,$(VALIDATE_TRACE_RHOS))
 
 # The summary runs every time (it is cheap) and fails the target if any case fails.

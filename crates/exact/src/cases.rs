@@ -1,7 +1,7 @@
 //! Analytic validation cases for sensor results (`sobolev:I=100,h1=1,...`): the exact value
 //! each sensor point should have, used by `evaluate sensors` (and the validation tests).
 
-use crate::solutions::{self, Sobolev};
+use crate::solutions::{self, CosnSobolev, Sobolev};
 use luxest_io::math::Vec3;
 use luxest_io::num::Real;
 use luxest_io::sensors::SensorResults;
@@ -14,6 +14,11 @@ pub enum Case {
     /// With a bin radius, the exact value is the mean over the counting disk (direct
     /// simulation).
     Sobolev(Sobolev, Option<f64>),
+    /// A cosⁿ luminaire (I0 cosⁿψ, nadir −y) at the origin between plane 1 at y = −h1
+    /// (sensors with y < 0) and plane 2 at y = +h2; `cosn-plane` is the same with both
+    /// reflectances 0 (plane 1 alone: the closed-form direct term). With a bin radius, the exact
+    /// value is the mean over the counting disk (direct simulation).
+    CosnSobolev(CosnSobolev, Option<f64>),
     /// Sphere centred at the origin; every sensor on the wall.
     Sphere {
         intensity_cd: f64,
@@ -105,6 +110,25 @@ impl Case {
                 }
                 Case::Sobolev(s, bin)
             }
+            "cosn-sobolev" | "cosn-plane" => {
+                let plane = name == "cosn-plane";
+                let c = CosnSobolev {
+                    i0_cd: get("I0", None)?,
+                    n: get("n", None)?,
+                    h1: get(if plane { "h" } else { "h1" }, None)?,
+                    h2: if plane { 1.0 } else { get("h2", None)? },
+                    rho1: if plane { 0.0 } else { get("rho1", None)? },
+                    rho2: if plane { 0.0 } else { get("rho2", None)? },
+                };
+                c.check().map_err(|m| format!("case {name}: {m}"))?;
+                let bin = map.remove("bin");
+                if let Some(b) = bin {
+                    solutions::POSITIVE_M
+                        .check_named("bin", b)
+                        .map_err(|m| format!("case {name}: {m}"))?;
+                }
+                Case::CosnSobolev(c, bin)
+            }
             "sphere" => {
                 let (intensity_cd, radius, rho) =
                     (get("I", None)?, get("R", None)?, get("rho", None)?);
@@ -173,7 +197,7 @@ impl Case {
             }
             other => {
                 return Err(format!(
-                    "unknown case '{other}' (sobolev, sphere, cosn-sphere, cie171-5.8)"
+                    "unknown case '{other}' (sobolev, cosn-plane, cosn-sobolev, sphere, cosn-sphere, cie171-5.8)"
                 ))
             }
         };
@@ -197,6 +221,28 @@ impl Case {
                     let exact = match bin {
                         None => plane.illuminance1(r).value,
                         Some(b) => solutions::disk_average(|x| plane.illuminance1(x).value, r, *b),
+                    };
+                    Row {
+                        label: format!("{set} r={r}"),
+                        exact,
+                        estimate: p.value,
+                        standard_error: p.standard_error,
+                    }
+                })
+                .collect(),
+            Case::CosnSobolev(c, bin) => points
+                .map(|(set, p)| {
+                    let r = (p.position.x * p.position.x + p.position.z * p.position.z).sqrt();
+                    let e = |x: f64| {
+                        if p.position.y < 0.0 {
+                            c.illuminance1(x).value
+                        } else {
+                            c.illuminance2(x).value
+                        }
+                    };
+                    let exact = match bin {
+                        None => e(r),
+                        Some(b) => solutions::disk_average(e, r, *b),
                     };
                     Row {
                         label: format!("{set} r={r}"),
@@ -294,6 +340,20 @@ mod tests {
             .unwrap_err()
             .contains("'w'"));
         assert!(Case::parse("cube").is_err());
+        let c = Case::parse("cosn-sobolev:I0=1000,n=2,h1=1,h2=2,rho1=0.5,rho2=0.9").unwrap();
+        assert!(matches!(c, Case::CosnSobolev(s, None) if s.n == 2.0 && s.h2 == 2.0));
+        let c = Case::parse("cosn-plane:I0=1000,n=3,h=2,bin=0.1").unwrap();
+        assert!(
+            matches!(c, Case::CosnSobolev(s, Some(b)) if s.h1 == 2.0 && s.rho1 == 0.0 && b == 0.1)
+        );
+        assert!(Case::parse("cosn-plane:I0=1000,n=3,h=2,rho1=0.5")
+            .unwrap_err()
+            .contains("'rho1'"));
+        assert!(
+            Case::parse("cosn-sobolev:I0=1000,n=25,h1=1,h2=2,rho1=0.5,rho2=0.9")
+                .unwrap_err()
+                .contains("n: must be")
+        );
     }
 
     #[test]

@@ -219,33 +219,198 @@ impl Sobolev {
         let rest = |k: f64| {
             let kap = kappa(k * big_h);
             let den = 1.0 - r1 * r2 * kap * kap;
-            (r1 * r2 * kap * kap * (-k * h1).exp() + r2 * kap * (-k * h2).exp()) / den * k
+            (r1 * r2 * kap * kap * (-k * h1).exp() + r2 * kap * (-k * h2).exp()) / den
         };
-        let k_max = 50.0 / big_h;
-        // Scale for the tolerance: the integral at r = 0 (positive integrand).
-        let (scale, _) = integrate(&mut |k| rest(k), 0.0, k_max, 1e-8 / (big_h * big_h));
-        let panel = if r > 0.0 {
-            (PI / r).min(0.5 / big_h)
-        } else {
-            0.5 / big_h
-        };
-        // At most 1e6 panels (r up to 3e5 H): beyond, the J0 oscillations are far below the
-        // tolerance anyway, and the work stays bounded for any r.
-        let n = (k_max / panel).ceil().clamp(1.0, 1e6) as usize;
-        // The Gauss-Kronrod difference overestimates the Kronrod error by orders of magnitude,
-        // so this bound is conservative (the tests compare with SciPy to 1e-9).
-        let tol = 1e-10 * scale.abs() / n as f64;
-        let (mut sum, mut err) = (0.0, 0.0);
-        for i in 0..n {
-            let a = i as f64 * k_max / n as f64;
-            let b = (i + 1) as f64 * k_max / n as f64;
-            let (v, e) = integrate(&mut |k| rest(k) * bessel_j0(k * r), a, b, tol);
-            sum += v;
-            err += e;
+        let (v, e) = inverse_hankel(rest, r, big_h);
+        (self.intensity_cd * v, self.intensity_cd * e)
+    }
+}
+
+/// `∫0^∞ f(k) J0(k r) k dk` for a transform `f` that decays at least like `e^{-k H}`, with its
+/// error bound: integrated over [0, 50/H] in panels of half a period of J0(kr), each by
+/// adaptive Gauss–Kronrod, to an error estimate of 1e-10 of the r = 0 value.
+fn inverse_hankel(f: impl Fn(f64) -> f64, r: f64, big_h: f64) -> (f64, f64) {
+    let k_max = 50.0 / big_h;
+    // Scale for the tolerance: the integral at r = 0 (positive integrand).
+    let (scale, _) = integrate(&mut |k| f(k) * k, 0.0, k_max, 1e-8 / (big_h * big_h));
+    let panel = if r > 0.0 {
+        (PI / r).min(0.5 / big_h)
+    } else {
+        0.5 / big_h
+    };
+    // At most 1e6 panels (r up to 3e5 H): beyond, the J0 oscillations are far below the
+    // tolerance anyway, and the work stays bounded for any r.
+    let n = (k_max / panel).ceil().clamp(1.0, 1e6) as usize;
+    // The Gauss-Kronrod difference overestimates the Kronrod error by orders of magnitude, so
+    // this bound is conservative (the tests compare with SciPy to 1e-9).
+    let tol = 1e-10 * scale.abs() / n as f64;
+    let (mut sum, mut err) = (0.0, 0.0);
+    for i in 0..n {
+        let a = i as f64 * k_max / n as f64;
+        let b = (i + 1) as f64 * k_max / n as f64;
+        let (v, e) = integrate(&mut |k| f(k) * k * bessel_j0(k * r), a, b, tol);
+        sum += v;
+        err += e;
+    }
+    // Round-off of the panel sum.
+    err += 1e-16 * n as f64 * scale.abs();
+    (sum, err)
+}
+
+/// The Gamma function for x > 0 (Lanczos, g = 7, 9 terms: relative error below 1e-14).
+pub fn gamma(x: f64) -> f64 {
+    const G: f64 = 7.0;
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    if x < 0.5 {
+        return PI / ((PI * x).sin() * gamma(1.0 - x));
+    }
+    let x = x - 1.0;
+    let mut a = C[0];
+    for (i, c) in C.iter().enumerate().skip(1) {
+        a += c / (x + i as f64);
+    }
+    let t = x + G + 0.5;
+    (2.0 * PI).sqrt() * t.powf(x + 0.5) * (-t).exp() * a
+}
+
+/// Modified Bessel function of the second kind of real order nu ≥ 0, for x > 0: the
+/// trapezoidal rule on `K_ν(x) = ∫0^∞ e^{-x cosh t} cosh(νt) dt`, as [`bessel_k1`].
+pub fn bessel_k(nu: f64, x: f64) -> f64 {
+    assert!(x > 0.0, "K_nu is defined for x > 0");
+    if x > 700.0 {
+        return 0.0;
+    }
+    let h: f64 = 0.25 / x.sqrt().max(1.0);
+    let mut s = 0.5 * (-x).exp();
+    let mut t = h;
+    loop {
+        let c = t.cosh();
+        let v = (-x * c).exp() * (nu * t).cosh();
+        s += v;
+        if x * c > 745.0 || (v < 1e-300 && x * c > 1.0) {
+            break;
         }
-        // Round-off of the panel sum.
-        err += 1e-16 * n as f64 * scale.abs();
-        (self.intensity_cd * sum, self.intensity_cd * err)
+        t += h;
+    }
+    s * h
+}
+
+/// `x^μ K_μ(x) / (2^{μ−1} Γ(μ))` for μ > 0: 1 at x = 0, e^{-x} for μ = 1/2, κ(x) for μ = 1.
+/// The Hankel transform of a cosⁿ luminaire's direct illuminance on a plane at distance h is
+/// `I0/(n + 1) · cosn_transform((n + 1)/2, k h)`.
+pub fn cosn_transform(mu: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 1.0;
+    }
+    // ln of the value, so that large x^μ and small K_μ do not overflow.
+    let k = bessel_k(mu, x);
+    if k == 0.0 {
+        return 0.0;
+    }
+    (mu * x.ln() + k.ln() - (mu - 1.0) * 2f64.ln() - gamma(mu).ln()).exp()
+}
+
+/// Sobolev's two planes lit by a cosⁿ luminaire at the origin aimed at plane 1 (I0 cosⁿψ, ψ
+/// from the normal of plane 1, nothing towards plane 2). Plane 1 gets the direct term
+/// `I0 h1^{n+1} / (r² + h1²)^{(n+3)/2}`, whose Hankel transform is `D̂(k) = I0/(n+1) ·
+/// cosn_transform((n+1)/2, k h1)` (Gradshteyn–Ryzhik 6.565.4), and the balance equations
+/// `Ê1 = D̂ + rho2 κ Ê2`, `Ê2 = rho1 κ Ê1` give
+///
+/// ```text
+/// E1(r) = direct + ∫ D̂ rho1 rho2 κ² / (1 − rho1 rho2 κ²) J0(kr) k dk
+/// E2(r) =          ∫ D̂ rho1 κ      / (1 − rho1 rho2 κ²) J0(kr) k dk
+/// ```
+///
+/// (n = 0 is the lower half of Sobolev's isotropic source: D̂ = I0 e^{-k h1}.)
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CosnSobolev {
+    pub i0_cd: f64,
+    pub n: f64,
+    pub h1: f64,
+    pub h2: f64,
+    pub rho1: f64,
+    pub rho2: f64,
+}
+
+/// The exponent of the cosⁿ luminaire of [`CosnSobolev`]: [0, 20].
+pub const COSN_SOBOLEV_EXPONENT: Real = Real::closed(0.0, 20.0, "");
+
+impl CosnSobolev {
+    /// The parameters' domain, as [`Sobolev::check`], and n in [0, 20].
+    pub fn check(&self) -> Result<(), String> {
+        Sobolev {
+            intensity_cd: self.i0_cd,
+            h1: self.h1,
+            h2: self.h2,
+            rho1: self.rho1,
+            rho2: self.rho2,
+        }
+        .check()?;
+        COSN_SOBOLEV_EXPONENT.check_named("n", self.n)?;
+        Ok(())
+    }
+
+    /// Direct illuminance on plane 1 at distance r from the foot of the luminaire.
+    pub fn direct1(&self, r: f64) -> f64 {
+        let h = self.h1;
+        self.i0_cd * h.powf(self.n + 1.0) / (r * r + h * h).powf(0.5 * (self.n + 3.0))
+    }
+
+    /// The transform of the direct term, D̂(k).
+    fn direct_transform(&self, k: f64) -> f64 {
+        self.i0_cd / (self.n + 1.0) * cosn_transform(0.5 * (self.n + 1.0), k * self.h1)
+    }
+
+    /// Total illuminance on plane 1 (below the luminaire).
+    pub fn illuminance1(&self, r: f64) -> ExactValue {
+        let (r1, r2, big_h) = (self.rho1, self.rho2, self.h1 + self.h2);
+        let (v, e) = if r1 * r2 == 0.0 {
+            (0.0, 0.0)
+        } else {
+            inverse_hankel(
+                |k| {
+                    let kap = kappa(k * big_h);
+                    let q = r1 * r2 * kap * kap;
+                    self.direct_transform(k) * q / (1.0 - q)
+                },
+                r.abs(),
+                big_h,
+            )
+        };
+        ExactValue {
+            value: self.direct1(r) + v,
+            error_bound: e,
+        }
+    }
+
+    /// Total illuminance on plane 2 (above the luminaire: reflected light only).
+    pub fn illuminance2(&self, r: f64) -> ExactValue {
+        let (r1, r2, big_h) = (self.rho1, self.rho2, self.h1 + self.h2);
+        if r1 == 0.0 {
+            return ExactValue {
+                value: 0.0,
+                error_bound: 0.0,
+            };
+        }
+        let (value, error_bound) = inverse_hankel(
+            |k| {
+                let kap = kappa(k * big_h);
+                self.direct_transform(k) * r1 * kap / (1.0 - r1 * r2 * kap * kap)
+            },
+            r.abs(),
+            big_h,
+        );
+        ExactValue { value, error_bound }
     }
 }
 
@@ -436,6 +601,133 @@ mod tests {
             e2 * phi_integral * s * ds
         };
         integrate(&mut f, 0.0, PI / 2.0, 1e-14).0
+    }
+
+    #[test]
+    fn gamma_and_real_order_bessel_k_match_closed_forms() {
+        let sqrt_pi = PI.sqrt();
+        for (x, v) in [
+            (0.5, sqrt_pi),
+            (1.5, sqrt_pi / 2.0),
+            (4.5, 3.5 * 2.5 * 1.5 * 0.5 * sqrt_pi),
+            (1.0, 1.0),
+            (5.0, 24.0),
+            (0.25, 3.625_609_908_221_908),
+        ] {
+            assert!(rel(gamma(x), v) < 1e-13, "Γ({x}) = {} vs {v}", gamma(x));
+        }
+        for x in [1e-4, 0.1, 1.0, 3.0, 20.0] {
+            let half = (PI / (2.0 * x)).sqrt() * (-x).exp();
+            assert!(rel(bessel_k(0.5, x), half) < 1e-13, "K_1/2({x})");
+            assert!(
+                rel(bessel_k(1.5, x), half * (1.0 + 1.0 / x)) < 1e-13,
+                "K_3/2({x})"
+            );
+            assert!(rel(bessel_k(1.0, x), bessel_k1(x)) < 1e-14, "K_1({x})");
+            assert!(
+                rel(cosn_transform(0.5, x), (-x).exp()) < 1e-12,
+                "f_1/2({x})"
+            );
+            assert!(rel(cosn_transform(1.0, x), kappa(x)) < 1e-12, "f_1({x})");
+        }
+        // The small-x limit is 1 (every order).
+        for mu in [0.5, 1.0, 1.5, 2.5] {
+            assert!((cosn_transform(mu, 1e-7) - 1.0).abs() < 1e-6, "f_{mu}(0)");
+        }
+    }
+
+    /// Single-bounce illuminance on plane 2 at distance r from the axis, from plane 1
+    /// (reflectance 1) lit directly by the cosⁿ luminaire, by the real-space quadrature of
+    /// [`single_bounce_real_space`].
+    fn cosn_single_bounce_real_space(i0: f64, n: f64, h1: f64, h2: f64, r: f64) -> f64 {
+        let big_h = h1 + h2;
+        let mut f = |u: f64| {
+            let s = h1 * u.tan();
+            let ds = h1 / (u.cos() * u.cos());
+            let e1 = i0 * h1.powf(n + 1.0) / (s * s + h1 * h1).powf(0.5 * (n + 3.0));
+            let a = s * s + r * r + big_h * big_h;
+            let b = 2.0 * s * r;
+            let phi_integral = 2.0 * a * big_h * big_h / (a * a - b * b).powf(1.5);
+            e1 * phi_integral * s * ds
+        };
+        // Split where the kernel peaks (s = r), so that the adaptive rule cannot step over it.
+        let u_r = (r / h1).atan();
+        integrate(&mut f, 0.0, u_r, 1e-14).0 + integrate(&mut f, u_r, PI / 2.0, 1e-14).0
+    }
+
+    #[test]
+    fn cosn_sobolev_single_bounce_matches_real_space_quadrature() {
+        // rho2 = 0: plane 1 gets the direct term only, plane 2 one reflection from plane 1.
+        for n in [1.0, 2.0, 5.0] {
+            for (h1, h2) in [(1.0, 1.0), (0.5, 1.5), (2.0, 0.25)] {
+                let c = CosnSobolev {
+                    i0_cd: 1000.0,
+                    n,
+                    h1,
+                    h2,
+                    rho1: 0.6,
+                    rho2: 0.0,
+                };
+                for r in [0.0, 0.5, 2.0, 6.0] {
+                    assert_eq!(c.illuminance1(r).value, c.direct1(r));
+                    let e = c.illuminance2(r);
+                    let want = 0.6 * cosn_single_bounce_real_space(1000.0, n, h1, h2, r);
+                    assert!(
+                        rel(e.value, want) < 1e-9 && e.error_bound < 1e-9 * want,
+                        "n={n} h=({h1},{h2}) r={r}: {} vs {want}",
+                        e.value
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn cosn_sobolev_with_n0_halves_add_up_to_sobolev() {
+        // An isotropic source is a downward n = 0 luminaire plus an upward one: Sobolev's E1 is
+        // the downward half's E1 plus the upward half's E2 (planes swapped), for any reflectances.
+        for (h1, h2, rho1, rho2) in [
+            (1.0, 1.0, 0.5, 0.5),
+            (0.5, 1.5, 0.3, 0.8),
+            (1.0, 1.0, 0.9, 0.9),
+        ] {
+            let s = Sobolev {
+                intensity_cd: 100.0,
+                h1,
+                h2,
+                rho1,
+                rho2,
+            };
+            let down = CosnSobolev {
+                i0_cd: 100.0,
+                n: 0.0,
+                h1,
+                h2,
+                rho1,
+                rho2,
+            };
+            let up = CosnSobolev {
+                h1: h2,
+                h2: h1,
+                rho1: rho2,
+                rho2: rho1,
+                ..down
+            };
+            for r in [0.0, 1.0, 4.0] {
+                let want = s.illuminance1(r).value;
+                let got = down.illuminance1(r).value + up.illuminance2(r).value;
+                assert!(rel(got, want) < 1e-9, "r={r}: {got} vs {want}");
+            }
+        }
+        let bad = CosnSobolev {
+            i0_cd: 1.0,
+            n: 30.0,
+            h1: 1.0,
+            h2: 1.0,
+            rho1: 0.5,
+            rho2: 0.5,
+        };
+        assert!(bad.check().unwrap_err().contains("n: must be"));
     }
 
     #[test]
