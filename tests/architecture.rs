@@ -253,3 +253,30 @@ fn every_stage_binary_is_the_three_line_main() {
         );
     }
 }
+
+#[test]
+fn every_test_file_is_compiled_into_its_one_test_binary() {
+    // Packages with `autotests = false` compile tests/main.rs only: a tests/*.rs file that
+    // main.rs does not name as a module would never run.
+    let root = repo_root();
+    let mut checked = 0;
+    for dir in [root.join("tests"), root.join("crates/photometry/tests")] {
+        let main = std::fs::read_to_string(dir.join("main.rs")).unwrap();
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            let Some(stem) = path.file_stem().and_then(|s| s.to_str()) else {
+                continue;
+            };
+            if path.extension().is_some_and(|e| e == "rs") && stem != "main" {
+                assert!(
+                    main.lines().any(|l| l.trim() == format!("mod {stem};")),
+                    "{} is not a module of {}: its tests never run",
+                    path.display(),
+                    dir.join("main.rs").display()
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 10, "only {checked} test files found");
+}

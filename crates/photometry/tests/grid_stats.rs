@@ -9,9 +9,7 @@
 //! Tolerance: the empirical SD over R = 400 repetitions has a relative standard error of
 //! 1/√(2(R−1)) = 3.5 %; the RMS of the B = 16-batch standard errors adds ~1 %; 4 combined σ ≈ 15 %.
 
-mod common;
-
-use common::Rng;
+use crate::common::Rng;
 use luxest_photometry::GridStats;
 
 struct Scatter {

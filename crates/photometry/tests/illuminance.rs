@@ -1,8 +1,6 @@
 //! Direct illuminance and the sensor kernels against closed forms.
 
-mod common;
-
-use common::{get, Rng};
+use crate::common::{get, Rng};
 use luxest_photometry::{
     direct_illuminance_lx, direct_sensor_illuminance_lx, Frame, Luminaire, Orientation, SensorKind,
 };

@@ -1,8 +1,6 @@
 //! The isolux plot of a direct-only office work plane: the picture's colours and contours agree
 //! with the values, and the PNG round-trips.
 
-mod common;
-
 use luxest_photometry::isolux::{render_isolux, IsoluxOptions};
 use luxest_photometry::{load, CalcGrid, GridSpec, GridStats, Luminaire, Orientation};
 use std::path::Path;
@@ -160,7 +158,7 @@ fn load_errors_name_the_file() {
         .unwrap_err()
         .to_string();
     assert!(e.starts_with("/nonexistent/lamp.ies: cannot read"), "{e}");
-    let e = load(&common::fixture("../parsers.rs"))
+    let e = load(&crate::common::fixture("../parsers.rs"))
         .unwrap_err()
         .to_string();
     assert!(e.contains("unknown photometric file type"), "{e}");

@@ -2,9 +2,7 @@
 //! every intensity is checked against the formula recomputed here, symmetric files against their
 //! expanded forms, IES against EULUMDAT, and malformed files against their one-line errors.
 
-mod common;
-
-use common::{fixture, get, Rng};
+use crate::common::{fixture, get, Rng};
 use luxest_photometry::ies::parse_ies_str;
 use luxest_photometry::ldt::parse_ldt_str;
 use luxest_photometry::{load, LampFlux, OpeningShape, Photometry, SourceFormat, Symmetry};

@@ -1,9 +1,7 @@
 //! The emission sampler against its own density (chi-square, as Mitsuba tests its samplers) and
 //! the Monte Carlo flux E[I/p] against the table integral and the closed form.
 
-mod common;
-
-use common::{chi2_z, get, Rng};
+use crate::common::{chi2_z, get, Rng};
 use luxest_photometry::{c_gamma_from_direction, IntensitySampler, Photometry};
 use std::f64::consts::PI;
 
