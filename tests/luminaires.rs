@@ -479,11 +479,32 @@ fn malformed_photometric_files_are_one_line_errors_and_leave_nothing() {
         cos2.replacen("998.097349", "-998.097349", 1),
     );
     dir.write("l.txt", "x");
+    // Non-monotonic angles, a wrong count, a truncated EULUMDAT file: named with their line.
+    dir.write(
+        "nonmono.ies",
+        cos2.replacen("0 2.5 5 7.5", "0 5 2.5 7.5", 1),
+    );
+    dir.write(
+        "counts.ies",
+        cos2.replacen("1 2000 1 37 1 1 2", "1 2000 1 38 1 1 2", 1),
+    );
+    let ldt = std::fs::read_to_string(fixtures().join("cos2.ldt")).unwrap();
+    let short_ldt: String = ldt.lines().take(30).map(|l| format!("{l}\n")).collect();
+    dir.write("trunc.ldt", short_ldt);
     let cases = [
         ("truncated.ies", "truncated.ies"),
         ("negative.ies", "negative.ies"),
         ("missing.ies", "not found"),
         ("l.txt", ".ies (IES LM-63) or .ldt"),
+        (
+            "nonmono.ies",
+            "nonmono.ies: line 9: vertical angles not strictly increasing",
+        ),
+        (
+            "counts.ies",
+            "counts.ies: line 13: vertical angles not strictly increasing",
+        ),
+        ("trunc.ldt", "trunc.ldt: line 30: truncated file"),
     ];
     for (file, expect) in cases {
         let ron = dir.write("s.ron", scene(file));
@@ -898,6 +919,46 @@ fn cosn_sphere_validation_case_passes_through_evaluate() {
     crate::util::evaluate(&["sensors", &out, "--case", case, "--max-z", "4"]).unwrap();
     // And the case is not vacuous: the same results fail against another flux.
     let wrong = "cosn-sphere:I0=1000,n=2.2,R=1,rho=0.5,x=0.2,y=0.1,z=-0.3";
+    crate::util::evaluate(&["sensors", &out, "--case", wrong, "--max-z", "4"]).unwrap_err();
+}
+
+#[test]
+fn cosn_sobolev_validation_case_passes_through_evaluate() {
+    // The `make validate` case: the cos² luminaire between Sobolev's planes (h1 = 0.5 below,
+    // h2 = 1 above, rho 0.5 and 0.7); exact values from the Hankel solution of luxest-exact.
+    // Plane 1 gets the tabulated direct term (interpolation error ≤ 0.05 % of I0 at 2.5°
+    // steps, below this run's standard errors of ~0.3 %) plus the indirect light.
+    let dir = TempDir::new("cosn-sobolev");
+    std::fs::copy(fixtures().join("cos2.ies"), dir.path().join("cos2.ies")).unwrap();
+    let plane = |y: f64, ny: f64| {
+        [0.0, 0.4, 1.0, 2.5]
+            .iter()
+            .map(|r| format!("(position: ({r}, {y}, 0.0), normal: (0.0, {ny}, 0.0))"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let scene = crate::util::compile_text(
+        &dir,
+        "sobolev",
+        &format!(
+            r#"Scene(materials: {{ "p1": Lambertian(reflectance: (0.5, 0.5, 0.5)),
+                                   "p2": Lambertian(reflectance: (0.7, 0.7, 0.7)) }},
+            objects: [(shape: Quad(corner: (-1000.0, -0.5, 1000.0), u: (2000.0, 0.0, 0.0), v: (0.0, 0.0, -2000.0)), material: "p1"),
+                      (shape: Quad(corner: (-1000.0, 1.0, -1000.0), u: (2000.0, 0.0, 0.0), v: (0.0, 0.0, 2000.0)), material: "p2")],
+            luminaires: [(file: "cos2.ies", position: (0.0, 0.0, 0.0))],
+            sensors: [Points(name: "p1", points: [{}]), Points(name: "p2", points: [{}])])"#,
+            plane(-0.5, 1.0),
+            plane(1.0, -1.0)
+        ),
+    );
+    let out = dir.path().join("sobolev.sensors.ron");
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (scene, out) = (s(&scene), s(&out));
+    crate::util::estimate(&["sensors", &scene, "-o", &out, "--paths", "40000"]).unwrap();
+    let case = "cosn-sobolev:I0=1000,n=2,h1=0.5,h2=1,rho1=0.5,rho2=0.7";
+    crate::util::evaluate(&["sensors", &out, "--case", case, "--max-z", "4"]).unwrap();
+    // Not vacuous: the same results fail against another exponent.
+    let wrong = "cosn-sobolev:I0=1000,n=2.2,h1=0.5,h2=1,rho1=0.5,rho2=0.7";
     crate::util::evaluate(&["sensors", &out, "--case", wrong, "--max-z", "4"]).unwrap_err();
 }
 
