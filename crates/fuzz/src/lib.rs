@@ -65,9 +65,21 @@ pub fn gltf(data: &[u8]) {
     let _ = scene_compile::meshes::load_gltf_bytes(&Path::new(NOWHERE).join("m.glb"), data);
 }
 
-/// A compiled scene file (magic, schema, hash, header, arrays).
+/// A compiled scene file (magic, schema, hash, header, arrays): as given, then with its content
+/// hash made right, so that mutations reach the header and array parsers behind the hash check
+/// (a fuzzer cannot forge an xxh3-128 by mutation).
 pub fn compiled(data: &[u8]) {
-    let _ = luxest_render::compiled::CompiledScene::decode(&Path::new(NOWHERE).join("s.lxs"), data);
+    let path = Path::new(NOWHERE).join("s.lxs");
+    let _ = luxest_render::compiled::CompiledScene::decode(&path, data);
+    if data.len() >= 32 {
+        let mut fixed = data.to_vec();
+        let hash = xxhash_rust::xxh3::xxh3_128(&data[32..]);
+        fixed[16..32].copy_from_slice(&hash.to_le_bytes());
+        if let Ok(scene) = luxest_render::compiled::CompiledScene::decode(&path, &fixed) {
+            // What the stages do next with a loaded scene: its consistency check.
+            let _ = scene.check_consistency();
+        }
+    }
 }
 
 /// An OpenEXR image as the stages read it.
