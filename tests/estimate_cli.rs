@@ -30,6 +30,70 @@ fn exact() -> Sobolev {
 }
 
 #[test]
+fn sensor_results_record_evaluated_points_and_the_direct_and_indirect_parts() {
+    // A 4 m room with a point source at its centre: a sensor in a floor corner and one on a
+    // floor edge are evaluated off the walls (recorded), the one mid-floor where authored; the
+    // direct part is the exact I cos / d² (Flux 1000 lm isotropic: I = 1000 / 4π cd).
+    let dir = TempDir::new("est-parts");
+    let text = r#"Scene(
+    materials: { "w": Lambertian(reflectance: (0.5, 0.5, 0.5)) },
+    objects: [(name: "room", shape: Box(size: (4.0, 4.0, 4.0)), material: "w", flip_normals: true)],
+    point_lights: [(name: "s", position: (0.0, 0.0, 0.0), power: Flux(1000.0))],
+    sensors: [Points(name: "floor", points: [
+        (position: (2.0, -2.0, 2.0), normal: (0.0, 1.0, 0.0)),
+        (position: (0.0, -2.0, 2.0), normal: (0.0, 1.0, 0.0)),
+        (position: (0.5, -2.0, 0.0), normal: (0.0, 1.0, 0.0))])],
+)"#;
+    let scene = compile_text(&dir, "room", text);
+    let out = dir.path().join("r.sensors.ron");
+    let csv = dir.path().join("r.csv");
+    estimate(&[
+        "sensors",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+        "--paths",
+        "20000",
+    ])
+    .unwrap();
+    let r = SensorResults::read_ron(&out).unwrap();
+    let points = &r.sets[0].points;
+    let intensity = 1000.0 / (4.0 * std::f64::consts::PI);
+    for (k, p) in points.iter().enumerate() {
+        let at = p.evaluated_at.unwrap_or(p.position);
+        assert_eq!(
+            p.evaluated_at.is_some(),
+            k < 2,
+            "point {k}: {:?}",
+            p.evaluated_at
+        );
+        let moved = (at - p.position).length();
+        assert!(moved < 0.02, "point {k} moved {moved} m");
+        let d = at.length();
+        let exact_direct = intensity * (-at.y / d) / (d * d);
+        let (direct, indirect) = (p.direct.unwrap(), p.indirect.unwrap());
+        assert!(
+            (direct.value - exact_direct).abs() <= 1e-9 * exact_direct,
+            "point {k}: direct {} vs {exact_direct}",
+            direct.value
+        );
+        assert!((direct.value + indirect.value - p.value).abs() <= 1e-9 * p.value);
+        assert!(indirect.value > 0.0 && indirect.standard_error > 0.0);
+    }
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let row: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!(header.len(), row.len());
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let ex: f64 = row[col("evaluated_x")].parse().unwrap();
+    assert_eq!(ex, points[0].evaluated_at.unwrap().x);
+    let direct: f64 = row[col("direct_lx")].parse().unwrap();
+    assert_eq!(direct, points[0].direct.unwrap().value);
+}
+
+#[test]
 fn sensors_write_ron_and_csv_with_metadata() {
     let dir = TempDir::new("est");
     let scene = compile_text(&dir, "sob", SOBOLEV);

@@ -323,3 +323,95 @@ fn sensors_on_edges_and_corners_match_the_backward_reference() {
         );
     }
 }
+
+#[test]
+fn direct_and_indirect_parts_match_sobolev() {
+    // The point source's direct part is exact (no variance); the indirect part is the exact
+    // solution minus it, within its own standard error; the parts add up to the value.
+    let w = world_from(&sobolev_text(1.0, 100.0, 1.0, 1.0, 0.5));
+    let (s, r) = run(&w, 50_000);
+    let exact = Sobolev {
+        intensity_cd: 100.0,
+        h1: 1.0,
+        h2: 1.0,
+        rho1: 0.5,
+        rho2: 0.5,
+    };
+    let mut worst: f64 = 0.0;
+    for (i, p) in s.iter().enumerate() {
+        let radius = p.position.x.hypot(p.position.z);
+        let plane = if p.position.y < 0.0 {
+            exact
+        } else {
+            exact.swapped()
+        };
+        let (d, d_se) = r.direct[i];
+        let (ind, ind_se) = r.indirect[i];
+        let exact_direct = plane.direct1(radius);
+        assert!(
+            (d - exact_direct).abs() <= 1e-9 * exact_direct && d_se == 0.0,
+            "sensor {i}: direct {d} ± {d_se} vs exact {exact_direct}"
+        );
+        assert!((d + ind - r.value[i]).abs() <= 1e-9 * r.value[i]);
+        let exact_indirect = plane.illuminance1(radius).value - exact_direct;
+        let z = (ind - exact_indirect) / ind_se;
+        assert!(
+            z.abs() <= 4.0,
+            "sensor {i}: indirect {ind} ± {ind_se} vs exact {exact_indirect}"
+        );
+        worst = worst.max(z.abs());
+    }
+    assert!(worst > 0.0, "the indirect parts must carry noise");
+}
+
+#[test]
+fn area_light_direct_part_equals_the_result_with_black_surfaces() {
+    // In the Cornell box (an area light, and sensors near the blocks where the near field is
+    // estimated backwards), the direct part must equal the whole illuminance of the same room
+    // with every reflectance 0 (an independent run), and there the indirect part is exactly 0.
+    let text = std::fs::read_to_string(repo_root().join("scenes/cornell-box.ron")).unwrap();
+    let mut black = String::new();
+    for line in text.lines() {
+        match line.find("reflectance: (") {
+            Some(k) => black.push_str(&format!("{}reflectance: (0, 0, 0)),\n", &line[..k])),
+            None => black.push_str(&format!("{line}\n")),
+        }
+    }
+    assert_ne!(black, text);
+    let run_near = |world: &World, seed: u64| {
+        let authored = sensors(world);
+        let near_radius = 1e-2 * world.room_scale;
+        let placed =
+            estimate::placement::place(world, &authored, 1e-3 * world.room_scale, near_radius);
+        let mut cfg = config(20_000, seed, 2, world);
+        cfg.near_field = Some(NearField {
+            radius: near_radius,
+            samples: 4_000,
+        });
+        let near = placed.near.iter().filter(|&&n| n).count();
+        (
+            local::estimate(world, &placed.points, &placed.near, &cfg),
+            near,
+        )
+    };
+    let (lit, near) = run_near(&world_from(&text), 1);
+    let (dark, _) = run_near(&world_from(&black), 2);
+    assert!(near > 0, "some Cornell-box sensors must use the near field");
+    let mut compared = 0;
+    for i in 0..lit.value.len() {
+        let (d, d_se) = lit.direct[i];
+        let (e, e_se) = (dark.value[i], dark.standard_error[i]);
+        assert_eq!(
+            dark.indirect[i],
+            (0.0, 0.0),
+            "sensor {i}: black room, indirect"
+        );
+        let tol = 4.0 * d_se.hypot(e_se) + 1e-12 * e.abs();
+        assert!(
+            (d - e).abs() <= tol,
+            "sensor {i}: direct {d} ± {d_se} vs black room {e} ± {e_se}"
+        );
+        compared += usize::from(e > 0.0);
+    }
+    assert!(compared > 50, "only {compared} lit sensors");
+}

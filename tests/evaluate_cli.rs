@@ -132,13 +132,8 @@ fn image_report_matches_the_reference_implementations_and_adds_up_costs() {
 #[test]
 fn sensor_report_gives_z_scores_against_the_exact_value() {
     let dir = TempDir::new("eval-sensors");
-    let point = |p: Vec3, value: f64, se: f64| SensorValue {
-        position: p,
-        normal: -p,
-        value,
-        standard_error: se,
-        rgb: Default::default(),
-    };
+    let point =
+        |p: Vec3, value: f64, se: f64| SensorValue::new(p, -p, value, se, Default::default());
     let results = SensorResults {
         scene: "sphere".into(),
         run: RunInfo::new("local-estimate", 1000, 1, 0.5, "0"),

@@ -65,13 +65,13 @@ fn results(batches: &[Vec<f64>]) -> SensorResults {
             let xs: Vec<f64> = batches.iter().map(|x| x[k]).collect();
             let m = mean(&xs);
             let var = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (b - 1.0);
-            SensorValue {
-                position: position(k),
-                normal: Vec3::new(0.0, 1.0, 0.0),
-                value: m,
-                standard_error: (var / b).sqrt(),
-                rgb: Rgb([m, m, m]),
-            }
+            SensorValue::new(
+                position(k),
+                Vec3::new(0.0, 1.0, 0.0),
+                m,
+                (var / b).sqrt(),
+                Rgb([m, m, m]),
+            )
         })
         .collect();
     SensorResults {
@@ -92,13 +92,13 @@ fn results(batches: &[Vec<f64>]) -> SensorResults {
                 name: "probe".into(),
                 grid: None,
                 kind: None,
-                points: vec![SensorValue {
-                    position: Vec3::new(0.1, 0.1, 0.1),
-                    normal: Vec3::new(0.0, 1.0, 0.0),
-                    value: 1.0,
-                    standard_error: 0.1,
-                    rgb: Rgb([1.0, 1.0, 1.0]),
-                }],
+                points: vec![SensorValue::new(
+                    Vec3::new(0.1, 0.1, 0.1),
+                    Vec3::new(0.0, 1.0, 0.0),
+                    1.0,
+                    0.1,
+                    Rgb([1.0, 1.0, 1.0]),
+                )],
                 batches: vec![],
             },
         ],

@@ -4,7 +4,9 @@
 
 use crate::image::{self, ImageConfig};
 use crate::local::{self, Detector, LocalConfig, NearField};
-use crate::sensors::{all_sensors, evaluation_points, load_world, results, Estimate};
+use crate::sensors::{
+    all_sensors, evaluation_points, load_world, record_evaluation_points, results, Estimate,
+};
 use crate::singularity::Singularity;
 use crate::{exact_table, gather};
 use clap::{Parser, Subcommand, ValueEnum};
@@ -381,7 +383,8 @@ fn sensors(
     let r = local::estimate(&world, &placed.points, &placed.near, &cfg);
     let info = run.info(&world, estimator::LOCAL_ESTIMATE, paths, r.seconds);
     let batches = batch_values.then_some(r.batch_values.as_slice());
-    let values = r.estimates();
+    let mut values = r.estimates();
+    record_evaluation_points(&world, &mut values, &placed.points);
     write_results(
         &mut plan,
         &out,
@@ -463,7 +466,11 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
         max_depth: run.max_depth,
     };
     let start = std::time::Instant::now();
-    let values = gather::estimate(&world, &sensors, &cfg);
+    let mut values: Vec<Estimate> = gather::estimate(&world, &sensors, &cfg)
+        .into_iter()
+        .map(Estimate::from)
+        .collect();
+    record_evaluation_points(&world, &mut values, &sensors);
     let info = run.info(
         &world,
         estimator::GATHER,

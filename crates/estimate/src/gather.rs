@@ -141,22 +141,26 @@ fn sample_once(world: &World, s: &SensorPoint, rng: &mut Rng, max_depth: u32) ->
 /// happened on a surface closer than `radius` along the line of sight. Together with the local
 /// estimate restricted to collisions at least `radius` away, it partitions E exactly (the
 /// local estimate's visibility term makes "collision j" equal "first surface seen towards j").
+/// Returns its two parts: emitted radiance met first (direct light) and reflected (indirect).
 pub fn near_field_sample(
     world: &World,
     s: &SensorPoint,
     radius: f64,
     rng: &mut Rng,
     max_depth: u32,
-) -> Rgb {
+) -> (Rgb, Rgb) {
     let (origin, dir) = sensor_ray(world, s, rng);
     let Some(sp) = world.intersect_from_sensor(origin, dir, radius) else {
-        return Rgb::BLACK;
+        return (Rgb::BLACK, Rgb::BLACK);
     };
     if (sp.position - s.position).length_squared() >= radius * radius {
-        return Rgb::BLACK;
+        return (Rgb::BLACK, Rgb::BLACK);
     }
     let emitted = world.emitted_radiance(sp.triangle, sp.ng, -dir);
-    (emitted + reflected_radiance(world, sp, dir, rng, max_depth)) * PI
+    (
+        emitted * PI,
+        reflected_radiance(world, sp, dir, rng, max_depth) * PI,
+    )
 }
 
 /// Per sensor: (RGB mean, Y mean, Y standard error).

@@ -26,10 +26,12 @@
 //!
 //! Standard errors come from independent batches (see [`luxest_render::parallel`]). All sums are f64.
 
+use crate::sensors::Estimate;
 pub use crate::singularity::Singularity;
 use crate::transport::{point_source_direct, scatter};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use luxest_io::sensors::Part;
 use luxest_render::bsdf::{self, Transport};
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
 use luxest_render::rt::Ray;
@@ -81,6 +83,11 @@ pub struct LocalResult {
     /// The exact direct part from delta lights (point sources, luminaires; included in
     /// `value`).
     pub direct_point: Vec<f64>,
+    /// Per sensor, the direct part (light straight from the emitters, the exact delta-light
+    /// term included) and the indirect part of `value`, each as (Y, standard error), lx; the
+    /// local estimate only (empty for the direct simulation).
+    pub direct: Vec<(f64, f64)>,
+    pub indirect: Vec<(f64, f64)>,
     /// `batch_values[b][i]`: batch b's estimate of Y at sensor i (the exact direct part
     /// included), lx; `value` is their mean, `standard_error` their standard deviation / √B.
     pub batch_values: Vec<Vec<f64>>,
@@ -90,10 +97,21 @@ pub struct LocalResult {
 }
 
 impl LocalResult {
-    /// Per sensor: (RGB, Y, standard error of Y), the results contract's values.
-    pub fn estimates(&self) -> Vec<(Rgb, f64, f64)> {
+    /// Per sensor: RGB, Y, the standard error of Y and (local estimate) the direct and
+    /// indirect parts, the results contract's values.
+    pub fn estimates(&self) -> Vec<Estimate> {
+        let part = |p: Option<&(f64, f64)>| {
+            p.map(|&(value, standard_error)| Part {
+                value,
+                standard_error,
+            })
+        };
         (0..self.value.len())
-            .map(|i| (self.rgb[i], self.value[i], self.standard_error[i]))
+            .map(|i| Estimate {
+                direct: part(self.direct.get(i)),
+                indirect: part(self.indirect.get(i)),
+                ..Estimate::from((self.rgb[i], self.value[i], self.standard_error[i]))
+            })
             .collect()
     }
 }
@@ -107,9 +125,23 @@ struct Scratch {
 }
 
 struct BatchSums {
+    /// Per sensor: every contribution (flux sums; the near-field part scaled to `paths`).
     sums: Vec<[f64; 3]>,
+    /// Per sensor: the direct ones among them (from emitter vertices and, in the near field,
+    /// emitted radiance met first).
+    direct: Vec<[f64; 3]>,
     collisions: u64,
     shadow_rays: u64,
+}
+
+impl BatchSums {
+    /// Adds contribution `c` to sensor `i` (and to its direct part when `direct`).
+    fn add(&mut self, i: usize, c: Rgb, direct: bool) {
+        add(&mut self.sums[i], c);
+        if direct {
+            add(&mut self.direct[i], c);
+        }
+    }
 }
 
 /// Adds an RGB contribution to an f64 accumulator.
@@ -147,6 +179,7 @@ fn connect(
     scratch: &mut Scratch,
     out: &mut BatchSums,
 ) {
+    let direct = matches!(source, Source::Emitter { .. });
     scratch.rays.clear();
     scratch.targets.clear();
     let min_d2 = (1e-12 * world.diagonal).powi(2);
@@ -193,7 +226,7 @@ fn connect(
         let eps = world.margin(origin, s.position);
         if len <= 2.0 * eps {
             // Closer than the scene's resolution: nothing can be in between.
-            add(&mut out.sums[i], contribution);
+            out.add(i, contribution, direct);
             continue;
         }
         // The margin at both ends skips the surfaces the sensor lies on (edges, corners).
@@ -211,7 +244,7 @@ fn connect(
         .occluded_many(&scratch.rays, &mut scratch.blocked);
     for ((i, c), blocked) in scratch.targets.iter().zip(&scratch.blocked) {
         if !blocked {
-            add(&mut out.sums[*i], *c);
+            out.add(*i, *c, direct);
         }
     }
 }
@@ -235,7 +268,7 @@ fn deposit(
             && v.dot(s.normal).abs() < 1e-3 * radius
             && dir.dot(s.normal) < 0.0
         {
-            add(&mut out.sums[i], q * inv_area);
+            out.add(i, q * inv_area, false);
         }
     }
 }
@@ -260,6 +293,7 @@ fn run_batch(
     let mut rng = Rng::new(cfg.seed, batch as u64 + 1);
     let mut out = BatchSums {
         sums: vec![[0.0; 3]; sensors.len()],
+        direct: vec![[0.0; 3]; sensors.len()],
         collisions: 0,
         shadow_rays: 0,
     };
@@ -332,20 +366,21 @@ fn run_batch(
         let samples = (nf.samples / cfg.batches.max(2) as u64).max(1);
         for (i, s) in sensors.iter().enumerate() {
             if skip_within[i] > 0.0 {
-                let mut acc = Rgb::BLACK;
+                let (mut emitted, mut reflected) = (Rgb::BLACK, Rgb::BLACK);
                 for _ in 0..samples {
-                    acc = acc
-                        + crate::gather::near_field_sample(
-                            world,
-                            s,
-                            nf.radius,
-                            &mut rng,
-                            cfg.max_depth,
-                        );
+                    let (e, r) = crate::gather::near_field_sample(
+                        world,
+                        s,
+                        nf.radius,
+                        &mut rng,
+                        cfg.max_depth,
+                    );
+                    (emitted, reflected) = (emitted + e, reflected + r);
                 }
                 // Stored as a sum over `paths` so that the common division gives the mean.
                 let scale = paths as f64 / samples as f64;
-                add(&mut out.sums[i], acc * scale);
+                out.add(i, emitted * scale, true);
+                out.add(i, reflected * scale, false);
             }
         }
     }
@@ -375,14 +410,27 @@ pub fn estimate(
     let mut value = vec![0.0; n];
     let mut standard_error = vec![0.0; n];
     let mut batch_values = vec![vec![0.0; n]; batches];
+    let split = matches!(cfg.detector, Detector::LocalEstimate(_));
+    let (mut direct_part, mut indirect_part) = (Vec::new(), Vec::new());
     for i in 0..n {
         let mut ys = Vec::with_capacity(batches);
+        let (mut ys_direct, mut ys_indirect) = (Vec::new(), Vec::new());
         let mut acc = [0.0; 3];
         for (b, r) in results.iter().enumerate() {
             let paths = per_batch(b).max(1) as f64;
             let e = r.sums[i].map(|s| s / paths);
             add(&mut acc, Rgb(e) * (1.0 / batches as f64));
             ys.push(Rgb(e).luminance());
+            if split {
+                let d = Rgb(r.direct[i].map(|s| s / paths)).luminance();
+                ys_direct.push(d);
+                ys_indirect.push(Rgb(e).luminance() - d);
+            }
+        }
+        if split {
+            let (md, sed) = mean_and_standard_error(&ys_direct);
+            direct_part.push((md + direct[i].luminance(), sed));
+            indirect_part.push(mean_and_standard_error(&ys_indirect));
         }
         let (m, se) = mean_and_standard_error(&ys);
         for (b, y) in ys.iter().enumerate() {
@@ -397,6 +445,8 @@ pub fn estimate(
         value,
         standard_error,
         direct_point: direct.iter().map(Rgb::luminance).collect(),
+        direct: direct_part,
+        indirect: indirect_part,
         batch_values,
         seconds: start.elapsed().as_secs_f64(),
         collisions: results.iter().map(|r| r.collisions).sum(),

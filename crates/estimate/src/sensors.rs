@@ -3,8 +3,9 @@
 
 use crate::placement;
 use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
 use luxest_io::meta::RunInfo;
-use luxest_io::sensors::{SensorGrid, SensorResults, SensorSetResult, SensorValue};
+use luxest_io::sensors::{Part, SensorGrid, SensorResults, SensorSetResult, SensorValue};
 use luxest_io::{Error, Result};
 use luxest_render::compiled::CompiledScene;
 use luxest_render::compiled::SensorSet;
@@ -45,8 +46,41 @@ pub fn evaluation_points(world: &World, delta: f64, near_radius: f64) -> placeme
     p
 }
 
-/// One sensor's estimate: RGB illuminance, its photometric value Y and Y's standard error (lx).
-pub type Estimate = (Rgb, f64, f64);
+/// One sensor's estimate (lx): RGB illuminance, its photometric value Y and Y's standard
+/// error; the direct and indirect parts when the estimator separates them; the point where it
+/// was evaluated when that is not the authored one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    pub rgb: Rgb,
+    pub value: f64,
+    pub standard_error: f64,
+    pub direct: Option<Part>,
+    pub indirect: Option<Part>,
+    pub evaluated_at: Option<Vec3>,
+}
+
+impl From<(Rgb, f64, f64)> for Estimate {
+    fn from((rgb, value, standard_error): (Rgb, f64, f64)) -> Self {
+        Estimate {
+            rgb,
+            value,
+            standard_error,
+            direct: None,
+            indirect: None,
+            evaluated_at: None,
+        }
+    }
+}
+
+/// Records where each estimate was evaluated (`evaluated[i]`, in [`all_sensors`] order) when
+/// the point differs from the authored sensor.
+pub fn record_evaluation_points(world: &World, values: &mut [Estimate], evaluated: &[SensorPoint]) {
+    for ((v, authored), e) in values.iter_mut().zip(all_sensors(world)).zip(evaluated) {
+        if e.position != authored.position {
+            v.evaluated_at = Some(e.position);
+        }
+    }
+}
 
 /// Packs per-sensor estimates (in [`all_sensors`] order) into the results contract; a
 /// non-finite estimate is an error naming `scene_path`.
@@ -57,10 +91,15 @@ pub fn results(
     singularity: String,
     values: &[Estimate],
 ) -> Result<SensorResults> {
-    if let Some(i) = values
-        .iter()
-        .position(|v| !(v.1.is_finite() && v.2.is_finite()))
-    {
+    let finite = |v: &Estimate| {
+        v.value.is_finite()
+            && v.standard_error.is_finite()
+            && [v.direct, v.indirect]
+                .iter()
+                .flatten()
+                .all(|p| p.value.is_finite() && p.standard_error.is_finite())
+    };
+    if let Some(i) = values.iter().position(|v| !finite(v)) {
         return Err(Error::input(
             scene_path,
             format!("estimate at sensor {i} is not finite"),
@@ -81,12 +120,11 @@ pub fn results(
                 .points
                 .iter()
                 .zip(values.by_ref())
-                .map(|(p, &(rgb, value, standard_error))| SensorValue {
-                    position: p.position,
-                    normal: p.normal,
-                    value,
-                    standard_error,
-                    rgb,
+                .map(|(p, e)| SensorValue {
+                    evaluated_at: e.evaluated_at,
+                    direct: e.direct,
+                    indirect: e.indirect,
+                    ..SensorValue::new(p.position, p.normal, e.value, e.standard_error, e.rgb)
                 })
                 .collect(),
         })

@@ -71,6 +71,43 @@ pub struct SensorValue {
     pub standard_error: f64,
     /// RGB illuminance, lx per channel.
     pub rgb: Rgb,
+    /// Where the estimator evaluated the illuminance, when that is not `position`: a sensor on
+    /// an edge or in a corner is moved off the adjacent surfaces (see `estimate`'s placement).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub evaluated_at: Option<Vec3>,
+    /// The direct part of `value` (light arriving straight from the emitters), when the
+    /// estimator separates it (the local estimate does).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direct: Option<Part>,
+    /// The indirect part of `value` (light reflected at least once); `direct.value +
+    /// indirect.value = value`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<Part>,
+}
+
+/// A part of an illuminance (Y, lx) with its own standard error from the same independent
+/// batches as the whole.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Part {
+    pub value: f64,
+    pub standard_error: f64,
+}
+
+impl SensorValue {
+    /// A point's result without the optional fields.
+    pub fn new(position: Vec3, normal: Vec3, value: f64, standard_error: f64, rgb: Rgb) -> Self {
+        SensorValue {
+            position,
+            normal,
+            value,
+            standard_error,
+            rgb,
+            evaluated_at: None,
+            direct: None,
+            indirect: None,
+        }
+    }
 }
 
 impl SensorResults {
@@ -101,13 +138,15 @@ impl SensorResults {
             let io = |e| Error::io(path, e);
             writeln!(
                 w,
-                "set,index,x,y,z,nx,ny,nz,value_{u},standard_error_{u},r,g,b",
+                "set,index,x,y,z,nx,ny,nz,value_{u},standard_error_{u},r,g,b,\
+                 evaluated_x,evaluated_y,evaluated_z,direct_{u},direct_standard_error_{u},\
+                 indirect_{u},indirect_standard_error_{u}",
                 u = self.unit
             )
             .map_err(io)?;
             for s in &self.sets {
                 for (i, p) in s.points.iter().enumerate() {
-                    writeln!(
+                    write!(
                         w,
                         "{},{},{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e}",
                         s.name,
@@ -123,6 +162,24 @@ impl SensorResults {
                         p.rgb.0[0],
                         p.rgb.0[1],
                         p.rgb.0[2]
+                    )
+                    .map_err(io)?;
+                    // The evaluated point (the position itself when not moved); the parts
+                    // left empty when the estimator does not separate them.
+                    let e = p.evaluated_at.unwrap_or(p.position);
+                    let part = |q: Option<Part>| {
+                        q.map_or(",".to_string(), |q| {
+                            format!("{:e},{:e}", q.value, q.standard_error)
+                        })
+                    };
+                    writeln!(
+                        w,
+                        ",{},{},{},{},{}",
+                        e.x,
+                        e.y,
+                        e.z,
+                        part(p.direct),
+                        part(p.indirect)
                     )
                     .map_err(io)?;
                 }
