@@ -740,7 +740,7 @@ fn evaluate_never_overwrites_inputs_and_commits_reports_together() {
     ] {
         expect_refusal(crate::util::evaluate, &dir, &args, want, &protected);
     }
-    // The RON report's directory is a file: the CSV written first must not stay behind.
+    // The RON report's directory is a file: refused, and no report (the CSV) is left behind.
     std::fs::write(dir.path().join("blocker"), "x").unwrap();
     let ron = s(&dir.path().join("blocker/r.ron"));
     let files = dir.files();
@@ -1088,7 +1088,8 @@ fn camera_and_sensor_stages_never_overwrite_inputs_and_commit_together() {
             vec!["gather".into(), scene.clone(), "-o".into(), d("")],
             "is a directory; refusing",
         ),
-        // The CSV fails after the estimate: the RON written first must not stay behind.
+        // The CSV cannot be written (its directory is a file): refused before the estimate,
+        // so neither the RON nor the CSV appears.
         (
             est,
             vec![
@@ -1103,7 +1104,7 @@ fn camera_and_sensor_stages_never_overwrite_inputs_and_commit_together() {
                 "--csv".into(),
                 d("blocker/x.csv"),
             ],
-            "blocker",
+            "cannot create the output's directory",
         ),
         (
             trace,

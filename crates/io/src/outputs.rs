@@ -96,6 +96,25 @@ fn non_regular_kind(path: &Path) -> Option<&'static str> {
     }
 }
 
+/// The nearest existing ancestor directory entry of `path` that is not a directory (so the
+/// output's directory cannot be created), with what it is.
+fn blocking_ancestor(path: &Path) -> Option<(PathBuf, &'static str)> {
+    for dir in path.ancestors().skip(1) {
+        if dir.as_os_str().is_empty() {
+            return None;
+        }
+        match std::fs::metadata(dir) {
+            Ok(m) if m.is_dir() => return None,
+            Ok(_) => {
+                let kind = non_regular_kind(dir).unwrap_or("a regular file");
+                return Some((dir.to_path_buf(), kind));
+            }
+            Err(_) => continue,
+        }
+    }
+    None
+}
+
 /// Checks that `value` (the scene file's `field`) can be one component of a default output path:
 /// not empty, not `.` or `..`, without path separators or control characters. The error names
 /// the file and the field.
@@ -181,6 +200,15 @@ impl OutputPlan {
             return Err(Error::input(
                 out,
                 format!("output exists and is {kind}; refusing to replace it"),
+            ));
+        }
+        if let Some((dir, kind)) = blocking_ancestor(out) {
+            return Err(Error::input(
+                out,
+                format!(
+                    "cannot create the output's directory: {} exists and is {kind}",
+                    dir.display()
+                ),
             ));
         }
         let id = Identity::of(out);
@@ -466,6 +494,35 @@ mod tests {
             assert!(e.contains(kind) && e.contains("refusing"), "{path:?}: {e}");
         }
         assert_eq!(std::fs::read(d.0.join("target")).unwrap(), b"t");
+    }
+
+    #[test]
+    fn outputs_under_a_file_or_device_are_refused_naming_it() {
+        let d = Dir::new("under");
+        std::fs::write(d.0.join("afile"), "t").unwrap();
+        for (path, blocker, kind) in [
+            (d.0.join("afile/x.csv"), d.0.join("afile"), "a regular file"),
+            (
+                d.0.join("afile/sub/x.csv"),
+                d.0.join("afile"),
+                "a regular file",
+            ),
+            (
+                PathBuf::from("/dev/null/x"),
+                PathBuf::from("/dev/null"),
+                "a device node",
+            ),
+        ] {
+            let e = err(OutputPlan::new(Vec::<PathBuf>::new(), [&path]));
+            let want = format!(
+                "cannot create the output's directory: {} exists and is {kind}",
+                blocker.display()
+            );
+            assert!(e.contains(&want), "{path:?}: {e}");
+        }
+        // A directory that does not exist yet is fine: the plan creates it when writing.
+        OutputPlan::new(Vec::<PathBuf>::new(), [d.0.join("new/dir/x.csv")]).unwrap();
+        assert_eq!(std::fs::read(d.0.join("afile")).unwrap(), b"t");
     }
 
     #[test]
