@@ -35,7 +35,7 @@ fn config(paths: u64, seed: u64, threads: usize, world: &World) -> LocalConfig {
 
 fn run(world: &World, paths: u64) -> (Vec<SensorPoint>, LocalResult) {
     let s = sensors(world);
-    let near = vec![false; s.len()];
+    let near = vec![0.0; s.len()];
     let r = local::estimate(world, &s, &near, &config(paths, 1, 2, world));
     (s, r)
 }
@@ -132,7 +132,7 @@ fn sobolev_matches_the_exact_solution() {
 fn result_is_independent_of_the_thread_count() {
     let w = world_from(&sobolev_text(1.0, 100.0, 1.0, 1.0, 0.7));
     let s = sensors(&w);
-    let near = vec![false; s.len()];
+    let near = vec![0.0; s.len()];
     let a = local::estimate(&w, &s, &near, &config(20_000, 9, 1, &w));
     let b = local::estimate(&w, &s, &near, &config(20_000, 9, 2, &w));
     assert_eq!(a.value, b.value);
@@ -257,7 +257,7 @@ fn cie_room_mean_indirect_matches() {
     let floor = &w.scene.header.sensors[0];
     assert_eq!(floor.name, "floor");
     let s = floor.points.clone();
-    let near = vec![false; s.len()];
+    let near = vec![0.0; s.len()];
     let r = local::estimate(&w, &s, &near, &config(20_000, 3, 2, &w));
     let i = 10_000.0 / (4.0 * std::f64::consts::PI);
     let centre = luxest_io::math::Vec3::splat(2.0);
@@ -294,13 +294,10 @@ fn sensors_on_edges_and_corners_match_the_backward_reference() {
         corners.len(),
         "every corner/edge sensor is moved off its walls"
     );
-    assert!(placed.near.iter().all(|&n| n));
+    assert!(placed.near_radius.iter().all(|&r| r > 0.0));
     let mut cfg = config(100_000, 5, 2, &w);
-    cfg.near_field = Some(NearField {
-        radius: 1e-2 * w.room_scale,
-        samples: 20_000,
-    });
-    let le = local::estimate(&w, &placed.points, &placed.near, &cfg);
+    cfg.near_field = Some(NearField { samples: 20_000 });
+    let le = local::estimate(&w, &placed.points, &placed.near_radius, &cfg);
     let reference = estimate::gather::estimate(
         &w,
         &placed.points,
@@ -380,17 +377,17 @@ fn area_light_direct_part_equals_the_result_with_black_surfaces() {
     assert_ne!(black, text);
     let run_near = |world: &World, seed: u64| {
         let authored = sensors(world);
-        let near_radius = 1e-2 * world.room_scale;
-        let placed =
-            estimate::placement::place(world, &authored, 1e-3 * world.room_scale, near_radius);
+        let placed = estimate::placement::place(
+            world,
+            &authored,
+            1e-3 * world.room_scale,
+            estimate::cli::DEFAULT_NEAR_FRACTION * world.room_scale,
+        );
         let mut cfg = config(20_000, seed, 2, world);
-        cfg.near_field = Some(NearField {
-            radius: near_radius,
-            samples: 4_000,
-        });
-        let near = placed.near.iter().filter(|&&n| n).count();
+        cfg.near_field = Some(NearField { samples: 4_000 });
+        let near = placed.near_radius.iter().filter(|&&r| r > 0.0).count();
         (
-            local::estimate(world, &placed.points, &placed.near, &cfg),
+            local::estimate(world, &placed.points, &placed.near_radius, &cfg),
             near,
         )
     };
@@ -414,4 +411,22 @@ fn area_light_direct_part_equals_the_result_with_black_surfaces() {
         compared += usize::from(e > 0.0);
     }
     assert!(compared > 50, "only {compared} lit sensors");
+}
+
+#[test]
+fn near_field_radius_is_given_to_sensors_with_another_surface_within_it() {
+    // Floor sensors 1 mm, 5 cm, 10 cm and 2 m from a wall (x = 2) of a 4 m room, radius 6 cm.
+    let text = r#"Scene(
+    materials: { "w": Lambertian(reflectance: (0.5, 0.5, 0.5)) },
+    objects: [(name: "room", shape: Box(size: (4.0, 4.0, 4.0)), material: "w", flip_normals: true)],
+    point_lights: [(name: "s", position: (0.0, 0.0, 0.0), power: Flux(1000.0))],
+    sensors: [Points(name: "floor", points: [
+        (position: (1.999, -2.0, 0.0), normal: (0.0, 1.0, 0.0)),
+        (position: (1.95, -2.0, 0.0), normal: (0.0, 1.0, 0.0)),
+        (position: (1.9, -2.0, 0.0), normal: (0.0, 1.0, 0.0)),
+        (position: (0.0, -2.0, 0.0), normal: (0.0, 1.0, 0.0))])],
+)"#;
+    let w = world_from(text);
+    let placed = estimate::placement::place(&w, &sensors(&w), 1e-3, 0.06);
+    assert_eq!(placed.near_radius, [0.06, 0.06, 0.0, 0.0]);
 }

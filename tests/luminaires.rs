@@ -47,7 +47,7 @@ fn config(paths: u64, world: &World) -> LocalConfig {
 
 fn run(world: &World, paths: u64) -> (Vec<SensorPoint>, LocalResult) {
     let s = estimate::all_sensors(world);
-    let near = vec![false; s.len()];
+    let near = vec![0.0; s.len()];
     let r = local::estimate(world, &s, &near, &config(paths, world));
     (s, r)
 }
@@ -977,7 +977,7 @@ fn luminaire_estimates_do_not_depend_on_the_thread_count() {
     );
     let world = world_from(&text);
     let s = estimate::all_sensors(&world);
-    let near = vec![false; s.len()];
+    let near = vec![0.0; s.len()];
     let mut cfg = config(3000, &world);
     cfg.threads = 1;
     let a = local::estimate(&world, &s, &near, &cfg);

@@ -50,7 +50,7 @@ fn time_to_error(
     pilot: u64,
     target: f64,
 ) -> (u64, f64, f64) {
-    let r = local::estimate(w, s, &vec![false; s.len()], &cfg(pilot, d));
+    let r = local::estimate(w, s, &vec![0.0; s.len()], &cfg(pilot, d));
     let worst = (0..s.len())
         .map(|i| r.standard_error[i] / r.value[i])
         .fold(0.0, f64::max);
@@ -69,7 +69,7 @@ fn main() {
     for (name, paths) in [("sobolev", 1_000_000u64), ("cie171-5.8", 50_000)] {
         let w = world(name);
         let s = sensors(&w);
-        let r = local::estimate(&w, &s, &vec![false; s.len()], &cfg(paths, le));
+        let r = local::estimate(&w, &s, &vec![0.0; s.len()], &cfg(paths, le));
         println!(
             "local estimate, {name}: {} sensors x {paths} paths in {:.2} s = {:.3e} sensor-paths/s, {:.1} M shadow rays/s, {:.2} collisions/path",
             s.len(),
@@ -84,7 +84,7 @@ fn main() {
     let s = sensors(&w);
     let (n_le, t_le, _) = time_to_error(&w, &s, le, 200_000, 0.01);
     // Check the extrapolation with a real run.
-    let check = local::estimate(&w, &s, &vec![false; s.len()], &cfg(n_le, le));
+    let check = local::estimate(&w, &s, &vec![0.0; s.len()], &cfg(n_le, le));
     let achieved = (0..s.len())
         .map(|i| check.standard_error[i] / check.value[i])
         .fold(0.0, f64::max);

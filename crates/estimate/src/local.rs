@@ -50,12 +50,12 @@ pub enum Detector {
     Bins { radius: f64 },
 }
 
-/// The near-field split for sensors close to other surfaces: collisions closer than `radius`
-/// are left to a backward estimate with `samples` samples per sensor (see
-/// [`crate::gather::near_field_sample`]); the two parts partition the illuminance exactly.
+/// The near-field split for sensors close to other surfaces: collisions closer than the
+/// sensor's near-field radius (given per sensor to [`estimate`]) are left to a backward
+/// estimate with `samples` samples per sensor (see [`crate::gather::near_field_sample`]); the
+/// two parts partition the illuminance exactly.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NearField {
-    pub radius: f64,
     pub samples: u64,
 }
 
@@ -68,7 +68,7 @@ pub struct LocalConfig {
     pub detector: Detector,
     /// Safety bound on path length; with survival probability q the bias is at most q^max_depth.
     pub max_depth: u32,
-    /// Near-field split, applied to the sensors flagged `near`.
+    /// Near-field split, applied to the sensors with a near-field radius.
     pub near_field: Option<NearField>,
 }
 
@@ -276,17 +276,17 @@ fn deposit(
 fn run_batch(
     world: &World,
     sensors: &[SensorPoint],
-    near: &[bool],
+    near_radius: &[f64],
     cfg: &LocalConfig,
     batch: usize,
     paths: u64,
 ) -> BatchSums {
-    let skip_within: Vec<f64> = near
+    let skip_within: Vec<f64> = near_radius
         .iter()
         .enumerate()
-        .map(|(i, &n)| match (n, cfg.near_field) {
+        .map(|(i, &r)| match cfg.near_field {
             // The backward near-field estimate samples the cosine about the normal: planar only.
-            (true, Some(nf)) if sensors[i].kind.is_planar() => nf.radius,
+            Some(_) if sensors[i].kind.is_planar() => r,
             _ => 0.0,
         })
         .collect();
@@ -371,7 +371,7 @@ fn run_batch(
                     let (e, r) = crate::gather::near_field_sample(
                         world,
                         s,
-                        nf.radius,
+                        skip_within[i],
                         &mut rng,
                         cfg.max_depth,
                     );
@@ -387,11 +387,12 @@ fn run_batch(
     out
 }
 
-/// Runs the local estimate for `sensors`.
+/// Runs the local estimate for `sensors`, with the near-field split (when configured) for
+/// each sensor `i` with `near_radius[i] > 0`.
 pub fn estimate(
     world: &World,
     sensors: &[SensorPoint],
-    near: &[bool],
+    near_radius: &[f64],
     cfg: &LocalConfig,
 ) -> LocalResult {
     let start = std::time::Instant::now();
@@ -403,7 +404,7 @@ pub fn estimate(
     let per_batch =
         |b: usize| cfg.paths / batches as u64 + u64::from((b as u64) < cfg.paths % batches as u64);
     let results = run_batches(batches, cfg.threads, "local estimate", |b| {
-        run_batch(world, sensors, near, cfg, b, per_batch(b))
+        run_batch(world, sensors, near_radius, cfg, b, per_batch(b))
     });
     let n = sensors.len();
     let mut rgb = vec![Rgb::BLACK; n];

@@ -16,8 +16,9 @@ use luxest_render::world::World;
 /// Sensors as evaluated.
 pub struct Placement {
     pub points: Vec<SensorPoint>,
-    /// Whether a surface other than the sensor's own lies within the near-field radius.
-    pub near: Vec<bool>,
+    /// Per sensor, its near-field radius (m): the radius asked for when a surface other than
+    /// its own lies within it, else 0 (no split).
+    pub near_radius: Vec<f64>,
     pub moved: usize,
 }
 
@@ -51,15 +52,15 @@ fn own_surface_continues(world: &World, p: Vec3, n: Vec3, m: Vec3, delta: f64, l
         .is_some_and(|h| world.surface(&h).ng.dot(n).abs() > 0.999)
 }
 
-/// Moves edge/corner sensors `delta` off the adjacent surfaces and flags sensors that have a
-/// surface other than their own within `near_radius`.
+/// Moves edge/corner sensors `delta` off the adjacent surfaces and gives the near-field radius
+/// `near_radius` to each sensor with a surface other than its own closer than that.
 pub fn place(world: &World, sensors: &[SensorPoint], delta: f64, near_radius: f64) -> Placement {
     let (points, moved) = separate_from_adjacent_surfaces(world, sensors, delta);
-    let near = points
+    let radii = points
         .iter()
         .map(|s| {
             let origin = s.position + s.normal * world.margin(s.position, s.position);
-            probe_directions(s.normal).into_iter().any(|d| {
+            let near = probe_directions(s.normal).into_iter().any(|d| {
                 world
                     .tracer
                     .intersect(origin, d, 0.0, near_radius)
@@ -68,12 +69,17 @@ pub fn place(world: &World, sensors: &[SensorPoint], delta: f64, near_radius: f6
                         sp.ng.dot(s.normal).abs() < 0.999
                             || (sp.position - s.position).dot(s.normal).abs() > delta * 1e-3
                     })
-            })
+            });
+            if near {
+                near_radius
+            } else {
+                0.0
+            }
         })
         .collect();
     Placement {
         points,
-        near,
+        near_radius: radii,
         moved,
     }
 }

@@ -36,8 +36,8 @@ pub fn all_sensors(world: &World) -> Vec<SensorPoint> {
         .collect()
 }
 
-/// The sensors as evaluated: moved off adjacent surfaces by `delta`, flagged when another
-/// surface lies within `near_radius` (see [`placement`]).
+/// The sensors as evaluated: moved off adjacent surfaces by `delta`, each with its near-field
+/// radius (`near_radius` when another surface is that close; see [`placement`]).
 pub fn evaluation_points(world: &World, delta: f64, near_radius: f64) -> placement::Placement {
     let p = placement::place(world, &all_sensors(world), delta, near_radius);
     if p.moved > 0 {
