@@ -254,6 +254,43 @@ fn decode_base64(s: &str) -> Option<Vec<u8>> {
     Some(out)
 }
 
+/// The binary glTF header (magic `glTF`, version, total length) checked before the gltf crate
+/// reads it: a total length below the 12-byte header underflows its arithmetic (a panic where
+/// overflow checks are on; found by the `gltf` fuzz target).
+fn check_glb_header(path: &Path, bytes: &[u8]) -> Result<()> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    if bytes.len() < 12 {
+        return Err(Error::input(
+            path,
+            format!(
+                "malformed glTF: binary header truncated at {} bytes",
+                bytes.len()
+            ),
+        ));
+    }
+    let word = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().expect("4 bytes"));
+    let (version, length) = (word(4), word(8));
+    if version != 2 {
+        return Err(Error::input(
+            path,
+            format!("malformed glTF: binary glTF version {version}, only 2 is supported"),
+        ));
+    }
+    if !(20..=bytes.len() as u64).contains(&(length as u64)) {
+        return Err(Error::input(
+            path,
+            format!(
+                "malformed glTF: binary header gives a total length of {length} bytes; the file \
+                 has {} and the headers alone need 20",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Loads all triangle meshes of a glTF file's default scene, node transforms applied.
 pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
     let bytes = luxest_io::fsio::read_bytes(path)?;
@@ -263,6 +300,7 @@ pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
 /// [`load_gltf`] of the file's content `bytes`; `path` names it in errors and locates external
 /// buffers.
 pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
+    check_glb_header(path, bytes)?;
     let gltf = gltf::Gltf::from_slice(bytes)
         .map_err(|e| Error::input(path, format!("malformed glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
