@@ -10,13 +10,13 @@ the Radiance binaries). What it reads, so that nothing is typed twice:
 - geometry and materials from the scene file (`Quad` and `Box` shapes with translations;
   `Lambertian` reflectances become Radiance `plastic` with the same RGB reflectance, no
   specularity, no roughness);
-- the luminaires from the compiled scene's header (`scene-compile --info`): position, frame,
-  multiplier and the intensity table *as luxest expanded it* (full C-γ sphere, candela). Each
-  table is written as an IES LM-63-2002 file (type C, absolute photometry, the multiplier in the
-  file's candela multiplier) and converted by `ies2rad -i 0.005 -c 1 1 1`: an illum sphere of
-  5 mm radius with the tabulated distribution, white. So the EULUMDAT pendant reaches Radiance
-  through luxest's own reading of the LDT file, and both programs see the same far-field
-  source (luxest's luminaires are point-like);
+- the luminaires' position, frame and multiplier from the compiled scene's header
+  (`scene-compile --info`), their photometric files from the scene's directory, read
+  independently of luxest: an IES file goes to `ies2rad` as it is; an EULUMDAT file is
+  converted here into an equivalent IES LM-63-2002 file (`ldt_to_ies`: same angles, same
+  symmetry, candela = cd/klm x conversion factor x lamp flux / 1000). `ies2rad -dm -i 0.005
+  -c 1 1 1 -m <multiplier>` makes each an illum sphere of 5 mm radius with the tabulated
+  distribution, white: a far-field source, as luxest's point-like luminaires;
 - the grid points (positions and normals) from the same header's sensor sets.
 
 Coordinates: luxest is y-up, Radiance z-up; a luxest point (x, y, z) is Radiance (x, -z, y), a
@@ -28,8 +28,10 @@ Illuminance: rtrace -I gives irradiance per channel in W/m^2; Radiance's luminou
 channels are equal). Uncertainty: rtrace with -aa 0 (no irradiance cache: plain Monte Carlo
 ambient sampling) and -u+ (uncorrelated random sampling) evaluates every point REPEATS times
 in one run; the point's value is the mean of the repeats and its standard error their standard
-deviation over sqrt(REPEATS). The CSV follows `report::peer` (comment lines, then
-`set,index,x,y,z,illuminance_lx,standard_error_lx`) in luxest's coordinates.
+deviation over sqrt(REPEATS). The defaults (-ab 16 -ad 1024 -lw 1e-5, 8 repeats: about 80
+CPU s) are converged: beyond -ab 8 -ad 512 -lw 1e-4 the work plane's mean moves by about 0.1 %
+at most (docs/measurements.md has the series). The CSV follows `report::peer` (comment lines,
+then `set,index,x,y,z,illuminance_lx,standard_error_lx`) in luxest's coordinates.
 """
 import argparse
 import math
@@ -46,6 +48,7 @@ import pyradiance  # noqa: F401  (puts the bundled Radiance binaries on PATH, se
 
 EFFICACY = 179.0  # lm/W, Radiance's white-light luminous efficacy (rpict/rtrace convention)
 WEIGHTS = (0.265, 0.670, 0.065)  # Radiance's luminance weights of R, G, B
+SPHERE_RADIUS = 0.005  # m, the illum sphere ies2rad puts in place of each luminaire
 
 
 # --- A small RON reader (enough for scene files and `scene-compile --info`) -------------------
@@ -209,28 +212,63 @@ def scene_rad(scene, path):
 # --- Luminaires ---------------------------------------------------------------------------------
 
 
-def write_ies(table, multiplier, path):
-    """An IES LM-63-2002 file of luxest's expanded table (type C, absolute photometry)."""
-    c, g, cd = table["c_deg"], table["gamma_deg"], table["cd"]
-    ng = len(g)
+def read_ldt(path):
+    """An EULUMDAT file read independently of luxest: (C angles, gamma angles, absolute cd per
+    stored plane, symmetry indicator). Intensities are cd per 1000 lm of lamp flux; absolute
+    candela are that times the conversion factor (line 24) times the total lamp flux of all lamp
+    sets / 1000. Only the stored planes are returned (as the file gives them)."""
+    lines = Path(path).read_text(errors="replace").splitlines()
+
+    def num(i):  # 1-based line
+        try:
+            return float(lines[i - 1].replace(",", "."))
+        except (IndexError, ValueError):
+            raise SystemExit(f"error: {path}: line {i}: expected a number")
+
+    isym, mc, ng = int(num(3)), int(num(4)), int(num(6))
+    factor, n_sets = num(24), int(num(26))
+    flux = sum(num(26 + 2 * n_sets + k + 1) for k in range(n_sets))  # each set's total flux
+    at = 26 + 6 * n_sets + 10 + 1  # after the lamp sets and the 10 direct ratios
+    c = [num(at + k) for k in range(mc)]
+    g = [num(at + mc + k) for k in range(ng)]
+    planes = {0: mc, 1: 1, 2: mc // 2 + 1, 4: mc // 4 + 1}
+    if isym not in planes:
+        raise SystemExit(f"error: {path}: line 3: symmetry Isym = {isym} is not converted (0, 1, 2, 4 are)")
+    n = planes[isym]
+    first = at + mc + ng
+    if len(lines) < first + n * ng - 1:
+        raise SystemExit(f"error: {path}: line {len(lines)}: truncated: {n * ng} intensities expected")
+    scale = factor * flux / 1000.0
+    cd = [[scale * num(first + p * ng + k) for k in range(ng)] for p in range(n)]
+    return c[:n], g, cd, isym
+
+
+def ldt_to_ies(ldt, ies):
+    """An IES LM-63-2002 file (type C, absolute photometry) with the LDT file's distribution and
+    its symmetry: Isym 1 -> one plane (rotational), 2 -> C 0..180 (bilateral), 4 -> C 0..90
+    (quadrant), 0 -> C 0..360 (the C = 0 plane repeated at 360). Both formats put C = 0 along
+    the luminaire's x axis, C = 90 along its y axis and gamma = 0 at nadir."""
+    c, g, cd, isym = read_ldt(ldt)
+    if isym == 0:
+        c, cd = c + [360.0], cd + [cd[0]]
     lines = [
         "IESNA:LM-63-2002",
-        f"[TEST] luxest's expansion of {table['source']} (pipelines/radiance_office.py)",
+        f"[TEST] converted from {Path(ldt).name} by pipelines/radiance_office.py",
         "TILT=NONE",
-        f"1 -1 {multiplier!r} {ng} {len(c)} 1 2 0 0 0",
+        f"1 -1 1 {len(g)} {len(c)} 1 2 0 0 0",
         "1 1 0",
-        " ".join(repr(x) for x in g),
-        " ".join(repr(x) for x in c),
-    ]
-    for i in range(len(c)):
-        lines.append(" ".join(repr(x) for x in cd[i * ng:(i + 1) * ng]))
-    Path(path).write_text("\n".join(lines) + "\n")
+        " ".join(f"{x:g}" for x in g),
+        " ".join(f"{x:g}" for x in c),
+    ] + [" ".join(f"{x:.9g}" for x in plane) for plane in cd]
+    Path(ies).write_text("\n".join(lines) + "\n")
 
 
-def luminaires_rad(info, work):
+def luminaires_rad(scene_path, info, work):
+    """Each luminaire as an ies2rad illum sphere placed by its frame: an IES file as it is, an
+    LDT file through ldt_to_ies; the multiplier through ies2rad -m."""
     out = []
-    tables = info["photometries"]
     P = ((1, 0, 0), (0, 0, -1), (0, 1, 0))
+    base = Path(scene_path).parent
     for e in info["emitters"]:
         if e["__name__"] != "Luminaire":
             raise SystemExit(f"error: emitter {e['name']!r}: only luminaires are exported")
@@ -240,15 +278,19 @@ def luminaires_rad(info, work):
         if abs(pm[2][2] - 1) > 1e-9:
             raise SystemExit(f"error: luminaire {e['name']!r}: only luminaires aimed straight down are exported")
         rz = math.degrees(math.atan2(pm[1][0], pm[0][0]))
-        stem = work / f"{e['name']}"
-        write_ies(tables[e["photometry"]], e["multiplier"], stem.with_suffix(".ies"))
+        source = base / info["photometries"][e["photometry"]]["source"]
+        ies = work / f"{e['name']}.ies"
+        if source.suffix.lower() == ".ldt":
+            ldt_to_ies(source, ies)
+        else:
+            ies.write_bytes(source.read_bytes())
         subprocess.run(
-            ["ies2rad", "-dm", "-c", "1", "1", "1", "-i", "0.005", "-l", str(work), "-o", stem.name,
-             stem.with_suffix(".ies").name],
-            check=True, cwd=work,
+            ["ies2rad", "-dm", "-c", "1", "1", "1", "-i", str(SPHERE_RADIUS), "-m", repr(e["multiplier"]),
+             "-l", str(work), "-o", e["name"], ies.name],
+            check=True, cwd=work, capture_output=True,
         )
         x, y, z = rad(e["position"])
-        out.append(f"!xform -rz {rz:.9g} -t {x:.9g} {y:.9g} {z:.9g} {stem.with_suffix('.rad')}\n")
+        out.append(f"!xform -rz {rz:.9g} -t {x:.9g} {y:.9g} {z:.9g} {e['name']}.rad\n")
     return "".join(out)
 
 
@@ -260,9 +302,9 @@ def main():
     ap.add_argument("--scene", required=True, help="the scene file (.ron)")
     ap.add_argument("--info", required=True, help="scene-compile --info output of the same scene")
     ap.add_argument("-o", "--out", required=True, help="peer CSV for `report --peer`")
-    ap.add_argument("--ab", type=int, default=10, help="ambient bounces")
+    ap.add_argument("--ab", type=int, default=16, help="ambient bounces")
     ap.add_argument("--ad", type=int, default=1024, help="ambient divisions")
-    ap.add_argument("--lw", type=float, default=1e-4, help="ray weight limit")
+    ap.add_argument("--lw", type=float, default=1e-5, help="ray weight limit")
     ap.add_argument("--repeats", type=int, default=8, help="independent evaluations per point")
     ap.add_argument("--procs", type=int, default=2, help="rtrace processes (-n)")
     a = ap.parse_args()
@@ -275,7 +317,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="luxest-radiance-") as tmp:
         work = Path(tmp)
         (work / "room.rad").write_text(scene_rad(scene, a.scene))
-        (work / "lum.rad").write_text(luminaires_rad(info, work))
+        (work / "lum.rad").write_text(luminaires_rad(a.scene, info, work))
         with open(work / "office.oct", "wb") as oct_file:
             subprocess.run(["oconv", "room.rad", "lum.rad"], check=True, cwd=work, stdout=oct_file)
         rays, index = [], []
@@ -306,12 +348,13 @@ def main():
     header = [
         "# name: Radiance",
         f"# program: Radiance rtrace ({version}; PyPI pyradiance {pyradiance.__version__})",
-        f"# settings: rtrace {' '.join(settings)}, {a.repeats} evaluations per point; ies2rad -i 0.005 -c 1 1 1",
+        f"# settings: rtrace {' '.join(settings)}, {a.repeats} evaluations per point; "
+        f"ies2rad -dm -i {SPHERE_RADIUS} -c 1 1 1 -m <multiplier>",
         f"# cpu_seconds: {cpu_s:.1f}",
         f"# wall_seconds: {wall:.1f}",
         "# note: Geometry and reflectances from the scene file (Radiance plastic, no specularity); "
-        "luminaires from luxest's expanded intensity tables written as IES files and converted by "
-        "ies2rad into 5 mm illum spheres (far field, as luxest models them); each point's standard "
+        "IES files as they are and the EULUMDAT file converted to IES by this script, each made by "
+        f"ies2rad into a {SPHERE_RADIUS * 1000:g} mm illum sphere (far field, as luxest models them); each point's standard "
         f"error from {a.repeats} independent rtrace evaluations (-aa 0, -u+).",
         "set,index,x,y,z,illuminance_lx,standard_error_lx",
     ]
