@@ -430,3 +430,121 @@ fn near_field_radius_is_given_to_sensors_with_another_surface_within_it() {
     let placed = estimate::placement::place(&w, &sensors(&w), 1e-3, 0.06);
     assert_eq!(placed.near_radius, [0.06, 0.06, 0.0, 0.0]);
 }
+
+/// A floor ending at x = 0.37 under a camera looking straight down, lit by a point source only
+/// (the light paths' connections between points of one plane vanish), so that the double local
+/// estimate's only randomness is where in each pixel its camera points fall.
+const FLOOR_EDGE: &str = r#"Scene(
+    camera: Camera(position: (0.0, 2.0, 0.0), look_at: (0.0, 0.0, 0.0), up: (0.0, 0.0, 1.0),
+                   vfov_deg: 60.0, resolution: (12, 10)),
+    materials: { "w": Lambertian(reflectance: (0.6, 0.6, 0.6)) },
+    objects: [(shape: Quad(corner: (-50.0, 0.0, 50.0), u: (50.37, 0.0, 0.0), v: (0.0, 0.0, -100.0)), material: "w")],
+    point_lights: [(position: (0.2, 1.0, 0.1), power: Intensity(100.0))],
+)"#;
+
+/// [`FLOOR_EDGE`]'s pixels box-filtered exactly: per sub-row, the floor's hit point is linear in
+/// the image column (a pinhole looking straight down), so the edge's column is found exactly
+/// and L = rho/π · I cos θ / d² is integrated over the covered part by the midpoint rule.
+/// Returns (value, covered fraction) per pixel.
+fn floor_edge_reference(cam: &luxest_render::camera::PinholeCamera) -> Vec<(f64, f64)> {
+    let light = luxest_io::math::Vec3::new(0.2, 1.0, 0.1);
+    let hit = |s: f64, t: f64| {
+        let d = cam.direction(s, t);
+        cam.position + d * (-cam.position.y / d.y)
+    };
+    let radiance = |p: luxest_io::math::Vec3| {
+        let l = light - p;
+        0.6 / std::f64::consts::PI * 100.0 * (l.y / l.length()) / l.length_squared()
+    };
+    let (rows, cols) = (64, 64);
+    let mut out = Vec::new();
+    for y in 0..10 {
+        for x in 0..12 {
+            let (mut acc, mut covered) = (0.0, 0.0);
+            for b in 0..rows {
+                let t = y as f64 + (b as f64 + 0.5) / rows as f64;
+                let (x0, x1) = (hit(x as f64, t).x, hit(x as f64 + 1.0, t).x);
+                // The covered columns [s0, s1] of this row: where the hit point's x < 0.37.
+                let se = x as f64 + (0.37 - x0) / (x1 - x0);
+                let (s0, s1) = if x1 > x0 {
+                    (x as f64, se.clamp(x as f64, x as f64 + 1.0))
+                } else {
+                    (se.clamp(x as f64, x as f64 + 1.0), x as f64 + 1.0)
+                };
+                let width = s1 - s0;
+                covered += width / rows as f64;
+                for a in 0..cols {
+                    let s = s0 + width * (a as f64 + 0.5) / cols as f64;
+                    acc += radiance(hit(s, t)) * width / (cols * rows) as f64;
+                }
+            }
+            out.push((acc, covered));
+        }
+    }
+    out
+}
+
+fn render_floor_edge(paths: u64) -> (estimate::image::ImageResult, Vec<(f64, f64)>) {
+    let dir = crate::util::TempDir::new("dle-edge");
+    let scene = crate::util::compile_text(&dir, "edge", FLOOR_EDGE);
+    let (world, cam) = luxest_render::world::load_with_camera(&scene, None).unwrap();
+    let r = estimate::image::render(
+        &world,
+        &cam,
+        &estimate::image::ImageConfig {
+            paths,
+            pixel_samples: 1,
+            seed: 3,
+            threads: 2,
+            singularity: Singularity::Ball { eps: 1e-3 },
+            max_depth: 1000,
+        },
+    );
+    (r, floor_edge_reference(&cam))
+}
+
+#[test]
+fn double_local_estimate_converges_to_box_filtered_pixels_across_an_edge() {
+    // Camera points redrawn per round make pixels on the edge converge to the covered fraction
+    // (a fixed point per pixel would give L or 0 with a standard error of 0): the pixels agree
+    // with the exact box filter within their standard errors, and the relative MSE falls as
+    // 1/paths over two decades. The image's standard errors come from 8 batches, so z follows
+    // Student's t with 7 degrees of freedom (variance 7/5, P(|t| > 8) = 1e-4): each pixel
+    // within 8 standard errors, and the mean z² over the pixels below 3.
+    let rel_mse = |paths: u64| {
+        let (r, reference) = render_floor_edge(paths);
+        let (mut sum, mut count, mut edge_pixels) = (0.0, 0, 0);
+        let mut z2 = Vec::new();
+        for (i, &(e, covered)) in reference.iter().enumerate() {
+            let (v, se) = (r.rgb[i].luminance(), r.standard_error[i]);
+            assert!(
+                (v - e).abs() <= 8.0 * se + 1e-9 * e + 1e-12,
+                "{paths} paths, pixel {i}: {v} ± {se} vs box-filtered {e} ({covered:.3} covered)"
+            );
+            if se > 0.0 {
+                z2.push(((v - e) / se).powi(2));
+            }
+            if covered > 0.0 && covered < 1.0 {
+                edge_pixels += 1;
+                assert!(se > 0.0, "pixel {i} on the edge has no footprint noise");
+            }
+            if e > 0.0 {
+                sum += ((v - e) / e).powi(2);
+                count += 1;
+            }
+        }
+        assert!(edge_pixels >= 8, "only {edge_pixels} pixels on the edge");
+        let mean_z2 = z2.iter().sum::<f64>() / z2.len() as f64;
+        assert!(
+            mean_z2 < 3.0,
+            "{paths} paths: mean z² {mean_z2} over {} pixels (7/5 expected)",
+            z2.len()
+        );
+        sum / count as f64
+    };
+    let (coarse, fine) = (rel_mse(2_000), rel_mse(200_000));
+    assert!(
+        coarse / fine > 30.0 && fine > 0.0,
+        "relMSE {coarse:e} at 2000 paths, {fine:e} at 200000: not falling as 1/paths"
+    );
+}

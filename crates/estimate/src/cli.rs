@@ -198,7 +198,8 @@ pub enum Command {
         /// Number of light paths.
         #[arg(long, default_value_t = 1_000, value_parser = PATHS)]
         paths: u64,
-        /// Camera samples per pixel (stratified over the pixel, box filter), at least 1.
+        /// Camera samples per pixel (stratified over the pixel, box filter), at least 1, drawn
+        /// anew for every 32 light paths.
         #[arg(long, default_value_t = 1, value_parser = Count::<u32>::range(1, u32::MAX as u64, "samples per pixel"))]
         pixel_samples: u32,
         /// Override the camera resolution, WIDTHxHEIGHT.
