@@ -346,6 +346,79 @@ fn peer_comparison_flags_points_outside_one_percent_plus_three_sigma() {
     );
 }
 
+#[test]
+fn malformed_peer_files_are_refused_in_one_line_naming_file_and_line_without_outputs() {
+    let dir = TempDir::new("report-bad-peer");
+    let res = dir.path().join("room.sensors.ron");
+    let r = results(&batches());
+    r.write_ron(&res).unwrap();
+    let good: Vec<String> = r.sets[0]
+        .points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            format!(
+                "work-plane,{k},{},{},{},{},0.5",
+                p.position.x, p.position.y, p.position.z, p.value
+            )
+        })
+        .collect();
+    let head = "# name: Peer\nset,index,x,y,z,illuminance_lx,standard_error_lx\n";
+    let with_row = |k: usize, row: &str| {
+        let mut rows = good.clone();
+        rows[k] = row.to_string();
+        format!("{head}{}\n", rows.join("\n"))
+    };
+    let p1 = &r.sets[0].points[1];
+    let cases = [
+        // (file text, expected part of the message); line numbers count the comment line.
+        (
+            with_row(1, "work-plane,1,0.5,0.75,2.0,NaN,0.5"),
+            "line 4: not a finite number",
+        ),
+        (
+            with_row(2, "work-plane,2,0.5,0.75"),
+            "line 5: 4 fields, expected 7",
+        ),
+        (
+            format!("# name: Peer\nset,x,y\n{}\n", good.join("\n")),
+            "line 2: expected the header",
+        ),
+        (
+            with_row(
+                1,
+                &format!(
+                    "work-plane,1,{},{},{},{},0.5",
+                    p1.position.x + 0.2,
+                    p1.position.y,
+                    p1.position.z,
+                    p1.value
+                ),
+            ),
+            "differs from luxest's",
+        ),
+    ];
+    for (i, (text, want)) in cases.iter().enumerate() {
+        let peer = dir.write(&format!("peer{i}.csv"), text);
+        let out = dir.path().join(format!("out{i}"));
+        let (code, msg) = report(&[
+            res.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--peer",
+            peer.to_str().unwrap(),
+        ])
+        .unwrap_err();
+        assert_eq!(code, 1, "{msg}");
+        assert!(
+            !msg.contains('\n') && msg.contains(&format!("peer{i}.csv")) && msg.contains(want),
+            "case {i}: {msg}"
+        );
+        let left = std::fs::read_dir(&out).map(|d| d.count()).unwrap_or(0);
+        assert_eq!(left, 0, "case {i}: outputs left in {}", out.display());
+    }
+}
+
 /// An IES file of I(γ) = 1000 cd cos³γ (0 above the horizontal) at 5° steps, rotationally
 /// symmetric, every value written in full precision.
 fn cos3_ies() -> String {
