@@ -65,6 +65,17 @@ impl Row {
     }
 }
 
+/// Refuses a source outside the sphere of `radius` centred at the origin (case `name`).
+fn inside_sphere(name: &str, source: Vec3, radius: f64) -> std::result::Result<(), String> {
+    if source.length() >= radius {
+        return Err(format!(
+            "case {name}: the source ({}, {}, {}) must be inside the sphere of radius {radius}",
+            source.x, source.y, source.z
+        ));
+    }
+    Ok(())
+}
+
 impl Case {
     pub fn parse(spec: &str) -> std::result::Result<Case, String> {
         let (name, params) = spec.split_once(':').unwrap_or((spec, ""));
@@ -139,12 +150,7 @@ impl Case {
                     get("y", Some(0.0))?,
                     get("z", Some(0.0))?,
                 );
-                if source.length() >= radius {
-                    return Err(format!(
-                        "case sphere: the source ({}, {}, {}) must be inside the sphere of radius {radius}",
-                        source.x, source.y, source.z
-                    ));
-                }
+                inside_sphere(name, source, radius)?;
                 Case::Sphere {
                     intensity_cd,
                     radius,
@@ -169,12 +175,7 @@ impl Case {
                     get("y", Some(0.0))?,
                     get("z", Some(0.0))?,
                 );
-                if source.length() >= radius {
-                    return Err(format!(
-                        "case cosn-sphere: the luminaire ({}, {}, {}) must be inside the sphere of radius {radius}",
-                        source.x, source.y, source.z
-                    ));
-                }
+                inside_sphere(name, source, radius)?;
                 Case::CosnSphere {
                     i0_cd,
                     n,
