@@ -67,9 +67,14 @@ impl Row {
 
 /// Refuses a source outside the sphere of `radius` centred at the origin (case `name`).
 fn inside_sphere(name: &str, source: Vec3, radius: f64) -> std::result::Result<(), String> {
+    let what = if name.starts_with("cosn") {
+        "luminaire"
+    } else {
+        "source"
+    };
     if source.length() >= radius {
         return Err(format!(
-            "case {name}: the source ({}, {}, {}) must be inside the sphere of radius {radius}",
+            "case {name}: the {what} ({}, {}, {}) must be inside the sphere of radius {radius}",
             source.x, source.y, source.z
         ));
     }
