@@ -243,6 +243,16 @@ fn mesh_files_with_cycles_and_bad_sizes_are_refused_with_the_place() {
             gltf(r#"[{"mesh":0,"children":[0]}]"#, 3),
             &["m.gltf: node 0: ", "cycle"],
         ),
+        // Found by fuzzing: a POSITION accessor that is not VEC3 of FLOAT tripped the gltf
+        // crate's assertions; a stride below the element size and sparse accessors likewise.
+        (
+            gltf(r#"[{"mesh":0}]"#, 3).replace(r#""type":"VEC3""#, r#""type":"VEC2""#),
+            &["m.gltf: mesh 0 primitive 0 Positions (accessor 0): is Vec2 F32, but must be VEC3 of FLOAT"],
+        ),
+        (
+            gltf(r#"[{"mesh":0}]"#, 3).replace(r#""byteLength":36}]"#, r#""byteLength":36,"byteStride":4}]"#),
+            &["Positions (accessor 0): buffer view 0 has a stride of 4 bytes, less than its 12-byte elements"],
+        ),
         (
             gltf(r#"[{"mesh":0}]"#, 1000),
             &["m.gltf: mesh 0 primitive 0 Positions (accessor 0): 1000 elements need 12000 bytes, but buffer view 0 has 36"],

@@ -185,11 +185,50 @@ fn check_accessor(
     accessor: &gltf::Accessor,
     buffers: &[Vec<u8>],
 ) -> Result<()> {
-    // Sparse or zero-filled accessors have no view; the reader handles them.
+    use gltf::accessor::{DataType, Dimensions};
+    let at = || format!("{place} {what} (accessor {})", accessor.index());
+    // What the reader will read it as: it assumes these types (a mismatch trips the gltf
+    // crate's assertions, or reads garbage without them; found by the gltf fuzz target).
+    let (dims, dims_name, types, types_name): (Dimensions, &str, &[DataType], &str) = match what {
+        "Positions" | "Normals" => (Dimensions::Vec3, "VEC3", &[DataType::F32], "FLOAT"),
+        "indices" => (
+            Dimensions::Scalar,
+            "SCALAR",
+            &[DataType::U8, DataType::U16, DataType::U32],
+            "UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT",
+        ),
+        // Other attributes are not read.
+        _ => (accessor.dimensions(), "", &[accessor.data_type()][..], ""),
+    };
+    if accessor.dimensions() != dims || !types.contains(&accessor.data_type()) {
+        return Err(Error::at(
+            path,
+            at(),
+            format!(
+                "is {:?} {:?}, but must be {dims_name} of {types_name}",
+                accessor.dimensions(),
+                accessor.data_type()
+            ),
+        ));
+    }
+    if accessor.sparse().is_some() {
+        return Err(Error::at(path, at(), "sparse accessors are not supported"));
+    }
+    // Zero-filled accessors have no view; the reader handles them.
     let Some(view) = accessor.view() else {
         return Ok(());
     };
     let (count, size) = (accessor.count() as u128, accessor.size() as u128);
+    if let Some(s) = view.stride().filter(|&s| (s as u128) < size) {
+        return Err(Error::at(
+            path,
+            at(),
+            format!(
+                "buffer view {} has a stride of {s} bytes, less than its {size}-byte elements",
+                view.index()
+            ),
+        ));
+    }
     let stride = view.stride().map_or(size, |s| s as u128);
     let need = if count == 0 {
         0
