@@ -243,6 +243,11 @@ fn mesh_files_with_cycles_and_bad_sizes_are_refused_with_the_place() {
             gltf(r#"[{"mesh":0,"children":[0]}]"#, 3),
             &["m.gltf: node 0: ", "cycle"],
         ),
+        // Found by fuzzing: an accessor that does not exist panicked in the gltf crate.
+        (
+            gltf(r#"[{"mesh":0}]"#, 3).replace(r#""POSITION":0"#, r#""POSITION":1"#),
+            &["m.gltf: mesh 0 primitive 0: refers to accessor 1, but the file has 1"],
+        ),
         // Found by fuzzing: a POSITION accessor that is not VEC3 of FLOAT tripped the gltf
         // crate's assertions; a stride below the element size and sparse accessors likewise.
         (
@@ -565,6 +570,15 @@ fn exr_headers_claiming_huge_images_are_refused_before_reading() {
     .unwrap_err();
     assert_eq!(code, 1);
     assert!(msg.starts_with(huge.to_str().unwrap()), "{msg}");
+    // A header claiming an image that would fit in memory, but that no compression could
+    // pack into the file's few hundred bytes (found by fuzzing: it allocated the claim first).
+    exr_claiming(&huge, 4000, 4000);
+    let e = luxest_io::exr_io::read_rgb(&huge).unwrap_err().to_string();
+    assert!(
+        e.contains("header claims 4000x4000 pixels, 192.0 MB of samples, more than its")
+            && e.contains("bytes can hold with its compression"),
+        "{e}"
+    );
     // The same header claiming 2x2 (its true size) reads.
     exr_claiming(&huge, 2, 2);
     assert_eq!(luxest_io::exr_io::read_rgb(&huge).unwrap().width, 2);

@@ -265,10 +265,32 @@ pub fn read_rgb_finite(path: &Path) -> Result<RgbImage> {
 /// available (with the RGB copy this reader makes), and the file must be long enough to hold at
 /// least the table of chunk offsets the header implies (8 bytes per chunk). A few hundred bytes
 /// claiming 100000² pixels are refused here instead of aborting in the allocator.
+/// Claims of sample data up to this size are read without the expansion bound below.
+const MIN_EXR_CLAIM: u128 = 16 << 20;
+
+/// The largest factor by which `compression` can expand stored bytes into samples, generously:
+/// none 1; RLE 64 (two bytes for a run of 128); deflate (ZIP) about 1032, PXR24 4/3 of that;
+/// B44 stores a 4x4 block of halves in at least 3 bytes; PIZ's Huffman coding with runs of at
+/// most 255 codes stays below 500; the lossy DWA and HTJ2K are bounded at 5000.
+fn max_expansion(compression: exr::compression::Compression) -> u128 {
+    use exr::compression::Compression::*;
+    match compression {
+        Uncompressed => 1,
+        RLE => 64,
+        ZIP1 | ZIP16 => 1100,
+        PXR24 => 1500,
+        B44 | B44A => 16,
+        PIZ => 1000,
+        _ => 5000,
+    }
+}
+
 fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
     let meta = exr::meta::MetaData::read_from_buffered(bytes, false)
         .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
     let mut chunks: u128 = 0;
+    let mut samples_bytes: u128 = 0;
+    let mut holds: u128 = 0;
     for header in &meta.headers {
         let (w, h) = (
             header.layer_size.width() as u128,
@@ -288,6 +310,26 @@ fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
         )
         .map_err(|m| Error::input(path, m))?;
         chunks += header.chunk_count as u128;
+        samples_bytes += w * h * sample_bytes;
+        holds = holds.max(bytes.len() as u128 * max_expansion(header.compression));
+    }
+    // A few kilobytes claiming gigabytes: no compression the format has expands that much, so the
+    // file is corrupt, and reading it would allocate the claimed size first (found by fuzzing).
+    let holds = holds.max(MIN_EXR_CLAIM);
+    if samples_bytes > holds {
+        let (w, h) = meta
+            .headers
+            .first()
+            .map_or((0, 0), |h| (h.layer_size.width(), h.layer_size.height()));
+        return Err(Error::input(
+            path,
+            format!(
+                "truncated or corrupt OpenEXR file: its header claims {w}x{h} pixels, {} of \
+                 samples, more than its {} bytes can hold with its compression",
+                crate::limits::show_bytes(samples_bytes),
+                bytes.len()
+            ),
+        ));
     }
     if chunks.saturating_mul(8) > bytes.len() as u128 {
         let (w, h) = meta

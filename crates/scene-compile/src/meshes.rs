@@ -293,6 +293,31 @@ fn decode_base64(s: &str) -> Option<Vec<u8>> {
     Some(out)
 }
 
+/// Every accessor a mesh primitive names exists: the gltf crate's own validation indexes the
+/// POSITION accessor before checking that it exists (a panic; found by the gltf fuzz target).
+fn check_accessor_indices(path: &Path, root: &gltf::json::Root) -> Result<()> {
+    let n = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let named = prim.attributes.values().chain(&prim.indices).chain(
+                prim.targets.iter().flatten().flat_map(|t| {
+                    [&t.positions, &t.normals, &t.tangents]
+                        .into_iter()
+                        .flatten()
+                }),
+            );
+            if let Some(i) = named.map(|i| i.value()).find(|&i| i >= n) {
+                return Err(Error::at(
+                    path,
+                    format!("mesh {m} primitive {p}"),
+                    format!("refers to accessor {i}, but the file has {n}"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The binary glTF header (magic `glTF`, version, total length) checked before the gltf crate
 /// reads it: a total length below the 12-byte header underflows its arithmetic (a panic where
 /// overflow checks are on; found by the `gltf` fuzz target).
@@ -340,8 +365,13 @@ pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
 /// buffers.
 pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
     check_glb_header(path, bytes)?;
-    let gltf = gltf::Gltf::from_slice(bytes)
-        .map_err(|e| Error::input(path, format!("malformed glTF: {e}")))?;
+    let malformed = |e: gltf::Error| Error::input(path, format!("malformed glTF: {e}"));
+    let raw = gltf::Gltf::from_slice_without_validation(bytes).map_err(malformed)?;
+    check_accessor_indices(path, raw.document.as_json())?;
+    let gltf = gltf::Gltf {
+        document: gltf::Document::from_json(raw.document.into_json()).map_err(malformed)?,
+        blob: raw.blob,
+    };
     let base = path.parent().unwrap_or(Path::new("."));
     let mut buffers: Vec<Vec<u8>> = Vec::new();
     for buffer in gltf.document.buffers() {
