@@ -232,3 +232,74 @@ fn double_local_estimate_image_matches_the_exact_luminance() {
         }
     }
 }
+
+#[test]
+fn light_tracing_image_matches_the_exact_box_filtered_luminance() {
+    // The same view of Sobolev's plane 1 from the source, by light tracing: each pixel's value
+    // is the box filter of rho1/pi * E1(r) over the pixel (4 x 4 midpoint rule: the direct
+    // term varies by < 8 % across a pixel, so its error is far below 0.3 %).
+    // The image's standard errors come from 8 batches (Student's t, 7 degrees of freedom):
+    // each pixel within 8 of them plus the quadrature, and the mean z² below 3 (7/5 expected).
+    let dir = TempDir::new("lt");
+    let scene = compile_text(&dir, "sob", SOBOLEV);
+    let out = dir.path().join("sob_lt.hdr.exr");
+    let se_out = dir.path().join("sob_lt.se.exr");
+    let run = |paths: &str| {
+        estimate(&[
+            "image",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--stderr-out",
+            se_out.to_str().unwrap(),
+            "--paths",
+            paths,
+            "--light-tracing",
+        ])
+    };
+    run("250000").unwrap();
+    let img = luxest_io::exr_io::read_rgb(&out).unwrap();
+    let se = luxest_io::exr_io::read_rgb(&se_out).unwrap();
+    assert_eq!(img.attribute(header::ESTIMATOR), Some("light-tracing"));
+    assert_eq!(img.attribute(header::SAMPLES), Some("250000"));
+    assert_eq!(img.attribute(header::PIXEL_SAMPLES), None);
+    let cam = luxest_render::camera::PinholeCamera::new(&luxest_render::scene::Camera {
+        position: luxest_io::math::Vec3::ZERO,
+        look_at: luxest_io::math::Vec3::new(0.0, -1.0, 0.0),
+        up: luxest_io::math::Vec3::new(0.0, 0.0, 1.0),
+        vfov_deg: 60.0,
+        resolution: (12, 10),
+    })
+    .unwrap();
+    let s = exact();
+    let mut z2 = 0.0;
+    for y in 0..10 {
+        for x in 0..12 {
+            let mut exact_l = 0.0;
+            for a in 0..4 {
+                for b in 0..4 {
+                    let d = cam.direction(
+                        x as f64 + (a as f64 + 0.5) / 4.0,
+                        y as f64 + (b as f64 + 0.5) / 4.0,
+                    );
+                    let t = 1.0 / -d.y;
+                    let r = (d.x * t).hypot(d.z * t);
+                    exact_l += 0.5 / std::f64::consts::PI * s.illuminance1(r).value / 16.0;
+                }
+            }
+            let i = y * 12 + x;
+            let v = luxest_io::color::Rgb(img.pixels[i].map(|c| c as f64)).luminance();
+            let sigma = se.pixels[i][0] as f64;
+            assert!(
+                sigma > 0.0 && (v - exact_l).abs() <= 8.0 * sigma + 0.003 * exact_l,
+                "pixel ({x},{y}): {v} ± {sigma} vs {exact_l}"
+            );
+            z2 += ((v - exact_l) / sigma).powi(2) / 120.0;
+        }
+    }
+    assert!(z2 < 3.0, "mean z² {z2} (7/5 expected)");
+    // Fewer paths than batches cannot give a standard error.
+    let e = run("7").unwrap_err();
+    assert_eq!(e.0, 2, "{}", e.1);
+    assert!(e.1.contains("--paths must be at least 8"), "{}", e.1);
+}

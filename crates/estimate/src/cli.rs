@@ -2,7 +2,8 @@
 //! output files. The estimators themselves are [`crate::local`], [`crate::gather`] and
 //! [`crate::image`].
 
-use crate::image::{self, ImageConfig};
+use crate::image::{self, ImageConfig, ImageResult};
+use crate::light_trace::{self, LightTraceConfig};
 use crate::local::{self, Detector, LocalConfig, NearField};
 use crate::sensors::{
     all_sensors, evaluation_points, load_world, record_evaluation_points, results, Estimate,
@@ -215,6 +216,12 @@ pub enum Command {
         /// Safety bound on path length, 1 to 2^20.
         #[arg(long, default_value_t = 100_000, value_parser = MAX_DEPTH)]
         max_depth: u32,
+        /// Light tracing instead (a baseline): every light-path vertex is connected to the
+        /// camera itself, not to the points the pixels see (the local estimate at the camera);
+        /// --pixel-samples, --singularity and --eps do not apply. Scenes whose camera would see
+        /// mirrors or glass are refused.
+        #[arg(long)]
+        light_tracing: bool,
     },
     /// Direct simulation baseline: photons counted in disks around the sensor points.
     Direct {
@@ -287,6 +294,7 @@ pub mod estimator {
     pub const DIRECT_SIMULATION: &str = "direct-simulation";
     pub const GATHER: &str = "gather";
     pub const DOUBLE_LOCAL_ESTIMATE: &str = "double-local-estimate";
+    pub const LIGHT_TRACING: &str = "light-tracing";
 }
 
 /// Runs the command line.
@@ -326,6 +334,7 @@ pub fn run(args: Args) -> Result<()> {
             eps,
             common,
             max_depth,
+            light_tracing,
         } => {
             let (world, cam) = load_with_camera(&scene, resolution.as_deref())?;
             let eps = eps.unwrap_or(DEFAULT_IMAGE_EPS_FRACTION * world.room_scale);
@@ -343,16 +352,50 @@ pub fn run(args: Args) -> Result<()> {
             // All outputs, checked against the scene and each other before the render.
             let outputs = std::iter::once(&out).chain(&stderr_out).chain(&preview);
             let mut plan = OutputPlan::new([&scene], outputs)?;
-            write_image(
-                &mut plan,
-                &scene,
-                &world,
-                &cam,
-                &cfg,
-                &out,
-                stderr_out.as_deref(),
-                preview.as_deref(),
-            )
+            let outputs = ImageOutputs {
+                out: &out,
+                stderr_out: stderr_out.as_deref(),
+                preview: preview.as_deref(),
+            };
+            if light_tracing {
+                if world.scene.header.features.specular_paths {
+                    return Err(Error::input(
+                        &scene,
+                        "light tracing cannot connect mirrors or glass to a pinhole camera (use trace or estimate image without --light-tracing)",
+                    ));
+                }
+                if paths < image::BATCHES as u64 {
+                    return Err(Error::Usage(format!(
+                        "--paths must be at least {} for --light-tracing (one per batch)",
+                        image::BATCHES
+                    )));
+                }
+                let lt = LightTraceConfig {
+                    paths,
+                    seed: common.seed,
+                    threads: common.thread_count(),
+                    max_depth,
+                };
+                let r = light_trace::render(&world, &cam, &lt);
+                let info = RunInfo::new(
+                    estimator::LIGHT_TRACING,
+                    paths,
+                    common.seed,
+                    r.seconds,
+                    &world.scene.content_hash,
+                );
+                write_image(&mut plan, &scene, &r, info, None, outputs)
+            } else {
+                let r = image::render(&world, &cam, &cfg);
+                let info = RunInfo::new(
+                    estimator::DOUBLE_LOCAL_ESTIMATE,
+                    paths,
+                    common.seed,
+                    r.seconds,
+                    &world.scene.content_hash,
+                );
+                write_image(&mut plan, &scene, &r, info, Some(&cfg), outputs)
+            }
         }
         Command::Exact { case } => exact_table::print(case),
     }
@@ -519,35 +562,40 @@ fn write_results(
     plan.commit()
 }
 
-/// `estimate image`: renders the double local estimate and writes it (with its standard error
-/// and a preview on request).
-#[allow(clippy::too_many_arguments)]
+/// Where `estimate image` writes: the image, and on request its standard error and a preview.
+#[derive(Clone, Copy)]
+struct ImageOutputs<'a> {
+    out: &'a Path,
+    stderr_out: Option<&'a Path>,
+    preview: Option<&'a Path>,
+}
+
+/// Writes a rendered image of `estimate image` (the double local estimate with its `cfg`, or
+/// the light tracer) with its standard error and preview on request, all committed together.
 fn write_image(
     plan: &mut OutputPlan,
     scene: &Path,
-    world: &World,
-    cam: &luxest_render::camera::PinholeCamera,
-    cfg: &ImageConfig,
-    out: &Path,
-    stderr_out: Option<&Path>,
-    preview: Option<&Path>,
+    r: &ImageResult,
+    info: RunInfo,
+    cfg: Option<&ImageConfig>,
+    outputs: ImageOutputs,
 ) -> Result<()> {
-    let r = image::render(world, cam, cfg);
+    let ImageOutputs {
+        out,
+        stderr_out,
+        preview,
+    } = outputs;
     if let Some(i) = r.rgb.iter().position(|c| !c.is_finite()) {
         return Err(Error::input(scene, format!("pixel {i} is not finite")));
     }
-    let info = RunInfo::new(
-        estimator::DOUBLE_LOCAL_ESTIMATE,
-        cfg.paths,
-        cfg.seed,
-        r.seconds,
-        &world.scene.content_hash,
-    );
+    let paths = info.samples;
     let mut img = RgbImage::new(r.width, r.height);
     img.pixels = r.rgb.iter().map(|c| c.0.map(|v| v as f32)).collect();
     img.attributes = info.to_attributes();
-    img.set_attribute(header::SINGULARITY, cfg.singularity);
-    img.set_attribute(header::PIXEL_SAMPLES, cfg.pixel_samples);
+    if let Some(cfg) = cfg {
+        img.set_attribute(header::SINGULARITY, cfg.singularity);
+        img.set_attribute(header::PIXEL_SAMPLES, cfg.pixel_samples);
+    }
     write_rgb_to(plan, out, &img)?;
     if let Some(p) = preview {
         write_preview_png_auto_to(plan, p, &img)?;
@@ -564,7 +612,7 @@ fn write_image(
         out.display(),
         r.width,
         r.height,
-        cfg.paths,
+        paths,
         r.collisions,
         r.shadow_rays,
         r.seconds,

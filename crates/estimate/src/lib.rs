@@ -14,6 +14,7 @@ pub mod cli;
 pub mod exact_table;
 pub mod gather;
 pub mod image;
+pub mod light_trace;
 pub mod local;
 pub mod placement;
 pub mod sensors;

@@ -47,6 +47,33 @@ impl PinholeCamera {
     pub fn forward(&self) -> Vec3 {
         self.forward
     }
+
+    /// Where the ray from the camera towards `p` crosses the image: the image point (sx, sy)
+    /// in pixel units (the inverse of [`PinholeCamera::direction`]) and cos θ between the ray
+    /// and the forward axis; `None` behind the camera or outside the image.
+    pub fn project(&self, p: Vec3) -> Option<(f64, f64, f64)> {
+        let d = p - self.position;
+        let z = d.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let aspect = self.width as f64 / self.height as f64;
+        let px = d.dot(self.right) / z / (self.tan_half * aspect);
+        let py = d.dot(self.up) / z / self.tan_half;
+        let sx = (px + 1.0) * 0.5 * self.width as f64;
+        let sy = (1.0 - py) * 0.5 * self.height as f64;
+        let inside =
+            (0.0..self.width as f64).contains(&sx) && (0.0..self.height as f64).contains(&sy);
+        inside.then(|| (sx, sy, z / d.length()))
+    }
+
+    /// The area of one pixel on the image plane at unit distance from the pinhole (the
+    /// importance of a pinhole camera is 1 / (this area · cos⁴ θ)).
+    pub fn pixel_area(&self) -> f64 {
+        let aspect = self.width as f64 / self.height as f64;
+        (2.0 * self.tan_half * aspect / self.width as f64)
+            * (2.0 * self.tan_half / self.height as f64)
+    }
 }
 
 /// The sub-pixel position (u, v) in [0, 1)² of sample `sample` of pixel `pixel`: a hash of
@@ -86,6 +113,31 @@ pub fn stratified_pixel_jitter(seed: u64, pixel: u64, k: u32, n: u32) -> (f64, f
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn project_inverts_direction() {
+        let cam = PinholeCamera::new(&Camera {
+            position: Vec3::new(0.3, 1.0, -2.0),
+            look_at: Vec3::new(0.1, 0.2, 0.5),
+            up: Vec3::new(0.0, 1.0, 0.0),
+            vfov_deg: 50.0,
+            resolution: (40, 30),
+        })
+        .unwrap();
+        for (sx, sy) in [(0.5, 0.5), (39.9, 0.01), (20.0, 15.0), (3.25, 28.75)] {
+            let d = cam.direction(sx, sy);
+            let (x, y, cos) = cam.project(cam.position + d * 3.7).unwrap();
+            assert!(
+                (x - sx).abs() < 1e-9 && (y - sy).abs() < 1e-9,
+                "{sx},{sy} -> {x},{y}"
+            );
+            assert!((cos - d.dot(cam.forward())).abs() < 1e-12);
+        }
+        assert!(cam.project(cam.position - cam.forward()).is_none());
+        // The image plane at unit distance is 2 tan(fov/2) high.
+        let h = 2.0 * (25f64).to_radians().tan();
+        assert!((cam.pixel_area() - (h * 40.0 / 30.0 / 40.0) * (h / 30.0)).abs() < 1e-15);
+    }
 
     #[test]
     fn centre_and_corners_follow_the_field_of_view() {

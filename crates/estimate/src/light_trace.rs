@@ -1,0 +1,162 @@
+//! Light tracing: the classical local estimate *at the camera*, a baseline for the double local
+//! estimate's images.
+//!
+//! Light paths are traced from the emitters exactly as for the local estimate (flux weight Q,
+//! BSDF sampling with analog Russian roulette). Every non-specular vertex x — a collision, or
+//! the emission point of an area emitter — is connected to the pinhole camera at c: when the
+//! segment is unoccluded and x projects into the image, the pixel it lands in receives
+//!
+//! ```text
+//! Q · f(ω_in, x→c) cos_x / (d² · A_p · cos³ θ)
+//! ```
+//!
+//! with `f cos_x` the BSDF times the cosine at x (for an emission point, the Lambertian
+//! emitter's `cos_e / π`), d = |x − c|, θ the angle between x − c and the camera's axis, and
+//! A_p the pixel's area on the image plane at unit distance. This is the pinhole's importance
+//! `1 / (A_p cos⁴ θ)` times the geometry term `cos_x cos θ / d²`; its expectation is the
+//! box-filtered luminance of the pixel (the image-plane area element is `cos_x dA / (d² cos³ θ)`).
+//!
+//! Specular surfaces cannot be connected to a pinhole (a delta BSDF has no value towards it),
+//! so a scene whose camera sees mirrors or glass is refused; point sources are invisible to the
+//! camera, as in `trace`. Per-pixel standard errors come from [`BATCHES`] independent batches;
+//! the image is bit-identical at any thread count.
+
+use crate::image::{ImageResult, BATCHES};
+use crate::transport::scatter;
+use luxest_io::color::Rgb;
+use luxest_io::math::Vec3;
+use luxest_render::bsdf::{self, Transport};
+use luxest_render::camera::PinholeCamera;
+use luxest_render::parallel::{mean_and_standard_error, run_batches};
+use luxest_render::sampling::Rng;
+use luxest_render::world::World;
+
+#[derive(Clone, Debug)]
+pub struct LightTraceConfig {
+    pub paths: u64,
+    pub seed: u64,
+    pub threads: usize,
+    pub max_depth: u32,
+}
+
+/// One batch's pixel sums (f64) and counters.
+struct BatchFilm {
+    sums: Vec<[f64; 3]>,
+    vertices: u64,
+    shadow_rays: u64,
+}
+
+/// Connects vertex `x` (geometric normal `ng`, value `f_cos(w)` of BSDF × cosine towards the
+/// unit direction w to the camera) carrying flux `q` to the camera.
+fn splat(
+    world: &World,
+    cam: &PinholeCamera,
+    x: Vec3,
+    ng: Vec3,
+    q: Rgb,
+    f_cos: impl Fn(Vec3) -> Rgb,
+    film: &mut BatchFilm,
+) {
+    let Some((sx, sy, cos_theta)) = cam.project(x) else {
+        return;
+    };
+    let v = cam.position - x;
+    let d2 = v.length_squared();
+    let w = v / d2.sqrt();
+    let f = f_cos(w);
+    if f.max_component() <= 0.0 {
+        return;
+    }
+    film.shadow_rays += 1;
+    if world.occluded(world.offset(x, ng, w), cam.position) {
+        return;
+    }
+    let c = q * f * (1.0 / (d2 * cam.pixel_area() * cos_theta.powi(3)));
+    let pixel = sy as usize * cam.width as usize + sx as usize;
+    for (a, v) in film.sums[pixel].iter_mut().zip(c.0) {
+        *a += v;
+    }
+}
+
+fn run_batch(
+    world: &World,
+    cam: &PinholeCamera,
+    cfg: &LightTraceConfig,
+    batch: usize,
+    paths: u64,
+) -> BatchFilm {
+    let mut rng = Rng::new(cfg.seed, batch as u64 + 1);
+    let mut film = BatchFilm {
+        sums: vec![[0.0; 3]; cam.width as usize * cam.height as usize],
+        vertices: 0,
+        shadow_rays: 0,
+    };
+    for _ in 0..paths {
+        let e = world.sample_emission(&mut rng);
+        let mut q = e.flux;
+        let mut origin = e.position;
+        if let Some(n) = e.normal {
+            film.vertices += 1;
+            let f_cos = |w: Vec3| Rgb::splat(n.dot(w).max(0.0) / std::f64::consts::PI);
+            splat(world, cam, e.position, n, q, f_cos, &mut film);
+            origin = world.offset(e.position, n, e.direction);
+        }
+        let mut dir = e.direction;
+        for _ in 0..cfg.max_depth {
+            let Some(sp) = world.intersect(origin, dir) else {
+                break;
+            };
+            let m = world.material(sp.triangle);
+            if !bsdf::is_delta(m) {
+                film.vertices += 1;
+                let (wo, ng) = (-dir, sp.ng);
+                let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+                splat(world, cam, sp.position, sp.ng, q, f_cos, &mut film);
+            }
+            let Some((next_q, next_origin, next_dir)) =
+                scatter(world, &sp, dir, q, Transport::Flux, &mut rng)
+            else {
+                break;
+            };
+            (q, origin, dir) = (next_q, next_origin, next_dir);
+        }
+    }
+    film
+}
+
+/// Renders the camera's image by light tracing (see the module docs).
+pub fn render(world: &World, cam: &PinholeCamera, cfg: &LightTraceConfig) -> ImageResult {
+    let start = std::time::Instant::now();
+    let per_batch =
+        |b: usize| cfg.paths / BATCHES as u64 + u64::from((b as u64) < cfg.paths % BATCHES as u64);
+    let films = run_batches(BATCHES, cfg.threads, "light tracing", |b| {
+        run_batch(world, cam, cfg, b, per_batch(b))
+    });
+    let n = cam.width as usize * cam.height as usize;
+    let mut rgb = vec![Rgb::BLACK; n];
+    let mut standard_error = vec![0.0; n];
+    // The estimate is the mean over all paths; the standard error comes from the batches'
+    // means (batches are equal to within one path; the stage asks for at least one per batch).
+    let total = cfg.paths.max(1) as f64;
+    for p in 0..n {
+        let ys: Vec<f64> = films
+            .iter()
+            .enumerate()
+            .filter(|(b, _)| per_batch(*b) > 0)
+            .map(|(b, f)| Rgb(f.sums[p]).luminance() / per_batch(b) as f64)
+            .collect();
+        standard_error[p] = mean_and_standard_error(&ys).1;
+        rgb[p] = films
+            .iter()
+            .fold(Rgb::BLACK, |a, f| a + Rgb(f.sums[p]) * (1.0 / total));
+    }
+    ImageResult {
+        width: cam.width as usize,
+        height: cam.height as usize,
+        rgb,
+        standard_error,
+        collisions: films.iter().map(|f| f.vertices).sum(),
+        shadow_rays: films.iter().map(|f| f.shadow_rays).sum(),
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
