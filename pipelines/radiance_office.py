@@ -26,12 +26,15 @@ proper rotation, under which a luminaire aimed straight down keeps ies2rad's fra
 Illuminance: rtrace -I gives irradiance per channel in W/m^2; Radiance's luminous efficacy
 179 lm/W and its luminance weights 0.265/0.670/0.065 give lux (the sources are white, so the
 channels are equal). Uncertainty: rtrace with -aa 0 (no irradiance cache: plain Monte Carlo
-ambient sampling) and -u+ (uncorrelated random sampling) evaluates every point REPEATS times
-in one run; the point's value is the mean of the repeats and its standard error their standard
-deviation over sqrt(REPEATS). The defaults (-ab 16 -ad 1024 -lw 1e-5, 8 repeats: about 80
-CPU s) are converged: beyond -ab 8 -ad 512 -lw 1e-4 the work plane's mean moves by about 0.1 %
-at most (docs/measurements.md has the series). The CSV follows `report::peer` (comment lines,
-then `set,index,x,y,z,illuminance_lx,standard_error_lx`) in luxest's coordinates.
+ambient sampling), -as 0 (no adaptive super-sampling), -dt 0 (every source tested for shadows,
+none estimated statistically) and -u+ (uncorrelated random sampling) evaluates every point
+REPEATS times in one run; the point's value is the mean of the repeats and its standard
+error their standard deviation over sqrt(REPEATS). Radiance's defaults -as 512 and -dt 0.03
+left a 0.3 % dip at one corner of the symmetric office. The defaults here (-ab 16 -ad 1024
+-lw 1e-5 -lr -20, 8 repeats: about 65 CPU s) are converged: beyond -ab 8 -ad 512 -lw 1e-4 the
+work plane's mean moves by about 0.1 % at most (docs/measurements.md has the series). The
+CSV follows `report::peer` (comment lines, then `set,index,x,y,z,illuminance_lx,
+standard_error_lx`) in luxest's coordinates.
 """
 import argparse
 import math
@@ -327,8 +330,11 @@ def main():
                 index.append((s["name"], k, p["position"]))
                 rays.append(" ".join(f"{v:.9g}" for v in (*o, *d)))
         text = "\n".join(r for r in rays for _ in range(a.repeats)) + "\n"
-        settings = ["-I", "-h", "-ab", str(a.ab), "-ad", str(a.ad), "-aa", "0", "-lw", str(a.lw),
-                    "-u+", "-n", str(a.procs)]
+        # Unbiased settings where Radiance has a choice: no irradiance cache (-aa 0), no
+        # adaptive super-sampling (-as 0), every source tested for shadows (-dt 0), and no
+        # reflection limit below the ambient bounces (-lr).
+        settings = ["-I", "-h", "-ab", str(a.ab), "-ad", str(a.ad), "-aa", "0", "-as", "0",
+                    "-dt", "0", "-lr", str(-(a.ab + 4)), "-lw", str(a.lw), "-u+", "-n", str(a.procs)]
         res = subprocess.run(["rtrace", *settings, "office.oct"], input=text, capture_output=True,
                              text=True, cwd=work, check=True)
     wall = time.time() - t0
@@ -355,7 +361,7 @@ def main():
         "# note: Geometry and reflectances from the scene file (Radiance plastic, no specularity); "
         "IES files as they are and the EULUMDAT file converted to IES by this script, each made by "
         f"ies2rad into a {SPHERE_RADIUS * 1000:g} mm illum sphere (far field, as luxest models them); each point's standard "
-        f"error from {a.repeats} independent rtrace evaluations (-aa 0, -u+).",
+        f"error from {a.repeats} independent rtrace evaluations (-aa 0 -as 0 -dt 0, -u+).",
         "set,index,x,y,z,illuminance_lx,standard_error_lx",
     ]
     out = Path(a.out)
