@@ -33,6 +33,7 @@ $(LIGHTING_DIR)/report.md: $(LIGHTING_BUILD)/$(LIGHTING_SCENE).sensors.ron $(LIG
 
 # The peer: Radiance (rtrace -I) on the same room, luminaire tables and points.
 lighting-radiance: $(LIGHTING_BUILD)/scene.info.ron pipelines/radiance_office.py
+	@test -x $(PEERS_PYTHON) || { echo "error: $(PEERS_PYTHON) not found: run scripts/setup.sh --no-python --no-ort --peers" >&2; exit 1; }
 	$(PEERS_PYTHON) pipelines/radiance_office.py --scene scenes/$(LIGHTING_SCENE).ron \
 		--info $< -o $(LIGHTING_DIR)/radiance.csv
 	$(MAKE) lighting
