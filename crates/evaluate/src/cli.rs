@@ -51,7 +51,10 @@ pub enum Command {
         results: PathBuf,
         /// Case and parameters, e.g. `sobolev:I=100,h1=1,h2=1,rho1=0.5,rho2=0.5[,bin=R]` (bin:
         /// compare direct-simulation results with the mean over their counting disks),
-        /// `sphere:I=100,R=1,rho=0.5[,x=..,y=..,z=..]`, `cie171-5.8:flux=1e4,area=96,rho=0.5,x=2,y=2,z=2`.
+        /// `sphere:I=100,R=1,rho=0.5[,x=..,y=..,z=..]`, `cie171-5.8:flux=1e4,area=96,rho=0.5,x=2,y=2,z=2`;
+        /// an I0 cosⁿ luminaire (nadir −y): `cosn-plane:I0=1000,n=2,h=1[,bin=R]`,
+        /// `cosn-sobolev:I0=1000,n=2,h1=1,h2=1,rho1=0.5,rho2=0.5[,bin=R]`,
+        /// `cosn-sphere:I0=1000,n=2,R=1,rho=0.5[,x=..,y=..,z=..]`.
         #[arg(long)]
         case: String,
         /// CSV report.
