@@ -548,3 +548,46 @@ fn double_local_estimate_converges_to_box_filtered_pixels_across_an_edge() {
         "relMSE {coarse:e} at 2000 paths, {fine:e} at 200000: not falling as 1/paths"
     );
 }
+
+#[test]
+fn images_are_bit_identical_at_any_thread_count() {
+    // The double local estimate (camera points per round, roulette on the connections) and the
+    // light tracer on the Cornell box, 1 and 2 threads.
+    let scene = repo_root().join("scenes/cornell-box.ron");
+    let dir = crate::util::TempDir::new("dle-threads");
+    let lxs = dir.path().join("cb.lxs");
+    crate::util::scene_compile(&[scene.to_str().unwrap(), "-o", lxs.to_str().unwrap(), "-q"])
+        .unwrap();
+    let (world, cam) = luxest_render::world::load_with_camera(&lxs, Some("40x30")).unwrap();
+    let dle = |threads| {
+        estimate::image::render(
+            &world,
+            &cam,
+            &estimate::image::ImageConfig {
+                paths: 400,
+                pixel_samples: 2,
+                seed: 11,
+                threads,
+                singularity: Singularity::Clamp { eps: 5e-3 },
+                max_depth: 1000,
+            },
+        )
+    };
+    let lt = |threads| {
+        estimate::light_trace::render(
+            &world,
+            &cam,
+            &estimate::light_trace::LightTraceConfig {
+                paths: 20_000,
+                seed: 11,
+                threads,
+                max_depth: 1000,
+            },
+        )
+    };
+    for (a, b) in [(dle(1), dle(2)), (lt(1), lt(2))] {
+        assert!(a.rgb.iter().any(|c| c.luminance() > 0.0));
+        assert_eq!(a.rgb, b.rgb);
+        assert_eq!(a.standard_error, b.standard_error);
+    }
+}
