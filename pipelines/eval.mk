@@ -10,7 +10,8 @@
 # Sections: (1) Cornell box 256²: a reference of EVAL_REF_SPP spp (seed REF_SEED), one
 # progressive run (seed NOISY_SEED) with snapshots at 1, 2, 4, ... and every 64 spp up to
 # EVAL_PROG_SPP, its features at the same snapshots, every snapshot denoised; double-local-
-# estimate images at EVAL_DLE light paths, each denoised with the 64-spp features. (2) The
+# estimate images at EVAL_DLE light paths, each denoised with the 64-spp features; light-tracing
+# images at EVAL_LT paths (the baseline). (2) The
 # held-out test scenes of the dataset: noisy levels of `make noisy` denoised; local-estimate
 # images at EVAL_DATA_DLE paths, denoised with the NOISY_MAX features. (3) The cases of `make validate` at EVAL_SENSOR_SCALE times
 # their paths, against exact values.
@@ -29,6 +30,9 @@ EVAL_SNAPSHOTS := $(shell (seq 64 64 $(EVAL_PROG_SPP); p=1; while [ $$p -le $(EV
 EVAL_LAST := $(lastword $(EVAL_SNAPSHOTS))
 eval_cb = $(foreach s,$(EVAL_SNAPSHOTS),$(call lx_image,$(EVAL_CB),$(s),$(1)))
 eval_cb_le = $(foreach n,$(EVAL_DLE),$(call lx_le,$(EVAL_CB),$(n),$(1)))
+# Light tracing (the baseline of the double local estimate) in its own directory: same names.
+EVAL_CB_LT := $(EVAL_DIR)/cornell-box/light-tracing/cb
+eval_cb_lt = $(foreach n,$(EVAL_LT),$(call lx_le,$(EVAL_CB_LT),$(n),hdr))
 
 $(call lx_ref,$(EVAL_CB),hdr): $(EVAL_CB_SCENE) $(TRACE)
 	@mkdir -p $(@D)
@@ -52,10 +56,14 @@ $(call lx_le_pattern,$(EVAL_CB),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
 	@mkdir -p $(@D)
 	$(ESTIMATE) image $< --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
 
+$(call lx_le_pattern,$(EVAL_CB_LT),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
+	@mkdir -p $(@D)
+	$(ESTIMATE) image $< --light-tracing --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
+
 $(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) $(EVAL_MODEL) $(DENOISE)
 	$(DENOISE) $< --model $(EVAL_MODEL) --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
 
-$(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb,hdr) $(call eval_cb,dn) $(call eval_cb_le,hdr) $(call eval_cb_le,dn) $(EVALUATE)
+$(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb,hdr) $(call eval_cb,dn) $(call eval_cb_le,hdr) $(call eval_cb_le,dn) $(eval_cb_lt) $(EVALUATE)
 	@mkdir -p $(@D) $(EVAL_DIR)/flip
 	$(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip
 

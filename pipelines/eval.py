@@ -37,6 +37,7 @@ STYLE = {
     "path-tracing+denoise": ("tab:orange", "s"),
     "double-local-estimate": ("tab:green", "^"),
     "double-local-estimate+denoise": ("tab:red", "D"),
+    "light-tracing": ("tab:purple", "v"),
 }
 
 
@@ -244,7 +245,8 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
               f"Reference: {args.ref_spp} spp path tracing (seed {args.ref_seed}, independent of the runs scored). Path tracing "
               f"is one progressive run (seed {args.noisy_seed}) whose snapshots are denoised with the albedo/normal features of the same snapshot; "
               "double-local-estimate (DLE) images (one camera sample per pixel) are denoised with the 64-spp features.", ""]
-    show = [r for r in cb_rows if r["estimator"].startswith("double") or int(r["samples"]) in (1, 4, 16, 64, 256, 1024, 4096)]
+    show = [r for r in cb_rows if r["estimator"].startswith(("double", "light"))
+            or int(r["samples"]) in (1, 4, 16, 64, 256, 1024, 4096)]
     rows = [[r["estimator"], int(r["samples"]), f"{r['total_seconds']:.2f}", f"{r['psnr_db']:.2f}", f"{r['ssim']:.4f}",
              "" if math.isnan(r["ms_ssim"]) else f"{r['ms_ssim']:.4f}", f"{r['flip']:.4f}", f"{r['rel_mse']:.3e}", f"{r['smape']:.4f}"]
             for r in sorted(show, key=lambda r: (r["estimator"], r["samples"]))]

@@ -22,7 +22,8 @@ TRAIN_STEPS_full := 60000
 TRAIN_MINUTES_full := 600
 
 # Evaluation (pipelines/eval.mk): the Cornell-box reference spp and progressive run's last spp,
-# double-local-estimate light paths on the Cornell box and on the dataset's test scenes, and the
+# double-local-estimate light paths on the Cornell box, light-tracing paths on the Cornell box
+# (the baseline), double-local-estimate paths on the dataset's test scenes, and the
 # sensor cases' path counts as a fraction of make validate's.
 EVAL_REF_SPP_quick := 4096
 EVAL_REF_SPP_full := 65536
@@ -30,6 +31,8 @@ EVAL_PROG_SPP_quick := 1024
 EVAL_PROG_SPP_full := 8192
 EVAL_DLE_quick := 100 300 1000 3000
 EVAL_DLE_full := 100 300 1000 3000 10000 30000
+EVAL_LT_quick := 1000000 4000000 16000000
+EVAL_LT_full := 1000000 4000000 16000000 64000000 256000000
 EVAL_DATA_DLE_quick := 100 1000
 EVAL_DATA_DLE_full := 100 1000 10000
 EVAL_SENSOR_SCALE_quick := 0.25
@@ -48,7 +51,7 @@ SINGULARITY_SAMPLES_full := 2000000
 # The selected preset's values: each NAME above gets NAME ?= NAME_$(PRESET), so every one is
 # also overridable on the command line (`make eval EVAL_DLE="100 1000"`).
 PRESET_VARIABLES := REF_SPP NOISY_LEVELS TRAIN_STEPS TRAIN_MINUTES EVAL_REF_SPP EVAL_PROG_SPP \
-	EVAL_DLE EVAL_DATA_DLE EVAL_SENSOR_SCALE VALIDATE_SCALE SINGULARITY_PATHS SINGULARITY_SAMPLES
+	EVAL_DLE EVAL_LT EVAL_DATA_DLE EVAL_SENSOR_SCALE VALIDATE_SCALE SINGULARITY_PATHS SINGULARITY_SAMPLES
 $(foreach v,$(PRESET_VARIABLES),$(eval $(v) ?= $$($(v)_$(PRESET))))
 
 # Seeds (docs/architecture.md, *Seeds*). A sample depends only on (seed, pixel, sample index), so

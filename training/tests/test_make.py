@@ -57,8 +57,12 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     assert len(ref) == len(prog) == 1 and flag(ref[0], "--seed") != flag(prog[0], "--seed")
     snapshots = flag(prog[0], "--snapshots").split(",")
     denoised = [c for c in cmds if c[0] == STAGES["DENOISE"] and "/cornell-box/" in c[1]]
-    dle = [c for c in cmds if c[0] == STAGES["ESTIMATE"] and c[1] == "image" and "cornell-box" in c[2]]
+    images = [c for c in cmds if c[0] == STAGES["ESTIMATE"] and c[1] == "image" and "cornell-box" in c[2]]
+    dle = [c for c in images if "--light-tracing" not in c]
     assert len(denoised) == len(snapshots) + len(dle)
+    # The light-tracing baseline is scored as it is (not denoised), from the noisy seed.
+    lt = [c for c in images if "--light-tracing" in c]
+    assert lt and all(flag(c, "--seed") == flag(prog[0], "--seed") for c in lt)
     assert [c for c in cmds if c[0] == STAGES["EVALUATE"] and c[1] == "images"]
     # Every program run is a stage variable or the summary: no stage runs behind make's back.
     r = subprocess.run(["make", "-n", "--no-print-directory", "eval", "EVAL_MODEL=models/default.onnx", "DATASET=pytest-dry-run",
