@@ -6,7 +6,8 @@
 //! ```text
 //! <name>_<spp, 6 digits>spp.<kind>.exr   a camera estimate at spp samples per pixel (path tracing)
 //! <name>_ref.<kind>.exr                  the same at reference quality
-//! <name>_<paths, 6 digits>le.<kind>.exr  a double-local-estimate image from `paths` light paths
+//! <name>_<paths, 6 digits>le.<kind>.exr  a local-estimate image from `paths` light paths (double
+//!                                        local estimate or light tracing: `luxest.estimator`)
 //! ```
 //!
 //! `<kind>` is one of [`Kind`]; a PNG preview replaces the final `.exr` by `.png`. Sensor results
