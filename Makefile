@@ -51,6 +51,8 @@ include pipelines/validate.mk
 include pipelines/singularity.mk
 include pipelines/eval.mk
 include pipelines/lighting.mk
+# The Mitsuba 3 cross-check (make mitsuba-check).
+include pipelines/mitsuba.mk
 
 # The main job on the default scene: compile it, path-trace snapshots with their albedo and
 # normal features and denoise them (the committed model), estimate illuminance at its sensors

@@ -11,7 +11,9 @@
 #   - the Python environment of training/ in .venv (scripts/setup-python.sh: torch for CPU,
 #     onnx, onnxruntime, pytest; ~4 GB).
 #   - with --peers: the optional peer programs in .venv-peers (PyPI pyradiance, which bundles the
-#     Radiance binaries ies2rad, oconv, rtrace; ~40 MB), used by `make lighting-radiance`.
+#     Radiance binaries ies2rad, oconv, rtrace, ~40 MB, used by `make lighting-radiance`; PyPI
+#     mitsuba 3, whose scalar_rgb variant renders `scene-compile --export-mitsuba` scenes, used
+#     by `make mitsuba-check`).
 #
 # Usage: scripts/setup.sh [--no-ort] [--no-python] [--peers]
 set -euo pipefail
@@ -79,10 +81,10 @@ if [ "$want_python" -eq 1 ]; then
 fi
 if [ "$want_peers" -eq 1 ]; then
     peers="$(cd "$(dirname "$0")/.." && pwd)/.venv-peers"
-    if ! "$peers/bin/python" -c "import pyradiance" >/dev/null 2>&1; then
-        echo "setup: creating $peers with pyradiance (Radiance binaries)" >&2
+    if ! "$peers/bin/python" -c "import pyradiance, mitsuba" >/dev/null 2>&1; then
+        echo "setup: creating $peers with pyradiance (Radiance binaries) and mitsuba 3" >&2
         python3 -m venv "$peers"
-        "$peers/bin/pip" install --quiet "pyradiance==1.3.*"
+        "$peers/bin/pip" install --quiet "pyradiance==1.3.*" "mitsuba==3.9.*"
     fi
 fi
 echo "setup: ok" >&2

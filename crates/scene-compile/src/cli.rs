@@ -28,6 +28,10 @@ pub struct Args {
     /// No warnings or summary on stderr.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Also write the scene for Mitsuba 3 into this directory (scene.xml and one OBJ per
+    /// material): a cross-check of any scene with Mitsuba (`mitsuba -D spp=256 scene.xml`).
+    #[arg(long, value_name = "DIR", conflicts_with = "check")]
+    pub export_mitsuba: Option<PathBuf>,
 }
 
 /// Runs the command line.
@@ -49,10 +53,11 @@ pub fn run(args: Args) -> Result<()> {
             Path::new("build").join(name).join("scene.lxs")
         }
     };
-    let inputs =
-        std::iter::once(args.input.clone()).chain(referenced_files(&authored, &args.input));
+    let inputs: Vec<PathBuf> = std::iter::once(args.input.clone())
+        .chain(referenced_files(&authored, &args.input))
+        .collect();
     let outputs = if args.check { None } else { Some(&out) };
-    let mut plan = OutputPlan::new(inputs, outputs)?;
+    let mut plan = OutputPlan::new(&inputs, outputs)?;
     let (mut scene, report) = compile(&authored, &args.input)?;
     if !args.quiet {
         for w in &report.warnings {
@@ -83,8 +88,30 @@ pub fn run(args: Args) -> Result<()> {
         }
         return Ok(());
     }
+    let export = match &args.export_mitsuba {
+        Some(dir) => {
+            let files = crate::mitsuba::export(&scene, &args.input)?;
+            let paths: Vec<PathBuf> = files.iter().map(|(name, _)| dir.join(name)).collect();
+            // Every output, the compiled scene's included, checked together before writing.
+            plan = OutputPlan::new(&inputs, std::iter::once(&out).chain(&paths))?;
+            Some((dir, files, paths))
+        }
+        None => None,
+    };
     plan.write_bytes(&out, &bytes)?;
+    if let Some((_, files, paths)) = &export {
+        for ((_, data), path) in files.iter().zip(paths) {
+            plan.write_bytes(path, data)?;
+        }
+    }
     plan.commit()?;
+    if let (Some((dir, files, _)), false) = (&export, args.quiet) {
+        eprintln!(
+            "wrote the Mitsuba 3 scene {} ({} meshes)",
+            dir.join("scene.xml").display(),
+            files.len() - 1
+        );
+    }
     if !args.quiet {
         eprintln!("wrote {} ({summary})", out.display());
     }

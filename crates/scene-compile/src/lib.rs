@@ -13,6 +13,7 @@
 pub mod cli;
 pub mod luminaires;
 pub mod meshes;
+pub mod mitsuba;
 pub mod shapes;
 pub mod surfaces;
 pub mod validate;

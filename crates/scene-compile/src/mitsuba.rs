@@ -1,0 +1,187 @@
+//! Export of a compiled scene as a Mitsuba 3 scene (`scene-compile --export-mitsuba DIR`), so
+//! that any luxest scene can be cross-checked with Mitsuba and Mitsuba can be a column of the
+//! benchmarks.
+//!
+//! What is written: `scene.xml` and one Wavefront OBJ per (material, emitter) group of
+//! triangles, in world coordinates (the compiled scene's triangles, winding kept, so that
+//! Mitsuba's face normals are luxest's geometric normals; `face_normals` is set because luxest
+//! shades with geometric normals). The mapping, chosen to be exact for RGB rendering:
+//!
+//! | luxest | Mitsuba 3 |
+//! |---|---|
+//! | `Lambertian` (two-sided) | `twosided` `diffuse` |
+//! | `Mirror` | `twosided` `conductor`, `material="none"` (Fresnel 1), `specular_reflectance` |
+//! | `Dielectric` (ior inside / outside) | `dielectric`, `int_ior = ior`, `ext_ior = 1` |
+//! | `Glossy` = diffuse/π + specular · GGX(α = roughness²) | `twosided` `blendbsdf` of weight ½ over `diffuse` (2 · diffuse) and `roughconductor` (`ggx`, α, `material="none"`, 2 · specular): the sum of the two lobes |
+//! | area emitter (front side, luminance L) | `area` emitter, `radiance` = L |
+//! | point source (intensity I per channel) | `point` emitter, `intensity` = I |
+//! | camera (pinhole, vertical field of view) | `perspective`, `fov_axis="y"`, `look_at` with the same up vector; `hdrfilm` with a `box` filter |
+//!
+//! Goniometric luminaires have no Mitsuba equivalent and are refused. The integrator is `path`
+//! (`max_depth` −1, `rr_depth` 5), the sampler `independent`; both are plain text in the XML.
+
+use luxest_io::math::Vec3;
+use luxest_io::{Error, Result};
+use luxest_render::compiled::{CompiledScene, Emitter, NO_EMITTER};
+use luxest_render::scene::Material;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The files of the export: (file name within the export directory, contents).
+pub type ExportFiles = Vec<(String, Vec<u8>)>;
+
+fn rgb(name: &str, c: [f64; 3]) -> String {
+    format!(
+        r#"<rgb name="{name}" value="{:e}, {:e}, {:e}"/>"#,
+        c[0], c[1], c[2]
+    )
+}
+
+fn vec3(v: Vec3) -> String {
+    format!("{:e}, {:e}, {:e}", v.x, v.y, v.z)
+}
+
+/// The BSDF element of a material.
+fn bsdf(m: &Material) -> String {
+    match m {
+        Material::Lambertian { reflectance } => format!(
+            r#"<bsdf type="twosided"><bsdf type="diffuse">{}</bsdf></bsdf>"#,
+            rgb("reflectance", reflectance.0)
+        ),
+        Material::Mirror { reflectance } => format!(
+            r#"<bsdf type="twosided"><bsdf type="conductor"><string name="material" value="none"/>{}</bsdf></bsdf>"#,
+            rgb("specular_reflectance", reflectance.0)
+        ),
+        Material::Dielectric { ior } => format!(
+            r#"<bsdf type="dielectric"><float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/></bsdf>"#
+        ),
+        Material::Glossy {
+            diffuse,
+            specular,
+            roughness,
+        } => format!(
+            r#"<bsdf type="twosided"><bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse">{}</bsdf><bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="{:e}"/><string name="material" value="none"/>{}</bsdf></bsdf></bsdf>"#,
+            rgb("reflectance", diffuse.0.map(|v| 2.0 * v)),
+            roughness * roughness,
+            rgb("specular_reflectance", specular.0.map(|v| 2.0 * v))
+        ),
+    }
+}
+
+/// The Mitsuba 3 scene of `scene` (see the module docs); `path` names the compiled scene in
+/// errors.
+pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
+    let h = &scene.header;
+    if let Some(Emitter::Luminaire { name, .. }) = h
+        .emitters
+        .iter()
+        .find(|e| matches!(e, Emitter::Luminaire { .. }))
+    {
+        return Err(Error::input(
+            path,
+            format!("luminaire \"{name}\": Mitsuba 3 has no goniometric emitter to export it to"),
+        ));
+    }
+    let mut xml = String::new();
+    let _ = writeln!(
+        xml,
+        "<!-- Mitsuba 3 scene exported by luxest scene-compile {} from \"{}\" (content hash {}) -->",
+        env!("CARGO_PKG_VERSION"),
+        h.name,
+        scene.content_hash
+    );
+    let _ = writeln!(xml, r#"<scene version="3.0.0">"#);
+    let _ = writeln!(
+        xml,
+        r#"  <default name="spp" value="64"/>
+  <integrator type="path"><integer name="max_depth" value="-1"/><integer name="rr_depth" value="5"/></integrator>"#
+    );
+    if let Some(c) = &h.camera {
+        let _ = writeln!(
+            xml,
+            r#"  <sensor type="perspective">
+    <string name="fov_axis" value="y"/><float name="fov" value="{:e}"/>
+    <transform name="to_world"><lookat origin="{}" target="{}" up="{}"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="{}"/><integer name="height" value="{}"/><rfilter type="box"/><string name="pixel_format" value="rgb"/></film>
+  </sensor>"#,
+            c.vfov_deg,
+            vec3(c.position),
+            vec3(c.look_at),
+            vec3(c.up),
+            c.resolution.0,
+            c.resolution.1
+        );
+    }
+    for e in &h.emitters {
+        if let Emitter::Point {
+            position,
+            intensity_rgb,
+            ..
+        } = e
+        {
+            let _ = writeln!(
+                xml,
+                r#"  <emitter type="point"><point name="position" value="{}"/>{}</emitter>"#,
+                vec3(*position),
+                rgb("intensity", intensity_rgb.0)
+            );
+        }
+    }
+    // Triangles grouped by (material, emitter), in order of first appearance.
+    let mut groups: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
+    for (t, (&m, &e)) in scene
+        .triangle_material
+        .iter()
+        .zip(&scene.triangle_emitter)
+        .enumerate()
+    {
+        groups.entry((m, e)).or_default().push(t);
+    }
+    let mut files = Vec::new();
+    for (g, ((m, e), triangles)) in groups.iter().enumerate() {
+        let material = &h.materials[*m as usize];
+        let file = format!("mesh_{g:03}.obj");
+        let mut obj = format!(
+            "# luxest scene \"{}\": material \"{}\"{}\n",
+            h.name,
+            material.name,
+            if *e == NO_EMITTER { "" } else { ", emitter" }
+        );
+        // Only the vertices this group uses, renumbered from 1.
+        let mut index = BTreeMap::new();
+        let mut faces = String::new();
+        for &t in triangles {
+            let mut f = [0usize; 3];
+            for (k, &v) in scene.indices[t].iter().enumerate() {
+                let next = index.len() + 1;
+                f[k] = *index.entry(v).or_insert(next);
+            }
+            let _ = writeln!(faces, "f {} {} {}", f[0], f[1], f[2]);
+        }
+        let mut by_new: Vec<(usize, u32)> = index.iter().map(|(&v, &n)| (n, v)).collect();
+        by_new.sort_unstable();
+        for (_, v) in by_new {
+            let p = scene.positions[v as usize];
+            let _ = writeln!(obj, "v {} {} {}", p[0], p[1], p[2]);
+        }
+        obj.push_str(&faces);
+        let emitter = match h.emitters.get(*e as usize) {
+            Some(Emitter::Area { radiance_rgb, .. }) => format!(
+                r#"<emitter type="area">{}</emitter>"#,
+                rgb("radiance", radiance_rgb.0)
+            ),
+            _ => String::new(),
+        };
+        let _ = writeln!(
+            xml,
+            r#"  <shape type="obj"><string name="filename" value="{file}"/><boolean name="face_normals" value="true"/>{}{emitter}</shape>"#,
+            bsdf(&material.model)
+        );
+        files.push((file, obj.into_bytes()));
+    }
+    let _ = writeln!(xml, "</scene>");
+    files.insert(0, ("scene.xml".to_string(), xml.into_bytes()));
+    Ok(files)
+}

@@ -1,0 +1,54 @@
+"""Renders a scene exported by `scene-compile --export-mitsuba` with Mitsuba 3 (the peer of
+`make mitsuba-check`), and compares it with a luxest image of the same scene: whole-image and
+4 x 4 block means of Y and of each channel, as ratios Mitsuba / luxest. Runs in .venv-peers
+(`scripts/setup.sh --peers`); prints the CPU seconds of the render."""
+import argparse
+import sys
+import time
+
+import numpy as np
+
+
+def read_exr(path):
+    """R, G, B of an EXR file as float64 (H, W, 3), read with Mitsuba's own EXR reader."""
+    import mitsuba as mi
+    return np.array(mi.Bitmap(str(path)), dtype=np.float64)[..., :3]
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("scene", help="scene.xml written by scene-compile --export-mitsuba")
+    ap.add_argument("--spp", type=int, default=256)
+    ap.add_argument("--variant", default="scalar_rgb")
+    ap.add_argument("--seed", type=int, default=5)
+    ap.add_argument("--luxest", required=True, help="a luxest image of the same scene (EXR)")
+    ap.add_argument("-o", "--out", required=True, help="the Mitsuba image (EXR)")
+    ap.add_argument("--summary", required=True, help="the comparison (Markdown)")
+    a = ap.parse_args(argv)
+    import mitsuba as mi
+    mi.set_variant(a.variant)
+    t, w = time.process_time(), time.time()
+    img = mi.render(mi.load_file(a.scene, spp=a.spp), seed=a.seed)
+    cpu, wall = time.process_time() - t, time.time() - w
+    mi.util.write_bitmap(a.out, img, write_async=False)
+    m, lx = read_exr(a.out), read_exr(a.luxest)
+    if m.shape != lx.shape:
+        sys.exit(f"error: {a.luxest}: {lx.shape[1]}x{lx.shape[0]}, Mitsuba rendered {m.shape[1]}x{m.shape[0]}")
+    luma = np.array([0.2126, 0.7152, 0.0722])
+    y_m, y_l = m @ luma, lx @ luma
+    rows = [f"Mitsuba 3 `{a.variant}` `path`, {a.spp} spp: {cpu:.1f} CPU-s ({wall:.1f} s wall), against `{a.luxest}`.", "",
+            "| region | Y ratio Mitsuba / luxest |", "|---|---|",
+            f"| whole image | {y_m.mean() / y_l.mean():.4f} |"]
+    rows += [f"| channel {c} | {m[..., i].mean() / lx[..., i].mean():.4f} |" for i, c in enumerate("RGB")]
+    h, w_ = m.shape[0] // 4, m.shape[1] // 4
+    blocks = [y_m[i * h:(i + 1) * h, j * w_:(j + 1) * w_].mean() / max(y_l[i * h:(i + 1) * h, j * w_:(j + 1) * w_].mean(), 1e-300)
+              for i in range(4) for j in range(4)]
+    rows += [f"| 4 x 4 blocks | {min(blocks):.4f} to {max(blocks):.4f} |", ""]
+    text = "\n".join(rows)
+    with open(a.summary, "w") as f:
+        f.write(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
