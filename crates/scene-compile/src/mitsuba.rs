@@ -104,7 +104,7 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
     <string name="fov_axis" value="y"/><float name="fov" value="{:e}"/>
     <transform name="to_world"><lookat origin="{}" target="{}" up="{}"/></transform>
     <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
-    <film type="hdrfilm"><integer name="width" value="{}"/><integer name="height" value="{}"/><rfilter type="box"/><string name="pixel_format" value="rgb"/></film>
+    <film type="hdrfilm"><integer name="width" value="{}"/><integer name="height" value="{}"/><rfilter type="box"/><string name="pixel_format" value="rgb"/><string name="component_format" value="float32"/></film>
   </sensor>"#,
             c.vfov_deg,
             vec3(c.position),
