@@ -12,8 +12,8 @@
 #     onnx, onnxruntime, pytest; ~4 GB).
 #   - with --peers: the optional peer programs in .venv-peers (PyPI pyradiance, which bundles the
 #     Radiance binaries ies2rad, oconv, rtrace, ~40 MB, used by `make lighting-radiance`; PyPI
-#     mitsuba 3, whose scalar_rgb variant renders `scene-compile --export-mitsuba` scenes, used
-#     by `make mitsuba-check`).
+#     mitsuba 3 with Debian's libllvm19 for its llvm_ad_rgb variant, which renders
+#     `scene-compile --export-mitsuba` scenes, used by `make mitsuba-check`).
 #
 # Usage: scripts/setup.sh [--no-ort] [--no-python] [--peers]
 set -euo pipefail
@@ -80,6 +80,12 @@ if [ "$want_python" -eq 1 ]; then
     "$(dirname "$0")/setup-python.sh"
 fi
 if [ "$want_peers" -eq 1 ]; then
+    # Mitsuba 3's llvm_ad_rgb variant (the fast one, the benchmark's peer) loads libLLVM 19.
+    if ! dpkg-query -W -f='${Status}' libllvm19 2>/dev/null | grep -q "install ok installed"; then
+        echo "setup: installing Debian package libllvm19 (Mitsuba 3's LLVM variant)" >&2
+        "${sudo_cmd[@]}" apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends libllvm19 >/dev/null
+    fi
     peers="$(cd "$(dirname "$0")/.." && pwd)/.venv-peers"
     if ! "$peers/bin/python" -c "import pyradiance, mitsuba" >/dev/null 2>&1; then
         echo "setup: creating $peers with pyradiance (Radiance binaries) and mitsuba 3" >&2
