@@ -5,7 +5,7 @@
 
 MITSUBA_SCENE ?= $(DEFAULT_SCENE)
 MITSUBA_SPP ?= 256
-MITSUBA_VARIANT ?= scalar_rgb
+MITSUBA_VARIANT ?= llvm_ad_rgb
 MITSUBA_DIR := build/mitsuba/$(MITSUBA_SCENE)
 
 .PHONY: mitsuba-check

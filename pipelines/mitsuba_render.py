@@ -19,7 +19,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scene", help="scene.xml written by scene-compile --export-mitsuba")
     ap.add_argument("--spp", type=int, default=256)
-    ap.add_argument("--variant", default="scalar_rgb")
+    ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--luxest", required=True, help="a luxest image of the same scene (EXR)")
     ap.add_argument("-o", "--out", required=True, help="the Mitsuba image (EXR)")
