@@ -357,6 +357,15 @@ pub fn run(args: Args) -> Result<()> {
                 stderr_out: stderr_out.as_deref(),
                 preview: preview.as_deref(),
             };
+            let info = |estimator: &str, seconds: f64| {
+                RunInfo::new(
+                    estimator,
+                    paths,
+                    common.seed,
+                    seconds,
+                    &world.scene.content_hash,
+                )
+            };
             if light_tracing {
                 if world.scene.header.features.specular_paths {
                     return Err(Error::input(
@@ -377,23 +386,11 @@ pub fn run(args: Args) -> Result<()> {
                     max_depth,
                 };
                 let r = light_trace::render(&world, &cam, &lt);
-                let info = RunInfo::new(
-                    estimator::LIGHT_TRACING,
-                    paths,
-                    common.seed,
-                    r.seconds,
-                    &world.scene.content_hash,
-                );
+                let info = info(estimator::LIGHT_TRACING, r.seconds);
                 write_image(&mut plan, &scene, &r, info, None, outputs)
             } else {
                 let r = image::render(&world, &cam, &cfg);
-                let info = RunInfo::new(
-                    estimator::DOUBLE_LOCAL_ESTIMATE,
-                    paths,
-                    common.seed,
-                    r.seconds,
-                    &world.scene.content_hash,
-                );
+                let info = info(estimator::DOUBLE_LOCAL_ESTIMATE, r.seconds);
                 write_image(&mut plan, &scene, &r, info, Some(&cfg), outputs)
             }
         }

@@ -20,7 +20,7 @@
 //! variation is part of the batches' standard error.
 
 use crate::singularity::Singularity;
-use crate::transport::{point_source_direct_to, scatter};
+use crate::transport::{point_source_direct_to, walk_light_path, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
@@ -161,43 +161,26 @@ fn light_records(world: &World, cfg: &ImageConfig, batch: usize, paths: u64) -> 
     let mut rng = Rng::new(cfg.seed, batch as u64 + 1);
     let mut out = Vec::new();
     for path in 0..paths {
-        let e = world.sample_emission(&mut rng);
-        let mut q = e.flux;
-        let mut origin = e.position;
-        if let Some(n) = e.normal {
-            out.push(Record {
-                position: e.position,
-                ng: n,
-                wo: n,
-                q,
-                triangle: None,
-                path,
-            });
-            origin = world.offset(e.position, n, e.direction);
-        }
-        let mut dir = e.direction;
-        for _ in 0..cfg.max_depth {
-            let Some(sp) = world.intersect(origin, dir) else {
-                break;
-            };
-            let m = world.material(sp.triangle);
-            if !bsdf::is_delta(m) {
-                out.push(Record {
+        walk_light_path(world, &mut rng, cfg.max_depth, |v, q| {
+            out.push(match v {
+                LightVertex::Emission { position, normal } => Record {
+                    position,
+                    ng: normal,
+                    wo: normal,
+                    q,
+                    triangle: None,
+                    path,
+                },
+                LightVertex::Collision { sp, dir } => Record {
                     position: sp.position,
                     ng: sp.ng,
                     wo: -dir,
                     q,
                     triangle: Some(sp.triangle),
                     path,
-                });
-            }
-            let Some((next_q, next_origin, next_dir)) =
-                scatter(world, &sp, dir, q, Transport::Flux, &mut rng)
-            else {
-                break;
-            };
-            (q, origin, dir) = (next_q, next_origin, next_dir);
-        }
+                },
+            })
+        });
     }
     out
 }

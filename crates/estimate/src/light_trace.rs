@@ -22,10 +22,10 @@
 //! the image is bit-identical at any thread count.
 
 use crate::image::{ImageResult, BATCHES};
-use crate::transport::scatter;
+use crate::transport::{walk_light_path, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
-use luxest_render::bsdf::{self, Transport};
+use luxest_render::bsdf;
 use luxest_render::camera::PinholeCamera;
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
 use luxest_render::sampling::Rng;
@@ -92,34 +92,20 @@ fn run_batch(
         shadow_rays: 0,
     };
     for _ in 0..paths {
-        let e = world.sample_emission(&mut rng);
-        let mut q = e.flux;
-        let mut origin = e.position;
-        if let Some(n) = e.normal {
+        walk_light_path(world, &mut rng, cfg.max_depth, |v, q| {
             film.vertices += 1;
-            let f_cos = |w: Vec3| Rgb::splat(n.dot(w).max(0.0) / std::f64::consts::PI);
-            splat(world, cam, e.position, n, q, f_cos, &mut film);
-            origin = world.offset(e.position, n, e.direction);
-        }
-        let mut dir = e.direction;
-        for _ in 0..cfg.max_depth {
-            let Some(sp) = world.intersect(origin, dir) else {
-                break;
-            };
-            let m = world.material(sp.triangle);
-            if !bsdf::is_delta(m) {
-                film.vertices += 1;
-                let (wo, ng) = (-dir, sp.ng);
-                let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
-                splat(world, cam, sp.position, sp.ng, q, f_cos, &mut film);
+            match v {
+                LightVertex::Emission { position, normal } => {
+                    let f_cos = |w: Vec3| Rgb::splat(normal.dot(w).max(0.0) / std::f64::consts::PI);
+                    splat(world, cam, position, normal, q, f_cos, &mut film);
+                }
+                LightVertex::Collision { sp, dir } => {
+                    let (m, wo, ng) = (world.material(sp.triangle), -dir, sp.ng);
+                    let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+                    splat(world, cam, sp.position, ng, q, f_cos, &mut film);
+                }
             }
-            let Some((next_q, next_origin, next_dir)) =
-                scatter(world, &sp, dir, q, Transport::Flux, &mut rng)
-            else {
-                break;
-            };
-            (q, origin, dir) = (next_q, next_origin, next_dir);
-        }
+        });
     }
     film
 }

@@ -16,6 +16,55 @@ use luxest_render::scene::IlluminanceKind;
 use luxest_render::scene::SensorPoint;
 use luxest_render::world::{SurfacePoint, World};
 
+/// A non-specular vertex of a light path (what connections start from).
+#[derive(Clone, Copy, Debug)]
+pub enum LightVertex {
+    /// The emission point of an area emitter (front normal `normal`).
+    Emission { position: Vec3, normal: Vec3 },
+    /// A collision on a non-specular surface, the light arriving along `dir`.
+    Collision { sp: SurfacePoint, dir: Vec3 },
+}
+
+/// Traces one light path from an emitter chosen by flux (at most `max_depth` collisions) and
+/// calls `visit(vertex, q)` at every vertex a connection can start from — the emission point of
+/// an area emitter, and every collision on a non-specular surface — with the flux weight `q`
+/// arriving there. The walk is [`scatter`]'s (analog Russian roulette, geometric normals).
+pub fn walk_light_path(
+    world: &World,
+    rng: &mut Rng,
+    max_depth: u32,
+    mut visit: impl FnMut(LightVertex, Rgb),
+) {
+    let e = world.sample_emission(rng);
+    let mut q = e.flux;
+    let mut origin = e.position;
+    if let Some(n) = e.normal {
+        visit(
+            LightVertex::Emission {
+                position: e.position,
+                normal: n,
+            },
+            q,
+        );
+        origin = world.offset(e.position, n, e.direction);
+    }
+    let mut dir = e.direction;
+    for _ in 0..max_depth {
+        let Some(sp) = world.intersect(origin, dir) else {
+            break;
+        };
+        if !bsdf::is_delta(world.material(sp.triangle)) {
+            visit(LightVertex::Collision { sp, dir }, q);
+        }
+        let Some((next_q, next_origin, next_dir)) =
+            scatter(world, &sp, dir, q, Transport::Flux, rng)
+        else {
+            break;
+        };
+        (q, origin, dir) = (next_q, next_origin, next_dir);
+    }
+}
+
 /// One step of a random walk: samples the BSDF (with geometric normals) at `sp` for a path
 /// that arrived along `dir` with throughput `beta`, applies analog Russian roulette (survival
 /// probability = the sample's weight, at most 1), and returns the new throughput, ray origin
