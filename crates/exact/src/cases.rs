@@ -65,6 +65,26 @@ impl Row {
     }
 }
 
+/// The checked parameters of an integrating-sphere case `name`: intensity, radius and
+/// reflectance in their domains, and the source position (x, y, z; default the centre) inside.
+fn sphere_source(
+    name: &str,
+    intensity_cd: f64,
+    radius: f64,
+    rho: f64,
+    get: &mut impl FnMut(&str, Option<f64>) -> std::result::Result<f64, String>,
+) -> std::result::Result<Vec3, String> {
+    solutions::check_integrating_sphere(intensity_cd, radius, rho)
+        .map_err(|m| format!("case {name}: {m}"))?;
+    let source = Vec3::new(
+        get("x", Some(0.0))?,
+        get("y", Some(0.0))?,
+        get("z", Some(0.0))?,
+    );
+    inside_sphere(name, source, radius)?;
+    Ok(source)
+}
+
 /// Refuses a source outside the sphere of `radius` centred at the origin (case `name`).
 fn inside_sphere(name: &str, source: Vec3, radius: f64) -> std::result::Result<(), String> {
     let what = if name.starts_with("cosn") {
@@ -148,14 +168,7 @@ impl Case {
             "sphere" => {
                 let (intensity_cd, radius, rho) =
                     (get("I", None)?, get("R", None)?, get("rho", None)?);
-                solutions::check_integrating_sphere(intensity_cd, radius, rho)
-                    .map_err(|m| format!("case sphere: {m}"))?;
-                let source = Vec3::new(
-                    get("x", Some(0.0))?,
-                    get("y", Some(0.0))?,
-                    get("z", Some(0.0))?,
-                );
-                inside_sphere(name, source, radius)?;
+                let source = sphere_source(name, intensity_cd, radius, rho, &mut get)?;
                 Case::Sphere {
                     intensity_cd,
                     radius,
@@ -170,17 +183,10 @@ impl Case {
                     get("R", None)?,
                     get("rho", None)?,
                 );
-                solutions::check_integrating_sphere(i0_cd, radius, rho)
-                    .map_err(|m| format!("case cosn-sphere: {m}"))?;
                 solutions::COSN_EXPONENT
                     .check_named("n", n)
                     .map_err(|m| format!("case cosn-sphere: {m}"))?;
-                let source = Vec3::new(
-                    get("x", Some(0.0))?,
-                    get("y", Some(0.0))?,
-                    get("z", Some(0.0))?,
-                );
-                inside_sphere(name, source, radius)?;
+                let source = sphere_source(name, i0_cd, radius, rho, &mut get)?;
                 Case::CosnSphere {
                     i0_cd,
                     n,
