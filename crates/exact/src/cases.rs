@@ -4,7 +4,7 @@
 use crate::solutions::{self, CosnSobolev, Sobolev};
 use luxest_io::math::Vec3;
 use luxest_io::num::Real;
-use luxest_io::sensors::SensorResults;
+use luxest_io::sensors::{SensorResults, SensorValue};
 use std::collections::BTreeMap;
 
 /// An analytic case and its parameters, parsed from `name:key=value,...`.
@@ -83,6 +83,48 @@ fn sphere_source(
     );
     inside_sphere(name, source, radius)?;
     Ok(source)
+}
+
+/// Rows of the two-plane cases, labelled by the radius r from the axis through the source:
+/// `exact(point, r)` at r, or averaged over a counting disk of radius `bin` about it.
+fn radial_rows<'a>(
+    points: impl Iterator<Item = (&'a str, &'a SensorValue)>,
+    bin: Option<f64>,
+    exact: impl Fn(&SensorValue, f64) -> f64,
+) -> Vec<Row> {
+    points
+        .map(|(set, p)| {
+            let r = (p.position.x * p.position.x + p.position.z * p.position.z).sqrt();
+            let exact = match bin {
+                None => exact(p, r),
+                Some(b) => solutions::disk_average(|x| exact(p, x), r, b),
+            };
+            Row {
+                label: format!("{set} r={r}"),
+                exact,
+                estimate: p.value,
+                standard_error: p.standard_error,
+            }
+        })
+        .collect()
+}
+
+/// Rows labelled by the point's position, with the exact value `exact(position)`.
+fn point_rows<'a>(
+    points: impl Iterator<Item = (&'a str, &'a SensorValue)>,
+    exact: impl Fn(Vec3) -> f64,
+) -> Vec<Row> {
+    points
+        .map(|(set, p)| Row {
+            label: format!(
+                "{set} ({:.3}, {:.3}, {:.3})",
+                p.position.x, p.position.y, p.position.z
+            ),
+            exact: exact(p.position),
+            estimate: p.value,
+            standard_error: p.standard_error,
+        })
+        .collect()
 }
 
 /// Refuses a source outside the sphere of `radius` centred at the origin (case `name`).
@@ -226,85 +268,36 @@ impl Case {
             .iter()
             .flat_map(|s| s.points.iter().map(move |p| (s.name.as_str(), p)));
         match self {
-            Case::Sobolev(s, bin) => points
-                .map(|(set, p)| {
-                    let r = (p.position.x * p.position.x + p.position.z * p.position.z).sqrt();
-                    let plane = if p.position.y < 0.0 { *s } else { s.swapped() };
-                    let exact = match bin {
-                        None => plane.illuminance1(r).value,
-                        Some(b) => solutions::disk_average(|x| plane.illuminance1(x).value, r, *b),
-                    };
-                    Row {
-                        label: format!("{set} r={r}"),
-                        exact,
-                        estimate: p.value,
-                        standard_error: p.standard_error,
-                    }
-                })
-                .collect(),
-            Case::CosnSobolev(c, bin) => points
-                .map(|(set, p)| {
-                    let r = (p.position.x * p.position.x + p.position.z * p.position.z).sqrt();
-                    let e = |x: f64| {
-                        if p.position.y < 0.0 {
-                            c.illuminance1(x).value
-                        } else {
-                            c.illuminance2(x).value
-                        }
-                    };
-                    let exact = match bin {
-                        None => e(r),
-                        Some(b) => solutions::disk_average(e, r, *b),
-                    };
-                    Row {
-                        label: format!("{set} r={r}"),
-                        exact,
-                        estimate: p.value,
-                        standard_error: p.standard_error,
-                    }
-                })
-                .collect(),
+            Case::Sobolev(s, bin) => radial_rows(points, *bin, |p, r| {
+                let plane = if p.position.y < 0.0 { *s } else { s.swapped() };
+                plane.illuminance1(r).value
+            }),
+            Case::CosnSobolev(c, bin) => radial_rows(points, *bin, |p, r| {
+                if p.position.y < 0.0 {
+                    c.illuminance1(r).value
+                } else {
+                    c.illuminance2(r).value
+                }
+            }),
             Case::Sphere {
                 intensity_cd,
                 radius,
                 rho,
                 source,
-            } => points
-                .map(|(set, p)| Row {
-                    label: format!(
-                        "{set} ({:.3}, {:.3}, {:.3})",
-                        p.position.x, p.position.y, p.position.z
-                    ),
-                    exact: solutions::integrating_sphere_illuminance(
-                        *intensity_cd,
-                        *radius,
-                        *rho,
-                        *source,
-                        p.position,
-                    ),
-                    estimate: p.value,
-                    standard_error: p.standard_error,
-                })
-                .collect(),
+            } => point_rows(points, |x| {
+                solutions::integrating_sphere_illuminance(*intensity_cd, *radius, *rho, *source, x)
+            }),
             Case::CosnSphere {
                 i0_cd,
                 n,
                 radius,
                 rho,
                 source,
-            } => points
-                .map(|(set, p)| Row {
-                    label: format!(
-                        "{set} ({:.3}, {:.3}, {:.3})",
-                        p.position.x, p.position.y, p.position.z
-                    ),
-                    exact: solutions::integrating_sphere_cosn_illuminance(
-                        *i0_cd, *n, *radius, *rho, *source, p.position,
-                    ),
-                    estimate: p.value,
-                    standard_error: p.standard_error,
-                })
-                .collect(),
+            } => point_rows(points, |x| {
+                solutions::integrating_sphere_cosn_illuminance(
+                    *i0_cd, *n, *radius, *rho, *source, x,
+                )
+            }),
             Case::Cie171Room {
                 flux_lm,
                 area_m2,

@@ -77,23 +77,7 @@ pub fn bessel_j0(x: f64) -> f64 {
 /// the strip |Im t| < π/2, so the error falls like e^{-π²/h}: step h = 1/4 gives ~1e-17 for
 /// x <= 1, and the step shrinks like 1/sqrt(x) for larger x, where the peak at t = 0 narrows.
 pub fn bessel_k1(x: f64) -> f64 {
-    assert!(x > 0.0, "K1 is defined for x > 0");
-    if x > 700.0 {
-        return 0.0;
-    }
-    let h: f64 = 0.25 / x.sqrt().max(1.0);
-    let mut s = 0.5 * (-x).exp();
-    let mut t = h;
-    loop {
-        let c = t.cosh();
-        let v = (-x * c).exp() * c;
-        s += v;
-        if x * c > 745.0 || v < 1e-300 {
-            break;
-        }
-        t += h;
-    }
-    s * h
+    bessel_k(1.0, x)
 }
 
 /// `x K1(x)`, the Hankel transform of the plane-to-plane Lambertian transfer; 1 at x = 0.
@@ -284,7 +268,8 @@ pub fn gamma(x: f64) -> f64 {
 }
 
 /// Modified Bessel function of the second kind of real order nu ≥ 0, for x > 0: the
-/// trapezoidal rule on `K_ν(x) = ∫0^∞ e^{-x cosh t} cosh(νt) dt`, as [`bessel_k1`].
+/// trapezoidal rule on `K_ν(x) = ∫0^∞ e^{-x cosh t} cosh(νt) dt`, with the step and the
+/// error of [`bessel_k1`].
 pub fn bessel_k(nu: f64, x: f64) -> f64 {
     assert!(x > 0.0, "K_nu is defined for x > 0");
     if x > 700.0 {
@@ -295,7 +280,8 @@ pub fn bessel_k(nu: f64, x: f64) -> f64 {
     let mut t = h;
     loop {
         let c = t.cosh();
-        let v = (-x * c).exp() * (nu * t).cosh();
+        // cosh(νt) is c itself for ν = 1 (kappa's K1, in the Sobolev integrands' inner loop).
+        let v = (-x * c).exp() * if nu == 1.0 { c } else { (nu * t).cosh() };
         s += v;
         if x * c > 745.0 || (v < 1e-300 && x * c > 1.0) {
             break;
