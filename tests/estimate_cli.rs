@@ -29,6 +29,33 @@ fn exact() -> Sobolev {
     }
 }
 
+/// The exact box-filtered luminance rho1/π · E1(r) of pixel (x, y) of [`SOBOLEV`]'s camera (at
+/// the source, looking straight down at plane 1): the mean over a 4 × 4 grid in the pixel.
+fn exact_pixel(x: usize, y: usize) -> f64 {
+    let cam = luxest_render::camera::PinholeCamera::new(&luxest_render::scene::Camera {
+        position: luxest_io::math::Vec3::ZERO,
+        look_at: luxest_io::math::Vec3::new(0.0, -1.0, 0.0),
+        up: luxest_io::math::Vec3::new(0.0, 0.0, 1.0),
+        vfov_deg: 60.0,
+        resolution: (12, 10),
+    })
+    .unwrap();
+    let s = exact();
+    let mut l = 0.0;
+    for a in 0..4 {
+        for b in 0..4 {
+            let d = cam.direction(
+                x as f64 + (a as f64 + 0.5) / 4.0,
+                y as f64 + (b as f64 + 0.5) / 4.0,
+            );
+            let t = 1.0 / -d.y;
+            let r = (d.x * t).hypot(d.z * t);
+            l += 0.5 / std::f64::consts::PI * s.illuminance1(r).value / 16.0;
+        }
+    }
+    l
+}
+
 #[test]
 fn sensor_results_record_evaluated_points_and_the_direct_and_indirect_parts() {
     // A 4 m room with a point source at its centre: a sensor in a floor corner and one on a
@@ -196,30 +223,9 @@ fn double_local_estimate_image_matches_the_exact_luminance() {
         Some("double-local-estimate")
     );
     assert_eq!(img.attribute(header::SAMPLES), Some("4000"));
-    let cam = luxest_render::camera::PinholeCamera::new(&luxest_render::scene::Camera {
-        position: luxest_io::math::Vec3::ZERO,
-        look_at: luxest_io::math::Vec3::new(0.0, -1.0, 0.0),
-        up: luxest_io::math::Vec3::new(0.0, 0.0, 1.0),
-        vfov_deg: 60.0,
-        resolution: (12, 10),
-    })
-    .unwrap();
-    let s = exact();
     for y in 0..10 {
         for x in 0..12 {
-            // Exact box-filtered pixel value: mean over a 4 x 4 grid in the pixel.
-            let mut exact_l = 0.0;
-            for a in 0..4 {
-                for b in 0..4 {
-                    let d = cam.direction(
-                        x as f64 + (a as f64 + 0.5) / 4.0,
-                        y as f64 + (b as f64 + 0.5) / 4.0,
-                    );
-                    let t = 1.0 / -d.y;
-                    let r = (d.x * t).hypot(d.z * t);
-                    exact_l += 0.5 / std::f64::consts::PI * s.illuminance1(r).value / 16.0;
-                }
-            }
+            let exact_l = exact_pixel(x, y);
             let i = y * 12 + x;
             let v = luxest_io::color::Rgb(img.pixels[i].map(|c| c as f64)).luminance();
             let sigma = se.pixels[i][0] as f64;
@@ -263,30 +269,10 @@ fn light_tracing_image_matches_the_exact_box_filtered_luminance() {
     assert_eq!(img.attribute(header::ESTIMATOR), Some("light-tracing"));
     assert_eq!(img.attribute(header::SAMPLES), Some("250000"));
     assert_eq!(img.attribute(header::PIXEL_SAMPLES), None);
-    let cam = luxest_render::camera::PinholeCamera::new(&luxest_render::scene::Camera {
-        position: luxest_io::math::Vec3::ZERO,
-        look_at: luxest_io::math::Vec3::new(0.0, -1.0, 0.0),
-        up: luxest_io::math::Vec3::new(0.0, 0.0, 1.0),
-        vfov_deg: 60.0,
-        resolution: (12, 10),
-    })
-    .unwrap();
-    let s = exact();
     let mut z2 = 0.0;
     for y in 0..10 {
         for x in 0..12 {
-            let mut exact_l = 0.0;
-            for a in 0..4 {
-                for b in 0..4 {
-                    let d = cam.direction(
-                        x as f64 + (a as f64 + 0.5) / 4.0,
-                        y as f64 + (b as f64 + 0.5) / 4.0,
-                    );
-                    let t = 1.0 / -d.y;
-                    let r = (d.x * t).hypot(d.z * t);
-                    exact_l += 0.5 / std::f64::consts::PI * s.illuminance1(r).value / 16.0;
-                }
-            }
+            let exact_l = exact_pixel(x, y);
             let i = y * 12 + x;
             let v = luxest_io::color::Rgb(img.pixels[i].map(|c| c as f64)).luminance();
             let sigma = se.pixels[i][0] as f64;

@@ -126,6 +126,33 @@ fn sobolev_matches_the_exact_solution() {
     check_sobolev(&w, &s, &r, &exact, 4.0, 0.0);
     // The point-source direct term is exact and included.
     assert!((r.direct_point[0] - 100.0).abs() < 1e-9);
+    // The direct part is exact (no variance); the indirect part is the exact solution minus
+    // it, within its own standard error; the parts add up to the value.
+    let mut worst: f64 = 0.0;
+    for (i, p) in s.iter().enumerate() {
+        let radius = p.position.x.hypot(p.position.z);
+        let plane = if p.position.y < 0.0 {
+            exact
+        } else {
+            exact.swapped()
+        };
+        let (d, d_se) = r.direct[i];
+        let (ind, ind_se) = r.indirect[i];
+        let exact_direct = plane.direct1(radius);
+        assert!(
+            (d - exact_direct).abs() <= 1e-9 * exact_direct && d_se == 0.0,
+            "sensor {i}: direct {d} ± {d_se} vs exact {exact_direct}"
+        );
+        assert!((d + ind - r.value[i]).abs() <= 1e-9 * r.value[i]);
+        let exact_indirect = plane.illuminance1(radius).value - exact_direct;
+        let z = (ind - exact_indirect) / ind_se;
+        assert!(
+            z.abs() <= 4.0,
+            "sensor {i}: indirect {ind} ± {ind_se} vs exact {exact_indirect}"
+        );
+        worst = worst.max(z.abs());
+    }
+    assert!(worst > 0.0, "the indirect parts must carry noise");
 }
 
 #[test]
@@ -319,46 +346,6 @@ fn sensors_on_edges_and_corners_match_the_backward_reference() {
             le.standard_error[i]
         );
     }
-}
-
-#[test]
-fn direct_and_indirect_parts_match_sobolev() {
-    // The point source's direct part is exact (no variance); the indirect part is the exact
-    // solution minus it, within its own standard error; the parts add up to the value.
-    let w = world_from(&sobolev_text(1.0, 100.0, 1.0, 1.0, 0.5));
-    let (s, r) = run(&w, 50_000);
-    let exact = Sobolev {
-        intensity_cd: 100.0,
-        h1: 1.0,
-        h2: 1.0,
-        rho1: 0.5,
-        rho2: 0.5,
-    };
-    let mut worst: f64 = 0.0;
-    for (i, p) in s.iter().enumerate() {
-        let radius = p.position.x.hypot(p.position.z);
-        let plane = if p.position.y < 0.0 {
-            exact
-        } else {
-            exact.swapped()
-        };
-        let (d, d_se) = r.direct[i];
-        let (ind, ind_se) = r.indirect[i];
-        let exact_direct = plane.direct1(radius);
-        assert!(
-            (d - exact_direct).abs() <= 1e-9 * exact_direct && d_se == 0.0,
-            "sensor {i}: direct {d} ± {d_se} vs exact {exact_direct}"
-        );
-        assert!((d + ind - r.value[i]).abs() <= 1e-9 * r.value[i]);
-        let exact_indirect = plane.illuminance1(radius).value - exact_direct;
-        let z = (ind - exact_indirect) / ind_se;
-        assert!(
-            z.abs() <= 4.0,
-            "sensor {i}: indirect {ind} ± {ind_se} vs exact {exact_indirect}"
-        );
-        worst = worst.max(z.abs());
-    }
-    assert!(worst > 0.0, "the indirect parts must carry noise");
 }
 
 #[test]
