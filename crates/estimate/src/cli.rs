@@ -18,6 +18,7 @@ use luxest_io::meta::RunInfo;
 use luxest_io::naming::{self, image_path, Kind, Level};
 use luxest_io::num::{Count, Real};
 use luxest_io::outputs::OutputPlan;
+use luxest_io::sensors::SensorResults;
 use luxest_io::{Error, Result};
 use luxest_render::world::{load_with_camera, World};
 use std::path::{Path, PathBuf};
@@ -56,6 +57,23 @@ pub struct RunArgs {
 }
 
 impl RunArgs {
+    /// The forward estimator's settings for `paths` light paths scored by `detector`.
+    fn local_config(
+        &self,
+        paths: u64,
+        detector: Detector,
+        near_field: Option<NearField>,
+    ) -> LocalConfig {
+        LocalConfig {
+            paths,
+            batches: self.batches,
+            seed: self.common.seed,
+            threads: self.common.thread_count(),
+            detector,
+            max_depth: self.max_depth,
+            near_field,
+        }
+    }
     /// `count` (`--paths` or `--samples`, named `what`) must fill every batch.
     fn check(&self, what: &str, count: u64) -> Result<()> {
         if count < self.batches as u64 {
@@ -413,32 +431,17 @@ fn sensors(
     let sing = singularity.with_eps(eps.unwrap_or(DEFAULT_EPS_FRACTION * world.room_scale))?;
     let near_radius = near_radius.unwrap_or(DEFAULT_NEAR_FRACTION * world.room_scale);
     let placed = evaluation_points(&world, run.edge_offset(&world)?, near_radius);
-    let cfg = LocalConfig {
-        paths,
-        batches: run.batches,
-        seed: run.common.seed,
-        threads: run.common.thread_count(),
-        detector: Detector::LocalEstimate(sing),
-        max_depth: run.max_depth,
-        near_field: (near_samples > 0).then_some(NearField {
-            samples: near_samples,
-        }),
-    };
+    let near_field = (near_samples > 0).then_some(NearField {
+        samples: near_samples,
+    });
+    let cfg = run.local_config(paths, Detector::LocalEstimate(sing), near_field);
     let r = local::estimate(&world, &placed.points, &placed.near_radius, &cfg);
     let info = run.info(&world, estimator::LOCAL_ESTIMATE, paths, r.seconds);
     let batches = batch_values.then_some(r.batch_values.as_slice());
     let mut values = r.estimates();
     record_evaluation_points(&world, &mut values, &placed.points);
-    write_results(
-        &mut plan,
-        &out,
-        &world,
-        run,
-        info,
-        sing.to_string(),
-        &values,
-        batches,
-    )?;
+    let results = results(&run.scene, &world, info, sing.to_string(), &values)?;
+    write_results(&mut plan, &out, run, results, batches)?;
     eprintln!(
         "wrote {}: {} paths, {} collisions, {} shadow rays, {:.2} s",
         out.display(),
@@ -457,29 +460,13 @@ fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
     crate::sensors::require_planar(&run.scene, &world, "estimate direct")?;
     let (out, mut plan) = run.plan(&world)?;
     let sensors = all_sensors(&world);
-    let cfg = LocalConfig {
-        paths,
-        batches: run.batches,
-        seed: run.common.seed,
-        threads: run.common.thread_count(),
-        detector: Detector::Bins { radius: bin_radius },
-        max_depth: run.max_depth,
-        near_field: None,
-    };
+    let cfg = run.local_config(paths, Detector::Bins { radius: bin_radius }, None);
     let r = local::estimate(&world, &sensors, &vec![0.0; sensors.len()], &cfg);
     let info = run.info(&world, estimator::DIRECT_SIMULATION, paths, r.seconds);
     let singularity = format!("bins(radius={bin_radius:e} m)");
     let values = r.estimates();
-    write_results(
-        &mut plan,
-        &out,
-        &world,
-        run,
-        info,
-        singularity,
-        &values,
-        None,
-    )?;
+    let results = results(&run.scene, &world, info, singularity, &values)?;
+    write_results(&mut plan, &out, run, results, None)?;
     eprintln!(
         "wrote {}: {} paths, {:.2} s",
         out.display(),
@@ -521,34 +508,22 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
         samples,
         start.elapsed().as_secs_f64(),
     );
-    write_results(
-        &mut plan,
-        &out,
-        &world,
-        run,
-        info,
-        "none (backward estimator)".into(),
-        &values,
-        None,
-    )?;
+    let singularity = "none (backward estimator)".to_string();
+    let results = results(&run.scene, &world, info, singularity, &values)?;
+    write_results(&mut plan, &out, run, results, None)?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }
 
 /// Writes the sensor results as RON to the planned `out`, with the per-batch estimates when
 /// given, and, on request, CSV; commits both together.
-#[allow(clippy::too_many_arguments)]
 fn write_results(
     plan: &mut OutputPlan,
     out: &Path,
-    world: &World,
     run: &RunArgs,
-    info: RunInfo,
-    singularity: String,
-    values: &[Estimate],
+    mut results: SensorResults,
     batches: Option<&[Vec<f64>]>,
 ) -> Result<()> {
-    let mut results = results(&run.scene, world, info, singularity, values)?;
     if let Some(b) = batches {
         crate::sensors::attach_batches(&mut results, b);
     }

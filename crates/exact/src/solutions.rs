@@ -424,11 +424,23 @@ pub fn integrating_sphere_illuminance(
     source: luxest_io::math::Vec3,
     point: luxest_io::math::Vec3,
 ) -> f64 {
-    let normal = (-point)
-        .try_normalize()
-        .expect("point must not be the centre");
-    let direct = point_source_illuminance(intensity_cd, source, point, normal);
-    direct + integrating_sphere_indirect(intensity_cd, radius, rho)
+    sphere_wall(point, |normal| {
+        point_source_illuminance(intensity_cd, source, point, normal)
+            + integrating_sphere_indirect(intensity_cd, radius, rho)
+    })
+}
+
+/// `illuminance(normal)` at a wall point of a sphere centred at the origin, whose normal
+/// points to the centre.
+fn sphere_wall(
+    point: luxest_io::math::Vec3,
+    illuminance: impl FnOnce(luxest_io::math::Vec3) -> f64,
+) -> f64 {
+    illuminance(
+        (-point)
+            .try_normalize()
+            .expect("point must not be the centre"),
+    )
 }
 
 /// The uniform indirect illuminance of an integrating sphere, `rho Φ / (4π R² (1 − rho))`.
@@ -502,12 +514,11 @@ pub fn integrating_sphere_cosn_illuminance(
     source: luxest_io::math::Vec3,
     point: luxest_io::math::Vec3,
 ) -> f64 {
-    let normal = (-point)
-        .try_normalize()
-        .expect("point must not be the centre");
     let flux = cosn_luminaire_flux(i0_cd, n);
-    cosn_luminaire_illuminance(i0_cd, n, source, point, normal)
-        + integrating_sphere_indirect(flux / (4.0 * PI), radius, rho)
+    sphere_wall(point, |normal| {
+        cosn_luminaire_illuminance(i0_cd, n, source, point, normal)
+            + integrating_sphere_indirect(flux / (4.0 * PI), radius, rho)
+    })
 }
 
 #[cfg(test)]

@@ -203,19 +203,29 @@ pub fn write_preview_png_auto(path: &Path, image: &RgbImage) -> Result<()> {
 
 /// The PNG bytes of [`write_preview_png_to`].
 pub fn encode_preview_png(path: &Path, image: &RgbImage, exposure: f64) -> Result<Vec<u8>> {
-    let mut buf = image::RgbImage::new(image.width as u32, image.height as u32);
-    for (i, p) in image.pixels.iter().enumerate() {
-        let c = p.map(|v| (srgb_encode(v as f64 * exposure) * 255.0 + 0.5) as u8);
-        buf.put_pixel(
-            (i % image.width) as u32,
-            (i / image.width) as u32,
-            image::Rgb(c),
-        );
-    }
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    buf.write_to(&mut bytes, image::ImageFormat::Png)
-        .map_err(|e| Error::input(path, format!("cannot encode PNG: {e}")))?;
-    Ok(bytes.into_inner())
+    let data: Vec<u8> = image
+        .pixels
+        .iter()
+        .flat_map(|p| p.map(|v| (srgb_encode(v as f64 * exposure) * 255.0 + 0.5) as u8))
+        .collect();
+    encode_png_rgb8(image.width as u32, image.height as u32, &data)
+        .map_err(|e| Error::input(path, format!("cannot encode PNG: {e}")))
+}
+
+/// The PNG bytes of an 8-bit sRGB raster, `data` row by row from the top, 3 bytes a pixel.
+pub fn encode_png_rgb8(
+    width: u32,
+    height: u32,
+    data: &[u8],
+) -> std::result::Result<Vec<u8>, String> {
+    let mut bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut bytes, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(data).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())?;
+    Ok(bytes)
 }
 
 /// Writes a PNG preview as the planned output `path`, exposed so that the 99th percentile of
@@ -316,11 +326,11 @@ fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
     // A few kilobytes claiming gigabytes: no compression the format has expands that much, so the
     // file is corrupt, and reading it would allocate the claimed size first (found by fuzzing).
     let holds = holds.max(MIN_EXR_CLAIM);
+    let (w, h) = meta
+        .headers
+        .first()
+        .map_or((0, 0), |h| (h.layer_size.width(), h.layer_size.height()));
     if samples_bytes > holds {
-        let (w, h) = meta
-            .headers
-            .first()
-            .map_or((0, 0), |h| (h.layer_size.width(), h.layer_size.height()));
         return Err(Error::input(
             path,
             format!(
@@ -332,10 +342,6 @@ fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
         ));
     }
     if chunks.saturating_mul(8) > bytes.len() as u128 {
-        let (w, h) = meta
-            .headers
-            .first()
-            .map_or((0, 0), |h| (h.layer_size.width(), h.layer_size.height()));
         return Err(Error::input(
             path,
             format!(

@@ -96,6 +96,24 @@ impl<'a> Tokens<'a> {
         }
         (0..n).map(|_| self.number(what)).collect()
     }
+    /// `n` angles in degrees (`what` angles), increasing within [0, `hi`], and what `ends` makes
+    /// of the first and last (its message is reported at the first angle's line); with the
+    /// angles' line numbers.
+    pub fn angles<T>(
+        &mut self,
+        n: usize,
+        what: &str,
+        hi: f64,
+        ends: impl FnOnce(f64, f64) -> Result<T, String>,
+    ) -> Result<(Vec<f64>, Vec<usize>, T), PhotometryError> {
+        let toks = self.numbers(n, &format!("{what} angles"))?;
+        let a: Vec<f64> = toks.iter().map(|t| t.0).collect();
+        check_angles(&a, 0.0, hi, what).map_err(|(k, m)| self.err(Some(toks[k].1), m))?;
+        let (first, last) = (toks.first(), toks.last());
+        let ends = ends(first.map_or(0.0, |t| t.0), last.map_or(0.0, |t| t.0))
+            .map_err(|m| self.err(first.map(|t| t.1), m))?;
+        Ok((a, toks.iter().map(|t| t.1).collect(), ends))
+    }
 }
 
 /// Parses a decimal number as photometric files write it; errors for junk and non-finite values.
@@ -264,44 +282,32 @@ pub fn parse_ies_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
     }
 
     let (n_vert, n_horiz) = (n_vert as usize, n_horiz as usize);
-    let vert = ts.numbers(n_vert, "vertical angles")?;
-    let horiz = ts.numbers(n_horiz, "horizontal angles")?;
-    let gamma: Vec<f64> = vert.iter().map(|v| v.0).collect();
-    let c: Vec<f64> = horiz.iter().map(|v| v.0).collect();
-    check_angles(&gamma, 0.0, 180.0, "vertical").map_err(|(k, m)| ts.err(Some(vert[k].1), m))?;
-    if !(gamma[0] == 0.0 || gamma[0] == 90.0)
-        || !(gamma[n_vert - 1] == 90.0 || gamma[n_vert - 1] == 180.0)
-    {
-        return Err(ts.err(
-            Some(vert[0].1),
-            format!(
-                "type C vertical angles must run from 0 or 90 to 90 or 180, found {} to {}",
-                gamma[0],
-                gamma[n_vert - 1]
-            ),
-        ));
-    }
-    check_angles(&c, 0.0, 360.0, "horizontal").map_err(|(k, m)| ts.err(Some(horiz[k].1), m))?;
-    let (c0, c_last) = (c[0], c[n_horiz - 1]);
-    let symmetry = if n_horiz == 1 && c0 == 0.0 {
-        Symmetry::Rotational
-    } else if c0 == 0.0 && c_last == 90.0 {
-        Symmetry::Quadrant
-    } else if c0 == 0.0 && c_last == 180.0 {
-        Symmetry::Bilateral0To180
-    } else if c0 == 0.0 && c_last > 180.0 {
-        Symmetry::None
-    } else if c0 == 90.0 && c_last == 270.0 {
-        Symmetry::Bilateral90To270
-    } else {
-        return Err(ts.err(
-            Some(horiz[0].1),
-            format!(
+    let (gamma, _, ()) = ts.angles(n_vert, "vertical", 180.0, |first, last| {
+        if (first == 0.0 || first == 90.0) && (last == 90.0 || last == 180.0) {
+            Ok(())
+        } else {
+            Err(format!(
+                "type C vertical angles must run from 0 or 90 to 90 or 180, found {first} to {last}"
+            ))
+        }
+    })?;
+    let (c, c_lines, symmetry) = ts.angles(n_horiz, "horizontal", 360.0, |c0, c_last| {
+        Ok(if n_horiz == 1 && c0 == 0.0 {
+            Symmetry::Rotational
+        } else if c0 == 0.0 && c_last == 90.0 {
+            Symmetry::Quadrant
+        } else if c0 == 0.0 && c_last == 180.0 {
+            Symmetry::Bilateral0To180
+        } else if c0 == 0.0 && c_last > 180.0 {
+            Symmetry::None
+        } else if c0 == 90.0 && c_last == 270.0 {
+            Symmetry::Bilateral90To270
+        } else {
+            return Err(format!(
                 "horizontal angles {c0} to {c_last}: type C files must give 0 (rotational), 0-90, 0-180, 0-360 or 90-270"
-            ),
-        ));
-    };
-
+            ));
+        })
+    })?;
     let need = n_vert * n_horiz;
     if ts.remaining() < need {
         return Err(ts.err(
@@ -339,14 +345,14 @@ pub fn parse_ies_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
             ),
         ));
     }
-    if symmetry == Symmetry::None && c_last == 360.0 {
+    if symmetry == Symmetry::None && c[n_horiz - 1] == 360.0 {
         // LM-63: the 360° plane repeats the 0° plane.
         let (a, b) = (&rows[0], &rows[n_horiz - 1]);
         if let Some(j) = (0..n_vert)
             .find(|&j| (a[j] - b[j]).abs() > 1e-6 * a[j].abs().max(b[j].abs()).max(1e-12))
         {
             return Err(ts.err(
-                Some(horiz[n_horiz - 1].1),
+                Some(c_lines[n_horiz - 1]),
                 format!(
                     "the 360° plane must repeat the 0° plane, but at vertical angle {} they differ ({} vs {} cd)",
                     gamma[j],
@@ -382,7 +388,7 @@ pub fn parse_ies_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
         factor,
         table,
     )
-    .map_err(|m| ts.err(Some(horiz[0].1), m))
+    .map_err(|m| ts.err(Some(c_lines[0]), m))
 }
 
 /// Reads and parses an IES file.

@@ -20,7 +20,6 @@
 //! twice its size; no font files are read.
 
 use crate::grid::{CalcGrid, GridError, GridStats};
-use std::path::Path;
 
 /// What to draw besides the field.
 #[derive(Debug, Clone, PartialEq)]
@@ -81,15 +80,9 @@ impl RgbImage {
         let k = 3 * (y as usize * self.width as usize + x as usize);
         [self.data[k], self.data[k + 1], self.data[k + 2]]
     }
-    /// Writes a PNG, through a temporary name renamed into place.
-    pub fn write_png(&self, path: &Path) -> Result<(), String> {
-        let tmp = path.with_extension("png.tmp");
-        let buf = image::RgbImage::from_raw(self.width, self.height, self.data.clone())
-            .ok_or_else(|| format!("{}: image buffer of the wrong size", path.display()))?;
-        buf.save_with_format(&tmp, image::ImageFormat::Png)
-            .map_err(|e| format!("{}: cannot write PNG: {e}", tmp.display()))?;
-        std::fs::rename(&tmp, path)
-            .map_err(|e| format!("{}: cannot rename into place: {e}", path.display()))
+    /// The raster as PNG bytes.
+    pub fn encode_png(&self) -> Result<Vec<u8>, String> {
+        luxest_io::exr_io::encode_png_rgb8(self.width, self.height, &self.data)
     }
 
     /// An anti-aliased line of width `w` px (coverage from the distance to the segment).

@@ -33,8 +33,7 @@
 use crate::error::{show, PhotometryError};
 use crate::ies::{parse_number, Tok, Tokens};
 use crate::photometry::{
-    check_angles, LampFlux, LuminousOpening, OpeningShape, Photometry, RawTable, SourceFormat,
-    Symmetry,
+    LampFlux, LuminousOpening, OpeningShape, Photometry, RawTable, SourceFormat, Symmetry,
 };
 
 struct Lines<'a> {
@@ -233,22 +232,16 @@ pub fn parse_ldt_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
         last_line: l.lines.len(),
     };
     ts.numbers(10, "direct ratios")?;
-    let c_toks = ts.numbers(mc, "C angles")?;
-    let g_toks = ts.numbers(ng, "gamma angles")?;
-    let c_all: Vec<f64> = c_toks.iter().map(|t| t.0).collect();
-    let gamma: Vec<f64> = g_toks.iter().map(|t| t.0).collect();
-    check_angles(&c_all, 0.0, 360.0, "C").map_err(|(k, m)| ts.err(Some(c_toks[k].1), m))?;
-    if c_all[0] != 0.0 || c_all[mc - 1] >= 360.0 {
-        return Err(ts.err(
-            Some(c_toks[0].1),
-            format!(
-                "C angles must start at 0 and stay below 360, found {} to {}",
-                c_all[0],
-                c_all[mc - 1]
-            ),
-        ));
-    }
-    check_angles(&gamma, 0.0, 180.0, "gamma").map_err(|(k, m)| ts.err(Some(g_toks[k].1), m))?;
+    let (c_all, c_lines, ()) = ts.angles(mc, "C", 360.0, |first, last| {
+        if first == 0.0 && last < 360.0 {
+            Ok(())
+        } else {
+            Err(format!(
+                "C angles must start at 0 and stay below 360, found {first} to {last}"
+            ))
+        }
+    })?;
+    let (gamma, _, ()) = ts.angles(ng, "gamma", 180.0, |_, _| Ok(()))?;
 
     // The stored planes' angles, with Isym 3's 270..360..90 unwrapped to -90..90.
     let mut c_given = Vec::with_capacity(n_planes);
@@ -271,7 +264,7 @@ pub fn parse_ldt_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
         let start = if isym == 3 { -90.0 } else { 0.0 };
         if (a - start).abs() > 1e-6 || (b - end).abs() > 1e-6 {
             return Err(ts.err(
-                Some(c_toks[0].1),
+                Some(c_lines[0]),
                 format!(
                     "symmetry Isym = {isym} needs the stored C planes to span {} to {end}, but the C angles give {} to {}",
                     if isym == 3 { 270.0 } else { 0.0 },
@@ -356,7 +349,7 @@ pub fn parse_ldt_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
         factor,
         table,
     )
-    .map_err(|m| ts.err(Some(c_toks[0].1), m))?;
+    .map_err(|m| ts.err(Some(c_lines[0]), m))?;
     p.ldt_lor_percent = Some(lorl);
     p.ldt_dff_percent = Some(dff);
     Ok(p)

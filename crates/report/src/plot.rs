@@ -3,7 +3,6 @@
 //! luminaires' marks (their positions projected onto the surface) and encodes the PNG.
 
 use crate::surface::Surface;
-use image::ImageEncoder;
 use luxest_io::{Error, Result};
 use luxest_photometry::{render_isolux, GridStats, IsoluxOptions};
 use std::path::Path;
@@ -36,14 +35,6 @@ pub fn isolux_png(
     };
     let img = render_isolux(&grid, &surface.values, Some(stats), &opts)
         .map_err(|e| Error::at(file, &place, e.0))?;
-    let mut bytes = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut bytes)
-        .write_image(
-            &img.data,
-            img.width,
-            img.height,
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| Error::at(file, &place, format!("cannot encode the isolux PNG: {e}")))?;
-    Ok(bytes)
+    img.encode_png()
+        .map_err(|e| Error::at(file, &place, format!("cannot encode the isolux PNG: {e}")))
 }
