@@ -37,6 +37,19 @@ pub(crate) struct Tok<'a> {
     pub line: usize,
 }
 
+/// How a file format names its intensity table in error messages.
+pub(crate) struct IntensityNames {
+    /// The values, plural ("candela values"), and one of them ("candela value").
+    pub values: &'static str,
+    pub value: &'static str,
+    /// The unit written after a value (with its leading space), or "".
+    pub unit: &'static str,
+    /// The table's expected shape from the header's counts.
+    pub shape: String,
+    /// What a surplus value means.
+    pub mismatch: &'static str,
+}
+
 /// A cursor over number tokens, producing one-line errors with file and line.
 pub(crate) struct Tokens<'a> {
     pub name: &'a str,
@@ -95,6 +108,55 @@ impl<'a> Tokens<'a> {
             ));
         }
         (0..n).map(|_| self.number(what)).collect()
+    }
+    /// The intensity table that follows the angles and ends the file: one row per plane of
+    /// `planes`, one value per angle of `gamma`, each non-negative (`at` names a value's
+    /// angles in the error) and scaled by `factor`; nothing may follow it.
+    pub fn intensity_table(
+        &mut self,
+        planes: &[f64],
+        gamma: &[f64],
+        factor: f64,
+        names: IntensityNames,
+        at: impl Fn(f64, f64) -> String,
+    ) -> Result<Vec<Vec<f64>>, PhotometryError> {
+        let need = planes.len() * gamma.len();
+        if self.remaining() < need {
+            return Err(self.err(
+                Some(self.last_line),
+                format!(
+                    "truncated file: expected {need} {} ({}), found {}",
+                    names.values,
+                    names.shape,
+                    self.remaining()
+                ),
+            ));
+        }
+        let mut rows = Vec::with_capacity(planes.len());
+        for &c in planes {
+            let mut row = Vec::with_capacity(gamma.len());
+            for &g in gamma {
+                let (v, line) = self.number(names.value)?;
+                if v < 0.0 {
+                    let m = format!("negative {} {v}{} ({})", names.value, names.unit, at(c, g));
+                    return Err(self.err(Some(line), m));
+                }
+                row.push(v * factor);
+            }
+            rows.push(row);
+        }
+        if let Some(t) = self.toks.get(self.pos) {
+            return Err(self.err(
+                Some(t.line),
+                format!(
+                    "unexpected value '{}' after the {need} {}: {}",
+                    show(t.text),
+                    names.values,
+                    names.mismatch
+                ),
+            ));
+        }
+        Ok(rows)
     }
     /// `n` angles in degrees (`what` angles), increasing within [0, `hi`], and what `ends` makes
     /// of the first and last (its message is reported at the first angle's line); with the
@@ -308,43 +370,20 @@ pub fn parse_ies_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
             ));
         })
     })?;
-    let need = n_vert * n_horiz;
-    if ts.remaining() < need {
-        return Err(ts.err(
-            Some(ts.last_line),
-            format!(
-                "truncated file: expected {need} candela values ({n_horiz} horizontal x {n_vert} vertical angles), found {}",
-                ts.remaining()
-            ),
-        ));
-    }
     let factor = multiplier * ballast * lamp_factor;
-    let mut rows = Vec::with_capacity(n_horiz);
-    for &hc in &c {
-        let mut row = Vec::with_capacity(n_vert);
-        for &g in &gamma {
-            let (v, line) = ts.number("candela value")?;
-            if v < 0.0 {
-                return Err(ts.err(
-                    Some(line),
-                    format!(
-                        "negative candela value {v} (horizontal angle {hc}, vertical angle {g})"
-                    ),
-                ));
-            }
-            row.push(v * factor);
-        }
-        rows.push(row);
-    }
-    if let Some(t) = ts.toks.get(ts.pos) {
-        return Err(ts.err(
-            Some(t.line),
-            format!(
-                "unexpected value '{}' after the {need} candela values: the angle counts do not match the table",
-                show(t.text)
-            ),
-        ));
-    }
+    let rows = ts.intensity_table(
+        &c,
+        &gamma,
+        factor,
+        IntensityNames {
+            values: "candela values",
+            value: "candela value",
+            unit: "",
+            shape: format!("{n_horiz} horizontal x {n_vert} vertical angles"),
+            mismatch: "the angle counts do not match the table",
+        },
+        |hc, g| format!("horizontal angle {hc}, vertical angle {g}"),
+    )?;
     if symmetry == Symmetry::None && c[n_horiz - 1] == 360.0 {
         // LM-63: the 360° plane repeats the 0° plane.
         let (a, b) = (&rows[0], &rows[n_horiz - 1]);

@@ -30,8 +30,8 @@
 //! (for absolute photometry the luminaire flux written in that field). Lengths: mm → m, `length`
 //! along C0–C180 (local x), `width` along C90–C270 (local y), height the largest of the four.
 
-use crate::error::{show, PhotometryError};
-use crate::ies::{parse_number, Tok, Tokens};
+use crate::error::PhotometryError;
+use crate::ies::{parse_number, IntensityNames, Tok, Tokens};
 use crate::photometry::{
     LampFlux, LuminousOpening, OpeningShape, Photometry, RawTable, SourceFormat, Symmetry,
 };
@@ -274,38 +274,20 @@ pub fn parse_ldt_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
             ));
         }
     }
-    let need = n_planes * ng;
-    if ts.remaining() < need {
-        return Err(ts.err(
-            Some(ts.last_line),
-            format!("truncated file: expected {need} intensities ({n_planes} C planes x {ng} gamma angles), found {}", ts.remaining()),
-        ));
-    }
     let factor = flux / 1000.0 * conversion;
-    let mut rows = Vec::with_capacity(n_planes);
-    for &c in &c_given {
-        let mut row = Vec::with_capacity(ng);
-        for &g in &gamma {
-            let (v, line) = ts.number("luminous intensity")?;
-            if v < 0.0 {
-                return Err(ts.err(
-                    Some(line),
-                    format!(
-                        "negative luminous intensity {v} cd/klm (C {}, gamma {g})",
-                        if c < 0.0 { c + 360.0 } else { c }
-                    ),
-                ));
-            }
-            row.push(v * factor);
-        }
-        rows.push(row);
-    }
-    if let Some(t) = ts.toks.get(ts.pos) {
-        return Err(ts.err(
-            Some(t.line),
-            format!("unexpected value '{}' after the {need} intensities: Mc, Ng or Isym do not match the table", show(t.text)),
-        ));
-    }
+    let rows = ts.intensity_table(
+        &c_given,
+        &gamma,
+        factor,
+        IntensityNames {
+            values: "intensities",
+            value: "luminous intensity",
+            unit: " cd/klm",
+            shape: format!("{n_planes} C planes x {ng} gamma angles"),
+            mismatch: "Mc, Ng or Isym do not match the table",
+        },
+        |c, g| format!("C {}, gamma {g}", if c < 0.0 { c + 360.0 } else { c }),
+    )?;
 
     let lamp_flux = if lamps < 0.0 {
         LampFlux::Absolute {

@@ -282,7 +282,7 @@ pub fn sample_flat(
     m: &Material,
     wo: Vec3,
     ng: Vec3,
-    rng: &mut crate::sampling::Rng,
+    rng: &mut impl crate::sampling::Sampler,
     mode: Transport,
 ) -> Option<BsdfSample> {
     let u = rng.next_2d();

@@ -4,6 +4,7 @@
 //! pixel (x, y). The vertical field of view spans the image height.
 
 use crate::scene::Camera;
+use crate::sobol::PixelSampler;
 use luxest_io::math::Vec3;
 
 #[derive(Clone, Copy, Debug)]
@@ -76,18 +77,14 @@ impl PinholeCamera {
     }
 }
 
-/// The sub-pixel position (u, v) in [0, 1)² of sample `sample` of pixel `pixel`: a hash of
-/// (seed, pixel, sample), so that the progressive stages (trace, aov-write) see through the
-/// same positions, independently of order, threads and passes. The pixel filter is a box:
-/// positions are uniform over the pixel. [`stratified_pixel_jitter`] builds on it.
+/// The sub-pixel position (u, v) in [0, 1)² of sample `sample` of pixel `pixel`: the first
+/// dimension of the path tracer's [`PixelSampler`] (an Owen-scrambled Sobol point, a function of
+/// (seed, pixel, sample) only), so that the progressive stages (trace, aov-write) see through
+/// the same positions, independently of order, threads and passes. The pixel filter is a box:
+/// positions are uniform over the pixel, and the first 2^k samples of a pixel stratify it.
+/// [`stratified_pixel_jitter`] builds on it.
 pub fn pixel_jitter(seed: u64, pixel: u64, sample: u64) -> (f64, f64) {
-    let h = crate::sampling::splitmix64(
-        seed ^ crate::sampling::splitmix64(pixel.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ sample),
-    );
-    let u = (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
-    let h2 = crate::sampling::splitmix64(h);
-    let v = (h2 >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
-    (u, v)
+    PixelSampler::new(seed, pixel, sample as u32).pixel_position()
 }
 
 /// The sub-pixel position of sample `k` of `n` stratified samples of pixel `pixel`: the pixel is

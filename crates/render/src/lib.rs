@@ -3,8 +3,9 @@
 //!
 //! - [`scene`]: the authored scene format (RON) that people and `data-gen` write;
 //! - [`compiled`]: the compiled, world-space scene every rendering stage reads;
-//! - [`sampling`], [`bsdf`], [`camera`]: seeded RNG and sampling routines, material models,
-//!   the pinhole camera and its pixel sampling;
+//! - [`sampling`], [`sobol`], [`bsdf`], [`camera`]: seeded RNG, the path tracer's Sobol
+//!   sampler and the sampling routines, material models, the pinhole camera and its pixel
+//!   sampling;
 //! - [`luminaire`]: goniometric luminaires (photometric files) as delta lights and emitters;
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
 //! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
@@ -18,4 +19,5 @@ pub mod parallel;
 pub mod rt;
 pub mod sampling;
 pub mod scene;
+pub mod sobol;
 pub mod world;

@@ -209,7 +209,7 @@ impl GoniometricLight {
     /// The source a light sample starts from: the only one for the point form (drawing no
     /// random number), else one chosen uniformly with `rng`.
     #[inline]
-    pub fn choose_source(&self, rng: &mut crate::sampling::Rng) -> Vec3 {
+    pub fn choose_source(&self, rng: &mut impl crate::sampling::Sampler) -> Vec3 {
         if self.sources.len() > 1 {
             self.pick_source(rng.next_f64())
         } else {

@@ -48,6 +48,25 @@ impl Rng {
     }
 }
 
+/// A source of uniform numbers in [0, 1) for the sampling routines: the independent [`Rng`], or
+/// the path tracer's low-discrepancy [`crate::sobol::PixelSampler`].
+pub trait Sampler {
+    fn next_f64(&mut self) -> f64;
+    /// Two numbers meant as one 2D sample (a low-discrepancy sampler stratifies them jointly).
+    fn next_2d(&mut self) -> (f64, f64);
+}
+
+impl Sampler for Rng {
+    #[inline]
+    fn next_f64(&mut self) -> f64 {
+        Rng::next_f64(self)
+    }
+    #[inline]
+    fn next_2d(&mut self) -> (f64, f64) {
+        Rng::next_2d(self)
+    }
+}
+
 /// SplitMix64 finaliser (Steele et al. 2014), used to spread user seeds over the state space.
 pub fn splitmix64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9E3779B97F4A7C15);

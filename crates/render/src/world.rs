@@ -5,7 +5,9 @@
 use crate::compiled::{CompiledScene, Emitter, NO_EMITTER};
 use crate::luminaire::GoniometricLight;
 use crate::rt::{Hit, RayTracer};
-use crate::sampling::{cosine_hemisphere, uniform_sphere, uniform_triangle, Distribution1D, Rng};
+use crate::sampling::{
+    cosine_hemisphere, uniform_sphere, uniform_triangle, Distribution1D, Rng, Sampler,
+};
 use crate::scene::Material;
 use luxest_io::color::Rgb;
 use luxest_io::error::Result;
@@ -404,7 +406,7 @@ impl World {
 
     /// A uniformly distributed point on area emitter `ei`: (position, unit front normal,
     /// triangle).
-    fn sample_area_point(&self, ei: usize, rng: &mut Rng) -> (Vec3, Vec3, u32) {
+    fn sample_area_point(&self, ei: usize, rng: &mut impl Sampler) -> (Vec3, Vec3, u32) {
         let Emitter::Area { first_triangle, .. } = &self.scene.header.emitters[ei] else {
             unreachable!("sample_area_point on a point emitter")
         };
@@ -413,13 +415,14 @@ impl World {
             .expect("area emitter has triangles");
         let (ti, _) = dist.sample(rng.next_f64());
         let [a, e1, e2, n] = self.emitter_triangles[ei][ti];
-        let (b1, b2) = uniform_triangle(rng.next_f64(), rng.next_f64());
+        let (u1, u2) = rng.next_2d();
+        let (b1, b2) = uniform_triangle(u1, u2);
         (a + e1 * b1 + e2 * b2, n, first_triangle + ti as u32)
     }
 
     /// A point on a light chosen by flux, for next-event estimation at `receiver` (a
     /// luminaire's intensity depends on the direction towards it).
-    pub fn sample_light_point(&self, rng: &mut Rng, receiver: Vec3) -> LightPoint {
+    pub fn sample_light_point(&self, rng: &mut impl Sampler, receiver: Vec3) -> LightPoint {
         let (ei, p_e) = self.emitter_choice.sample(rng.next_f64());
         match &self.scene.header.emitters[ei] {
             Emitter::Luminaire { .. } => {

@@ -16,7 +16,8 @@ use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
 use luxest_render::rt::Ray;
-use luxest_render::sampling::Rng;
+use luxest_render::sampling::Sampler;
+use luxest_render::sobol::PixelSampler;
 use luxest_render::world::World;
 
 /// Rays traced, for rates; optionally every ray, to time raw Embree on the same rays.
@@ -39,14 +40,14 @@ fn power_heuristic(a: f64, b: f64) -> f64 {
 }
 
 /// Signature of a radiance kernel.
-pub type Kernel = fn(&World, Vec3, Vec3, &mut Rng, u32, &mut RayLog) -> Rgb;
+pub type Kernel = fn(&World, Vec3, Vec3, &mut PixelSampler, u32, &mut RayLog) -> Rgb;
 
 /// Radiance arriving at `origin` from direction `dir`.
 pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
     world: &World,
     origin: Vec3,
     dir: Vec3,
-    rng: &mut Rng,
+    rng: &mut PixelSampler,
     max_depth: u32,
     log: &mut RayLog,
 ) -> Rgb {
@@ -57,6 +58,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
     let mut bsdf_pdf = 0.0;
     let mut delta = true;
     for depth in 0..max_depth {
+        rng.start_bounce(depth);
         log.closest += 1;
         if log.record {
             log.closest_rays.push(Ray {

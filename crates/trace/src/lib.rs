@@ -17,4 +17,4 @@ pub mod renderer;
 pub use cli::{run, Args, ESTIMATOR};
 pub use film::Film;
 pub use luxest_render::world::load_with_camera as load;
-pub use renderer::{sample_rng, Renderer, TILE};
+pub use renderer::{pixel_sampler, Renderer, TILE};

@@ -1,22 +1,23 @@
 //! The renderer: adds samples to a [`Film`] tile by tile on worker threads.
 //!
-//! Pixels are independent (box filter, one random stream per pixel sample: see
-//! [`luxest_render::camera::pixel_jitter`] and [`sample_rng`]), so an image depends only on the
-//! seed and the sample count — not on threads, tiles or how the run was split into passes.
+//! Pixels are independent (box filter, one sampler per pixel sample: see [`pixel_sampler`],
+//! whose first draw is [`luxest_render::camera::pixel_jitter`]), so an image depends only on
+//! the seed and the sample count — not on threads, tiles or how the run was split into passes.
 
 use crate::film::Film;
 use crate::integrator::{kernel_for, Kernel, RayLog};
-use luxest_render::camera::{pixel_jitter, PinholeCamera};
+use luxest_render::camera::PinholeCamera;
 use luxest_render::parallel::run_batches;
-use luxest_render::sampling::Rng;
+use luxest_render::sobol::PixelSampler;
 use luxest_render::world::World;
 
 /// Side of the square tiles handed to worker threads.
 pub const TILE: usize = 16;
 
-/// The random stream of sample `sample` of pixel `pixel` (after its camera jitter).
-pub fn sample_rng(seed: u64, pixel: usize, sample: u32) -> Rng {
-    Rng::new(seed, ((pixel as u64) << 24) | sample as u64)
+/// The sampler of sample `sample` of pixel `pixel`: its first draw is the pixel position
+/// ([`pixel_jitter`]), the rest feed the path.
+pub fn pixel_sampler(seed: u64, pixel: usize, sample: u32) -> PixelSampler {
+    PixelSampler::new(seed, pixel as u64, sample)
 }
 
 /// A scene prepared for tracing.
@@ -65,9 +66,9 @@ impl<'a> Renderer<'a> {
                     let pixel = y * w + x;
                     let (mut sum, mut sum_y2) = ([0.0; 3], 0.0);
                     for s in from..target {
-                        let (u, v) = pixel_jitter(self.seed, pixel as u64, s as u64);
+                        let mut rng = pixel_sampler(self.seed, pixel, s);
+                        let (u, v) = rng.pixel_position();
                         let dir = self.camera.direction(x as f64 + u, y as f64 + v);
-                        let mut rng = sample_rng(self.seed, pixel, s);
                         let l = (self.kernel)(
                             self.world,
                             self.camera.position,
