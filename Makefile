@@ -53,6 +53,7 @@ include pipelines/eval.mk
 include pipelines/lighting.mk
 # The Mitsuba 3 cross-check (make mitsuba-check).
 include pipelines/mitsuba.mk
+include pipelines/bench.mk
 
 # The main job on the default scene: compile it, path-trace snapshots with their albedo and
 # normal features and denoise them (the committed model), estimate illuminance at its sensors
@@ -115,7 +116,7 @@ $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract
 		--json ../models/$(DATASET).metrics.json
 	cp runs/$(DATASET)/config.json models/$(DATASET).config.json
 
-bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs
+bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs bench-pt
 	$(CARGO) bench -p scene-compile --bench compile_1m
 	$(CARGO) bench -p estimate --bench estimate
 	$(CARGO) bench -p trace --bench trace

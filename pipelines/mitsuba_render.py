@@ -1,8 +1,12 @@
 """Renders a scene exported by `scene-compile --export-mitsuba` with Mitsuba 3 (the peer of
-`make mitsuba-check`), and compares it with a luxest image of the same scene: whole-image and
-4 x 4 block means of Y and of each channel, as ratios Mitsuba / luxest. Runs in .venv-peers
-(`scripts/setup.sh --peers`); prints the CPU seconds of the render."""
+`make mitsuba-check` and of `make bench-pt`), and with --luxest and --summary compares it with a
+luxest image of the same scene: whole-image and 4 x 4 block means of Y and of each channel, as
+ratios Mitsuba / luxest. Runs in .venv-peers (`scripts/setup.sh --peers`); prints the CPU
+seconds of loading and rendering the scene (JIT compilation included; Python and Mitsuba's
+import excluded), alone as `cpu_seconds <s> wall_seconds <s>` without --summary."""
 import argparse
+import os
+import re
 import sys
 import time
 
@@ -21,16 +25,38 @@ def main(argv=None):
     ap.add_argument("--spp", type=int, default=256)
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--seed", type=int, default=5)
-    ap.add_argument("--luxest", required=True, help="a luxest image of the same scene (EXR)")
+    ap.add_argument("--resolution", help="WIDTHxHEIGHT instead of the scene's")
+    ap.add_argument("--integrator", default="path", choices=["path", "ptracer"],
+                    help="the exported `path` (max_depth -1, rr_depth 5) or `ptracer` with the same settings")
+    ap.add_argument("--luxest", help="a luxest image of the same scene (EXR), to compare with")
     ap.add_argument("-o", "--out", required=True, help="the Mitsuba image (EXR)")
-    ap.add_argument("--summary", required=True, help="the comparison (Markdown)")
+    ap.add_argument("--summary", help="the comparison (Markdown; with --luxest)")
     a = ap.parse_args(argv)
+    if (a.luxest is None) != (a.summary is None):
+        sys.exit("error: --luxest and --summary go together")
     import mitsuba as mi
     mi.set_variant(a.variant)
+    scene_xml = open(a.scene).read()
+    if a.resolution:
+        # The exporter writes the film size as literal integers: substitute them.
+        w_, h_ = (int(v) for v in a.resolution.split("x"))
+        for name, v in (("width", w_), ("height", h_)):
+            scene_xml = re.sub(rf'(<integer name="{name}" value=")\d+(")', rf"\g<1>{v}\g<2>", scene_xml, count=1)
+    if a.integrator != "path":
+        scene_xml = scene_xml.replace('<integrator type="path">', f'<integrator type="{a.integrator}">', 1)
+    # Meshes are named relative to the scene file.
+    mi.file_resolver().prepend(os.path.dirname(os.path.abspath(a.scene)))
+    import drjit as dr
     t, w = time.process_time(), time.time()
-    img = mi.render(mi.load_file(a.scene, spp=a.spp), seed=a.seed)
+    scene = mi.load_string(scene_xml, spp=a.spp)
+    img = mi.render(scene, seed=a.seed)
+    dr.eval(img)  # Dr.Jit is lazy: the render runs here
+    dr.sync_thread()
     cpu, wall = time.process_time() - t, time.time() - w
     mi.util.write_bitmap(a.out, img, write_async=False)
+    if a.luxest is None:
+        print(f"cpu_seconds {cpu:.4f} wall_seconds {wall:.4f}")
+        return
     m, lx = read_exr(a.out), read_exr(a.luxest)
     if m.shape != lx.shape:
         sys.exit(f"error: {a.luxest}: {lx.shape[1]}x{lx.shape[0]}, Mitsuba rendered {m.shape[1]}x{m.shape[0]}")

@@ -321,13 +321,15 @@ pub fn parse_ldt_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
         gamma_deg: gamma,
         rows,
     };
+    // Installed power: the lamp sets' wattage when given.
+    let input_watts = (watts > 0.0).then_some(watts);
     let mut p = Photometry::from_parts(
         name,
         SourceFormat::Eulumdat,
         keywords,
         lamp_flux,
         opening,
-        (watts > 0.0).then_some(watts),
+        input_watts,
         factor,
         table,
     )
