@@ -255,6 +255,61 @@ impl RayTracer {
         out.extend(buf.iter().map(to_hit));
     }
 
+    /// Closest hits for up to 8 rays as one packet (`rtcIntersect8`); `out[i]` receives the hit
+    /// of `rays[i]`, lanes beyond `rays.len()` are inactive.
+    pub fn intersect8(&self, rays: &[Ray], out: &mut [Option<Hit>; 8]) {
+        assert!(rays.len() <= 8, "a packet holds at most 8 rays");
+        let mut valid = [0i32; 8];
+        // SAFETY: all-zero bytes are a valid RTCRayHit8 (plain f32/u32 arrays).
+        let mut p: sys::RTCRayHit8 = unsafe { std::mem::zeroed() };
+        for (i, r) in rays.iter().enumerate() {
+            let ray = make_ray(r.origin, r.direction, r.tnear, r.tfar);
+            valid[i] = -1;
+            (p.ray.org_x[i], p.ray.org_y[i], p.ray.org_z[i]) = (ray.org_x, ray.org_y, ray.org_z);
+            (p.ray.dir_x[i], p.ray.dir_y[i], p.ray.dir_z[i]) = (ray.dir_x, ray.dir_y, ray.dir_z);
+            (p.ray.tnear[i], p.ray.tfar[i], p.ray.mask[i]) = (ray.tnear, ray.tfar, ray.mask);
+            p.hit.geomID[i] = u32::MAX;
+        }
+        let mut ctx = context(false);
+        // SAFETY: `valid` and `p` are 32-byte-aligned packets of 8 lanes (the sys types' repr).
+        unsafe { sys::rtcIntersect8(valid.as_ptr(), self.scene, &mut ctx, &mut p) };
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = (i < rays.len() && p.hit.geomID[i] != u32::MAX).then(|| Hit {
+                t: p.ray.tfar[i] as f64,
+                triangle: p.hit.primID[i],
+                u: p.hit.u[i] as f64,
+                v: p.hit.v[i] as f64,
+                geometric_normal: Vec3::new(
+                    p.hit.Ng_x[i] as f64,
+                    p.hit.Ng_y[i] as f64,
+                    p.hit.Ng_z[i] as f64,
+                ),
+            });
+        }
+    }
+
+    /// Visibility for up to 8 segments as one packet (`rtcOccluded8`); `out[i]` is true if
+    /// `rays[i]` is blocked.
+    pub fn occluded8(&self, rays: &[Ray], out: &mut [bool; 8]) {
+        assert!(rays.len() <= 8, "a packet holds at most 8 rays");
+        let mut valid = [0i32; 8];
+        // SAFETY: all-zero bytes are a valid RTCRay8 (plain f32/u32 arrays).
+        let mut p: sys::RTCRay8 = unsafe { std::mem::zeroed() };
+        for (i, r) in rays.iter().enumerate() {
+            let ray = make_ray(r.origin, r.direction, r.tnear, r.tfar);
+            valid[i] = -1;
+            (p.org_x[i], p.org_y[i], p.org_z[i]) = (ray.org_x, ray.org_y, ray.org_z);
+            (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (ray.dir_x, ray.dir_y, ray.dir_z);
+            (p.tnear[i], p.tfar[i], p.mask[i]) = (ray.tnear, ray.tfar, ray.mask);
+        }
+        let mut ctx = context(false);
+        // SAFETY: as in intersect8.
+        unsafe { sys::rtcOccluded8(valid.as_ptr(), self.scene, &mut ctx, &mut p) };
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = i < rays.len() && p.tfar[i] == f32::NEG_INFINITY;
+        }
+    }
+
     /// Visibility for a batch of segments (`rtcOccluded1M`); `out[i]` is true if blocked.
     pub fn occluded_many(&self, rays: &[Ray], out: &mut Vec<bool>) {
         let mut buf: Vec<sys::RTCRay> = rays
@@ -372,6 +427,21 @@ mod tests {
                 rt.intersect(ray.origin, ray.direction, ray.tnear, ray.tfar)
             );
             assert_eq!(occ[i], hits[i].is_some());
+        }
+        // Packets of 8, the last one partial (inactive lanes report nothing).
+        let (mut h8, mut o8) = ([None; 8], [false; 8]);
+        for (k, chunk) in rays[..997].chunks(8).enumerate() {
+            rt.intersect8(chunk, &mut h8);
+            rt.occluded8(chunk, &mut o8);
+            for i in 0..8 {
+                let want = hits
+                    .get(8 * k + i)
+                    .copied()
+                    .flatten()
+                    .filter(|_| i < chunk.len());
+                assert_eq!(h8[i], want, "packet {k} lane {i}");
+                assert_eq!(o8[i], want.is_some(), "packet {k} lane {i}");
+            }
         }
     }
 

@@ -3,7 +3,9 @@
 //! very same rays (recorded during one pass), the raw Embree rate: closest-hit queries for the
 //! path rays and occlusion queries for the shadow rays, on the same threads. The ratio is the
 //! share of the raw ray rate the full path tracer sustains (target: at least 60 % on
-//! cornell-box).
+//! cornell-box). The same rays sorted into wavefront order (by bounce) are also timed as single
+//! rays, as packets of 8 (`rtcIntersect8`) and as streams of 256 (`rtcIntersect1M`): what a
+//! wavefront formulation of the tracer could gain in Embree.
 
 use luxest_io::cli::thread_count;
 use luxest_render::parallel::run_batches;
@@ -12,35 +14,77 @@ use std::path::PathBuf;
 use std::time::Instant;
 use trace::{Film, Renderer};
 
+/// How the raw rate queries Embree.
+#[derive(Clone, Copy, Debug)]
+enum Query {
+    /// `rtcIntersect1` / `rtcOccluded1`, one ray at a time (what `trace` does).
+    Single,
+    /// `rtcIntersect8` / `rtcOccluded8` on packets of 8 rays of the same bounce from
+    /// neighbouring pixels (what a wavefront tracer would submit).
+    Packet8,
+    /// `rtcIntersect1M` / `rtcOccluded1M` on streams of 256 such rays.
+    Stream256,
+}
+
+/// The rays in wavefront order: by bounce, and within a bounce in the order recorded (tile by
+/// tile, pixel by pixel).
+fn wavefront(rays: &[Ray], depths: &[u32]) -> Vec<Ray> {
+    let mut idx: Vec<usize> = (0..rays.len()).collect();
+    idx.sort_by_key(|&i| depths[i]);
+    idx.into_iter().map(|i| rays[i]).collect()
+}
+
 /// Raw Embree time for the recorded rays, split over `threads`.
 fn raw_seconds(
     world: &luxest_render::world::World,
     closest: &[Ray],
     shadow: &[Ray],
     threads: usize,
+    query: Query,
 ) -> f64 {
     let chunks = 64;
     let slice = |v: &[Ray], c: usize| -> std::ops::Range<usize> {
-        let len = v.len().div_ceil(chunks);
+        // Chunk bounds on multiples of 256, so that packets and streams are whole.
+        let len = v.len().div_ceil(chunks).next_multiple_of(256);
         (c * len).min(v.len())..((c + 1) * len).min(v.len())
     };
+    let tracer = &world.tracer;
     let start = Instant::now();
     let hits: Vec<usize> = run_batches(chunks, threads, "raw", |c| {
+        let (closest, shadow) = (&closest[slice(closest, c)], &shadow[slice(shadow, c)]);
         let mut n = 0;
-        for r in &closest[slice(closest, c)] {
-            n += usize::from(
-                world
-                    .tracer
-                    .intersect(r.origin, r.direction, r.tnear, r.tfar)
-                    .is_some(),
-            );
-        }
-        for r in &shadow[slice(shadow, c)] {
-            n += usize::from(
-                world
-                    .tracer
-                    .occluded(r.origin, r.direction, r.tnear, r.tfar),
-            );
+        match query {
+            Query::Single => {
+                for r in closest {
+                    let hit = tracer.intersect(r.origin, r.direction, r.tnear, r.tfar);
+                    n += usize::from(hit.is_some());
+                }
+                for r in shadow {
+                    n += usize::from(tracer.occluded(r.origin, r.direction, r.tnear, r.tfar));
+                }
+            }
+            Query::Packet8 => {
+                let (mut h, mut o) = ([None; 8], [false; 8]);
+                for p in closest.chunks(8) {
+                    tracer.intersect8(p, &mut h);
+                    n += h.iter().filter(|x| x.is_some()).count();
+                }
+                for p in shadow.chunks(8) {
+                    tracer.occluded8(p, &mut o);
+                    n += o.iter().filter(|&&x| x).count();
+                }
+            }
+            Query::Stream256 => {
+                let (mut h, mut o) = (Vec::new(), Vec::new());
+                for s in closest.chunks(256) {
+                    tracer.intersect_many(s, &mut h);
+                    n += h.iter().filter(|x| x.is_some()).count();
+                }
+                for s in shadow.chunks(256) {
+                    tracer.occluded_many(s, &mut o);
+                    n += o.iter().filter(|&&x| x).count();
+                }
+            }
         }
         n
     });
@@ -73,9 +117,17 @@ fn bench(name: &str, resolution: &str, spp: u32) {
     // distribution as the timed passes), best of 3.
     let mut rec_film = Film::new(cam.width as usize, cam.height as usize);
     let rec = renderer.advance(&mut rec_film, 1, true);
-    let t_raw = (0..3)
-        .map(|_| raw_seconds(&world, &rec.closest_rays, &rec.shadow_rays, threads))
-        .fold(f64::INFINITY, f64::min);
+    let best = |closest: &[Ray], shadow: &[Ray], q: Query| {
+        (0..3)
+            .map(|_| raw_seconds(&world, closest, shadow, threads, q))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let t_raw = best(&rec.closest_rays, &rec.shadow_rays, Query::Single);
+    let (wc, ws) = (
+        wavefront(&rec.closest_rays, &rec.closest_depths),
+        wavefront(&rec.shadow_rays, &rec.shadow_depths),
+    );
+    let t_wave = [Query::Single, Query::Packet8, Query::Stream256].map(|q| (q, best(&wc, &ws, q)));
     let rec_rays = (rec.closest_rays.len() + rec.shadow_rays.len()) as f64;
     println!(
         "trace {name} {resolution}, {spp} spp, {} triangles: {:.2} s (best of 3), {:.3} M samples/s, {:.2} M rays/s ({:.2} rays/sample); \
@@ -88,6 +140,14 @@ fn bench(name: &str, resolution: &str, spp: u32) {
         rec_rays / t_raw / 1e6,
         100.0 * (rays / t) / (rec_rays / t_raw)
     );
+    for (q, tq) in t_wave {
+        println!(
+            "  raw Embree on the same rays in wavefront order (by bounce), {q:?}: {:.2} M rays/s \
+             ({:.2}x single rays in path order)",
+            rec_rays / tq / 1e6,
+            t_raw / tq
+        );
+    }
 }
 
 fn main() {

@@ -28,6 +28,9 @@ pub struct RayLog {
     pub record: bool,
     pub closest_rays: Vec<Ray>,
     pub shadow_rays: Vec<Ray>,
+    /// The bounce each recorded ray belongs to (0: the camera ray and its shadow ray).
+    pub closest_depths: Vec<u32>,
+    pub shadow_depths: Vec<u32>,
 }
 
 fn power_heuristic(a: f64, b: f64) -> f64 {
@@ -61,6 +64,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
         rng.start_bounce(depth);
         log.closest += 1;
         if log.record {
+            log.closest_depths.push(depth);
             log.closest_rays.push(Ray {
                 origin,
                 direction: dir,
@@ -117,6 +121,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
                         log.shadow += 1;
                         let from = world.offset(sp.position, sp.ng, w);
                         if log.record {
+                            log.shadow_depths.push(depth);
                             log.shadow_rays.push(Ray {
                                 origin: from,
                                 direction: w,

@@ -102,6 +102,8 @@ impl<'a> Renderer<'a> {
             total.shadow += log.shadow;
             total.closest_rays.extend(log.closest_rays);
             total.shadow_rays.extend(log.shadow_rays);
+            total.closest_depths.extend(log.closest_depths);
+            total.shadow_depths.extend(log.shadow_depths);
         }
         film.samples = target;
         total
