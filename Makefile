@@ -87,10 +87,18 @@ lint:
 # its -D warnings in CLIPPY_ARGS), so the dependencies are not built a second time for a check.
 CLIPPY_BUILD := RUSTC_WORKSPACE_WRAPPER=clippy-driver CLIPPY_ARGS=-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__
 
+# The evaluator and the denoiser are also built as programs and must not link Embree (a
+# researcher who swaps the tracer builds them without it; tests/architecture.rs checks the
+# dependency graph, this the binaries).
 test: pytest
 	$(CARGO) fmt --all -- --check
 	$(CLIPPY_BUILD) $(CARGO) test --workspace --all-targets --no-run
 	$(CLIPPY_BUILD) $(CARGO) test --workspace
+	$(CLIPPY_BUILD) $(CARGO) build -p denoise -p evaluate --bins
+	@for b in denoise evaluate; do \
+		readelf -d target/debug/$$b > target/debug/$$b.dynamic || exit 1; \
+		if grep -qi embree target/debug/$$b.dynamic; then echo "error: target/debug/$$b links Embree" >&2; exit 1; fi; \
+	done; echo "denoise and evaluate link no Embree"
 
 $(VENV)/$(VENV_STAMP): scripts/setup-python.sh training/requirements.txt
 	scripts/setup-python.sh
