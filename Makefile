@@ -124,7 +124,7 @@ $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract
 		--json ../models/$(DATASET).metrics.json
 	cp runs/$(DATASET)/config.json models/$(DATASET).config.json
 
-bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs bench-pt
+bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs bench-pt bench-sensors
 	$(CARGO) bench -p scene-compile --bench compile_1m
 	$(CARGO) bench -p estimate --bench estimate
 	$(CARGO) bench -p trace --bench trace

@@ -31,3 +31,17 @@ endef
 $(foreach s,$(BENCH_SCENES),$(eval $(call lx_bench_rules,$(s))))
 
 bench-pt: $(foreach s,$(BENCH_SCENES),build/bench/$(s)/pt.md)
+
+# `make bench-sensors` (part of `make bench`, needs .venv-peers): the local estimate at the default
+# scene's sensors against Mitsuba 3 irradiance meters, CPU-s until every sensor and the median
+# sensor reach 1 % standard error (pipelines/bench_sensors.py); build/bench/<scene>/sensors.md.
+BENCH_SENSORS_DIR := build/bench/$(DEFAULT_SCENE)
+
+.PHONY: bench-sensors
+
+$(BENCH_SENSORS_DIR)/sensors.md: build/$(DEFAULT_SCENE)/scene.lxs $(BENCH_SENSORS_DIR)/scene.xml $(ESTIMATE) pipelines/bench_sensors.py
+	@test -x $(PEERS_PYTHON) || { echo "error: $(PEERS_PYTHON) missing: run scripts/setup.sh --no-python --no-ort --peers" >&2; exit 1; }
+	$(PEERS_PYTHON) pipelines/bench_sensors.py --scene $< --mitsuba-scene $(word 2,$^) --estimate $(ESTIMATE) \
+		--work-dir $(BENCH_SENSORS_DIR)/sensors -o $@
+
+bench-sensors: $(BENCH_SENSORS_DIR)/sensors.md

@@ -1,0 +1,127 @@
+"""`make bench-sensors`: the local estimate at a scene's sensors against Mitsuba 3 irradiance
+meters on the same scene in the same run. CPU seconds until a sensor's relative standard error
+reaches 1 %: for luxest, one `estimate sensors` run serves every sensor, so a sensor reaches 1 %
+at t · (r_i / 0.01)² (r_i its relative standard error after t CPU-s); for Mitsuba each sensor is
+a render of its own (an `irradiancemeter` on a disk of radius --disk-radius at the evaluated
+point, facing the sensor's normal), so every sensor at 1 % costs the sum over sensors. Runs in
+.venv-peers (numpy, mitsuba); Mitsuba's CPU-s count its renders (`dr.eval`), not the JIT warm-up
+render of each sensor. Sensors with no light (value 0) are left out."""
+import argparse
+import csv
+import os
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from atomic import write_text  # noqa: E402
+
+TARGET = 0.01
+
+
+def luxest(a, work):
+    """Runs `estimate sensors`; returns (CPU-s, [(position, normal, value, standard_error)])."""
+    out = work / "luxest.sensors.ron"
+    table = work / "luxest.sensors.csv"
+    r0 = os.times()
+    p = subprocess.run([a.estimate, "sensors", a.scene, "--paths", str(a.paths), "-o", str(out), "--csv", str(table)],
+                       capture_output=True, text=True)
+    r1 = os.times()
+    if p.returncode != 0:
+        sys.exit(f"error: estimate sensors failed:\n{p.stderr.strip()}")
+    cpu = (r1.children_user - r0.children_user) + (r1.children_system - r0.children_system)
+    rows = list(csv.DictReader(open(table)))
+    unit = next(k[len("value_"):] for k in rows[0] if k.startswith("value_"))
+    sensors = []
+    for r in rows:
+        p_ = tuple(float(r[f"evaluated_{c}"]) for c in "xyz")
+        n = tuple(float(r[f"n{c}"]) for c in "xyz")
+        sensors.append((p_, n, float(r[f"value_{unit}"]), float(r[f"standard_error_{unit}"])))
+    return cpu, sensors
+
+
+def meter_xml(i, position, normal, radius, spp):
+    p = position
+    t = tuple(p[k] + normal[k] for k in range(3))
+    up = (0.0, 0.0, 1.0) if abs(normal[2]) < 0.9 else (1.0, 0.0, 0.0)
+    f = lambda v: ", ".join(f"{x:.9g}" for x in v)
+    return (f'<shape type="disk" id="meter{i}"><transform name="to_world"><scale value="{radius:.9g}"/>'
+            f'<lookat origin="{f(p)}" target="{f(t)}" up="{f(up)}"/></transform>'
+            f'<sensor type="irradiancemeter" id="meter{i}_sensor"><film type="hdrfilm"><integer name="width" value="1"/>'
+            f'<integer name="height" value="1"/><rfilter type="box"/><string name="pixel_format" value="rgb"/>'
+            f'<string name="component_format" value="float32"/></film>'
+            f'<sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler></sensor></shape>')
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scene", required=True, help="compiled scene (.lxs)")
+    ap.add_argument("--mitsuba-scene", required=True, help="the same scene exported for Mitsuba (scene.xml)")
+    ap.add_argument("--estimate", required=True)
+    ap.add_argument("--paths", type=int, default=400000, help="light paths of the luxest run")
+    ap.add_argument("--spp", type=int, default=16384, help="samples per estimate of a Mitsuba meter")
+    ap.add_argument("--replicates", type=int, default=8, help="independent estimates per Mitsuba meter")
+    ap.add_argument("--disk-radius", type=float, default=1e-4, help="radius of the meters' disks (m)")
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--work-dir", required=True)
+    ap.add_argument("-o", "--out", required=True, help="Markdown table")
+    a = ap.parse_args(argv)
+    work = Path(a.work_dir)
+    work.mkdir(parents=True, exist_ok=True)
+    t_lx, sensors = luxest(a, work)
+    lit = [(i, s) for i, s in enumerate(sensors) if s[2] > 0 and s[3] > 0]
+    lx_time = {i: t_lx * (s[3] / s[2] / TARGET) ** 2 for i, s in lit}
+
+    import drjit as dr
+    import mitsuba as mi
+    import numpy as np
+    mi.set_variant(a.variant)
+    xml = open(a.mitsuba_scene).read()
+    meters = "".join(meter_xml(i, s[0], s[1], a.disk_radius, a.spp) for i, s in lit)
+    xml = xml.replace("</scene>", meters + "</scene>")
+    mi.file_resolver().prepend(os.path.dirname(os.path.abspath(a.mitsuba_scene)))
+    scene = mi.load_string(xml.replace("$spp", "1"))
+    index = {s.id(): k for k, s in enumerate(scene.sensors())}
+    mi_time, mi_value = {}, {}
+    for i, s in lit:
+        k = index[f"meter{i}_sensor"]
+        dr.eval(mi.render(scene, sensor=k, spp=16, seed=0))  # JIT warm-up for this sensor
+        # Independent estimates (the meter's film is one pixel): replicates with their own seeds.
+        t0 = time.process_time()
+        y = []
+        for r in range(a.replicates):
+            img = mi.render(scene, sensor=k, seed=1 + r + a.replicates * i)
+            dr.eval(img)
+            y.append(float(np.array(img).reshape(-1)[:3] @ np.array([0.2126, 0.7152, 0.0722])))
+        cpu = time.process_time() - t0
+        y = np.array(y)
+        mean, rel = y.mean(), y.std(ddof=1) / y.mean() if y.mean() > 0 else float("inf")
+        # One pixel's estimate has relative error `rel` for spp samples: 1 % needs (rel/0.01)² x.
+        mi_time[i] = cpu / a.replicates * (rel / TARGET) ** 2
+        mi_value[i] = mean
+    rows = sorted(lit, key=lambda t: lx_time[t[0]])
+    lx_all, mi_all = max(lx_time.values()), sum(mi_time.values())
+    lx_med = statistics.median(lx_time.values())
+    mi_med = statistics.median(mi_time.values())
+    speedups = sorted(mi_time[i] / lx_time[i] for i, _ in lit)
+    lines = [f"Sensors at 1 % standard error: `{a.scene}`, {len(lit)} lit sensors of {len(sensors)}; luxest `estimate sensors` "
+             f"{a.paths} paths ({t_lx:.1f} CPU-s), Mitsuba 3 `{a.variant}` irradiance meters (disk radius {a.disk_radius:g} m, "
+             f"{a.replicates} x {a.spp} samples each) ({time.strftime('%Y-%m-%d %H:%M')}).", "",
+             "| | luxest local estimate | Mitsuba 3 irradiance meters |", "|---|---|---|",
+             f"| every lit sensor at 1 % | {lx_all:.1f} CPU-s (one run, the slowest sensor) | {mi_all:.1f} CPU-s (one render per sensor, summed) |",
+             f"| median sensor at 1 % | {lx_med:.2f} CPU-s | {mi_med:.2f} CPU-s |", "",
+             f"Per sensor, Mitsuba's time / luxest's time to 1 %: median {statistics.median(speedups):.1f}, "
+             f"lowest {speedups[0]:.2f}, highest {speedups[-1]:.1f}. Mitsuba's value / luxest's: median "
+             f"{statistics.median(mi_value[i] / s[2] for i, s in lit):.4f} (a cross-check of the two).", "",
+             "| sensor | luxest E | rel. SE | Mitsuba / luxest | luxest CPU-s to 1 % | Mitsuba CPU-s to 1 % |",
+             "|---|---|---|---|---|---|"]
+    lines += [f"| {i} | {s[2]:.4g} | {s[3] / s[2]:.2e} | {mi_value[i] / s[2]:.4f} | {lx_time[i]:.3f} | {mi_time[i]:.3f} |"
+              for i, s in rows]
+    write_text(a.out, "\n".join(lines) + "\n")
+    print("\n".join(lines[:8]))
+
+
+if __name__ == "__main__":
+    main()
