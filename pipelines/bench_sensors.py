@@ -79,7 +79,9 @@ def main(argv=None):
     import numpy as np
     mi.set_variant(a.variant)
     xml = open(a.mitsuba_scene).read()
-    meters = "".join(meter_xml(i, s[0], s[1], a.disk_radius, a.spp) for i, s in lit)
+    # Mitsuba's parser merges identical nested objects, and a meter can belong to one shape only:
+    # the sample counts differ by one per meter (spp + i) to keep the meters distinct.
+    meters = "".join(meter_xml(i, s[0], s[1], a.disk_radius, a.spp + i) for i, s in lit)
     xml = xml.replace("</scene>", meters + "</scene>")
     mi.file_resolver().prepend(os.path.dirname(os.path.abspath(a.mitsuba_scene)))
     scene = mi.load_string(xml.replace("$spp", "1"))
