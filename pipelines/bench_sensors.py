@@ -65,6 +65,10 @@ def main(argv=None):
     ap.add_argument("--replicates", type=int, default=8, help="independent estimates per Mitsuba meter")
     ap.add_argument("--disk-radius", type=float, default=1e-4, help="radius of the meters' disks (m)")
     ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--integrator", default="ptracer", choices=["ptracer", "path"],
+                    help="Mitsuba's integrator for the meters: ptracer connects every light-path vertex "
+                         "to the meter (a local estimate per meter); path samples directions from the meter "
+                         "(no next-event estimation there: the direct light of a small emitter is a rare event)")
     ap.add_argument("--work-dir", required=True)
     ap.add_argument("-o", "--out", required=True, help="Markdown table")
     a = ap.parse_args(argv)
@@ -83,6 +87,7 @@ def main(argv=None):
     # the sample counts differ by one per meter (spp + i) to keep the meters distinct.
     meters = "".join(meter_xml(i, s[0], s[1], a.disk_radius, a.spp + i) for i, s in lit)
     xml = xml.replace("</scene>", meters + "</scene>")
+    xml = xml.replace('<integrator type="path">', f'<integrator type="{a.integrator}">', 1)
     mi.file_resolver().prepend(os.path.dirname(os.path.abspath(a.mitsuba_scene)))
     scene = mi.load_string(xml.replace("$spp", "1"))
     index = {s.id(): k for k, s in enumerate(scene.sensors())}
@@ -109,7 +114,7 @@ def main(argv=None):
     mi_med = statistics.median(mi_time.values())
     speedups = sorted(mi_time[i] / lx_time[i] for i, _ in lit)
     lines = [f"Sensors at 1 % standard error: `{a.scene}`, {len(lit)} lit sensors of {len(sensors)}; luxest `estimate sensors` "
-             f"{a.paths} paths ({t_lx:.1f} CPU-s), Mitsuba 3 `{a.variant}` irradiance meters (disk radius {a.disk_radius:g} m, "
+             f"{a.paths} paths ({t_lx:.1f} CPU-s), Mitsuba 3 `{a.variant}` `{a.integrator}` irradiance meters (disk radius {a.disk_radius:g} m, "
              f"{a.replicates} x {a.spp} samples each) ({time.strftime('%Y-%m-%d %H:%M')}).", "",
              "| | luxest local estimate | Mitsuba 3 irradiance meters |", "|---|---|---|",
              f"| every lit sensor at 1 % | {lx_all:.1f} CPU-s (one run, the slowest sensor) | {mi_all:.1f} CPU-s (one render per sensor, summed) |",
