@@ -70,7 +70,7 @@ def main(argv=None):
 
     def luxest_image(extra, tag):
         def run(rep, paths):
-            out = work / f"{tag}_r{rep}_{paths}.hdr.exr"
+            out = work / image_name(f"{tag}_r{rep}", "hdr", paths, unit="le")
             cpu, _ = child_cpu([a.estimate, "image", a.scene, "--paths", paths, "--resolution", a.resolution,
                                 "--seed", rep, "-o", out, *extra])
             return cpu, out

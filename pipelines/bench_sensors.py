@@ -7,38 +7,33 @@ point, facing the sensor's normal), so every sensor at 1 % costs the sum over se
 .venv-peers (numpy, mitsuba); Mitsuba's CPU-s count its renders (`dr.eval`), not the JIT warm-up
 render of each sensor. Sensors with no light (value 0) are left out."""
 import argparse
-import csv
-import os
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
+from luxest_contract import read_sensors_csv, sensors_name  # noqa: E402
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from atomic import write_text  # noqa: E402
+from bench_pt import child_cpu  # noqa: E402
+from mitsuba_render import scene_xml  # noqa: E402
 
 TARGET = 0.01
 
 
 def luxest(a, work):
     """Runs `estimate sensors`; returns (CPU-s, [(position, normal, value, standard_error)])."""
-    out = work / "luxest.sensors.ron"
-    table = work / "luxest.sensors.csv"
-    r0 = os.times()
-    p = subprocess.run([a.estimate, "sensors", a.scene, "--paths", str(a.paths), "-o", str(out), "--csv", str(table)],
-                       capture_output=True, text=True)
-    r1 = os.times()
-    if p.returncode != 0:
-        sys.exit(f"error: estimate sensors failed:\n{p.stderr.strip()}")
-    cpu = (r1.children_user - r0.children_user) + (r1.children_system - r0.children_system)
-    rows = list(csv.DictReader(open(table)))
-    unit = next(k[len("value_"):] for k in rows[0] if k.startswith("value_"))
+    out = sensors_name(work, "luxest")
+    table = out.with_suffix(".csv")
+    cpu, _ = child_cpu([a.estimate, "sensors", a.scene, "--paths", a.paths, "-o", out, "--csv", table])
+    rows, _ = read_sensors_csv(table)
     sensors = []
     for r in rows:
-        p_ = tuple(float(r[f"evaluated_{c}"]) for c in "xyz")
+        p = tuple(float(r[f"evaluated_{c}"]) for c in "xyz")
         n = tuple(float(r[f"n{c}"]) for c in "xyz")
-        sensors.append((p_, n, float(r[f"value_{unit}"]), float(r[f"standard_error_{unit}"])))
+        sensors.append((p, n, r["value"], r["standard_error"]))
     return cpu, sensors
 
 
@@ -82,13 +77,11 @@ def main(argv=None):
     import mitsuba as mi
     import numpy as np
     mi.set_variant(a.variant)
-    xml = open(a.mitsuba_scene).read()
+    xml = scene_xml(mi, a.mitsuba_scene, integrator=a.integrator)
     # Mitsuba's parser merges identical nested objects, and a meter can belong to one shape only:
     # the sample counts differ by one per meter (spp + i) to keep the meters distinct.
     meters = "".join(meter_xml(i, s[0], s[1], a.disk_radius, a.spp + i) for i, s in lit)
     xml = xml.replace("</scene>", meters + "</scene>")
-    xml = xml.replace('<integrator type="path">', f'<integrator type="{a.integrator}">', 1)
-    mi.file_resolver().prepend(os.path.dirname(os.path.abspath(a.mitsuba_scene)))
     scene = mi.load_string(xml.replace("$spp", "1"))
     index = {s.id(): k for k, s in enumerate(scene.sensors())}
     mi_time, mi_value = {}, {}

@@ -19,6 +19,22 @@ def read_exr(path):
     return np.array(mi.Bitmap(str(path)), dtype=np.float64)[..., :3]
 
 
+def scene_xml(mi, path, resolution=None, integrator="path"):
+    """The text of an exported scene, with the film size `resolution` ("WxH") and `integrator`
+    in place of the exported `path` when given; registers the scene's folder with Mitsuba's
+    file resolver (meshes are named relative to the scene file)."""
+    xml = open(path).read()
+    if resolution:
+        # The exporter writes the film size as literal integers: substitute them.
+        w, h = (int(v) for v in resolution.split("x"))
+        for name, v in (("width", w), ("height", h)):
+            xml = re.sub(rf'(<integer name="{name}" value=")\d+(")', rf"\g<1>{v}\g<2>", xml, count=1)
+    if integrator != "path":
+        xml = xml.replace('<integrator type="path">', f'<integrator type="{integrator}">', 1)
+    mi.file_resolver().prepend(os.path.dirname(os.path.abspath(path)))
+    return xml
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scene", help="scene.xml written by scene-compile --export-mitsuba")
@@ -36,19 +52,10 @@ def main(argv=None):
         sys.exit("error: --luxest and --summary go together")
     import mitsuba as mi
     mi.set_variant(a.variant)
-    scene_xml = open(a.scene).read()
-    if a.resolution:
-        # The exporter writes the film size as literal integers: substitute them.
-        w_, h_ = (int(v) for v in a.resolution.split("x"))
-        for name, v in (("width", w_), ("height", h_)):
-            scene_xml = re.sub(rf'(<integer name="{name}" value=")\d+(")', rf"\g<1>{v}\g<2>", scene_xml, count=1)
-    if a.integrator != "path":
-        scene_xml = scene_xml.replace('<integrator type="path">', f'<integrator type="{a.integrator}">', 1)
-    # Meshes are named relative to the scene file.
-    mi.file_resolver().prepend(os.path.dirname(os.path.abspath(a.scene)))
+    xml = scene_xml(mi, a.scene, a.resolution, a.integrator)
     import drjit as dr
     t, w = time.process_time(), time.time()
-    scene = mi.load_string(scene_xml, spp=a.spp)
+    scene = mi.load_string(xml, spp=a.spp)
     img = mi.render(scene, seed=a.seed)
     dr.eval(img)  # Dr.Jit is lazy: the render runs here
     dr.sync_thread()

@@ -1,11 +1,12 @@
 //! The built-in scenes compile, round-trip, and carry the geometry and photometry they claim,
 //! checked against closed-form values.
 
-use crate::util::{repo_root, scene_compile, TempDir};
+use crate::util::{repo_root, scene_compile, StageResult, TempDir};
 use luxest_io::math::Vec3;
 use luxest_render::compiled::{CompiledScene, Emitter};
 use luxest_render::rt::RayTracer;
 use std::f64::consts::PI;
+use std::path::PathBuf;
 
 fn compile(name: &str) -> CompiledScene {
     let path = repo_root().join("scenes").join(format!("{name}.ron"));
@@ -325,6 +326,23 @@ fn generated_training_scenes_compile_and_are_reproducible() {
     assert_eq!(n, 24);
 }
 
+/// `scene-compile scenes/<name>.ron -o <tmp>/s.lxs --export-mitsuba <tmp>/mi`: the directory, the
+/// compiled scene and export paths, and the stage's result.
+fn export_mitsuba(name: &str) -> (TempDir, PathBuf, PathBuf, StageResult) {
+    let dir = TempDir::new("mitsuba");
+    let (out, lxs) = (dir.path().join("mi"), dir.path().join("s.lxs"));
+    let src = repo_root().join("scenes").join(format!("{name}.ron"));
+    let r = scene_compile(&[
+        src.to_str().unwrap(),
+        "-o",
+        lxs.to_str().unwrap(),
+        "--export-mitsuba",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    (dir, out, lxs, r)
+}
+
 #[test]
 fn mitsuba_export_carries_every_triangle_material_emitter_and_the_camera() {
     // Export the Cornell box and the trefoil scene (glass, mirror, point light); read the OBJ
@@ -332,19 +350,8 @@ fn mitsuba_export_carries_every_triangle_material_emitter_and_the_camera() {
     // XML holds each group's BSDF, the area light's luminance, the point light's intensity and
     // the camera. A scene with a goniometric luminaire is refused with nothing written.
     for name in ["cornell-box", "gltf-trefoil"] {
-        let dir = TempDir::new("mitsuba");
-        let out = dir.path().join("mi");
-        let lxs = dir.path().join("s.lxs");
-        let src = repo_root().join("scenes").join(format!("{name}.ron"));
-        scene_compile(&[
-            src.to_str().unwrap(),
-            "-o",
-            lxs.to_str().unwrap(),
-            "--export-mitsuba",
-            out.to_str().unwrap(),
-            "-q",
-        ])
-        .unwrap();
+        let (_dir, out, lxs, r) = export_mitsuba(name);
+        r.unwrap();
         let s = CompiledScene::load(&lxs).unwrap();
         let xml = std::fs::read_to_string(out.join("scene.xml")).unwrap();
         let mut triangles = Vec::new();
@@ -407,19 +414,8 @@ fn mitsuba_export_carries_every_triangle_material_emitter_and_the_camera() {
             );
         }
     }
-    let dir = TempDir::new("mitsuba-office");
-    let out = dir.path().join("mi");
-    let lxs = dir.path().join("s.lxs");
-    let src = repo_root().join("scenes/office.ron");
-    let e = scene_compile(&[
-        src.to_str().unwrap(),
-        "-o",
-        lxs.to_str().unwrap(),
-        "--export-mitsuba",
-        out.to_str().unwrap(),
-        "-q",
-    ])
-    .unwrap_err();
+    let (_dir, out, lxs, r) = export_mitsuba("office");
+    let e = r.unwrap_err();
     assert_eq!(e.0, 1);
     assert!(
         e.1.contains("goniometric") && !e.1.contains('\n'),

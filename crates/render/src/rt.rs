@@ -97,6 +97,22 @@ fn make_ray(origin: Vec3, direction: Vec3, tnear: f64, tfar: f64) -> sys::RTCRay
     }
 }
 
+/// Up to 8 rays as an Embree packet, with its valid mask (lanes beyond `rays.len()` inactive).
+fn packet8(rays: &[Ray]) -> ([i32; 8], sys::RTCRay8) {
+    assert!(rays.len() <= 8, "a packet holds at most 8 rays");
+    let mut valid = [0i32; 8];
+    // SAFETY: all-zero bytes are a valid RTCRay8 (plain f32/u32 arrays).
+    let mut p: sys::RTCRay8 = unsafe { std::mem::zeroed() };
+    for (i, r) in rays.iter().enumerate() {
+        let ray = make_ray(r.origin, r.direction, r.tnear, r.tfar);
+        valid[i] = -1;
+        (p.org_x[i], p.org_y[i], p.org_z[i]) = (ray.org_x, ray.org_y, ray.org_z);
+        (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (ray.dir_x, ray.dir_y, ray.dir_z);
+        (p.tnear[i], p.tfar[i], p.mask[i]) = (ray.tnear, ray.tfar, ray.mask);
+    }
+    (valid, p)
+}
+
 fn empty_hit() -> sys::RTCHit {
     sys::RTCHit {
         Ng_x: 0.0,
@@ -258,18 +274,13 @@ impl RayTracer {
     /// Closest hits for up to 8 rays as one packet (`rtcIntersect8`); `out[i]` receives the hit
     /// of `rays[i]`, lanes beyond `rays.len()` are inactive.
     pub fn intersect8(&self, rays: &[Ray], out: &mut [Option<Hit>; 8]) {
-        assert!(rays.len() <= 8, "a packet holds at most 8 rays");
-        let mut valid = [0i32; 8];
-        // SAFETY: all-zero bytes are a valid RTCRayHit8 (plain f32/u32 arrays).
-        let mut p: sys::RTCRayHit8 = unsafe { std::mem::zeroed() };
-        for (i, r) in rays.iter().enumerate() {
-            let ray = make_ray(r.origin, r.direction, r.tnear, r.tfar);
-            valid[i] = -1;
-            (p.ray.org_x[i], p.ray.org_y[i], p.ray.org_z[i]) = (ray.org_x, ray.org_y, ray.org_z);
-            (p.ray.dir_x[i], p.ray.dir_y[i], p.ray.dir_z[i]) = (ray.dir_x, ray.dir_y, ray.dir_z);
-            (p.ray.tnear[i], p.ray.tfar[i], p.ray.mask[i]) = (ray.tnear, ray.tfar, ray.mask);
-            p.hit.geomID[i] = u32::MAX;
-        }
+        let (valid, ray) = packet8(rays);
+        let mut p = sys::RTCRayHit8 {
+            ray,
+            // SAFETY: all-zero bytes are a valid RTCHit8 (plain f32/u32 arrays).
+            hit: unsafe { std::mem::zeroed() },
+        };
+        p.hit.geomID = [u32::MAX; 8];
         let mut ctx = context(false);
         // SAFETY: `valid` and `p` are 32-byte-aligned packets of 8 lanes (the sys types' repr).
         unsafe { sys::rtcIntersect8(valid.as_ptr(), self.scene, &mut ctx, &mut p) };
@@ -291,17 +302,7 @@ impl RayTracer {
     /// Visibility for up to 8 segments as one packet (`rtcOccluded8`); `out[i]` is true if
     /// `rays[i]` is blocked.
     pub fn occluded8(&self, rays: &[Ray], out: &mut [bool; 8]) {
-        assert!(rays.len() <= 8, "a packet holds at most 8 rays");
-        let mut valid = [0i32; 8];
-        // SAFETY: all-zero bytes are a valid RTCRay8 (plain f32/u32 arrays).
-        let mut p: sys::RTCRay8 = unsafe { std::mem::zeroed() };
-        for (i, r) in rays.iter().enumerate() {
-            let ray = make_ray(r.origin, r.direction, r.tnear, r.tfar);
-            valid[i] = -1;
-            (p.org_x[i], p.org_y[i], p.org_z[i]) = (ray.org_x, ray.org_y, ray.org_z);
-            (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (ray.dir_x, ray.dir_y, ray.dir_z);
-            (p.tnear[i], p.tfar[i], p.mask[i]) = (ray.tnear, ray.tfar, ray.mask);
-        }
+        let (valid, mut p) = packet8(rays);
         let mut ctx = context(false);
         // SAFETY: as in intersect8.
         unsafe { sys::rtcOccluded8(valid.as_ptr(), self.scene, &mut ctx, &mut p) };
