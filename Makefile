@@ -65,7 +65,7 @@ run: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE) $(TRACE) $(AOV_WRITE) $(DENOIS
 	$(AOV_WRITE) $< --spp 64 --snapshots 1,4,16 --resolution 256x256
 	$(DENOISE) --model $(DEFAULT_MODEL) --preview $(foreach s,1 4 16 64,$(call lx_image,$(RUN_PREFIX),$(s),hdr))
 	$(ESTIMATE) sensors $< --paths 200000 --csv $(RUN_PREFIX).sensors.csv
-	$(ESTIMATE) image $< --paths 1000 --resolution 256x256 --preview $(RUN_PREFIX)_$(call lx_count,1000)le.png
+	$(ESTIMATE) image $< --paths 300 --resolution 256x256 --preview $(RUN_PREFIX)_$(call lx_count,300)le.png
 
 scenes: $(COMPILED)
 
@@ -124,7 +124,7 @@ $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract
 		--json ../models/$(DATASET).metrics.json
 	cp runs/$(DATASET)/config.json models/$(DATASET).config.json
 
-bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs bench-pt bench-sensors
+bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs bench-pt bench-sensors bench-edges
 	$(CARGO) bench -p scene-compile --bench compile_1m
 	$(CARGO) bench -p estimate --bench estimate
 	$(CARGO) bench -p trace --bench trace

@@ -3,7 +3,8 @@
 # (pipelines/bench_pt.py; the peer rows when .venv-peers has Mitsuba:
 # `scripts/setup.sh --no-python --no-ort --peers`), for each scene of BENCH_SCENES: the default
 # scene and the 1M-triangle heightfield of `make bench`. Each reference has its own seed
-# (REF_SEED) and many more samples (BENCH_REF_SPP); the tables go to build/bench/<scene>/pt.md.
+# (REF_SEED) and many more samples (BENCH_REF_SPP); the tables go to build/bench/<scene>/pt.md
+# with a plot of relMSE against CPU-s (pt.png), both copied to reports/bench/<scene>.md/.png.
 
 BENCH_SCENES ?= $(DEFAULT_SCENE) bench-1m
 BENCH_RESOLUTION ?= 256x256
@@ -25,12 +26,17 @@ build/bench/$(1)/pt.md: build/$(1)/scene.lxs $(call lx_ref,build/bench/$(1)/ref,
 	$$(PYTHON) pipelines/bench_pt.py --scene $$< --reference $$(word 2,$$^) --mitsuba-scene $$(word 3,$$^) \
 		--peers-python $$(PEERS_PYTHON) --trace $$(TRACE) --estimate $$(ESTIMATE) --evaluate $$(EVALUATE) \
 		--resolution $$(BENCH_RESOLUTION) --spp $$(subst $$(space),$$(comma),$$(BENCH_SPP)) \
-		--lt-paths $$(subst $$(space),$$(comma),$$(BENCH_LT)) --dle-paths $$(subst $$(space),$$(comma),$$(BENCH_DLE)) \
-		--work-dir build/bench/$(1)/runs -o $$@
+		--lt-paths $$(subst $$(space),$$(comma),$$(BENCH_LT)) --dle-paths $$(subst $$(space),$$(comma),$$(BENCH_DLE)) --dle-mis-paths $$(BENCH_DLE_MIS) \
+		--dle-plain-paths $$(subst $$(space),$$(comma),$$(BENCH_DLE_PLAIN)) \
+		--work-dir build/bench/$(1)/runs -o $$@ --plot build/bench/$(1)/pt.png
+
+# The committed copies (README's plot).
+reports/bench/$(1).md: build/bench/$(1)/pt.md
+	mkdir -p reports/bench && cp build/bench/$(1)/pt.png reports/bench/$(1).png && cp $$< $$@
 endef
 $(foreach s,$(BENCH_SCENES),$(eval $(call lx_bench_rules,$(s))))
 
-bench-pt: $(foreach s,$(BENCH_SCENES),build/bench/$(s)/pt.md)
+bench-pt: $(foreach s,$(BENCH_SCENES),reports/bench/$(s).md)
 
 # `make bench-sensors` (part of `make bench`, needs .venv-peers): the local estimate at the default
 # scene's sensors against Mitsuba 3 irradiance meters, CPU-s until every sensor and the median
@@ -45,3 +51,32 @@ $(BENCH_SENSORS_DIR)/sensors.md: build/$(DEFAULT_SCENE)/scene.lxs $(BENCH_SENSOR
 		--work-dir $(BENCH_SENSORS_DIR)/sensors -o $@
 
 bench-sensors: $(BENCH_SENSORS_DIR)/sensors.md
+
+# `make bench-edges` (part of `make bench`): do the double local estimate's pixels on object
+# edges carry a bias beyond their standard error? The default scene at BENCH_RESOLUTION with 10
+# times `estimate image`'s default light paths (BENCH_EDGE_PATHS), combined with light tracing
+# (the default) and plain (--mis-paths 0, the clamped kernel), against an independent `trace`
+# reference with its standard errors (BENCH_EDGE_REF_SPP); pipelines/edge_bias.py. The table goes
+# to build/bench/<scene>/edges/edges.md and reports/bench/<scene>-edges.md.
+BENCH_EDGES_DIR := build/bench/$(DEFAULT_SCENE)/edges
+BENCH_EDGES_IMAGES := $(foreach m,mis plain,$(call lx_le,$(BENCH_EDGES_DIR)/$(m),$(BENCH_EDGE_PATHS),hdr))
+
+.PHONY: bench-edges
+
+$(call lx_ref,$(BENCH_EDGES_DIR)/ref,hdr) $(call lx_ref,$(BENCH_EDGES_DIR)/ref,se) &: build/$(DEFAULT_SCENE)/scene.lxs $(TRACE)
+	$(TRACE) $< --reference --stderr --spp $(BENCH_EDGE_REF_SPP) --resolution $(BENCH_RESOLUTION) --seed $(REF_SEED) -o $(BENCH_EDGES_DIR)/ref
+
+$(BENCH_EDGES_DIR)/%_$(call lx_count,$(BENCH_EDGE_PATHS))le.hdr.exr: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE)
+	$(ESTIMATE) image $< --paths $(BENCH_EDGE_PATHS) --resolution $(BENCH_RESOLUTION) --seed $(NOISY_SEED) \
+		$(if $(filter plain,$*),--mis-paths 0) -o $@ --stderr-out $(call lx_le,$(BENCH_EDGES_DIR)/$*,$(BENCH_EDGE_PATHS),se)
+
+$(BENCH_EDGES_DIR)/edges.md: $(call lx_ref,$(BENCH_EDGES_DIR)/ref,hdr) $(BENCH_EDGES_IMAGES) pipelines/edge_bias.py
+	$(PYTHON) pipelines/edge_bias.py --reference $< --reference-se $(call lx_ref,$(BENCH_EDGES_DIR)/ref,se) \
+		$(foreach m,mis plain,--test $(call lx_le,$(BENCH_EDGES_DIR)/$(m),$(BENCH_EDGE_PATHS),hdr) \
+		--test-se $(call lx_le,$(BENCH_EDGES_DIR)/$(m),$(BENCH_EDGE_PATHS),se) \
+		--label "$(if $(filter mis,$(m)),combined with light tracing (default),plain (--mis-paths 0)), $(BENCH_EDGE_PATHS) paths") -o $@
+
+reports/bench/$(DEFAULT_SCENE)-edges.md: $(BENCH_EDGES_DIR)/edges.md
+	mkdir -p reports/bench && cp $< $@
+
+bench-edges: reports/bench/$(DEFAULT_SCENE)-edges.md

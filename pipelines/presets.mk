@@ -37,7 +37,12 @@ $(eval $(call lx_preset,EVAL_SENSOR_SCALE,0.25,1))
 $(eval $(call lx_preset,BENCH_REF_SPP,4096,16384))
 $(eval $(call lx_preset,BENCH_SPP,16 64 256,16 64 256 1024))
 $(eval $(call lx_preset,BENCH_LT,1000000 4000000 16000000,1000000 4000000 16000000 64000000))
-$(eval $(call lx_preset,BENCH_DLE,300 1000 3000,300 1000 3000 10000))
+$(eval $(call lx_preset,BENCH_DLE,30 100 300 1000,30 100 300 1000 3000 10000))
+$(eval $(call lx_preset,BENCH_DLE_MIS,10000,10000))
+$(eval $(call lx_preset,BENCH_DLE_PLAIN,300 1000,300 1000 3000))
+# make bench-edges: 10 times estimate image's default light paths; the reference's spp.
+$(eval $(call lx_preset,BENCH_EDGE_PATHS,3000,3000))
+$(eval $(call lx_preset,BENCH_EDGE_REF_SPP,1024,4096))
 
 # Validation (pipelines/validate.mk): multiplier of every case's light paths.
 $(eval $(call lx_preset,VALIDATE_SCALE,1,10))

@@ -653,6 +653,7 @@ fn double_local_estimate_image_sees_the_luminaire_distribution() {
             threads: 2,
             singularity: Singularity::Ball { eps: 1e-3 },
             max_depth: 1000,
+            mis_paths: 100,
         },
     );
     let mean: Vec<f64> = r.rgb.iter().map(|c| c.luminance()).collect();

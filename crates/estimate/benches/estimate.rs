@@ -114,6 +114,7 @@ fn main() {
             eps: 1e-2 * w.room_scale,
         },
         max_depth: 100_000,
+        mis_paths: 100,
     };
     let r = estimate::image::render(&w, &cam, &icfg);
     println!(

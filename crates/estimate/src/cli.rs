@@ -136,6 +136,13 @@ const LENGTH: Real = Real::positive("m");
 /// near-field split, so a larger radius keeps pixels near edges from sparkling).
 pub const DEFAULT_IMAGE_EPS_FRACTION: f64 = 1e-2;
 
+/// Default light-tracing paths per light path of `estimate image`. Measured on the Cornell box
+/// 256² (docs/measurements.md), relMSE × CPU-s, two seeds, 3 M light-tracing paths: 30 light
+/// paths × 100 000: 2.4e-2, 3.4e-2; 100 × 30 000: 1.0e-2, 1.1e-2; 300 × 10 000: 6.3e-3,
+/// 6.2e-3; 1000 × 3 000: 7.1e-3, 5.7e-3 (light tracing alone 1.9e-2, 1.8e-2; the plain
+/// estimate, 300 paths: 9.6e-2, 4.9e-2).
+pub const DEFAULT_MIS_PATHS: u32 = 10_000;
+
 /// Default near-field radius, as a fraction of the room scale. Chosen by measurement on the
 /// Cornell box's 88 lit sensors (docs/measurements.md): 1e-2 left sensors just beyond it (8 mm
 /// from a block face) with 10 times the median relative error and 5 times the CPU time for
@@ -214,16 +221,19 @@ pub enum Command {
         /// Also write an sRGB PNG preview (exposure: 1 / the 99th percentile of Y).
         #[arg(long)]
         preview: Option<PathBuf>,
-        /// Number of light paths.
-        #[arg(long, default_value_t = 1_000, value_parser = PATHS)]
+        /// Number of light paths connected to the pixels' points (light tracing adds
+        /// --mis-paths per path).
+        #[arg(long, default_value_t = 300, value_parser = PATHS)]
         paths: u64,
-        /// Camera samples per pixel (stratified over the pixel, box filter), at least 1, drawn
-        /// anew for every 32 light paths.
+        /// Camera samples per pixel (box filter), at least 1, drawn anew for every 32 light
+        /// paths (the rounds' points together stratify the pixel).
         #[arg(long, default_value_t = 1, value_parser = Count::<u32>::range(1, u32::MAX as u64, "samples per pixel"))]
         pixel_samples: u32,
         /// Override the camera resolution, WIDTHxHEIGHT.
         #[arg(long)]
         resolution: Option<String>,
+        /// The kernel singularity's treatment where light tracing cannot take over: at points
+        /// seen through mirrors or glass, and everywhere with --no-mis.
         #[arg(long, value_enum, default_value_t = SingularityMode::Clamp)]
         singularity: SingularityMode,
         /// Regularisation radius in m [default: 1e-2 of the room scale].
@@ -234,6 +244,12 @@ pub enum Command {
         /// Safety bound on path length, 1 to 2^20.
         #[arg(long, default_value_t = 100_000, value_parser = MAX_DEPTH)]
         max_depth: u32,
+        /// Light-tracing paths per light path, combined with the connections by multiple
+        /// importance sampling at the points the camera sees directly (unbiased at edges and
+        /// corners); 0: the plain double local estimate, --singularity everywhere (biased
+        /// near edges and corners).
+        #[arg(long, default_value_t = DEFAULT_MIS_PATHS, value_parser = Count::<u32>::range(0, 1 << 20, "light-tracing paths per light path"))]
+        mis_paths: u32,
         /// Light tracing instead (a baseline): every light-path vertex is connected to the
         /// camera itself, not to the points the pixels see (the local estimate at the camera);
         /// --pixel-samples, --singularity and --eps do not apply. Scenes whose camera would see
@@ -352,9 +368,17 @@ pub fn run(args: Args) -> Result<()> {
             eps,
             common,
             max_depth,
+            mis_paths,
             light_tracing,
         } => {
             let (world, cam) = load_with_camera(&scene, resolution.as_deref())?;
+            luxest_io::limits::check_image(
+                "image film",
+                cam.width.into(),
+                cam.height.into(),
+                image::BYTES_PER_PIXEL,
+            )
+            .map_err(Error::Usage)?;
             let eps = eps.unwrap_or(DEFAULT_IMAGE_EPS_FRACTION * world.room_scale);
             let cfg = ImageConfig {
                 paths,
@@ -363,6 +387,7 @@ pub fn run(args: Args) -> Result<()> {
                 threads: common.thread_count(),
                 singularity: singularity.with_eps(eps)?,
                 max_depth,
+                mis_paths,
             };
             let prefix = scene.with_file_name(&world.scene.header.name);
             let out =
@@ -565,7 +590,7 @@ fn write_image(
     img.pixels = r.rgb.iter().map(|c| c.0.map(|v| v as f32)).collect();
     img.attributes = info.to_attributes();
     if let Some(cfg) = cfg {
-        img.set_attribute(header::SINGULARITY, cfg.singularity);
+        img.set_attribute(header::SINGULARITY, image::singularity_header(cfg));
         img.set_attribute(header::PIXEL_SAMPLES, cfg.pixel_samples);
     }
     write_rgb_to(plan, out, &img)?;

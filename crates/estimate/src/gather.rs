@@ -94,14 +94,12 @@ fn reflected_radiance(
             false,
         );
         l = l + beta * radiance;
-        let Some((next_beta, origin, next_dir)) =
-            scatter(world, &sp, dir, beta, Transport::Radiance, rng)
-        else {
+        let Some(s) = scatter(world, &sp, dir, beta, Transport::Radiance, rng) else {
             break;
         };
-        beta = next_beta;
-        dir = next_dir;
-        match world.intersect(origin, dir) {
+        beta = s.beta;
+        dir = s.dir;
+        match world.intersect(s.origin, dir) {
             Some(next) => sp = next,
             None => break,
         }

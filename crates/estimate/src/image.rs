@@ -18,20 +18,42 @@
 //! sample of the box-filtered pixel, so the image converges to the same pixel values as
 //! `trace` as the path count grows (one fixed point per pixel could not), and the footprint's
 //! variation is part of the batches' standard error.
+//!
+//! The kernel singularity: multiple importance sampling with light tracing. A path
+//! `… y → x → camera`, x seen directly, is produced by two strategies from the same light
+//! paths: the connection of the light vertex y to the camera point x (density `s p_cam(x)` per
+//! light path, with s camera points per pixel and p_cam the camera ray's area density, see
+//! `PinholeCamera::area_density`), and light tracing, which samples x from y (density
+//! `p_y(y→x) cos_x / d²`, the roulette's survival included) and connects x to the camera. Each
+//! gets its balance-heuristic weight, so the connection's `1/d²` becomes
+//! `p_cam s / (d² p_cam s + p_y cos_x)`: bounded as d → 0 and unbiased, with no eps. Points seen
+//! through mirrors or glass cannot be reached by light tracing; for them the connection keeps
+//! its full weight and the `Singularity` treatment. A collision reached straight from a delta
+//! light is left to the exact direct term. `--no-mis` gives the plain connection with the
+//! `Singularity` treatment everywhere (measured in docs/measurements.md).
+//!
+//! Diffuse (Lambertian or emitter) pairs, nearly all pairs of a room, take a short path that
+//! needs no BSDF call: per record and per view point the constant factors are computed once.
 
+use crate::light_trace::connect_to_camera;
 use crate::singularity::Singularity;
-use crate::transport::{point_source_direct_to, walk_light_path, LightVertex};
+use crate::transport::{point_source_direct_to, survival, walk_light_path, Arrival, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
-use luxest_render::camera::{stratified_pixel_jitter, PinholeCamera};
+use luxest_render::camera::{pixel_jitter, PinholeCamera};
 use luxest_render::parallel::run_batches;
 use luxest_render::rt::Ray;
 use luxest_render::sampling::{splitmix64, Rng};
 use luxest_render::scene::Material;
 use luxest_render::world::World;
+use std::f64::consts::PI;
 
 pub const TILE: usize = 16;
+/// Bytes per pixel the image estimators keep at most: per batch a light-tracing film and the
+/// tiles' sums (RGB, f64), then the image and its standard error. Checked against the memory
+/// available before rendering.
+pub const BYTES_PER_PIXEL: u64 = 2 * BATCHES as u64 * 24 + 32;
 /// Batches for the per-pixel standard error.
 pub const BATCHES: usize = 8;
 /// Light paths that share one draw of camera points. Redrawing costs a tile's camera rays (and
@@ -47,6 +69,10 @@ pub struct ImageConfig {
     pub threads: usize,
     pub singularity: Singularity,
     pub max_depth: u32,
+    /// Light-tracing paths per light path, combined with the connections by multiple
+    /// importance sampling at the points the camera sees directly (see the module docs); 0:
+    /// the plain connection with `singularity` everywhere.
+    pub mis_paths: u32,
 }
 
 pub struct ImageResult {
@@ -72,6 +98,12 @@ struct ViewPoint {
     material: u32,
     /// Throughput of the specular chain, divided by the samples per pixel.
     weight: Rgb,
+    /// Samples per pixel times the camera's area density at the point, for multiple importance
+    /// sampling; `None` without it (points seen through specular bounces, or `--no-mis`).
+    camera_pdf: Option<f64>,
+    /// The short path of a Lambertian point: the normal on the camera's side and
+    /// `weight · reflectance / π`.
+    diffuse: Option<(Vec3, Rgb)>,
 }
 
 /// A light-path vertex stored for connection.
@@ -86,14 +118,27 @@ struct Record {
     triangle: Option<u32>,
     /// Index of the light path within its batch (its round is `path / ROUND_PATHS`).
     path: u64,
+    /// Whether the light path may go on from here (the depth bound), for light tracing's
+    /// density.
+    can_continue: bool,
+    /// The short path of an emission point or a Lambertian collision: the normal on the
+    /// light's side, `q · reflectance / π` (`q / π` for emission), and light tracing's
+    /// solid-angle density per cosine times its paths per light path
+    /// (`mis_paths · survival / π`; 0 when the path cannot go on).
+    diffuse: Option<(Vec3, Rgb, f64)>,
 }
 
-/// Russian roulette threshold of the connections, as a multiple of the pixel's running mean
-/// connected light per path (see `render`). Measured on the Cornell box 256², 2000 paths
-/// (docs/measurements.md): 0 (off) 240 M shadow rays, relMSE 2.13e-3 in 25.1 CPU-s; 1: 125 M,
-/// 2.17e-3 in 18.7; 3: 71 M, 2.35e-3 in 15.3 (1.5x the efficiency of no roulette); 10: 45 M,
-/// 3.07e-3 in 13.9. The rest of the time is evaluating every pair's contribution.
+/// Russian roulette threshold of the connections, as a multiple of the pixel's light-traced
+/// luminance (with MIS) or of its running mean connected light per path (see `render`).
+/// Measured on the Cornell box 256² (docs/measurements.md). Without MIS, 2000 paths: 0 (off)
+/// 240 M shadow rays, relMSE 2.13e-3 in 25.1 CPU-s; 1: 125 M, 2.17e-3 in 18.7; 3: 71 M,
+/// 2.35e-3 in 15.3 (1.5x the efficiency of no roulette); 10: 45 M, 3.07e-3 in 13.9. With MIS
+/// (300 paths, 10 000 light-tracing paths each, two seeds), relMSE × CPU-s: 1: 6.1e-3, 3:
+/// 6.0e-3, 10: 8.5e-3; the running-mean threshold 7.0e-3.
 pub const RR_ALPHA: f64 = 3.0;
+/// Paths of a batch connected without roulette before its threshold is set (measured on the
+/// Cornell box: a threshold from the first path alone doubled the relMSE at equal paths).
+const RR_WARMUP: u64 = ROUND_PATHS;
 /// Salt of the connections' roulette numbers.
 const RR_SALT: u64 = 0x00c0_ffee_5a17;
 
@@ -120,27 +165,47 @@ fn view_points(
     for (&pixel, emitted_px) in pixels.iter().zip(emitted.iter_mut()) {
         let mut rng = Rng::new(round_seed ^ VIEW_POINT_SEED_SALT, pixel as u64);
         for k in 0..spp {
-            let (u, v) = stratified_pixel_jitter(round_seed, pixel as u64, k, spp);
+            // Sample round·spp + k of the pixel's Owen-scrambled Sobol sequence: the rounds'
+            // points stratify the pixel together (their footprint error falls faster than
+            // with independent points).
+            let (u, v) = pixel_jitter(
+                cfg.seed ^ VIEW_POINT_SEED_SALT,
+                pixel as u64,
+                round * spp as u64 + k as u64,
+            );
             let sx = (pixel % w) as f64 + u;
             let sy = (pixel / w) as f64 + v;
             let mut dir = cam.direction(sx, sy);
             let mut origin = cam.position;
             let mut weight = Rgb::splat(1.0 / spp as f64);
-            for _ in 0..16 {
+            for bounce in 0..16 {
                 let Some(sp) = world.intersect(origin, dir) else {
                     break;
                 };
-                *emitted_px =
-                    *emitted_px + weight * world.emitted_radiance(sp.triangle, sp.ng, -dir);
+                // Emitters seen directly are light tracing's when it runs (its emission points
+                // sample the emitter's image with far more points than the pixels get here).
+                if cfg.mis_paths == 0 || bounce > 0 {
+                    *emitted_px =
+                        *emitted_px + weight * world.emitted_radiance(sp.triangle, sp.ng, -dir);
+                }
                 let m = world.material(sp.triangle);
                 if !bsdf::is_delta(m) {
+                    let wo = -dir;
                     out.push(ViewPoint {
                         pixel,
                         position: sp.position,
                         ng: sp.ng,
-                        wo: -dir,
+                        wo,
                         material: sp.triangle,
                         weight,
+                        camera_pdf: (cfg.mis_paths > 0 && bounce == 0)
+                            .then(|| spp as f64 * cam.area_density(sp.position, sp.ng)),
+                        diffuse: match m {
+                            Material::Lambertian { reflectance } => {
+                                Some((facing(wo, sp.ng), weight * *reflectance * (1.0 / PI)))
+                            }
+                            _ => None,
+                        },
                     });
                     break;
                 }
@@ -157,38 +222,159 @@ fn view_points(
     (out, emitted)
 }
 
-fn light_records(world: &World, cfg: &ImageConfig, batch: usize, paths: u64) -> Vec<Record> {
+/// The normal of a two-sided surface on the side of `wo`.
+#[inline]
+fn facing(wo: Vec3, ng: Vec3) -> Vec3 {
+    if wo.dot(ng) < 0.0 {
+        -ng
+    } else {
+        ng
+    }
+}
+
+/// A batch's light paths: the vertices to connect, and the light-tracing film (luminance
+/// times the connected paths per pixel; empty without light tracing) with its shadow rays.
+struct LightBatch {
+    records: Vec<Record>,
+    film: Vec<Rgb>,
+    shadow_rays: u64,
+}
+
+/// Salt of the light-tracing paths' random streams (the connected light paths use the run's
+/// seed, streams 1..=batches).
+const LIGHT_TRACING_SALT: u64 = 0x0071_7e5a_1c7d;
+
+fn light_records(
+    world: &World,
+    cam: &PinholeCamera,
+    cfg: &ImageConfig,
+    batch: usize,
+    paths: u64,
+) -> LightBatch {
     let mut rng = Rng::new(cfg.seed, batch as u64 + 1);
-    let mut out = Vec::new();
+    let mut records = Vec::new();
+    // Light tracing's density of a path counts its `mis_paths` samples per light path.
+    let k = cfg.mis_paths as f64;
     for path in 0..paths {
         walk_light_path(world, &mut rng, cfg.max_depth, |v, q| {
-            out.push(match v {
-                LightVertex::Emission { position, normal } => Record {
-                    position,
-                    ng: normal,
-                    wo: normal,
-                    q,
-                    triangle: None,
-                    path,
-                },
-                LightVertex::Collision { sp, dir } => Record {
-                    position: sp.position,
-                    ng: sp.ng,
-                    wo: -dir,
-                    q,
-                    triangle: Some(sp.triangle),
-                    path,
-                },
+            records.push(match v {
+                LightVertex::Emission { position, normal } => {
+                    let can_continue = cfg.max_depth >= 1;
+                    Record {
+                        position,
+                        ng: normal,
+                        wo: normal,
+                        q,
+                        triangle: None,
+                        path,
+                        can_continue,
+                        diffuse: Some((
+                            normal,
+                            q * (1.0 / PI),
+                            if can_continue { k / PI } else { 0.0 },
+                        )),
+                    }
+                }
+                LightVertex::Collision { sp, dir, depth, .. } => {
+                    let can_continue = depth + 1 < cfg.max_depth;
+                    let wo = -dir;
+                    Record {
+                        position: sp.position,
+                        ng: sp.ng,
+                        wo,
+                        q,
+                        triangle: Some(sp.triangle),
+                        path,
+                        can_continue,
+                        diffuse: match world.material(sp.triangle) {
+                            Material::Lambertian { reflectance } => Some((
+                                facing(wo, sp.ng),
+                                q * *reflectance * (1.0 / PI),
+                                if can_continue {
+                                    k * survival(*reflectance) / PI
+                                } else {
+                                    0.0
+                                },
+                            )),
+                            _ => None,
+                        },
+                    }
+                }
             })
         });
     }
-    out
+    let (film, shadow_rays) = light_tracing(world, cam, cfg, batch, paths);
+    LightBatch {
+        records,
+        film,
+        shadow_rays,
+    }
 }
 
-/// Connection value from record `r` to view point `v` (without visibility).
+/// Light tracing's share: `mis_paths` light paths per connected path, every collision seen
+/// directly by the camera connected to it with its balance-heuristic weight; the luminance of
+/// each is divided by `mis_paths` (the pixels are later divided by the connected paths).
+fn light_tracing(
+    world: &World,
+    cam: &PinholeCamera,
+    cfg: &ImageConfig,
+    batch: usize,
+    paths: u64,
+) -> (Vec<Rgb>, u64) {
+    let mut shadow_rays = 0;
+    if cfg.mis_paths == 0 {
+        return (Vec::new(), shadow_rays);
+    }
+    let mut film = vec![Rgb::BLACK; cam.width as usize * cam.height as usize];
+    let k = cfg.mis_paths as f64;
+    let spp = cfg.pixel_samples.max(1) as f64;
+    let mut rng = Rng::new(cfg.seed ^ LIGHT_TRACING_SALT, batch as u64 + 1);
+    for _ in 0..paths * cfg.mis_paths as u64 {
+        walk_light_path(world, &mut rng, cfg.max_depth, |v, q| {
+            let (sp, dir, arrival) = match v {
+                LightVertex::Emission { position, normal } => {
+                    // The emitter seen directly: light tracing's alone.
+                    let f_cos = |w: Vec3| Rgb::splat(normal.dot(w).max(0.0) / PI);
+                    if let Some(link) =
+                        connect_to_camera(world, cam, position, normal, f_cos, &mut shadow_rays)
+                    {
+                        film[link.pixel] = film[link.pixel] + q * link.value * (1.0 / k);
+                    }
+                    return;
+                }
+                LightVertex::Collision {
+                    sp, dir, arrival, ..
+                } => (sp, dir, arrival),
+            };
+            if arrival == Arrival::DeltaLight {
+                return; // the exact direct term's
+            }
+            let (m, wo, ng) = (world.material(sp.triangle), -dir, sp.ng);
+            let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+            if let Some(link) =
+                connect_to_camera(world, cam, sp.position, ng, f_cos, &mut shadow_rays)
+            {
+                let weight = match arrival {
+                    Arrival::Sampled { from, pdf } => {
+                        let p = k * pdf * dir.dot(ng).abs() / (sp.position - from).length_squared();
+                        p / (p + spp * link.camera_pdf)
+                    }
+                    _ => 1.0,
+                };
+                film[link.pixel] = film[link.pixel] + q * link.value * (weight / k);
+            }
+        });
+    }
+    (film, shadow_rays)
+}
+
+/// Connection value from record `r` to view point `v` (without visibility) and the unit
+/// direction from the record to the view point.
+#[inline]
 fn contribution(
     world: &World,
     sing: &Singularity,
+    mis_paths: f64,
     r: &Record,
     v: &ViewPoint,
     m_v: &Material,
@@ -198,6 +384,22 @@ fn contribution(
     if d2 <= 0.0 {
         return None;
     }
+    if let (Some((n_r, qf, k_r)), Some((n_v, fv))) = (r.diffuse, v.diffuse) {
+        // Both diffuse: cos_r · d and cos_v · d without a square root.
+        let cr = n_r.dot(d);
+        let cv = -n_v.dot(d);
+        if cr <= 0.0 || cv <= 0.0 {
+            return None;
+        }
+        let g = cr * cv;
+        let kernel = match v.camera_pdf {
+            // g / d⁴ · s p_cam / (s p_cam + k_r g / d⁴)
+            Some(pc) => g * pc / (d2 * d2 * pc + k_r * g),
+            None => g / d2 * sing.inverse_square(d2),
+        };
+        let c = qf * fv * kernel;
+        return (c.max_component() > 0.0).then(|| (c, d * (1.0 / d2.sqrt())));
+    }
     let dist = d2.sqrt();
     let w = d / dist; // from the record to the view point
                       // BRDF at the view point, light arriving from -w, leaving towards the camera.
@@ -205,18 +407,52 @@ fn contribution(
     if f_v.max_component() <= 0.0 {
         return None;
     }
-    let f_r = match r.triangle {
+    // BRDF × cosine at the record, and light tracing's solid-angle density towards w.
+    let (f_r, pdf_r) = match r.triangle {
         None => {
             let c = r.ng.dot(w);
             if c <= 0.0 {
                 return None;
             }
-            Rgb::splat(c / std::f64::consts::PI)
+            (Rgb::splat(c / PI), c / PI)
         }
-        Some(t) => bsdf::eval(world.material(t), r.wo, w, r.ng, r.ng) * w.dot(r.ng).abs(),
+        Some(t) => {
+            let (f, p) = bsdf::eval_and_pdf(world.material(t), r.wo, w, r.ng, r.ng);
+            let f = f * w.dot(r.ng).abs();
+            let pdf = if p > 0.0 {
+                p * survival(f * (1.0 / p))
+            } else {
+                0.0
+            };
+            (f, pdf)
+        }
     };
-    let c = r.q * f_r * f_v * v.weight * sing.inverse_square(d2);
+    let pdf_r = if r.can_continue {
+        mis_paths * pdf_r
+    } else {
+        0.0
+    };
+    let kernel = match v.camera_pdf {
+        Some(pc) => {
+            let p_light = pdf_r * w.dot(v.ng).abs() / d2;
+            pc / (d2 * (pc + p_light))
+        }
+        None => sing.inverse_square(d2),
+    };
+    let c = r.q * f_r * f_v * v.weight * kernel;
     (c.max_component() > 0.0).then_some((c, w))
+}
+
+/// The `luxest.singularity` header value of an image rendered with `cfg`.
+pub fn singularity_header(cfg: &ImageConfig) -> String {
+    if cfg.mis_paths > 0 {
+        format!(
+            "mis(light tracing, {} paths per path); behind mirrors and glass: {}",
+            cfg.mis_paths, cfg.singularity
+        )
+    } else {
+        cfg.singularity.to_string()
+    }
 }
 
 /// Renders the double-local-estimate image of the scene's camera.
@@ -225,8 +461,27 @@ pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageRes
     let (w, h) = (cam.width as usize, cam.height as usize);
     let per_batch =
         |b: usize| cfg.paths / BATCHES as u64 + u64::from((b as u64) < cfg.paths % BATCHES as u64);
-    let records = run_batches(BATCHES, cfg.threads, "light paths", |b| {
-        light_records(world, cfg, b, per_batch(b))
+    let light = run_batches(BATCHES, cfg.threads, "light paths", |b| {
+        light_records(world, cam, cfg, b, per_batch(b))
+    });
+    let mut records = Vec::with_capacity(BATCHES);
+    let mut films = Vec::with_capacity(BATCHES);
+    let mut shadow_rays = 0;
+    for l in light {
+        records.push(l.records);
+        films.push(l.film);
+        shadow_rays += l.shadow_rays;
+    }
+    let mis_paths = cfg.mis_paths as f64;
+    // Light tracing's share of every pixel (Y), the scale of the connections' roulette.
+    let light_traced = (cfg.mis_paths > 0).then(|| {
+        let mut y = vec![0.0; w * h];
+        for film in &films {
+            for (m, c) in y.iter_mut().zip(film) {
+                *m += c.luminance() / cfg.paths.max(1) as f64;
+            }
+        }
+        y
     });
     let collisions: u64 = records.iter().map(|r| r.len() as u64).sum();
     let rounds_per_batch = per_batch(0).div_ceil(ROUND_PATHS).max(1);
@@ -255,29 +510,18 @@ pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageRes
                 let mut next = 0;
                 // Per pixel of the tile: this batch's connection contributions so far (Y).
                 let mut connected = vec![0.0f64; pixels.len()];
+                let mut tau = vec![0.0f64; pixels.len()];
+                let mut tau_path = 0;
+                if let Some(lt) = &light_traced {
+                    for (t, &p) in tau.iter_mut().zip(&pixels) {
+                        *t = RR_ALPHA * lt[p] / cfg.pixel_samples.max(1) as f64;
+                    }
+                }
                 for r in 0..n.div_ceil(ROUND_PATHS).max(1) {
                     // This round's paths, its camera points and their path-independent terms
                     // (emitters seen directly, exact delta lights), counted once per path.
                     let paths_in_round = (n - (r * ROUND_PATHS).min(n)).clamp(1, ROUND_PATHS);
                     let round = b as u64 * rounds_per_batch + r;
-                    // Russian roulette on the connections: a pair whose contribution c is
-                    // below the threshold tau of its pixel is traced with probability c / tau
-                    // and then counts c / (c / tau) = tau. tau is RR_ALPHA times the mean per
-                    // path, so far in this batch, of the pixel's connected light (the exact
-                    // terms left out; none in the first round), per camera point; unbiased for
-                    // any tau that depends only on earlier paths.
-                    let done = (r * ROUND_PATHS).min(n);
-                    let spp = cfg.pixel_samples.max(1) as f64;
-                    let tau: Vec<f64> = connected
-                        .iter()
-                        .map(|y| {
-                            if done > 0 {
-                                RR_ALPHA * y / (done as f64 * spp)
-                            } else {
-                                0.0
-                            }
-                        })
-                        .collect();
                     let (views, emitted) = view_points(world, cam, cfg, &pixels, round);
                     let view_local: Vec<usize> = views.iter().map(|v| local(v.pixel)).collect();
                     let direct = point_source_direct_to(
@@ -297,6 +541,26 @@ pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageRes
                     let end = (r + 1) * ROUND_PATHS;
                     while next < recs.len() && recs[next].path < end {
                         let rec = &recs[next];
+                        // Russian roulette on the connections: a pair whose contribution c is
+                        // below the threshold tau of its pixel is traced with probability
+                        // c / tau and then counts c / (c / tau) = tau; unbiased for any tau
+                        // independent of the roulette's own random number. tau is RR_ALPHA
+                        // times, per camera point, the pixel's light-traced luminance (with
+                        // MIS, known before any connection), or else the mean per path of its
+                        // connected light over this batch's earlier paths, from the batch's
+                        // RR_WARMUP-th path on (a mean over fewer paths is too noisy: it
+                        // promotes small contributions to a large tau).
+                        if rec.path != tau_path && light_traced.is_none() {
+                            tau_path = rec.path;
+                            let scale = if rec.path >= RR_WARMUP {
+                                RR_ALPHA / (rec.path as f64 * cfg.pixel_samples.max(1) as f64)
+                            } else {
+                                0.0
+                            };
+                            for (t, y) in tau.iter_mut().zip(&connected) {
+                                *t = y * scale;
+                            }
+                        }
                         let record_key = splitmix64(
                             cfg.seed ^ splitmix64(((b as u64) << 40) ^ next as u64 ^ RR_SALT),
                         );
@@ -306,7 +570,7 @@ pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageRes
                         for (i, (v, &k)) in views.iter().zip(&view_local).enumerate() {
                             let m_v = world.material(v.material);
                             if let Some((c, dir_to_view)) =
-                                contribution(world, &cfg.singularity, rec, v, m_v)
+                                contribution(world, &cfg.singularity, mis_paths, rec, v, m_v)
                             {
                                 let y = c.luminance();
                                 let c = if y < tau[k] {
@@ -351,16 +615,25 @@ pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageRes
         },
     );
 
-    // Combine: per pixel and batch, the mean over the batch's paths.
-    let mut batch_pixels = vec![vec![Rgb::BLACK; w * h]; BATCHES];
-    let mut shadow_rays = 0;
+    // Combine: per pixel and batch, the mean over the batch's paths (the light-tracing films
+    // are the batches' accumulators: at most BYTES_PER_PIXEL at any time).
+    drop(records);
+    let mut batch_pixels = films;
+    for film in batch_pixels.iter_mut() {
+        film.resize(w * h, Rgb::BLACK);
+    }
     for (pixels, acc, rays) in tile_results {
         shadow_rays += rays;
         for (b, vals) in acc.into_iter().enumerate() {
-            let n = per_batch(b).max(1) as f64;
             for (&p, c) in pixels.iter().zip(vals) {
-                batch_pixels[b][p] = c * (1.0 / n);
+                batch_pixels[b][p] = batch_pixels[b][p] + c;
             }
+        }
+    }
+    for (b, film) in batch_pixels.iter_mut().enumerate() {
+        let n = per_batch(b).max(1) as f64;
+        for c in film.iter_mut() {
+            *c = *c * (1.0 / n);
         }
     }
     let mut rgb = vec![Rgb::BLACK; w * h];

@@ -46,8 +46,51 @@ struct BatchFilm {
     shadow_rays: u64,
 }
 
+/// A light-path vertex connected to the pinhole camera.
+pub(crate) struct CameraLink {
+    /// The pixel the vertex lands in.
+    pub pixel: usize,
+    /// What the vertex's flux weight is multiplied by to give the pixel's luminance:
+    /// `f cos_x / (d² A_p cos³ θ)` (see the module docs).
+    pub value: Rgb,
+    /// The density per unit area with which a camera ray of that pixel hits the vertex
+    /// ([`PinholeCamera::area_density`]), for multiple importance sampling.
+    pub camera_pdf: f64,
+}
+
 /// Connects vertex `x` (geometric normal `ng`, value `f_cos(w)` of BSDF × cosine towards the
-/// unit direction w to the camera) carrying flux `q` to the camera.
+/// unit direction w to the camera) to the camera, counting the shadow ray in `shadow_rays`;
+/// `None` outside the image, with no light towards the camera, or blocked.
+pub(crate) fn connect_to_camera(
+    world: &World,
+    cam: &PinholeCamera,
+    x: Vec3,
+    ng: Vec3,
+    f_cos: impl Fn(Vec3) -> Rgb,
+    shadow_rays: &mut u64,
+) -> Option<CameraLink> {
+    let (sx, sy, cos_theta) = cam.project(x)?;
+    let v = cam.position - x;
+    let d2 = v.length_squared();
+    let w = v / d2.sqrt();
+    let f = f_cos(w);
+    if f.max_component() <= 0.0 {
+        return None;
+    }
+    *shadow_rays += 1;
+    if world.occluded(world.offset(x, ng, w), cam.position) {
+        return None;
+    }
+    // The pinhole's importance times the geometry term, without the cosine at x (in f).
+    let g = 1.0 / (d2 * cam.pixel_area() * cos_theta.powi(3));
+    Some(CameraLink {
+        pixel: sy as usize * cam.width as usize + sx as usize,
+        value: f * g,
+        camera_pdf: w.dot(ng).abs() * g,
+    })
+}
+
+/// Connects vertex `x` carrying flux `q` to the camera and adds it to the film.
 fn splat(
     world: &World,
     cam: &PinholeCamera,
@@ -57,24 +100,11 @@ fn splat(
     f_cos: impl Fn(Vec3) -> Rgb,
     film: &mut BatchFilm,
 ) {
-    let Some((sx, sy, cos_theta)) = cam.project(x) else {
-        return;
-    };
-    let v = cam.position - x;
-    let d2 = v.length_squared();
-    let w = v / d2.sqrt();
-    let f = f_cos(w);
-    if f.max_component() <= 0.0 {
-        return;
-    }
-    film.shadow_rays += 1;
-    if world.occluded(world.offset(x, ng, w), cam.position) {
-        return;
-    }
-    let c = q * f * (1.0 / (d2 * cam.pixel_area() * cos_theta.powi(3)));
-    let pixel = sy as usize * cam.width as usize + sx as usize;
-    for (a, v) in film.sums[pixel].iter_mut().zip(c.0) {
-        *a += v;
+    if let Some(link) = connect_to_camera(world, cam, x, ng, f_cos, &mut film.shadow_rays) {
+        let c = q * link.value;
+        for (a, v) in film.sums[link.pixel].iter_mut().zip(c.0) {
+            *a += v;
+        }
     }
 }
 
@@ -99,7 +129,7 @@ fn run_batch(
                     let f_cos = |w: Vec3| Rgb::splat(normal.dot(w).max(0.0) / std::f64::consts::PI);
                     splat(world, cam, position, normal, q, f_cos, &mut film);
                 }
-                LightVertex::Collision { sp, dir } => {
+                LightVertex::Collision { sp, dir, .. } => {
                     let (m, wo, ng) = (world.material(sp.triangle), -dir, sp.ng);
                     let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
                     splat(world, cam, sp.position, ng, q, f_cos, &mut film);

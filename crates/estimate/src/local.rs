@@ -354,12 +354,10 @@ fn run_batch(
                     deposit(sensors, *radius, sp.position, sp.ng, dir, q, &mut out)
                 }
             }
-            let Some((next_q, next_origin, next_dir)) =
-                scatter(world, &sp, dir, q, Transport::Flux, &mut rng)
-            else {
+            let Some(s) = scatter(world, &sp, dir, q, Transport::Flux, &mut rng) else {
                 break;
             };
-            (q, origin, dir) = (next_q, next_origin, next_dir);
+            (q, origin, dir) = (s.beta, s.origin, s.dir);
         }
     }
     if let (Detector::LocalEstimate(_), Some(nf)) = (&cfg.detector, cfg.near_field) {

@@ -21,8 +21,37 @@ use luxest_render::world::{SurfacePoint, World};
 pub enum LightVertex {
     /// The emission point of an area emitter (front normal `normal`).
     Emission { position: Vec3, normal: Vec3 },
-    /// A collision on a non-specular surface, the light arriving along `dir`.
-    Collision { sp: SurfacePoint, dir: Vec3 },
+    /// A collision on a non-specular surface, the light arriving along `dir`; `depth` counts
+    /// the path's collisions before it (specular ones included).
+    Collision {
+        sp: SurfacePoint,
+        dir: Vec3,
+        arrival: Arrival,
+        depth: u32,
+    },
+}
+
+/// How a light path reached a collision: what multiple importance sampling between connection
+/// strategies needs to know of the vertex before it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Arrival {
+    /// Straight from a delta light (isotropic point source, goniometric luminaire), whose
+    /// direct light the estimators compute exactly.
+    DeltaLight,
+    /// After a specular bounce (no connection can end at a delta vertex).
+    Specular,
+    /// Sampled at the non-specular vertex `from` (an area emitter's emission point or a
+    /// collision) with solid-angle density `pdf`, the roulette's survival probability included.
+    Sampled { from: Vec3, pdf: f64 },
+}
+
+/// A step of a random walk: the new throughput, ray origin and direction, and the density of
+/// the direction (solid angle, times the roulette's survival probability; 0 for a delta BSDF).
+pub struct Scattered {
+    pub beta: Rgb,
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub pdf: f64,
 }
 
 /// Traces one light path from an emitter chosen by flux (at most `max_depth` collisions) and
@@ -38,6 +67,7 @@ pub fn walk_light_path(
     let e = world.sample_emission(rng);
     let mut q = e.flux;
     let mut origin = e.position;
+    let mut arrival = Arrival::DeltaLight;
     if let Some(n) = e.normal {
         visit(
             LightVertex::Emission {
@@ -47,28 +77,47 @@ pub fn walk_light_path(
             q,
         );
         origin = world.offset(e.position, n, e.direction);
+        // Area emitters emit with a cosine distribution.
+        arrival = Arrival::Sampled {
+            from: e.position,
+            pdf: n.dot(e.direction) / std::f64::consts::PI,
+        };
     }
     let mut dir = e.direction;
-    for _ in 0..max_depth {
+    for depth in 0..max_depth {
         let Some(sp) = world.intersect(origin, dir) else {
             break;
         };
-        if !bsdf::is_delta(world.material(sp.triangle)) {
-            visit(LightVertex::Collision { sp, dir }, q);
+        let delta = bsdf::is_delta(world.material(sp.triangle));
+        if !delta {
+            visit(
+                LightVertex::Collision {
+                    sp,
+                    dir,
+                    arrival,
+                    depth,
+                },
+                q,
+            );
         }
-        let Some((next_q, next_origin, next_dir)) =
-            scatter(world, &sp, dir, q, Transport::Flux, rng)
-        else {
+        let Some(s) = scatter(world, &sp, dir, q, Transport::Flux, rng) else {
             break;
         };
-        (q, origin, dir) = (next_q, next_origin, next_dir);
+        arrival = if delta {
+            Arrival::Specular
+        } else {
+            Arrival::Sampled {
+                from: sp.position,
+                pdf: s.pdf,
+            }
+        };
+        (q, origin, dir) = (s.beta, s.origin, s.dir);
     }
 }
 
 /// One step of a random walk: samples the BSDF (with geometric normals) at `sp` for a path
 /// that arrived along `dir` with throughput `beta`, applies analog Russian roulette (survival
-/// probability = the sample's weight, at most 1), and returns the new throughput, ray origin
-/// and direction; `None` when the path ends.
+/// probability = the sample's weight, at most 1, see [`survival`]); `None` when the path ends.
 pub fn scatter(
     world: &World,
     sp: &SurfacePoint,
@@ -76,18 +125,26 @@ pub fn scatter(
     beta: Rgb,
     mode: Transport,
     rng: &mut Rng,
-) -> Option<(Rgb, Vec3, Vec3)> {
+) -> Option<Scattered> {
     let m = world.material(sp.triangle);
     let s = bsdf::sample_flat(m, -dir, sp.ng, rng, mode)?;
-    let survival = s.weight.max_component().min(1.0);
+    let survival = survival(s.weight);
     if survival <= 0.0 || rng.next_f64() >= survival {
         return None;
     }
-    Some((
-        beta * s.weight * (1.0 / survival),
-        world.offset(sp.position, sp.ng, s.wi),
-        s.wi,
-    ))
+    Some(Scattered {
+        beta: beta * s.weight * (1.0 / survival),
+        origin: world.offset(sp.position, sp.ng, s.wi),
+        dir: s.wi,
+        pdf: if s.delta { 0.0 } else { s.pdf * survival },
+    })
+}
+
+/// The roulette's survival probability of a walk that sampled a direction of weight
+/// `f cos / pdf`.
+#[inline]
+pub fn survival(weight: Rgb) -> f64 {
+    weight.max_component().min(1.0)
 }
 
 /// The response of sensor `s` to light from `v` (not normalised, length `d`): for planar

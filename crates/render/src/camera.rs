@@ -68,6 +68,21 @@ impl PinholeCamera {
         inside.then(|| (sx, sy, z / d.length()))
     }
 
+    /// Density per unit area at the surface point `x` (unit geometric normal `ng`) of the point
+    /// that a camera ray of x's pixel, uniform over the pixel, hits: `|cos_x| / (d² A_p cos³ θ)`
+    /// with d = |x − c|, θ the angle between x − c and the axis, A_p = [`Self::pixel_area`]
+    /// (the image-plane area element is `cos_x dA / (d² cos³ θ)`). Zero behind the camera.
+    pub fn area_density(&self, x: Vec3, ng: Vec3) -> f64 {
+        let v = x - self.position;
+        let d2 = v.length_squared();
+        let d = d2.sqrt();
+        let cos_theta = v.dot(self.forward) / d;
+        if cos_theta.is_nan() || cos_theta <= 0.0 {
+            return 0.0;
+        }
+        (ng.dot(v) / d).abs() / (d2 * self.pixel_area() * cos_theta.powi(3))
+    }
+
     /// The area of one pixel on the image plane at unit distance from the pinhole (the
     /// importance of a pinhole camera is 1 / (this area · cos⁴ θ)).
     pub fn pixel_area(&self) -> f64 {
