@@ -106,7 +106,7 @@ fn main() {
     camera.resolution = (256, 256);
     let cam = luxest_render::camera::PinholeCamera::new(&camera).unwrap();
     let icfg = estimate::image::ImageConfig {
-        paths: 1000,
+        paths: 300,
         pixel_samples: 1,
         seed: 1,
         threads: luxest_io::cli::thread_count(None),
@@ -114,14 +114,16 @@ fn main() {
             eps: 1e-2 * w.room_scale,
         },
         max_depth: 100_000,
-        mis_paths: 100,
+        mis_paths: estimate::cli::DEFAULT_MIS_PATHS,
     };
     let r = estimate::image::render(&w, &cam, &icfg);
     println!(
-        "double local estimate, cornell-box 256x256, 1000 paths: {:.2} s, {} collisions, {:.1} M shadow rays/s ({:.0}% of collisions x pixels needed a ray)",
+        "double local estimate, cornell-box 256x256, {} paths + {} light-tracing paths each: {:.2} s, {} collisions, {} shadow rays (connections and light tracing), {:.1} M shadow rays/s",
+        icfg.paths,
+        icfg.mis_paths,
         r.seconds,
         r.collisions,
+        r.shadow_rays,
         r.shadow_rays as f64 / r.seconds / 1e6,
-        100.0 * r.shadow_rays as f64 / (r.collisions as f64 * 65536.0)
     );
 }
