@@ -14,7 +14,8 @@
 # images at EVAL_LT paths (the baseline). (2) The
 # held-out test scenes of the dataset: noisy levels of `make noisy` denoised; local-estimate
 # images at EVAL_DATA_DLE paths, denoised with the NOISY_MAX features. (3) The cases of `make validate` at EVAL_SENSOR_SCALE times
-# their paths, against exact values.
+# their paths, against exact values. Every image luxest's model denoises in (1) and (2) is also
+# denoised by Intel Open Image Denoise 1.4.3 (the peer; hdr + albedo + normal), scored beside it.
 
 EVAL_DIR := build/eval/$(PRESET)
 EVAL_MODEL ?= $(MODEL)
@@ -63,7 +64,22 @@ $(call lx_le_pattern,$(EVAL_CB_LT),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
 $(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) $(EVAL_MODEL) $(DENOISE)
 	$(DENOISE) $< --model $(EVAL_MODEL) --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
 
-$(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb,hdr) $(call eval_cb,dn) $(call eval_cb_le,hdr) $(call eval_cb_le,dn) $(eval_cb_lt) $(EVALUATE)
+# Intel Open Image Denoise, the peer, on the same inputs (pipelines/oidn_denoise.py): in an oidn/
+# directory beside them, the scene's name suffixed `-oidn` (the FLIP maps share one directory).
+OIDN_DENOISE ?= $(PYTHON) pipelines/oidn_denoise.py
+EVAL_CB_OIDN := $(EVAL_DIR)/cornell-box/oidn/cb-oidn
+eval_cb_oidn = $(foreach s,$(EVAL_SNAPSHOTS),$(call lx_image,$(EVAL_CB_OIDN),$(s),dn)) \
+	$(foreach n,$(EVAL_DLE),$(call lx_le,$(EVAL_CB_OIDN),$(n),dn))
+
+$(call lx_image_pattern,$(EVAL_CB_OIDN),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB),alb) $(call lx_image_pattern,$(EVAL_CB),nrm) pipelines/oidn_denoise.py
+	@mkdir -p $(@D)
+	$(OIDN_DENOISE) $< --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
+
+$(call lx_le_pattern,$(EVAL_CB_OIDN),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) pipelines/oidn_denoise.py
+	@mkdir -p $(@D)
+	$(OIDN_DENOISE) $< --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
+
+$(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb,hdr) $(call eval_cb,dn) $(call eval_cb_le,hdr) $(call eval_cb_le,dn) $(eval_cb_lt) $(eval_cb_oidn) $(EVALUATE)
 	@mkdir -p $(@D) $(EVAL_DIR)/flip
 	$(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip
 
@@ -89,8 +105,17 @@ $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr): build/dataset/$(DATASET)/test/$(1).lx
 $(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) $(EVAL_MODEL) $(DENOISE)
 	$$(DENOISE) $$< --model $(EVAL_MODEL) --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
 
+$(call lx_image_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) pipelines/oidn_denoise.py
+	@mkdir -p $$(@D)
+	$(OIDN_DENOISE) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
+
+$(call lx_le_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) pipelines/oidn_denoise.py
+	@mkdir -p $$(@D)
+	$(OIDN_DENOISE) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
+
 $(EVAL_CSV)/dataset-$(1).images.csv: $(call lx_ref,$(EVAL_DATA)/$(1),hdr) \
-		$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr) $(call lx_image,$(EVAL_DS)/$(1),$(s),dn)) \
+		$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr) $(call lx_image,$(EVAL_DS)/$(1),$(s),dn) $(call lx_image,$(EVAL_DS)/oidn/$(1)-oidn,$(s),dn)) \
+		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/oidn/$(1)-oidn,$(n),dn)) \
 		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/$(1),$(n),hdr) $(call lx_le,$(EVAL_DS)/$(1),$(n),dn)) $(EVALUATE)
 	@mkdir -p $$(@D)
 	$$(EVALUATE) images --reference $$< $$(filter-out $$< $(EVALUATE),$$^) -o $$@ --ron $$(@:.csv=.ron)

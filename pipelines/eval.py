@@ -38,6 +38,8 @@ STYLE = {
     "double-local-estimate": ("tab:green", "^"),
     "double-local-estimate+denoise": ("tab:red", "D"),
     "light-tracing": ("tab:purple", "v"),
+    "path-tracing+oidn": ("tab:gray", "P"),
+    "double-local-estimate+oidn": ("tab:brown", "X"),
 }
 
 
@@ -209,6 +211,30 @@ def level_key(r):
     return (r["estimator"], int(r["samples"]))
 
 
+def peer_table(rows, what):
+    """luxest's denoiser against Intel Open Image Denoise (the `+oidn` rows) on the same inputs:
+    PSNR / SSIM / FLIP per input level, and the inference time per megapixel of each (wall-clock,
+    excluding I/O, the run's threads)."""
+    by = {(r["estimator"], int(r["samples"])): r for r in rows}
+    out = []
+    for base in ("path-tracing", "double-local-estimate"):
+        levels = sorted(n for (e, n) in by if e == base + "+oidn" and (base, n) in by and (base + "+denoise", n) in by)
+        if not levels:
+            continue
+        trs = []
+        for n in levels:
+            a, d, o = by[(base, n)], by[(base + "+denoise", n)], by[(base + "+oidn", n)]
+            trs.append([n] + [f"{a[k]:{f}} / {d[k]:{f}} / {o[k]:{f}}" for k, f in (("psnr_db", ".2f"), ("ssim", ".4f"), ("flip", ".4f"))]
+                       + [f"{1e3 * d['denoise_seconds'] / 0.065536:.0f} / {1e3 * o['denoise_seconds'] / 0.065536:.0f}"
+                          if what.startswith("Cornell") else "—"])
+        unit = "spp" if base == "path-tracing" else "paths"
+        out += [f"### {base}: luxest's denoiser against Intel Open Image Denoise 1.4.3 ({what})", "",
+                "Each cell: noisy / luxest (`denoise`) / OIDN (hdr + albedo + normal, pipelines/oidn_denoise.py), "
+                "the same inputs and features.", "",
+                table([unit, "PSNR dB", "SSIM", "FLIP", "inference ms per megapixel (luxest / OIDN)"], trs), ""]
+    return out
+
+
 def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, model):
     plot_trade(cb_rows, "Cornell box 256² — error vs time", plots / "cornell-box-time.png")
     plot_trade(cb_rows, "Cornell box 256² — error vs samples (spp or light paths)", plots / "cornell-box-samples.png",
@@ -256,11 +282,7 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
         lines.append(f"- Pareto front in {label}: " + front_text(front))
     lines += ["", "![error vs time](plots/cornell-box-time.png)", "", "![error vs samples](plots/cornell-box-samples.png)", ""]
 
-    dn_ms = [1e3 * r["denoise_seconds"] / (256 * 256 / 1e6) for r in cb_rows if r["estimator"].endswith("+denoise")]
-    if dn_ms:
-        dn_ms.sort()
-        lines += [f"Denoising a 256² image: median {dn_ms[len(dn_ms) // 2]:.0f} ms per megapixel (inference only, "
-                  f"{len(dn_ms)} images, threads as the run).", ""]
+    lines += peer_table(cb_rows, "Cornell box 256²")
 
     # Progressive experiment.
     lines += ["## The progressive experiment (the thesis' Fig. done against a converged reference)", "",
@@ -304,6 +326,9 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
             front = pareto([(m["total_seconds"], m[key], f"{m['estimator']} {m['samples']}") for m in ds_mean])
             lines.append(f"- Pareto front in {label}: " + front_text(front))
         lines += ["", "![dataset error vs time](plots/dataset-time.png)", "", "![dataset error vs samples](plots/dataset-samples.png)", ""]
+
+    if ds_mean:
+        lines += peer_table(ds_mean, f"held-out scenes, mean over {len(ds_names)}")
 
     # Sensors.
     lines += ["## Local estimate at sensors vs exact solutions", "",

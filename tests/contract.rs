@@ -7,6 +7,8 @@
 //! - `header.exr` + `header.json`: a 5×3 RGB f32 ZIP-compressed EXR from
 //!   [`luxest_io::exr_io::write_rgb`] with every image header key of [`luxest_io::header`] set,
 //!   and those values by key (numbers as JSON numbers);
+//! - `denoiser.json`: how `luxest.denoiser` names Intel Open Image Denoise, and the estimator
+//!   labels `evaluate` gives denoised images ([`evaluate::images::estimator_label`]);
 //! - `exposure_input.exr` + `exposure.json`: a fixed image and its
 //!   [`RgbImage::autoexposure`], with the evaluation tonemap of a few values
 //!   (`evaluate::metrics::tonemap`) at that exposure.
@@ -73,6 +75,32 @@ fn naming_json() -> String {
         })
         .collect();
     format!("[\n{}\n]\n", rows.join(",\n"))
+}
+
+/// `denoiser.json`: the OIDN prefix of `luxest.denoiser` and the labels of a few cases.
+fn denoiser_json() -> String {
+    let oidn = format!("{}1.4.3", header::OIDN_DENOISER_PREFIX);
+    let cases = [
+        ("path-tracing", None),
+        ("path-tracing", Some("default.onnx")),
+        ("double-local-estimate", Some(oidn.as_str())),
+    ];
+    let rows: Vec<String> = cases
+        .iter()
+        .map(|&(estimator, denoiser)| {
+            format!(
+                "    {{\"estimator\": {}, \"denoiser\": {}, \"label\": {}}}",
+                json_str(estimator),
+                denoiser.map_or("null".to_string(), json_str),
+                json_str(&evaluate::images::estimator_label(estimator, denoiser))
+            )
+        })
+        .collect();
+    format!(
+        "{{\n  \"oidn_prefix\": {},\n  \"labels\": [\n{}\n  ]\n}}\n",
+        json_str(header::OIDN_DENOISER_PREFIX),
+        rows.join(",\n")
+    )
 }
 
 /// Writes `header.exr` and returns `header.json`'s text.
@@ -179,6 +207,7 @@ fn contract_fixtures_are_what_luxest_io_writes() {
     std::fs::write(tmp.path().join("naming.json"), naming_json()).unwrap();
     let header_json = write_header_fixture(tmp.path());
     std::fs::write(tmp.path().join("header.json"), header_json).unwrap();
+    std::fs::write(tmp.path().join("denoiser.json"), denoiser_json()).unwrap();
     let exposure_json = write_exposure_fixture(tmp.path());
     std::fs::write(tmp.path().join("exposure.json"), exposure_json).unwrap();
 
@@ -189,6 +218,7 @@ fn contract_fixtures_are_what_luxest_io_writes() {
         "naming.json",
         "header.exr",
         "header.json",
+        "denoiser.json",
         "exposure_input.exr",
         "exposure.json",
     ] {

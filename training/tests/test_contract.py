@@ -174,3 +174,13 @@ def test_python_exposure_equals_rusts():
     expected = json.loads(fixture("exposure.json").read_text())
     hdr = contract.read_rgb(fixture("exposure_input.exr"))
     assert math.isclose(contract.exposure(hdr), expected["exposure"], rel_tol=1e-6)
+
+
+def test_oidn_denoiser_name_and_labels_match_rust():
+    # How `luxest.denoiser` names OIDN (written by pipelines/oidn_denoise.py) is the prefix Rust's
+    # evaluate reads to label an image `<estimator>+oidn`.
+    expected = json.loads(fixture("denoiser.json").read_text())
+    assert contract.OIDN_DENOISER_PREFIX == expected["oidn_prefix"]
+    labels = {(c["estimator"], c["denoiser"]): c["label"] for c in expected["labels"]}
+    assert labels[("double-local-estimate", contract.OIDN_DENOISER_PREFIX + "1.4.3")] == "double-local-estimate+oidn"
+    assert labels[("path-tracing", "default.onnx")] == "path-tracing+denoise"

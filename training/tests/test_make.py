@@ -9,7 +9,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 # Stand-in stage programs: files make sees as up-to-date prerequisites (no cargo build planned).
 _STAGE_DIR = Path(tempfile.mkdtemp(prefix="luxest-stages-"))
-STAGES = {v: str(_STAGE_DIR / v.lower()) for v in ("SCENE_COMPILE", "TRACE", "AOV_WRITE", "ESTIMATE", "DENOISE", "EVALUATE")}
+STAGES = {v: str(_STAGE_DIR / v.lower())
+          for v in ("SCENE_COMPILE", "TRACE", "AOV_WRITE", "ESTIMATE", "DENOISE", "EVALUATE", "OIDN_DENOISE")}
 for _p in STAGES.values():
     Path(_p).touch()
 
@@ -60,6 +61,9 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     images = [c for c in cmds if c[0] == STAGES["ESTIMATE"] and c[1] == "image" and "cornell-box" in c[2]]
     dle = [c for c in images if "--light-tracing" not in c]
     assert len(denoised) == len(snapshots) + len(dle)
+    # The peer (Intel Open Image Denoise) denoises exactly the same inputs.
+    oidn = [c for c in cmds if c[0] == STAGES["OIDN_DENOISE"] and "/cornell-box/" in c[1]]
+    assert sorted(c[1] for c in oidn) == sorted(c[1] for c in denoised)
     # The light-tracing baseline is scored as it is (not denoised), from the noisy seed.
     lt = [c for c in images if "--light-tracing" in c]
     assert lt and all(flag(c, "--seed") == flag(prog[0], "--seed") for c in lt)

@@ -19,7 +19,8 @@ pub const TONEMAP: &str = "x = max(v, 0) * k per channel, k = the reference's au
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ImageRow {
     pub image: String,
-    /// The estimator recorded in the image header, with `+denoise` appended for denoised images.
+    /// The estimator recorded in the image header, with `+denoise` appended for images denoised
+    /// by a luxest model and `+oidn` for Intel Open Image Denoise ([`estimator_label`]).
     pub estimator: String,
     /// Samples per pixel (path tracing) or light paths (local estimates).
     pub samples: u64,
@@ -92,7 +93,8 @@ pub fn score_images(
             *p = [e; 3];
         }
         flip_map(test_path, &map)?;
-        let denoised = test.attribute(header::DENOISER).is_some();
+        let denoiser = test.attribute(header::DENOISER);
+        let denoised = denoiser.is_some();
         let render_seconds = seconds(test_path, &test, header::SECONDS)?;
         let (feature_seconds, denoise_seconds) = if denoised {
             (
@@ -105,11 +107,7 @@ pub fn score_images(
         let estimator = test.attribute(header::ESTIMATOR).unwrap_or("unknown");
         rows.push(ImageRow {
             image: test_path.display().to_string(),
-            estimator: if denoised {
-                format!("{estimator}+denoise")
-            } else {
-                estimator.to_string()
-            },
+            estimator: estimator_label(estimator, denoiser),
             samples: samples(test_path, &test)?,
             render_seconds,
             feature_seconds,
@@ -175,5 +173,34 @@ impl ImageReport {
     /// Writes the report as RON, the planned output `path`.
     pub fn write_ron_to(&self, plan: &mut OutputPlan, path: &Path) -> Result<()> {
         write_ron_to(plan, path, self)
+    }
+}
+
+/// The estimator label of an image: the header's estimator, `+oidn` appended when the denoiser
+/// header names Intel Open Image Denoise (`oidn-<version>`, pipelines/oidn_denoise.py), `+denoise`
+/// for any other denoiser (a luxest model's file name).
+pub fn estimator_label(estimator: &str, denoiser: Option<&str>) -> String {
+    match denoiser {
+        None => estimator.to_string(),
+        Some(d) if d.starts_with(header::OIDN_DENOISER_PREFIX) => format!("{estimator}+oidn"),
+        Some(_) => format!("{estimator}+denoise"),
+    }
+}
+
+#[cfg(test)]
+mod label_tests {
+    use super::*;
+
+    #[test]
+    fn denoised_images_are_labelled_by_their_denoiser() {
+        assert_eq!(estimator_label("path-tracing", None), "path-tracing");
+        assert_eq!(
+            estimator_label("path-tracing", Some("default.onnx")),
+            "path-tracing+denoise"
+        );
+        assert_eq!(
+            estimator_label("double-local-estimate", Some("oidn-1.4.3")),
+            "double-local-estimate+oidn"
+        );
     }
 }

@@ -31,8 +31,12 @@ pub const PIXEL_FILTER: &str = "luxest.pixelFilter";
 pub const SINGULARITY: &str = "luxest.singularity";
 /// Camera samples per pixel of the double local estimate (its view points).
 pub const PIXEL_SAMPLES: &str = "luxest.pixelSamples";
-/// File name of the ONNX model that denoised the image.
+/// What denoised the image: the file name of a luxest ONNX model, or
+/// [`OIDN_DENOISER_PREFIX`] and the version for Intel Open Image Denoise.
 pub const DENOISER: &str = "luxest.denoiser";
+/// How [`DENOISER`] names Intel Open Image Denoise: `oidn-<version>` (the peer of `make eval`,
+/// pipelines/oidn_denoise.py).
+pub const OIDN_DENOISER_PREFIX: &str = "oidn-";
 /// Wall-clock seconds of denoising inference (excluding I/O).
 pub const DENOISE_SECONDS: &str = "luxest.denoiseSeconds";
 /// Render seconds of the albedo/normal feature images a denoised image used.
