@@ -5,7 +5,16 @@ at t · (r_i / 0.01)² (r_i its relative standard error after t CPU-s); for Mits
 a render of its own (an `irradiancemeter` on a disk of radius --disk-radius at the evaluated
 point, facing the sensor's normal), so every sensor at 1 % costs the sum over sensors. Runs in
 .venv-peers (numpy, mitsuba); Mitsuba's CPU-s count its renders (`dr.eval`), not the JIT warm-up
-render of each sensor. Sensors with no light (value 0) are left out."""
+render of each sensor. Sensors with no light (value 0) are left out.
+
+Mitsuba's integrator is `path` (light reaches the meter by directions sampled from it, with no
+next-event estimation there). Its `ptracer`, which would connect every light-path vertex to the
+meter, is wrong for irradiance meters in Mitsuba 3.9.1: the meter's `sample_direction` weight
+ignores the distance (mitsuba3 pull request #1848). On the Cornell box floor at (0.357, 0, 0.028)
+and (0.137, 0, 0.363), 4 × 4096 samples: `ptracer` 0.574 ± 0.001 and 0.658 ± 0.001, `path`
+0.438 ± 0.03 and 0.712 ± 0.03, luxest's local estimate 0.4489 ± 0.0002 and 0.7327 ± 0.0007 (its
+backward estimate 0.4492 ± 0.0016 and 0.7325 ± 0.0023). The table checks the values: per sensor
+z = (Mitsuba − luxest) / √(se² + se²)."""
 import argparse
 import statistics
 import sys
@@ -56,14 +65,15 @@ def main(argv=None):
     ap.add_argument("--mitsuba-scene", required=True, help="the same scene exported for Mitsuba (scene.xml)")
     ap.add_argument("--estimate", required=True)
     ap.add_argument("--paths", type=int, default=400000, help="light paths of the luxest run")
-    ap.add_argument("--spp", type=int, default=16384, help="samples per estimate of a Mitsuba meter")
+    ap.add_argument("--spp", type=int, default=65536, help="samples per estimate of a Mitsuba meter")
     ap.add_argument("--replicates", type=int, default=8, help="independent estimates per Mitsuba meter")
     ap.add_argument("--disk-radius", type=float, default=1e-4, help="radius of the meters' disks (m)")
     ap.add_argument("--variant", default="llvm_ad_rgb")
-    ap.add_argument("--integrator", default="ptracer", choices=["ptracer", "path"],
-                    help="Mitsuba's integrator for the meters: ptracer connects every light-path vertex "
-                         "to the meter (a local estimate per meter); path samples directions from the meter "
-                         "(no next-event estimation there: the direct light of a small emitter is a rare event)")
+    ap.add_argument("--integrator", default="path", choices=["path", "ptracer"],
+                    help="Mitsuba's integrator for the meters: path samples directions from the meter (no "
+                         "next-event estimation there: the direct light of a small emitter is a rare event); "
+                         "ptracer connects every light-path vertex to the meter but is biased for irradiance "
+                         "meters in Mitsuba 3.9.1 (see the module docs)")
     ap.add_argument("--work-dir", required=True)
     ap.add_argument("-o", "--out", required=True, help="Markdown table")
     a = ap.parse_args(argv)
@@ -84,7 +94,7 @@ def main(argv=None):
     xml = xml.replace("</scene>", meters + "</scene>")
     scene = mi.load_string(xml.replace("$spp", "1"))
     index = {s.id(): k for k, s in enumerate(scene.sensors())}
-    mi_time, mi_value = {}, {}
+    mi_time, mi_value, mi_se = {}, {}, {}
     for i, s in lit:
         k = index[f"meter{i}_sensor"]
         dr.eval(mi.render(scene, sensor=k, spp=16, seed=0))  # JIT warm-up for this sensor
@@ -92,7 +102,9 @@ def main(argv=None):
         t0 = time.process_time()
         y = []
         for r in range(a.replicates):
-            img = mi.render(scene, sensor=k, seed=1 + r + a.replicates * i)
+            # spp given every time: a render with spp sets the sensor's sample count for good
+            # (the warm-up's 16 were what every replicate used before this was noticed).
+            img = mi.render(scene, sensor=k, seed=1 + r + a.replicates * i, spp=a.spp)
             dr.eval(img)
             y.append(float(np.array(img).reshape(-1)[:3] @ np.array([0.2126, 0.7152, 0.0722])))
         cpu = time.process_time() - t0
@@ -101,11 +113,13 @@ def main(argv=None):
         # One pixel's estimate has relative error `rel` for spp samples: 1 % needs (rel/0.01)² x.
         mi_time[i] = cpu / a.replicates * (rel / TARGET) ** 2
         mi_value[i] = mean
+        mi_se[i] = y.std(ddof=1) / np.sqrt(len(y))
     rows = sorted(lit, key=lambda t: lx_time[t[0]])
     lx_all, mi_all = max(lx_time.values()), sum(mi_time.values())
     lx_med = statistics.median(lx_time.values())
     mi_med = statistics.median(mi_time.values())
     speedups = sorted(mi_time[i] / lx_time[i] for i, _ in lit)
+    z = {i: (mi_value[i] - s[2]) / (mi_se[i] ** 2 + s[3] ** 2) ** 0.5 for i, s in lit}
     lines = [f"Sensors at 1 % standard error: `{a.scene}`, {len(lit)} lit sensors of {len(sensors)}; luxest `estimate sensors` "
              f"{a.paths} paths ({t_lx:.1f} CPU-s), Mitsuba 3 `{a.variant}` `{a.integrator}` irradiance meters (disk radius {a.disk_radius:g} m, "
              f"{a.replicates} x {a.spp} samples each) ({time.strftime('%Y-%m-%d %H:%M')}).", "",
@@ -114,10 +128,12 @@ def main(argv=None):
              f"| median sensor at 1 % | {lx_med:.2f} CPU-s | {mi_med:.2f} CPU-s |", "",
              f"Per sensor, Mitsuba's time / luxest's time to 1 %: median {statistics.median(speedups):.1f}, "
              f"lowest {speedups[0]:.2f}, highest {speedups[-1]:.1f}. Mitsuba's value / luxest's: median "
-             f"{statistics.median(mi_value[i] / s[2] for i, s in lit):.4f} (a cross-check of the two).", "",
-             "| sensor | luxest E | rel. SE | Mitsuba / luxest | luxest CPU-s to 1 % | Mitsuba CPU-s to 1 % |",
-             "|---|---|---|---|---|---|"]
-    lines += [f"| {i} | {s[2]:.4g} | {s[3] / s[2]:.2e} | {mi_value[i] / s[2]:.4f} | {lx_time[i]:.3f} | {mi_time[i]:.3f} |"
+             f"{statistics.median(mi_value[i] / s[2] for i, s in lit):.4f}; z = (Mitsuba − luxest) / combined standard "
+             f"error: max abs {max(abs(v) for v in z.values()):.2f}, mean z² {sum(v * v for v in z.values()) / len(z):.2f} "
+             f"(the two agree when mean z² is near 1; Mitsuba's standard errors come from {a.replicates} replicates).", "",
+             "| sensor | luxest E | rel. SE | Mitsuba / luxest | z | luxest CPU-s to 1 % | Mitsuba CPU-s to 1 % |",
+             "|---|---|---|---|---|---|---|"]
+    lines += [f"| {i} | {s[2]:.4g} | {s[3] / s[2]:.2e} | {mi_value[i] / s[2]:.4f} | {z[i]:+.2f} | {lx_time[i]:.3f} | {mi_time[i]:.3f} |"
               for i, s in rows]
     write_text(a.out, "\n".join(lines) + "\n")
     print("\n".join(lines[:8]))
