@@ -1,7 +1,9 @@
 """`make bench-sensors`: the local estimate at a scene's sensors against Mitsuba 3 irradiance
-meters on the same scene in the same run. CPU seconds until a sensor's relative standard error
-reaches 1 %: for luxest, one `estimate sensors` run serves every sensor, so a sensor reaches 1 %
-at t · (r_i / 0.01)² (r_i its relative standard error after t CPU-s); for Mitsuba each sensor is
+meters on the same scene in the same run, with luxest's backward estimate (`estimate gather`) as
+a second luxest column. CPU seconds until a sensor's relative standard error reaches 1 %: for the
+local estimate, one `estimate sensors` run serves every sensor, so a sensor reaches 1 % at
+t · (r_i / 0.01)² (r_i its relative standard error after t CPU-s); the backward estimate spends
+its samples per sensor, so every sensor costs the sum; for Mitsuba each sensor is
 a render of its own (an `irradiancemeter` on a disk of radius --disk-radius at the evaluated
 point, facing the sensor's normal), so every sensor at 1 % costs the sum over sensors. Runs in
 .venv-peers (numpy, mitsuba); Mitsuba's CPU-s count its renders (`dr.eval`), not the JIT warm-up
@@ -46,6 +48,16 @@ def luxest(a, work):
     return cpu, sensors
 
 
+def gather(a, work):
+    """Runs `estimate gather` (luxest's backward estimate, a sample budget per sensor); returns
+    (CPU-s, [(value, standard_error)])."""
+    out = sensors_name(work, "gather")
+    table = out.with_suffix(".csv")
+    cpu, _ = child_cpu([a.estimate, "gather", a.scene, "--samples", a.gather_samples, "-o", out, "--csv", table])
+    rows, _ = read_sensors_csv(table)
+    return cpu, [(r["value"], r["standard_error"]) for r in rows]
+
+
 def meter_xml(i, position, normal, radius, spp):
     p = position
     t = tuple(p[k] + normal[k] for k in range(3))
@@ -66,6 +78,8 @@ def main(argv=None):
     ap.add_argument("--estimate", required=True)
     ap.add_argument("--paths", type=int, default=400000, help="light paths of the luxest run")
     ap.add_argument("--spp", type=int, default=65536, help="samples per estimate of a Mitsuba meter")
+    ap.add_argument("--gather-samples", type=int, default=20000,
+                    help="samples per sensor of luxest's backward estimate (estimate gather)")
     ap.add_argument("--replicates", type=int, default=8, help="independent estimates per Mitsuba meter")
     ap.add_argument("--disk-radius", type=float, default=1e-4, help="radius of the meters' disks (m)")
     ap.add_argument("--variant", default="llvm_ad_rgb")
@@ -82,6 +96,10 @@ def main(argv=None):
     t_lx, sensors = luxest(a, work)
     lit = [(i, s) for i, s in enumerate(sensors) if s[2] > 0 and s[3] > 0]
     lx_time = {i: t_lx * (s[3] / s[2] / TARGET) ** 2 for i, s in lit}
+    # The backward estimate costs each sensor its own samples (about the same per sample): a
+    # sensor reaches 1 % at (t / sensors) · (r_i / 0.01)², every sensor at the sum of those.
+    t_ga, backward = gather(a, work)
+    ga_time = {i: t_ga / len(backward) * (backward[i][1] / backward[i][0] / TARGET) ** 2 for i, _ in lit}
 
     import drjit as dr
     import mitsuba as mi
@@ -118,23 +136,26 @@ def main(argv=None):
     lx_all, mi_all = max(lx_time.values()), sum(mi_time.values())
     lx_med = statistics.median(lx_time.values())
     mi_med = statistics.median(mi_time.values())
+    ga_all, ga_med = sum(ga_time.values()), statistics.median(ga_time.values())
     speedups = sorted(mi_time[i] / lx_time[i] for i, _ in lit)
     z = {i: (mi_value[i] - s[2]) / (mi_se[i] ** 2 + s[3] ** 2) ** 0.5 for i, s in lit}
     lines = [f"Sensors at 1 % standard error: `{a.scene}`, {len(lit)} lit sensors of {len(sensors)}; luxest `estimate sensors` "
              f"{a.paths} paths ({t_lx:.1f} CPU-s), Mitsuba 3 `{a.variant}` `{a.integrator}` irradiance meters (disk radius {a.disk_radius:g} m, "
              f"{a.replicates} x {a.spp} samples each) ({time.strftime('%Y-%m-%d %H:%M')}).", "",
-             "| | luxest local estimate | Mitsuba 3 irradiance meters |", "|---|---|---|",
-             f"| every lit sensor at 1 % | {lx_all:.1f} CPU-s (one run, the slowest sensor) | {mi_all:.1f} CPU-s (one render per sensor, summed) |",
-             f"| median sensor at 1 % | {lx_med:.2f} CPU-s | {mi_med:.2f} CPU-s |", "",
+             f"luxest `estimate gather` (backward estimate) {a.gather_samples} samples per sensor ({t_ga:.1f} CPU-s).", "",
+             "| | luxest local estimate | luxest backward estimate | Mitsuba 3 irradiance meters |", "|---|---|---|---|",
+             f"| every lit sensor at 1 % | {lx_all:.1f} CPU-s (one run, the slowest sensor) | {ga_all:.2f} CPU-s (per sensor, summed) "
+             f"| {mi_all:.1f} CPU-s (one render per sensor, summed) |",
+             f"| median sensor at 1 % | {lx_med:.2f} CPU-s | {ga_med:.4f} CPU-s | {mi_med:.2f} CPU-s |", "",
              f"Per sensor, Mitsuba's time / luxest's time to 1 %: median {statistics.median(speedups):.1f}, "
              f"lowest {speedups[0]:.2f}, highest {speedups[-1]:.1f}. Mitsuba's value / luxest's: median "
              f"{statistics.median(mi_value[i] / s[2] for i, s in lit):.4f}; z = (Mitsuba − luxest) / combined standard "
              f"error: max abs {max(abs(v) for v in z.values()):.2f}, mean z² {sum(v * v for v in z.values()) / len(z):.2f} "
              f"(the two agree when mean z² is near 1; Mitsuba's standard errors come from {a.replicates} replicates).", "",
-             "| sensor | luxest E | rel. SE | Mitsuba / luxest | z | luxest CPU-s to 1 % | Mitsuba CPU-s to 1 % |",
-             "|---|---|---|---|---|---|---|"]
-    lines += [f"| {i} | {s[2]:.4g} | {s[3] / s[2]:.2e} | {mi_value[i] / s[2]:.4f} | {z[i]:+.2f} | {lx_time[i]:.3f} | {mi_time[i]:.3f} |"
-              for i, s in rows]
+             "| sensor | luxest E | rel. SE | Mitsuba / luxest | z | luxest CPU-s to 1 % | backward CPU-s to 1 % | Mitsuba CPU-s to 1 % |",
+             "|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {i} | {s[2]:.4g} | {s[3] / s[2]:.2e} | {mi_value[i] / s[2]:.4f} | {z[i]:+.2f} | {lx_time[i]:.3f} | "
+              f"{ga_time[i]:.4f} | {mi_time[i]:.3f} |" for i, s in rows]
     write_text(a.out, "\n".join(lines) + "\n")
     print("\n".join(lines[:8]))
 
