@@ -51,9 +51,9 @@ use std::f64::consts::PI;
 
 pub const TILE: usize = 16;
 /// Bytes per pixel the image estimators keep at most: per batch a light-tracing film and the
-/// tiles' sums (RGB, f64), then the image and its standard error. Checked against the memory
-/// available before rendering.
-pub const BYTES_PER_PIXEL: u64 = 2 * BATCHES as u64 * 24 + 32;
+/// tiles' sums (RGB, f64), the light-traced luminance (f64), then the image and its standard
+/// error. Checked against the memory available before rendering.
+pub const BYTES_PER_PIXEL: u64 = 2 * BATCHES as u64 * 24 + 8 + 32;
 /// Batches for the per-pixel standard error.
 pub const BATCHES: usize = 8;
 /// Light paths that share one draw of camera points. Redrawing costs a tile's camera rays (and
