@@ -275,8 +275,9 @@ pub fn sample(
 }
 
 /// [`sample`] on a flat-shaded surface (shading normal = geometric normal `ng`), drawing its
-/// three uniform numbers from `rng` in the order the estimators always have: the 2D direction
-/// sample, then the lobe choice.
+/// uniform numbers from `rng`: the 2D direction sample, then the lobe choice — except for a
+/// Lambertian surface, which has one lobe and draws no third number (in the path tracer's first
+/// bounces every draw is an Owen-scrambled Sobol dimension, which costs hashing).
 #[inline]
 pub fn sample_flat(
     m: &Material,
@@ -286,7 +287,10 @@ pub fn sample_flat(
     mode: Transport,
 ) -> Option<BsdfSample> {
     let u = rng.next_2d();
-    let uc = rng.next_f64();
+    let uc = match m {
+        Material::Lambertian { .. } => 0.0,
+        _ => rng.next_f64(),
+    };
     sample(m, wo, ng, ng, u, uc, mode)
 }
 

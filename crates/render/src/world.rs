@@ -423,7 +423,12 @@ impl World {
     /// A point on a light chosen by flux, for next-event estimation at `receiver` (a
     /// luminaire's intensity depends on the direction towards it).
     pub fn sample_light_point(&self, rng: &mut impl Sampler, receiver: Vec3) -> LightPoint {
-        let (ei, p_e) = self.emitter_choice.sample(rng.next_f64());
+        // One emitter needs no choice (no random number drawn).
+        let (ei, p_e) = if self.scene.header.emitters.len() == 1 {
+            (0, 1.0)
+        } else {
+            self.emitter_choice.sample(rng.next_f64())
+        };
         match &self.scene.header.emitters[ei] {
             Emitter::Luminaire { .. } => {
                 // One source of an area opening, chosen uniformly, with the whole intensity:
