@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
-from luxest_contract import read_sensors_csv, sensors_name  # noqa: E402
+from luxest_contract import luminance, read_sensors_csv, sensors_name  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from atomic import write_text  # noqa: E402
@@ -124,7 +124,7 @@ def main(argv=None):
             # (the warm-up's 16 were what every replicate used before this was noticed).
             img = mi.render(scene, sensor=k, seed=1 + r + a.replicates * i, spp=a.spp)
             dr.eval(img)
-            y.append(float(np.array(img).reshape(-1)[:3] @ np.array([0.2126, 0.7152, 0.0722])))
+            y.append(float(luminance(np.array(img).reshape(-1)[:3])))
         cpu = time.process_time() - t0
         y = np.array(y)
         mean, rel = y.mean(), y.std(ddof=1) / y.mean() if y.mean() > 0 else float("inf")

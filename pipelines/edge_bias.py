@@ -13,16 +13,12 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
-from luxest_contract import read_rgb  # noqa: E402
+from luxest_contract import luminance, read_rgb  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from atomic import write_text  # noqa: E402
 
 EDGE_CONTRAST = 0.2
-
-
-def luminance(rgb):
-    return 0.2126 * rgb[..., 0] + 0.7152 * rgb[..., 1] + 0.0722 * rgb[..., 2]
 
 
 def edge_mask(y):

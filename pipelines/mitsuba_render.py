@@ -12,6 +12,9 @@ import time
 
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "python"))
+from luxest_contract import luminance  # noqa: E402
+
 
 def read_exr(path):
     """R, G, B of an EXR file as float64 (H, W, 3), read with Mitsuba's own EXR reader."""
@@ -67,8 +70,7 @@ def main(argv=None):
     m, lx = read_exr(a.out), read_exr(a.luxest)
     if m.shape != lx.shape:
         sys.exit(f"error: {a.luxest}: {lx.shape[1]}x{lx.shape[0]}, Mitsuba rendered {m.shape[1]}x{m.shape[0]}")
-    luma = np.array([0.2126, 0.7152, 0.0722])
-    y_m, y_l = m @ luma, lx @ luma
+    y_m, y_l = luminance(m), luminance(lx)
     rows = [f"Mitsuba 3 `{a.variant}` `path`, {a.spp} spp: {cpu:.1f} CPU-s ({wall:.1f} s wall), against `{a.luxest}`.", "",
             "| region | Y ratio Mitsuba / luxest |", "|---|---|",
             f"| whole image | {y_m.mean() / y_l.mean():.4f} |"]

@@ -226,6 +226,13 @@ EXPOSURE_EPS = 1e-4        # keeps ln finite on black pixels
 LUMA = (0.2126, 0.7152, 0.0722)  # Rec. 709 / sRGB luminance weights (ITU-R BT.709-6)
 
 
+def luminance(rgb):
+    """The Rec. 709 luminance Y of (..., 3) pixels, in float64 (the Y of `exposure`)."""
+    a = np.asarray(rgb)
+    return a[..., 0].astype(np.float64) * LUMA[0] + a[..., 1].astype(np.float64) * LUMA[1] \
+        + a[..., 2].astype(np.float64) * LUMA[2]
+
+
 def exposure(hdr):
     """The autoexposure of a whole image (..., 3): 0.18 / exp(mean ln(max(Y, 0) + 1e-4)), Y the
     Rec. 709 luminance, accumulated in float64 — exactly `RgbImage::autoexposure` in luxest-io.
@@ -233,8 +240,7 @@ def exposure(hdr):
     a = np.asarray(hdr)
     if a.size == 0:
         return 1.0
-    y = a[..., 0].astype(np.float64) * LUMA[0] + a[..., 1].astype(np.float64) * LUMA[1] \
-        + a[..., 2].astype(np.float64) * LUMA[2]
+    y = luminance(a)
     return EXPOSURE_KEY_VALUE / math.exp(float(np.log(np.maximum(y, 0.0) + EXPOSURE_EPS).mean()))
 
 

@@ -233,7 +233,7 @@ pub enum Command {
         #[arg(long)]
         resolution: Option<String>,
         /// The kernel singularity's treatment where light tracing cannot take over: at points
-        /// seen through mirrors or glass, and everywhere with --no-mis.
+        /// seen through mirrors or glass, and everywhere with --mis-paths 0.
         #[arg(long, value_enum, default_value_t = SingularityMode::Clamp)]
         singularity: SingularityMode,
         /// Regularisation radius in m [default: 1e-2 of the room scale].

@@ -84,7 +84,7 @@ fn reflected_radiance(
     for _ in 0..max_depth {
         let m = world.material(sp.triangle);
         let wo = -dir;
-        let ng = if wo.dot(sp.ng) >= 0.0 { sp.ng } else { -sp.ng };
+        let ng = bsdf::facing_normal(wo, sp.ng);
         let radiance = next_event(
             world,
             sp.position,

@@ -29,7 +29,7 @@
 //! `p_cam s / (d² p_cam s + p_y cos_x)`: bounded as d → 0 and unbiased, with no eps. Points seen
 //! through mirrors or glass cannot be reached by light tracing; for them the connection keeps
 //! its full weight and the `Singularity` treatment. A collision reached straight from a delta
-//! light is left to the exact direct term. `--no-mis` gives the plain connection with the
+//! light is left to the exact direct term. `--mis-paths 0` gives the plain connection with the
 //! `Singularity` treatment everywhere (measured in docs/measurements.md).
 //!
 //! Diffuse (Lambertian or emitter) pairs, nearly all pairs of a room, take a short path that
@@ -99,7 +99,7 @@ struct ViewPoint {
     /// Throughput of the specular chain, divided by the samples per pixel.
     weight: Rgb,
     /// Samples per pixel times the camera's area density at the point, for multiple importance
-    /// sampling; `None` without it (points seen through specular bounces, or `--no-mis`).
+    /// sampling; `None` without it (points seen through specular bounces, or `--mis-paths 0`).
     camera_pdf: Option<f64>,
     /// The short path of a Lambertian point: the normal on the camera's side and
     /// `weight · reflectance / π`.
@@ -201,9 +201,10 @@ fn view_points(
                         camera_pdf: (cfg.mis_paths > 0 && bounce == 0)
                             .then(|| spp as f64 * cam.area_density(sp.position, sp.ng)),
                         diffuse: match m {
-                            Material::Lambertian { reflectance } => {
-                                Some((facing(wo, sp.ng), weight * *reflectance * (1.0 / PI)))
-                            }
+                            Material::Lambertian { reflectance } => Some((
+                                bsdf::facing_normal(wo, sp.ng),
+                                weight * *reflectance * (1.0 / PI),
+                            )),
                             _ => None,
                         },
                     });
@@ -220,16 +221,6 @@ fn view_points(
         }
     }
     (out, emitted)
-}
-
-/// The normal of a two-sided surface on the side of `wo`.
-#[inline]
-fn facing(wo: Vec3, ng: Vec3) -> Vec3 {
-    if wo.dot(ng) < 0.0 {
-        -ng
-    } else {
-        ng
-    }
 }
 
 /// A batch's light paths: the vertices to connect, and the light-tracing film (luminance
@@ -288,7 +279,7 @@ fn light_records(
                         can_continue,
                         diffuse: match world.material(sp.triangle) {
                             Material::Lambertian { reflectance } => Some((
-                                facing(wo, sp.ng),
+                                bsdf::facing_normal(wo, sp.ng),
                                 q * *reflectance * (1.0 / PI),
                                 if can_continue {
                                     k * survival(*reflectance) / PI

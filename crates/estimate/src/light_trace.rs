@@ -69,7 +69,7 @@ pub(crate) fn connect_to_camera(
     f_cos: impl Fn(Vec3) -> Rgb,
     shadow_rays: &mut u64,
 ) -> Option<CameraLink> {
-    let (sx, sy, cos_theta) = cam.project(x)?;
+    let (sx, sy, _) = cam.project(x)?;
     let v = cam.position - x;
     let d2 = v.length_squared();
     let w = v / d2.sqrt();
@@ -82,7 +82,7 @@ pub(crate) fn connect_to_camera(
         return None;
     }
     // The pinhole's importance times the geometry term, without the cosine at x (in f).
-    let g = 1.0 / (d2 * cam.pixel_area() * cos_theta.powi(3));
+    let g = cam.footprint(x)?;
     Some(CameraLink {
         pixel: sy as usize * cam.width as usize + sx as usize,
         value: f * g,

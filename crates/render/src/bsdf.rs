@@ -71,6 +71,13 @@ fn facing(wo: Vec3, ng: Vec3, ns: Vec3) -> (Vec3, Vec3) {
     }
 }
 
+/// The geometric normal `ng` of a two-sided surface turned to the side of `wo` (the normal
+/// every BSDF here scatters about).
+#[inline]
+pub fn facing_normal(wo: Vec3, ng: Vec3) -> Vec3 {
+    facing(wo, ng, ng).0
+}
+
 fn ggx_d(n_dot_h: f64, alpha: f64) -> f64 {
     let a2 = alpha * alpha;
     let c2 = n_dot_h * n_dot_h;

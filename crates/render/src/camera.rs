@@ -68,19 +68,25 @@ impl PinholeCamera {
         inside.then(|| (sx, sy, z / d.length()))
     }
 
-    /// Density per unit area at the surface point `x` (unit geometric normal `ng`) of the point
-    /// that a camera ray of x's pixel, uniform over the pixel, hits: `|cos_x| / (d² A_p cos³ θ)`
-    /// with d = |x − c|, θ the angle between x − c and the axis, A_p = [`Self::pixel_area`]
-    /// (the image-plane area element is `cos_x dA / (d² cos³ θ)`). Zero behind the camera.
-    pub fn area_density(&self, x: Vec3, ng: Vec3) -> f64 {
+    /// `1 / (d² A_p cos³ θ)` for the point `x`, with d = |x − c|, θ the angle between x − c and
+    /// the axis, A_p = [`Self::pixel_area`]: the pinhole's importance times the geometry term,
+    /// less the cosine at x (the image-plane area element is `cos_x dA / (d² cos³ θ)`). `None`
+    /// behind the camera. Light tracing's camera connection and [`Self::area_density`] share it.
+    pub fn footprint(&self, x: Vec3) -> Option<f64> {
         let v = x - self.position;
         let d2 = v.length_squared();
-        let d = d2.sqrt();
-        let cos_theta = v.dot(self.forward) / d;
-        if cos_theta.is_nan() || cos_theta <= 0.0 {
-            return 0.0;
-        }
-        (ng.dot(v) / d).abs() / (d2 * self.pixel_area() * cos_theta.powi(3))
+        let cos_theta = v.dot(self.forward) / d2.sqrt();
+        (cos_theta > 0.0).then(|| 1.0 / (d2 * self.pixel_area() * cos_theta.powi(3)))
+    }
+
+    /// Density per unit area at the surface point `x` (unit geometric normal `ng`) of the point
+    /// that a camera ray of x's pixel, uniform over the pixel, hits: `|cos_x|` times
+    /// [`Self::footprint`]. Zero behind the camera.
+    pub fn area_density(&self, x: Vec3, ng: Vec3) -> f64 {
+        self.footprint(x).map_or(0.0, |g| {
+            let v = x - self.position;
+            (ng.dot(v) / v.length()).abs() * g
+        })
     }
 
     /// The area of one pixel on the image plane at unit distance from the pinhole (the
@@ -97,29 +103,8 @@ impl PinholeCamera {
 /// (seed, pixel, sample) only), so that the progressive stages (trace, aov-write) see through
 /// the same positions, independently of order, threads and passes. The pixel filter is a box:
 /// positions are uniform over the pixel, and the first 2^k samples of a pixel stratify it.
-/// [`stratified_pixel_jitter`] builds on it.
 pub fn pixel_jitter(seed: u64, pixel: u64, sample: u64) -> (f64, f64) {
     PixelSampler::new(seed, pixel, sample as u32).pixel_position()
-}
-
-/// The sub-pixel position of sample `k` of `n` stratified samples of pixel `pixel`: the pixel is
-/// cut into `n` equal cells, `cols × rows` with `rows` the largest divisor of `n` not above √n
-/// (4 × 4 for 16, 2 × 1 for 2, n × 1 for prime n), and sample k lies in cell k at the offset
-/// [`pixel_jitter`] gives it. The cells tile the pixel, so the mean over the n samples is an
-/// unbiased box-filtered pixel value for any n. For estimators whose camera samples are fixed
-/// for the whole run (the double local estimate), where stratification removes most of the
-/// pixel-footprint error that their standard error does not see.
-pub fn stratified_pixel_jitter(seed: u64, pixel: u64, k: u32, n: u32) -> (f64, f64) {
-    let n = n.max(1);
-    let rows = (1..=n)
-        .take_while(|r| r * r <= n)
-        .filter(|r| n.is_multiple_of(*r))
-        .last()
-        .unwrap_or(1);
-    let cols = n / rows;
-    let (u, v) = pixel_jitter(seed, pixel, k as u64);
-    let (cx, cy) = ((k % n % cols) as f64, (k % n / cols) as f64);
-    ((cx + u) / cols as f64, (cy + v) / rows as f64)
 }
 
 #[cfg(test)]
@@ -187,26 +172,5 @@ mod tests {
             stat < dof as f64 + 5.0 * (2.0 * dof as f64).sqrt(),
             "chi-square {stat}"
         );
-    }
-
-    #[test]
-    fn stratified_samples_put_one_sample_in_each_cell_of_the_pixel() {
-        for (n, cols, rows) in [
-            (1, 1, 1),
-            (2, 2, 1),
-            (3, 3, 1),
-            (6, 3, 2),
-            (16, 4, 4),
-            (18, 6, 3),
-        ] {
-            let mut hit = vec![0; n as usize];
-            for k in 0..n {
-                let (u, v) = stratified_pixel_jitter(5, 11, k, n);
-                assert!((0.0..1.0).contains(&u) && (0.0..1.0).contains(&v));
-                let cell = (v * rows as f64) as usize * cols + (u * cols as f64) as usize;
-                hit[cell] += 1;
-            }
-            assert!(hit.iter().all(|&h| h == 1), "n = {n}: {hit:?}");
-        }
     }
 }
