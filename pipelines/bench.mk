@@ -38,9 +38,10 @@ $(foreach s,$(BENCH_SCENES),$(eval $(call lx_bench_rules,$(s))))
 
 bench-pt: $(foreach s,$(BENCH_SCENES),reports/bench/$(s).md)
 
-# `make bench-sensors` (part of `make bench`, needs .venv-peers): the local estimate at the default
-# scene's sensors against Mitsuba 3 irradiance meters, CPU-s until every sensor and the median
-# sensor reach 1 % standard error (pipelines/bench_sensors.py); build/bench/<scene>/sensors.md.
+# `make bench-sensors` (part of `make bench`, needs .venv-peers): the local estimate and luxest's
+# backward estimate at the default scene's sensors against Mitsuba 3 irradiance meters, CPU-s until
+# every sensor and the median sensor reach 1 % standard error (pipelines/bench_sensors.py);
+# build/bench/<scene>/sensors.md.
 BENCH_SENSORS_DIR := build/bench/$(DEFAULT_SCENE)
 
 .PHONY: bench-sensors
@@ -66,9 +67,12 @@ BENCH_EDGES_IMAGES := $(foreach m,mis plain,$(call lx_le,$(BENCH_EDGES_DIR)/$(m)
 $(call lx_ref,$(BENCH_EDGES_DIR)/ref,hdr) $(call lx_ref,$(BENCH_EDGES_DIR)/ref,se) &: build/$(DEFAULT_SCENE)/scene.lxs $(TRACE)
 	$(TRACE) $< --reference --stderr --spp $(BENCH_EDGE_REF_SPP) --resolution $(BENCH_RESOLUTION) --seed $(REF_SEED) -o $(BENCH_EDGES_DIR)/ref
 
-$(BENCH_EDGES_DIR)/%_$(call lx_count,$(BENCH_EDGE_PATHS))le.hdr.exr: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE)
-	$(ESTIMATE) image $< --paths $(BENCH_EDGE_PATHS) --resolution $(BENCH_RESOLUTION) --seed $(NOISY_SEED) \
-		$(if $(filter plain,$*),--mis-paths 0) -o $@ --stderr-out $(call lx_le,$(BENCH_EDGES_DIR)/$*,$(BENCH_EDGE_PATHS),se)
+define lx_bench_edge_image
+$(call lx_le,$(BENCH_EDGES_DIR)/$(1),$(BENCH_EDGE_PATHS),hdr): build/$(DEFAULT_SCENE)/scene.lxs $$(ESTIMATE)
+	$$(ESTIMATE) image $$< --paths $(BENCH_EDGE_PATHS) --resolution $(BENCH_RESOLUTION) --seed $(NOISY_SEED) \
+		$(if $(filter plain,$(1)),--mis-paths 0) -o $$@ --stderr-out $(call lx_le,$(BENCH_EDGES_DIR)/$(1),$(BENCH_EDGE_PATHS),se)
+endef
+$(foreach m,mis plain,$(eval $(call lx_bench_edge_image,$(m))))
 
 $(BENCH_EDGES_DIR)/edges.md: $(call lx_ref,$(BENCH_EDGES_DIR)/ref,hdr) $(BENCH_EDGES_IMAGES) pipelines/edge_bias.py
 	$(PYTHON) pipelines/edge_bias.py --reference $< --reference-se $(call lx_ref,$(BENCH_EDGES_DIR)/ref,se) \
