@@ -115,9 +115,9 @@ train: $(MODEL)
 
 $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract.py $(EVALUATE) | reference noisy
 	cd training && ../$(PYTHON) preprocess.py --data-dir ../$(DATA_DIR) --prep-dir ../build/train/$(DATASET) \
-		--noisy-spp $(NOISY_LEVELS)
+		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE)
 	cd training && ../$(PYTHON) train.py --prep-dir ../build/train/$(DATASET) --run-dir ../runs/$(DATASET) \
-		--noisy-spp $(NOISY_LEVELS) --steps $(TRAIN_STEPS) --minutes $(TRAIN_MINUTES)
+		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) --steps $(TRAIN_STEPS) --minutes $(TRAIN_MINUTES)
 	cd training && ../$(PYTHON) export.py --run-dir ../runs/$(DATASET) --out ../$@
 	cd training && ../$(PYTHON) compare_image.py --model ../$@ --split-dir ../$(DATA_DIR)/test \
 		--work-dir ../build/train/$(DATASET)/compare --evaluate $(if $(findstring /,$(EVALUATE)),$(abspath $(EVALUATE)),$(EVALUATE)) \

@@ -3,6 +3,9 @@
 # (pipelines/naming.mk):
 #   <name>_ref.{hdr,alb,nrm}.exr                 reference: REF_SPP samples per pixel, seed REF_SEED
 #   <name>_<spp, 6 digits>spp.{hdr,alb,nrm}.exr  noisy levels NOISY_LEVELS, seed NOISY_SEED
+#   <name>_<paths, 6 digits>le.hdr.exr           double local estimate at DATASET_DLE light
+#                                                paths, seed NOISY_SEED (train and valid scenes;
+#                                                training pairs it with the NOISY_MAX features)
 # (pipelines/presets.mk). trace and aov-write get the same --seed for each image, so the features
 # have exactly the pixel positions of the radiance they go with; the reference's seed differs
 # from the noisy one, so it shares none of their samples. Splits (train / valid / test) come from
@@ -43,6 +46,15 @@ $(call lx_image,$(DATA_DIR)/%,$(NOISY_MAX),nrm): build/dataset/$(DATASET)/%.lxs 
 	$(TRACE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) -o $(DATA_DIR)/$*
 	$(AOV_WRITE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) -o $(DATA_DIR)/$*
 
+# The local-estimate family (not for the test scenes: make eval renders theirs).
+DATASET_LE_SCENES := $(filter-out test/%,$(DATASET_SCENES))
+define dataset_le
+$(call lx_le,$(DATA_DIR)/$(1),$(2),hdr): build/dataset/$(DATASET)/$(1).lxs $(ESTIMATE)
+	$$(ESTIMATE) image $$< --paths $(2) --seed $(NOISY_SEED) -o $$@
+endef
+$(foreach s,$(DATASET_LE_SCENES),$(foreach n,$(DATASET_DLE),$(eval $(call dataset_le,$(s),$(n)))))
+
 dataset-scenes: $(patsubst %,build/dataset/$(DATASET)/%.lxs,$(DATASET_SCENES))
 reference: $(foreach s,$(DATASET_SCENES),$(call lx_ref,$(DATA_DIR)/$(s),nrm))
-noisy: $(foreach s,$(DATASET_SCENES),$(call lx_image,$(DATA_DIR)/$(s),$(NOISY_MAX),nrm))
+noisy: $(foreach s,$(DATASET_SCENES),$(call lx_image,$(DATA_DIR)/$(s),$(NOISY_MAX),nrm)) \
+	$(foreach s,$(DATASET_LE_SCENES),$(foreach n,$(DATASET_DLE),$(call lx_le,$(DATA_DIR)/$(s),$(n),hdr)))

@@ -14,8 +14,11 @@ endif
 lx_preset = $(1) ?= $(if $(filter full,$(PRESET)),$(3),$(2))
 
 # Dataset (pipelines/dataset.mk): reference samples per pixel; noisy snapshot levels.
-$(eval $(call lx_preset,REF_SPP,256,4096))
-$(eval $(call lx_preset,NOISY_LEVELS,1 2 4 8 16 32 64,1 2 4 8 16 32 64))
+$(eval $(call lx_preset,REF_SPP,1024,4096))
+$(eval $(call lx_preset,NOISY_LEVELS,1 2 4 8 16 32 64 256 1024,1 2 4 8 16 32 64 256 1024))
+# The second input family: double-local-estimate images (estimate image, seed NOISY_SEED) of the
+# train and valid scenes at these light-path counts, denoised with the NOISY_MAX features.
+$(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))
 
 # Training (make train): steps of the one-cycle schedule, and the time budget in minutes.
 $(eval $(call lx_preset,TRAIN_STEPS,6000,60000))

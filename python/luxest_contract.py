@@ -86,6 +86,17 @@ def scan(directory):
     return out
 
 
+def scan_le(directory):
+    """{name: {light paths: path}} of the double-local-estimate radiance images (`le`, hdr) in a
+    directory."""
+    out = {}
+    for p in sorted(Path(directory).glob("*.exr")):
+        n = parse_image_name(p.name)
+        if n and n.unit == "le" and n.kind == "hdr":
+            out.setdefault(n.name, {})[n.spp] = p
+    return out
+
+
 # --- Header keys (the same names as luxest-io's `header` module) -------------------------------
 
 SAMPLES = "luxest.samples"                # samples per pixel, or light paths (integer)

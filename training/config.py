@@ -11,10 +11,12 @@ class Config:
     prep_dir: str = "build/train/quick"  # preprocessed .npy arrays
     run_dir: str = "runs/quick"          # checkpoints, config.json, log
     features: list = field(default_factory=lambda: ["hdr", "alb", "nrm"])
-    noisy_spp: list = field(default_factory=lambda: [1, 2, 4, 8, 16, 32, 64])
+    noisy_spp: list = field(default_factory=lambda: [1, 2, 4, 8, 16, 32, 64, 256, 1024])
+    dle_paths: list = field(default_factory=lambda: [100, 300, 1000])  # local-estimate inputs
     crop: int = 64                       # training crop side (multiple of 16)
     batch: int = 16
     base_width: int = 24                 # U-Net channels of the first level
+    head: str = "kpn"                    # output: kpn (kernel-predicting) or direct (model.py)
     lr: float = 2e-3                     # peak learning rate of the one-cycle schedule
     minutes: float = 18.0                # training time budget
     steps: int = 3000                    # schedule length (stops earlier if out of time)
@@ -30,7 +32,11 @@ class Config:
     @staticmethod
     def load(path):
         with open(path) as f:
-            return Config(**json.load(f))
+            values = json.load(f)
+        # Runs from before the `head` option predicted the radiance directly.
+        values.setdefault("head", "direct")
+        values.setdefault("dle_paths", [])
+        return Config(**values)
 
 
 def parse(argv=None, description=""):
@@ -42,7 +48,7 @@ def parse(argv=None, description=""):
         if isinstance(v, bool):
             ap.add_argument(flag, action="store_true", default=v)
         elif isinstance(v, list):
-            ap.add_argument(flag, type=type(v[0]), nargs="+", default=v)
+            ap.add_argument(flag, type=type(v[0]), nargs="*", default=v)
         else:
             ap.add_argument(flag, type=type(v), default=v)
     return Config(**vars(ap.parse_args(argv)))

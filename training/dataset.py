@@ -2,7 +2,8 @@
 
 preprocess.py turns each rendered image set (named as in luxest_contract: the OIDN training-
 toolkit layout) into `<prep_dir>/<split>/<name>_<tag>.npy` — inputs (H, W, 9) hdr+alb+nrm per
-noisy level (`tag` = `000004spp`), references (H, W, 3) hdr (`tag` = `ref`) — and, per input, a
+noisy level (`tag` = `000004spp`) and per double-local-estimate image (`tag` = `001000le`, with
+the features of the largest noisy level), references (H, W, 3) hdr (`tag` = `ref`) — and, per input, a
 `<name>_<tag>.json` with what the headers and the whole image say: samples, seed (of the input
 and of its reference) and the whole-image exposure under each of the six RGB channel orders
 (`exposures`, in the order of `PERMUTATIONS`), so that a crop, even channel-shuffled, is
@@ -20,9 +21,10 @@ PERMUTATIONS = list(itertools.permutations(range(3)))
 """RGB channel orders, the index into a preprocessed input's `exposures`."""
 
 
-def prep_name(name, spp):
-    """`<name>_<tag>.npy` of a preprocessed array (spp None: the reference)."""
-    return f"{name}_{'ref' if spp is None else contract.count_tag(spp)}.npy"
+def prep_name(name, spp, unit="spp"):
+    """`<name>_<tag>.npy` of a preprocessed array (spp None: the reference; unit `le`: a
+    double-local-estimate input at `spp` light paths)."""
+    return f"{name}_{'ref' if spp is None else contract.count_tag(spp, unit)}.npy"
 
 
 def whole_image_exposures(hdr):
@@ -34,7 +36,7 @@ def pairs(prep_split_dir):
     """[(input path, reference path, metadata dict)] of one preprocessed split."""
     out = []
     d = Path(prep_split_dir)
-    for meta_path in sorted(d.glob("*spp.json")):
+    for meta_path in sorted(list(d.glob("*spp.json")) + list(d.glob("*le.json"))):
         meta = json.loads(meta_path.read_text())
         out.append((meta_path.with_suffix(".npy"), d / prep_name(meta["name"], None), meta))
     return out

@@ -13,14 +13,26 @@ import torch
 
 import config
 import luxest_contract as contract
+import model
 from model import Denoiser
+
+
+OUTPUTS = {
+    "direct": "output: the network's transferred radiance, inverted in graph (expm1(out) / exposure)",
+    "kpn": f"output: predicted {model.KERNEL}x{model.KERNEL} kernels applied in graph to the linear "
+           f"irradiance max(hdr, 0) / max(alb, {model.ALBEDO_FLOOR}) at {model.SCALES} scales (1 to "
+           f"1/{2 ** (model.SCALES - 1)}), combined by predicted blend weights, times max(alb, "
+           f"{model.ALBEDO_FLOOR})",
+}
+"""What the graph's output is, per head (model.py), in the metadata's transfer description."""
 
 
 def export(run_dir, out_path, metrics=None):
     cfg = config.Config.load(Path(run_dir) / "config.json")
-    net = Denoiser(width=cfg.base_width)
+    net = Denoiser(width=cfg.base_width, head=cfg.head)
     net.load_state_dict(torch.load(Path(run_dir) / "checkpoint.pt", weights_only=False)["model"])
     net.eval()
+    net.kernel_gather = "slices"
     x = torch.rand(1, 9, 48, 64)
     e = torch.tensor([0.5])
     h, w = torch.export.Dim("h", min=1, max=16384), torch.export.Dim("w", min=1, max=16384)
@@ -32,7 +44,8 @@ def export(run_dir, out_path, metrics=None):
     meta = {
         contract.CHANNELS: ",".join(contract.FEATURES),
         contract.MODEL_TRANSFER: "log1p(max(hdr, 0) * exposure) in graph; input exposure (N,) = 0.18 / "
-        "exp(mean over the whole image of log(max(Y, 0) + 1e-4)), Y = Rec. 709 luminance of hdr",
+        "exp(mean over the whole image of log(max(Y, 0) + 1e-4)), Y = Rec. 709 luminance of hdr; "
+        + OUTPUTS[cfg.head],
         contract.MODEL_PADDING: "replicate to multiples of 16; in graph",
         contract.MODEL_CONFIG: json.dumps(asdict(cfg)),
     }

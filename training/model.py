@@ -1,16 +1,42 @@
-"""An OIDN-style U-Net: 4 levels of 3x3 convolutions + ReLU with max-pool down and nearest
-up-sampling and skip connections, on the transferred hdr + albedo + normal (9 channels).
+"""The denoiser: an OIDN-style U-Net (4 levels of 3x3 convolutions + ReLU, max-pool down,
+nearest up-sampling, skip connections) on the transferred hdr + albedo + normal (9 channels),
+with one of two outputs (`Config.head`):
 
-`Denoiser` wraps it with the contract of transfer.py and the padding to multiples of 16, so the
-exported graph takes raw linear features of any H, W, plus the image's exposure (computed by the
-caller over the whole image, so that tiles of one image share it: luxest_contract.exposure).
-Training passes the stored whole-image exposure of each crop's image (preprocess.py), so the
-network is trained on exactly the inputs it sees at inference."""
+- `kpn` (the default): a multi-scale kernel-predicting output (Bako et al. 2017, "Kernel-
+  Predicting Convolutional Networks for Denoising Monte Carlo Renderings"; Vogels et al. 2018,
+  "Denoising with Kernel Prediction and Asymmetric Loss Functions"). The noisy radiance is
+  demodulated by the albedo (irradiance = hdr / max(albedo, ALBEDO_FLOOR)), averaged down to
+  1/2, 1/4 and 1/8 of the image side, and at every scale each pixel is replaced by a weighted
+  mean of its KERNEL x KERNEL neighbours, the weights a softmax of what the decoder level of that
+  scale predicts (so they are positive and sum to one). From the coarsest scale up, a predicted
+  per-pixel blend alpha replaces the finer scale's low frequencies by the coarser result:
+  o_s = f_s + alpha_s (U(o_{s+1}) - U(D(f_s))). The result is remodulated by the same albedo.
+  At every scale the result is a local weighted mean of the input's irradiance, so it cannot
+  invent a colour the neighbourhood lacks; a noiseless image of uniform irradiance comes back
+  unchanged whatever the weights, and the identity kernel with alpha 0 returns any input
+  unchanged, which is what a clean input needs. Linear in hdr, so scale-equivariant.
+- `direct`: the U-Net predicts the transferred radiance itself (the first models).
+
+`Denoiser` wraps either with the transfer of transfer.py and the padding to multiples of 16, so
+the exported graph takes raw linear features of any H, W, plus the exposure of the whole image
+(computed by the caller over the whole image, so that tiles of one image share it:
+luxest_contract.exposure). Training passes the stored whole-image exposure of each crop's image
+(preprocess.py), so the network is trained on exactly the inputs it sees at inference."""
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
 import transfer
+
+HEADS = ("kpn", "direct")
+KERNEL = 5
+"""Side of the per-pixel filter kernels of the `kpn` head, at every scale."""
+SCALES = 4
+"""Scales of the `kpn` head: 1, 1/2, 1/4, 1/8 (the U-Net's decoder levels)."""
+ALBEDO_FLOOR = 0.01
+"""Demodulation divides by max(albedo, ALBEDO_FLOOR) and remodulates by the same value, so a
+black albedo (background, black materials) neither divides by zero nor changes the result when
+the kernel is the identity."""
 
 
 def conv(cin, cout):
@@ -18,9 +44,13 @@ def conv(cin, cout):
 
 
 class UNet(nn.Module):
+    """`forward` returns the output channels at full resolution (`direct`), `decoder` the
+    decoder's feature maps at 1, 1/2, 1/4, 1/8 of the side (`kpn`)."""
+
     def __init__(self, in_channels=9, out_channels=3, width=24):
         super().__init__()
         c1, c2, c3, c4, c5 = width, width * 3 // 2, width * 2, width * 5 // 2, width * 3
+        self.channels = (c1, c2, c3, c4)
         self.enc0 = nn.Sequential(conv(in_channels, c1), conv(c1, c1))
         self.enc1 = conv(c1, c2)
         self.enc2 = conv(c2, c3)
@@ -30,9 +60,9 @@ class UNet(nn.Module):
         self.dec2 = nn.Sequential(conv(c4 + c3, c3), conv(c3, c3))
         self.dec1 = nn.Sequential(conv(c3 + c2, c2), conv(c2, c2))
         self.dec0 = nn.Sequential(conv(c2 + c1, c1), conv(c1, c1))
-        self.out = nn.Conv2d(c1, out_channels, 3, padding=1)
+        self.out = nn.Conv2d(c1, out_channels, 3, padding=1) if out_channels else None
 
-    def forward(self, x):
+    def decoder(self, x):
         e0 = self.enc0(x)                      # H
         e1 = self.enc1(F.max_pool2d(e0, 2))    # H/2
         e2 = self.enc2(F.max_pool2d(e1, 2))    # H/4
@@ -43,34 +73,98 @@ class UNet(nn.Module):
         d2 = self.dec2(torch.cat([up(d3), e2], 1))   # H/4
         d1 = self.dec1(torch.cat([up(d2), e1], 1))   # H/2
         d0 = self.dec0(torch.cat([up(d1), e0], 1))   # H
-        return self.out(d0)
+        return [d0, d1, d2, d3]
+
+    def forward(self, x):
+        return self.out(self.decoder(x)[0])
+
+
+def apply_kernels(img, logits, gather="unfold"):
+    """Each pixel of `img` (N, C, H, W) replaced by the mean of its KERNEL x KERNEL neighbours
+    (replicated at the border) weighted by softmax(`logits` (N, KERNEL², H, W)) over the kernel:
+    sum(e_i x_i) / sum(e_i) with e_i = exp(logit_i - max logit), normalised after the sum (C
+    divisions per pixel, not KERNEL²). The neighbours come from unfold (training: the KERNEL²
+    slices' gradients would be zero-filled full tensors, five times the cost of a step) or from
+    KERNEL² slices (export: ONNX Runtime runs unfold's decomposition through Gather, slower)."""
+    e = torch.exp(logits - logits.amax(1, keepdim=True))
+    r = KERNEL // 2
+    n, c, h, wd = img.shape
+    p = F.pad(img, (r, r, r, r), mode="replicate")
+    if gather == "unfold":
+        num = (F.unfold(p, KERNEL).view(n, c, KERNEL * KERNEL, h, wd) * e.unsqueeze(1)).sum(2)
+    else:
+        num = None
+        for i in range(KERNEL * KERNEL):
+            dy, dx = divmod(i, KERNEL)
+            term = e[:, i:i + 1] * p[:, :, dy:dy + h, dx:dx + wd]
+            num = term if num is None else num + term
+    return num / e.sum(1, keepdim=True)
+
+
+def reconstruct(hdr, albedo, heads, gather="unfold"):
+    """The `kpn` output (linear radiance) from the linear hdr and albedo (N, 3, H, W; H and W
+    multiples of 2^(SCALES-1)) and the heads' predictions per scale, finest first: (N, KERNEL²
+    [+ 1 blend logit except at the coarsest], H_s, W_s). In float32 whatever the autocast."""
+    with torch.autocast(hdr.device.type, enabled=False):
+        a = albedo.float().clamp(min=ALBEDO_FLOOR)
+        irr = [hdr.float().clamp(min=0) / a]
+        for _ in range(1, len(heads)):
+            irr.append(F.avg_pool2d(irr[-1], 2))
+        up = lambda t: F.interpolate(t, scale_factor=2.0, mode="bilinear", align_corners=False)
+        k2 = KERNEL * KERNEL
+        out = apply_kernels(irr[-1], heads[-1][:, :k2].float(), gather)
+        for s in range(len(heads) - 2, -1, -1):
+            pred = heads[s].float()
+            f = apply_kernels(irr[s], pred[:, :k2], gather)
+            alpha = torch.sigmoid(pred[:, k2:k2 + 1])
+            out = f + alpha * (up(out) - up(F.avg_pool2d(f, 2)))
+        return out * a
 
 
 class Denoiser(nn.Module):
     """Raw linear (N, 9, H, W) hdr+alb+nrm -> linear (N, 3, H, W) radiance."""
 
-    def __init__(self, width=24):
+    def __init__(self, width=24, head="kpn"):
         super().__init__()
-        self.unet = UNet(width=width)
+        if head not in HEADS:
+            raise ValueError(f"head {head!r}: expected one of {', '.join(HEADS)}")
+        self.head = head
+        self.kernel_gather = "unfold"  # export.py sets "slices" (apply_kernels)
+        if head == "direct":
+            self.unet = UNet(width=width)
+        else:
+            self.unet = UNet(width=width, out_channels=0)
+            k2 = KERNEL * KERNEL
+            self.heads = nn.ModuleList(
+                nn.Conv2d(c, k2 + (1 if s < SCALES - 1 else 0), 1)
+                for s, c in enumerate(self.unet.channels[:SCALES]))
 
     def forward(self, x, exposure=None):
         """`exposure` (N,) float: the exposure of each whole image; if None, x must hold whole
         images and it is computed from them (transfer.exposure_of)."""
         h, w = x.shape[2], x.shape[3]
-        hdr = x[:, 0:3]
         if exposure is None:
-            exposure = transfer.exposure_of(hdr).to(x.device)
-        exp = exposure.view(-1, 1, 1, 1)
-        inp = torch.cat([transfer.forward(hdr, exp), x[:, 3:9]], 1)
+            exposure = transfer.exposure_of(x[:, 0:3]).to(x.device)
         ph, pw = (16 - h % 16) % 16, (16 - w % 16) % 16
-        inp = F.pad(inp, (0, pw, 0, ph), mode="replicate")
-        out = self.unet(inp)[:, :, :h, :w]
-        return transfer.inverse(out, exp)
+        x = F.pad(x, (0, pw, 0, ph), mode="replicate")
+        out, exp = self.transferred(x, exposure)
+        out = out[:, :, :h, :w]
+        return transfer.inverse(out, exp) if self.head == "direct" else out
 
     def transferred(self, x, exposure):
-        """The network output in the transferred domain (for the loss), and the exposure as
-        (N, 1, 1, 1). `exposure` (N,): that of each crop's whole image (never the crop's own)."""
+        """(output, exposure as (N, 1, 1, 1)) for x of H, W multiples of 16. `exposure` (N,):
+        that of each crop's whole image (never the crop's own). The output is the transferred
+        radiance for `direct`, linear radiance for `kpn`; `loss_domain` maps it to the
+        transferred domain of the loss."""
         hdr = x[:, 0:3]
         exp = exposure.view(-1, 1, 1, 1).to(x.dtype)
         inp = torch.cat([transfer.forward(hdr, exp), x[:, 3:9]], 1)
-        return self.unet(inp), exp
+        if self.head == "direct":
+            return self.unet(inp), exp
+        feats = self.unet.decoder(inp)
+        heads = [head(f) for head, f in zip(self.heads, feats)]
+        return reconstruct(hdr, x[:, 3:6], heads, self.kernel_gather), exp
+
+    def loss_domain(self, out, exp):
+        """The output of `transferred` in the transferred domain (where the loss is taken)."""
+        return out if self.head == "direct" else transfer.forward(out, exp.float())

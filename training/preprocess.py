@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Converts a rendered dataset (data/<dataset>/<split>/*.exr) into float32 arrays for training:
-inputs (H, W, 9) = hdr + alb + nrm per noisy level, references (H, W, 3), and per input a JSON
-of its samples, seeds and whole-image exposures (dataset.py). Incremental.
+inputs (H, W, 9) = hdr + alb + nrm per noisy level and per double-local-estimate image (`le`,
+with the features of the largest noisy level), references (H, W, 3), and per input a JSON of its
+samples, seeds and whole-image exposures (dataset.py). Incremental.
 
 Samples and seeds come from the EXR headers (luxest_contract), not from file names. A pair whose
 reference has the noisy image's seed is refused: a sample depends only on (seed, pixel, sample
@@ -35,33 +36,45 @@ def samples_of(image, expected):
     return spp
 
 
-def preprocess_split(src, dst, noisy_spp):
-    """Writes the arrays of one split directory; returns the number written."""
+def preprocess_split(src, dst, noisy_spp, dle_paths=()):
+    """Writes the arrays of one split directory; returns the number written. Inputs: the noisy
+    levels in `noisy_spp`, and the double-local-estimate images at `dle_paths` light paths
+    (with the features of the scene's largest noisy level, as make eval denoises them)."""
     n = 0
     dst.mkdir(parents=True, exist_ok=True)
+    local_estimates = contract.scan_le(src)
     for name, levels in contract.scan(src).items():
         if None not in levels or "hdr" not in levels[None]:
             raise contract.ContractError(f"{src}: {name} has no reference image")
         ref = contract.read(levels[None]["hdr"])
         ref_out = dst / dataset.prep_name(name, None)
+        inputs = []  # (noisy hdr path, feature paths, count, unit)
         for spp_in_name, feats in sorted((k, v) for k, v in levels.items() if k is not None):
             missing = [f for f in contract.FEATURES if f not in feats]
             if missing:
                 raise contract.ContractError(f"{src}: {name} at {spp_in_name} spp lacks {', '.join(missing)}")
-            noisy = contract.read(feats["hdr"])
-            spp = samples_of(noisy, spp_in_name)
-            check_pair(ref, noisy)
-            if spp not in noisy_spp:
+            inputs.append((feats["hdr"], feats, spp_in_name, "spp"))
+        for paths, path in sorted(local_estimates.get(name, {}).items()):
+            if not inputs:
+                raise contract.ContractError(f"{path}: {name} has no noisy level whose features it could use")
+            inputs.append((path, inputs[-1][1], paths, "le"))
+        wanted = {"spp": set(noisy_spp), "le": set(dle_paths)}
+        for hdr_path, feats, count_in_name, unit in inputs:
+            if count_in_name not in wanted[unit]:
                 continue
-            out = dst / dataset.prep_name(name, spp)
+            out = dst / dataset.prep_name(name, count_in_name, unit)
             meta_out = out.with_suffix(".json")
-            newest = max([p.stat().st_mtime for p in feats.values()] + [levels[None]["hdr"].stat().st_mtime])
+            newest = max([p.stat().st_mtime for p in [hdr_path] + list(feats.values())] + [levels[None]["hdr"].stat().st_mtime])
             if meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists():
                 continue
+            noisy = contract.read(hdr_path)
+            count = samples_of(noisy, count_in_name)
+            check_pair(ref, noisy)
             arr = np.concatenate([noisy.pixels] + [contract.read_rgb(feats[f]) for f in contract.FEATURES[1:]], axis=-1)
             if not np.isfinite(arr).all():
-                raise contract.ContractError(f"{feats['hdr']}: non-finite values")
-            meta = {"name": name, "samples": spp, "seed": noisy.value(contract.SEED),
+                raise contract.ContractError(f"{hdr_path}: non-finite values")
+            meta = {"name": name, "samples": count, "unit": unit, "estimator": noisy.value(contract.ESTIMATOR),
+                    "seed": noisy.value(contract.SEED), "features": feats["alb"].name,
                     "reference_seed": ref.value(contract.SEED), "reference_samples": ref.value(contract.SAMPLES),
                     "exposures": dataset.whole_image_exposures(noisy.pixels)}
             _save(out, arr)
@@ -88,7 +101,8 @@ def main(argv=None):
     n = 0
     try:
         for split in ["train", "valid", "test"]:
-            n += preprocess_split(Path(cfg.data_dir) / split, Path(cfg.prep_dir) / split, cfg.noisy_spp)
+            n += preprocess_split(Path(cfg.data_dir) / split, Path(cfg.prep_dir) / split, cfg.noisy_spp,
+                                  cfg.dle_paths)
     except contract.ContractError as e:
         print(f"preprocess: error: {e}", file=sys.stderr)
         sys.exit(1)

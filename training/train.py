@@ -32,6 +32,7 @@ def validation_loss(net, prep_dir, cfg):
             a = to(np.load(inp_path)[y0:y0 + c, x0:x0 + c])
             b = to(ref[y0:y0 + c, x0:x0 + c])
             pred, exp = net.transferred(a, torch.tensor([meta["exposures"][0]]))
+            pred = net.loss_domain(pred, exp)
             total += float(losses.loss(pred, transfer.forward(b, exp), cfg.ms_ssim_weight))
             n += 1
     return total / max(n, 1)
@@ -46,7 +47,7 @@ def main(argv=None):
     run = Path(cfg.run_dir)
     run.mkdir(parents=True, exist_ok=True)
     ckpt = run / "checkpoint.pt"
-    net = Denoiser(width=cfg.base_width).to(device=device, memory_format=torch.channels_last)
+    net = Denoiser(width=cfg.base_width, head=cfg.head).to(device=device, memory_format=torch.channels_last)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=cfg.steps, pct_start=0.15)
     step = 0
@@ -70,8 +71,8 @@ def main(argv=None):
         b, e = b.to(device), e.to(device)
         with torch.autocast(device.type, dtype=torch.bfloat16):
             pred, exp = net.transferred(a, e)
-        target = transfer.forward(b, exp)
-        value = losses.loss(pred.float(), target, cfg.ms_ssim_weight)
+        target = transfer.forward(b, exp.float())
+        value = losses.loss(net.loss_domain(pred.float(), exp), target, cfg.ms_ssim_weight)
         opt.zero_grad()
         value.backward()
         opt.step()

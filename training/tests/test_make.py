@@ -41,6 +41,24 @@ def test_dataset_references_have_their_own_seed_and_features_share_traces():
     assert sorted(c[1:] for c in traces) == sorted(c[1:] for c in aovs)
 
 
+def test_local_estimate_family_renders_train_and_valid_scenes_with_the_noisy_seed():
+    cmds = dry_run("noisy", DATASET_DLE="100 1000")
+    traces = [c for c in cmds if c[0] == STAGES["TRACE"]]
+    dle = [c for c in cmds if c[0] == STAGES["ESTIMATE"] and c[1] == "image"]
+    # quick: 24 scenes, 4 of them test scenes (make eval renders theirs)
+    assert len(dle) == 2 * 20 and not [c for c in dle if "/test/" in c[2]]
+    assert {flag(c, "--paths") for c in dle} == {"100", "1000"}
+    assert {flag(c, "--seed") for c in dle} == {flag(traces[0], "--seed")}
+    assert all(re.search(r"/(train|valid)/gen\d{4}_00(0100|1000)le\.hdr\.exr$", flag(c, "-o")) for c in dle)
+    # Training is told which light-path counts to use.
+    r = subprocess.run(["make", "-n", "--no-print-directory", "-W", "training/train.py", "models/pytest-dry-run.onnx",
+                        "DATASET=pytest-dry-run", "DATASET_DLE=100 1000", *[f"{k}={v}" for k, v in STAGES.items()]],
+                       cwd=ROOT, capture_output=True, text=True)
+    lines = r.stdout.replace("\\\n", " ").splitlines()
+    runs = [shlex.split(line.split("&&", 1)[1]) for line in lines if "preprocess.py" in line or "train.py" in line]
+    assert len(runs) == 2 and all(c[c.index("--dle-paths") + 1:c.index("--dle-paths") + 3] == ["100", "1000"] for c in runs)
+
+
 def test_noisy_target_follows_noisy_max():
     cmds = dry_run("noisy", NOISY_LEVELS="1 2 4 8")
     runs = [c for c in cmds if c[0] == STAGES["TRACE"]]

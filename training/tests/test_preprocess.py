@@ -93,3 +93,29 @@ def test_stores_the_whole_image_exposure_for_every_crop(tmp_path):
     assert len(seen) > 1 and differs > len(crops) // 2  # a per-crop exposure would be wrong
     # Preprocessing is incremental: nothing to do the second time.
     assert preprocess.preprocess_split(src, tmp_path / "prep", [4]) == 0
+
+
+def test_local_estimate_inputs_use_the_largest_noisy_levels_features(tmp_path):
+    rng = np.random.default_rng(7)
+    src = tmp_path / "train"
+    src.mkdir()
+    write_ref(src, "g", 1000001, rng)
+    write_set(src, "g", 4, 1, rng)
+    write_set(src, "g", 16, 1, rng)
+    le = rng.random((32, 48, 3)).astype(np.float32)
+    contract.write(src / contract.image_name("g", "hdr", 100, unit="le"), le,
+                   {contract.SAMPLES: 100, contract.SEED: 1, contract.ESTIMATOR: "double-local-estimate"})
+    # Levels not asked for are skipped: 4 spp and the local estimate at 100 paths are written.
+    assert preprocess.preprocess_split(src, tmp_path / "prep", [4], [100]) == 3
+    by_unit = {meta["unit"]: (inp, meta) for inp, _, meta in dataset.pairs(tmp_path / "prep")}
+    inp, meta = by_unit["le"]
+    assert inp.name == "g_000100le.npy" and meta["samples"] == 100
+    assert meta["estimator"] == "double-local-estimate" and meta["features"] == "g_000016spp.alb.exr"
+    arr = np.load(inp)
+    np.testing.assert_array_equal(arr[..., 0:3], le)
+    np.testing.assert_array_equal(arr[..., 3:6], contract.read_rgb(src / "g_000016spp.alb.exr"))
+    assert meta["exposures"][0] == pytest.approx(contract.exposure(le))
+    # A local estimate with the reference's seed is refused like a noisy level.
+    contract.write(src / contract.image_name("g", "hdr", 300, unit="le"), le, {contract.SAMPLES: 300, contract.SEED: 1000001})
+    with pytest.raises(contract.ContractError, match="g_000300le.hdr.exr"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [4], [100, 300])

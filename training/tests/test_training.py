@@ -12,17 +12,93 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import config  # noqa: E402
 import loss as losses  # noqa: E402
+import model  # noqa: E402
 import transfer  # noqa: E402
 from model import Denoiser, UNet  # noqa: E402
 
 
-def test_shapes_any_size():
+@pytest.mark.parametrize("head", model.HEADS)
+def test_shapes_any_size(head):
     torch.manual_seed(0)
-    net = Denoiser(width=8).eval()
+    net = Denoiser(width=8, head=head).eval()
     for h, w in [(37, 53), (16, 16), (1, 5)]:
         out = net(torch.rand(2, 9, h, w))
         assert out.shape == (2, 3, h, w)
     assert UNet(width=8)(torch.rand(1, 9, 64, 32)).shape == (1, 3, 64, 32)
+
+
+def _uniform_irradiance(h=48, w=64, seed=3):
+    """A noiseless image of uniform irradiance (2.5, 1.0, 0.4) under a random albedo texture
+    with black patches (below the demodulation floor), and random normals: (N=1, 9, H, W)."""
+    g = torch.Generator().manual_seed(seed)
+    alb = torch.rand(1, 3, h, w, generator=g)
+    alb[:, :, 5:12, 7:30] = 0.0
+    hdr = alb.clamp(min=model.ALBEDO_FLOOR) * torch.tensor([2.5, 1.0, 0.4]).view(1, 3, 1, 1)
+    nrm = torch.nn.functional.normalize(torch.randn(1, 3, h, w, generator=g), dim=1)
+    return torch.cat([hdr, alb, nrm], 1)
+
+
+def test_kernel_head_returns_a_noiseless_uniform_irradiance_image_unchanged():
+    # Whatever the (random, untrained) weights: every scale's kernels average equal irradiance
+    # and the blends add U(o) - U(D(f)) = 0; the albedo texture is remodulated exactly. The
+    # direct head, untrained, does not (so the check can fail).
+    x = _uniform_irradiance()
+    for seed in range(3):
+        torch.manual_seed(seed)
+        net = Denoiser(width=8, head="kpn").eval()
+        with torch.no_grad():
+            out = net(x)
+        assert torch.allclose(out, x[:, 0:3], rtol=1e-5, atol=1e-7), float((out - x[:, 0:3]).abs().max())
+    with torch.no_grad():
+        direct = Denoiser(width=8, head="direct").eval()(x)
+    assert not torch.allclose(direct, x[:, 0:3], rtol=1e-2)
+
+
+def test_kernel_head_with_identity_kernels_returns_any_input():
+    # Centre weight ~1 and blend 0 at every scale: a clean input is left alone exactly.
+    torch.manual_seed(4)
+    x = torch.rand(2, 9, 32, 48) * torch.tensor([20.0] * 3 + [1.0] * 6).view(1, 9, 1, 1)
+    k2 = model.KERNEL * model.KERNEL
+    heads = []
+    for s in range(model.SCALES):
+        n, h, w = x.shape[0], x.shape[2] >> s, x.shape[3] >> s
+        logits = torch.full((n, k2 + (1 if s < model.SCALES - 1 else 0), h, w), -60.0)
+        logits[:, k2 // 2] = 60.0
+        heads.append(logits)
+    out = model.reconstruct(x[:, 0:3], x[:, 3:6], heads)
+    assert torch.allclose(out, x[:, 0:3], rtol=1e-5, atol=1e-6)
+
+
+def test_kernel_gathers_agree():
+    # Training gathers the neighbours with unfold, the exported graph with slices.
+    torch.manual_seed(6)
+    img = torch.rand(2, 3, 20, 28) * 5
+    logits = torch.randn(2, model.KERNEL ** 2, 20, 28) * 4
+    a = model.apply_kernels(img, logits, "unfold")
+    b = model.apply_kernels(img, logits, "slices")
+    assert torch.allclose(a, b, rtol=1e-5, atol=1e-6)
+    # A softmax-weighted mean: the explicit form.
+    w = torch.softmax(logits, 1)
+    k = model.KERNEL
+    p = torch.nn.functional.pad(img, (k // 2,) * 4, mode="replicate")
+    y, x = 7, 11
+    want = sum(w[:, i, y, x, None] * p[:, :, y + i // k, x + i % k] for i in range(k * k))
+    assert torch.allclose(a[:, :, y, x], want, rtol=1e-5)
+
+
+@pytest.mark.parametrize("head", model.HEADS)
+def test_scale_equivariance(head):
+    # Scaling the radiance and the exposure input inversely scales the result (as denoise's
+    # power-of-two rescaling near the f32 limit relies on).
+    torch.manual_seed(5)
+    net = Denoiser(width=8, head=head).eval()
+    x = torch.rand(1, 9, 32, 32)
+    y = x.clone()
+    y[:, 0:3] *= 1e6
+    e = transfer.exposure_of(x[:, 0:3])
+    with torch.no_grad():
+        a, b = net(x, e), net(y, e / 1e6)
+    assert float((b - a * 1e6).abs().max()) <= 1e-4 * float((a * 1e6).abs().max())
 
 
 def test_transfer_round_trip_and_exposure():
@@ -35,9 +111,10 @@ def test_transfer_round_trip_and_exposure():
     assert torch.allclose(transfer.exposure_of(x[2:] * 10.0), e[2:].view(-1) / 10.0, rtol=1e-3)
 
 
-def test_one_training_step_lowers_the_loss():
+@pytest.mark.parametrize("head", model.HEADS)
+def test_one_training_step_lowers_the_loss(head):
     torch.manual_seed(1)
-    net = Denoiser(width=8)
+    net = Denoiser(width=8, head=head)
     ref = torch.rand(4, 3, 32, 32)
     noisy = ref * (1 + 0.5 * torch.randn_like(ref)).clamp(min=0)
     inp = torch.cat([noisy, torch.rand(4, 3, 32, 32), torch.rand(4, 3, 32, 32)], 1)
@@ -45,7 +122,7 @@ def test_one_training_step_lowers_the_loss():
 
     def current():
         pred, exp = net.transferred(inp, transfer.exposure_of(noisy))
-        return losses.loss(pred, transfer.forward(ref, exp), 0.2)
+        return losses.loss(net.loss_domain(pred, exp), transfer.forward(ref, exp), 0.2)
 
     before = current()
     opt.zero_grad()
@@ -62,14 +139,15 @@ def test_ms_ssim_is_one_for_identical_images_and_less_otherwise():
     assert float(losses.ms_ssim(a, a + 0.2 * torch.randn_like(a))) < 0.9
 
 
-def test_export_matches_onnxruntime(tmp_path):
+@pytest.mark.parametrize("head", model.HEADS)
+def test_export_matches_onnxruntime(tmp_path, head):
     ort = pytest.importorskip("onnxruntime")
     import export
 
     torch.manual_seed(2)
-    cfg = config.Config(base_width=8)
+    cfg = config.Config(base_width=8, head=head)
     cfg.save(tmp_path / "config.json")
-    net = Denoiser(width=8)
+    net = Denoiser(width=8, head=head)
     torch.save({"model": net.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
     model = tmp_path / "m.onnx"
     export.export(tmp_path, model)
@@ -86,6 +164,8 @@ def test_export_matches_onnxruntime(tmp_path):
     meta = {p.key: p.value for p in __import__("onnx").load(str(model)).metadata_props}
     assert meta["luxest.channels"] == "hdr,alb,nrm"
     assert json.loads(meta["luxest.config"])["base_width"] == 8
+    assert json.loads(meta["luxest.config"])["head"] == head
+    assert export.OUTPUTS[head] in meta["luxest.transfer"]
 
 
 def test_config_round_trip(tmp_path):
@@ -93,3 +173,8 @@ def test_config_round_trip(tmp_path):
     assert cfg.minutes == 3.0 and cfg.noisy_spp == [1, 4]
     cfg.save(tmp_path / "c.json")
     assert asdict(config.Config.load(tmp_path / "c.json")) == asdict(cfg)
+    # A run saved before the head option was a direct one.
+    old = asdict(cfg)
+    del old["head"]
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    assert config.Config.load(tmp_path / "old.json").head == "direct"
