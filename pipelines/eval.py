@@ -211,6 +211,28 @@ def level_key(r):
     return (r["estimator"], int(r["samples"]))
 
 
+def colour_shift(image, reference):
+    """max over R, G, B of |mean of the image's channel / mean of the reference's − 1| (linear
+    values, whole image): the issue-11 check that a denoiser shifts no colour. None when a file
+    is missing (summaries of reports whose images were deleted)."""
+    if not (Path(image).exists() and Path(reference).exists()):
+        return None
+    a = contract.read_rgb(image).reshape(-1, 3).astype("float64").mean(0)
+    b = contract.read_rgb(reference).reshape(-1, 3).astype("float64").mean(0)
+    return float(max(abs(a[c] / b[c] - 1.0) for c in range(3) if b[c] > 0))
+
+
+def row_colour_shift(r):
+    """A report row's colour shift: stored (a mean over scenes), else from its image files."""
+    if "colour_shift" in r:
+        return r["colour_shift"]
+    return colour_shift(r["image"], r["reference"]) if "image" in r else None
+
+
+def _pct(v):
+    return "—" if v is None else f"{100 * v:.2f} %"
+
+
 def peer_table(rows, what):
     """luxest's denoiser against Intel Open Image Denoise (the `+oidn` rows) on the same inputs:
     PSNR / SSIM / FLIP per input level, and the inference time per megapixel of each (wall-clock,
@@ -226,12 +248,15 @@ def peer_table(rows, what):
             a, d, o = by[(base, n)], by[(base + "+denoise", n)], by[(base + "+oidn", n)]
             trs.append([n] + [f"{a[k]:{f}} / {d[k]:{f}} / {o[k]:{f}}" for k, f in (("psnr_db", ".2f"), ("ssim", ".4f"), ("flip", ".4f"))]
                        + [f"{1e3 * d['denoise_seconds'] / 0.065536:.0f} / {1e3 * o['denoise_seconds'] / 0.065536:.0f}"
-                          if what.startswith("Cornell") else "—"])
+                          if what.startswith("Cornell") else "—"]
+                       + [" / ".join(_pct(row_colour_shift(r)) for r in (a, d, o))])
         unit = "spp" if base == "path-tracing" else "paths"
         out += [f"### {base}: luxest's denoiser against Intel Open Image Denoise 1.4.3 ({what})", "",
                 "Each cell: noisy / luxest (`denoise`) / OIDN (hdr + albedo + normal, pipelines/oidn_denoise.py), "
                 "the same inputs and features.", "",
-                table([unit, "PSNR dB", "SSIM", "FLIP", "inference ms per megapixel (luxest / OIDN)"], trs), ""]
+                table([unit, "PSNR dB", "SSIM", "FLIP", "inference ms per megapixel (luxest / OIDN)",
+                       "colour shift: max over R, G, B of abs(mean / reference mean − 1)"
+                       + (" (mean over scenes)" if "colour_shift" in rows[0] else "")], trs), ""]
     return out
 
 
@@ -248,6 +273,8 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
         m = {"estimator": est, "samples": n, "scenes": len(rs)}
         for k in ("total_seconds", "psnr_db", "ssim", "flip", "rel_mse", "smape", "one_minus_ssim"):
             m[k] = sum(r[k] for r in rs) / len(rs)
+        shifts = [row_colour_shift(r) for r in rs]
+        m["colour_shift"] = None if None in shifts else sum(shifts) / len(shifts)
         ds_mean.append(m)
     if ds_mean:
         plot_trade(ds_mean, f"Held-out test scenes ({len(ds_names)}), mean — error vs time", plots / "dataset-time.png")

@@ -32,3 +32,17 @@ def test_extrapolation_follows_a_power_law_and_refuses_plateaus():
     assert math.isclose(slope, -0.5, rel_tol=1e-9) and math.isclose(t, 25.0, rel_tol=1e-9)
     flat = [{"total_seconds": t, "ssim": 0.9 + 1e-4 * t} for t in (1.0, 2.0, 4.0, 8.0)]
     assert ev.extrapolated_time(flat, 0.98) is None
+
+
+def test_colour_shift_is_the_largest_relative_channel_mean_error(tmp_path):
+    import numpy as np
+    import luxest_contract as contract
+
+    rng = np.random.default_rng(1)
+    ref = rng.random((8, 12, 3)).astype(np.float32) + 0.5
+    img = ref * np.array([1.0, 0.98, 1.03], dtype=np.float32)  # blue +3 %, green −2 %
+    contract.write(tmp_path / "r.hdr.exr", ref)
+    contract.write(tmp_path / "i.hdr.exr", img)
+    assert math.isclose(ev.colour_shift(tmp_path / "i.hdr.exr", tmp_path / "r.hdr.exr"), 0.03, rel_tol=1e-5)
+    assert ev.colour_shift(tmp_path / "r.hdr.exr", tmp_path / "r.hdr.exr") == 0.0
+    assert ev.colour_shift(tmp_path / "missing.exr", tmp_path / "r.hdr.exr") is None
