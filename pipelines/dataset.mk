@@ -37,8 +37,15 @@ $(GEN_DIR)/%.ron: data-gen/generate.py $(MESHES)
 build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(SCENE_COMPILE)
 	$(SCENE_COMPILE) -q $< -o $@
 
+# REF_SPP is part of what a reference is: a stamp named after it (the only one of its kind) is a
+# prerequisite of every reference, so changing REF_SPP re-renders them (preprocess.py also
+# refuses a reference with fewer samples than its input).
+REF_SPP_STAMP := build/dataset/$(DATASET)/reference-spp-$(REF_SPP)
+$(REF_SPP_STAMP):
+	mkdir -p $(@D) && rm -f $(@D)/reference-spp-* && touch $@
+
 # The normal image is written last, so it marks a complete set.
-$(call lx_ref,$(DATA_DIR)/%,nrm): build/dataset/$(DATASET)/%.lxs $(TRACE) $(AOV_WRITE)
+$(call lx_ref,$(DATA_DIR)/%,nrm): build/dataset/$(DATASET)/%.lxs $(TRACE) $(AOV_WRITE) $(REF_SPP_STAMP)
 	$(TRACE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) -o $(DATA_DIR)/$*
 	$(AOV_WRITE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) -o $(DATA_DIR)/$*
 

@@ -219,7 +219,8 @@ def colour_shift(image, reference):
         return None
     a = contract.read_rgb(image).reshape(-1, 3).astype("float64").mean(0)
     b = contract.read_rgb(reference).reshape(-1, 3).astype("float64").mean(0)
-    return float(max(abs(a[c] / b[c] - 1.0) for c in range(3) if b[c] > 0))
+    shifts = [abs(a[c] / b[c] - 1.0) for c in range(3) if b[c] > 0]
+    return float(max(shifts)) if shifts else None
 
 
 def row_colour_shift(r):

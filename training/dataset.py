@@ -32,12 +32,18 @@ def whole_image_exposures(hdr):
     return [contract.exposure(hdr[..., list(p)]) for p in PERMUTATIONS]
 
 
-def pairs(prep_split_dir):
-    """[(input path, reference path, metadata dict)] of one preprocessed split."""
+def pairs(prep_split_dir, noisy_spp=None, dle_paths=None):
+    """[(input path, reference path, metadata dict)] of one preprocessed split: the noisy levels
+    in `noisy_spp` and the local-estimate images in `dle_paths` (None: all of that family), so
+    that arrays left by an earlier configuration are not trained on."""
     out = []
     d = Path(prep_split_dir)
+    wanted = {"spp": noisy_spp, "le": dle_paths}
     for meta_path in sorted(list(d.glob("*spp.json")) + list(d.glob("*le.json"))):
         meta = json.loads(meta_path.read_text())
+        keep = wanted[meta.get("unit", "spp")]
+        if keep is not None and meta["samples"] not in keep:
+            continue
         out.append((meta_path.with_suffix(".npy"), d / prep_name(meta["name"], None), meta))
     return out
 
@@ -47,9 +53,9 @@ class Crops(torch.utils.data.Dataset):
     and a random permutation of the RGB channels applied alike to hdr, albedo and reference;
     the exposure is the stored whole-image exposure of the input under that permutation."""
 
-    def __init__(self, prep_split_dir, crop, seed, length=100_000):
+    def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None):
         self.pairs = [(np.load(i, mmap_mode="r"), np.load(r, mmap_mode="r"), m["exposures"])
-                      for i, r, m in pairs(prep_split_dir)]
+                      for i, r, m in pairs(prep_split_dir, noisy_spp, dle_paths)]
         if not self.pairs:
             raise FileNotFoundError(f"{prep_split_dir}: no preprocessed pairs (run preprocess.py)")
         self.crop, self.seed, self.length = crop, seed, length

@@ -11,13 +11,16 @@ with one of two outputs (`Config.head`):
   scale predicts (so they are positive and sum to one). From the coarsest scale up, a predicted
   per-pixel blend alpha replaces the finer scale's low frequencies by the coarser result:
   o_s = f_s + alpha_s (U(o_{s+1}) - U(D(f_s))). The result is remodulated by the same albedo.
-  At every scale the result is a local weighted mean of the input's irradiance, so it cannot
-  invent a colour the neighbourhood lacks; a noiseless image of uniform irradiance comes back
-  unchanged whatever the weights, and the identity kernel with alpha 0 returns any input
-  unchanged, which is what a clean input needs. Linear in hdr, so scale-equivariant.
+  At every scale the filtered image is a local weighted mean of the input's irradiance (the
+  blend of the scales is not a convex combination; the output is clamped at zero); a noiseless
+  image of uniform irradiance comes back unchanged whatever the weights, and the identity kernel
+  with alpha 0 returns any input unchanged, which is what a clean input needs.
 - `direct`: the U-Net predicts the transferred radiance itself (the first models).
 
-`Denoiser` wraps either with the transfer of transfer.py and the padding to multiples of 16, so
+Both heads are scale-equivariant through the exposure input: hdr times s with the exposure over
+s gives the network the same input and the result times s (denoise's rescaling near the f32
+limit relies on it). `Denoiser` wraps either with the transfer of transfer.py and the padding to
+multiples of 16, so
 the exported graph takes raw linear features of any H, W, plus the exposure of the whole image
 (computed by the caller over the whole image, so that tiles of one image share it:
 luxest_contract.exposure). Training passes the stored whole-image exposure of each crop's image
@@ -118,7 +121,9 @@ def reconstruct(hdr, albedo, heads, gather="unfold"):
             f = apply_kernels(irr[s], pred[:, :k2], gather)
             alpha = torch.sigmoid(pred[:, k2:k2 + 1])
             out = f + alpha * (up(out) - up(F.avg_pool2d(f, 2)))
-        return out * a
+        # The blend is not a convex combination (a dark pixel beside a firefly can go below
+        # zero); the loss sees max(out, 0) through the transfer, and so does the graph.
+        return (out * a).clamp(min=0)
 
 
 class Denoiser(nn.Module):
@@ -162,7 +167,10 @@ class Denoiser(nn.Module):
         if self.head == "direct":
             return self.unet(inp), exp
         feats = self.unet.decoder(inp)
-        heads = [head(f) for head, f in zip(self.heads, feats)]
+        # The 1x1 heads in float32 (cheap): bf16 logits of 10-30 are rounded by 0.06-0.125,
+        # several per cent of a kernel weight, which inference in float32 would not see.
+        with torch.autocast(x.device.type, enabled=False):
+            heads = [head(f.float()) for head, f in zip(self.heads, feats)]
         return reconstruct(hdr, x[:, 3:6], heads, self.kernel_gather), exp
 
     def loss_domain(self, out, exp):

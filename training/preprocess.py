@@ -70,7 +70,17 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=()):
             noisy = contract.read(hdr_path)
             count = samples_of(noisy, count_in_name)
             check_pair(ref, noisy)
-            arr = np.concatenate([noisy.pixels] + [contract.read_rgb(feats[f]) for f in contract.FEATURES[1:]], axis=-1)
+            if unit == "spp" and count > ref.value(contract.SAMPLES, required=True):
+                raise contract.ContractError(
+                    f"{ref.path}: {ref.value(contract.SAMPLES)} samples per pixel, fewer than its input {hdr_path} "
+                    f"({count}); re-render the references (make reference)")
+            planes = [noisy.pixels] + [contract.read_rgb(feats[f]) for f in contract.FEATURES[1:]]
+            for path, plane in zip([hdr_path] + [feats[f] for f in contract.FEATURES[1:]], planes):
+                if plane.shape != ref.pixels.shape:
+                    raise contract.ContractError(
+                        f"{path}: {plane.shape[1]}x{plane.shape[0]} pixels, its reference {Path(ref.path).name} "
+                        f"{ref.pixels.shape[1]}x{ref.pixels.shape[0]}")
+            arr = np.concatenate(planes, axis=-1)
             if not np.isfinite(arr).all():
                 raise contract.ContractError(f"{hdr_path}: non-finite values")
             meta = {"name": name, "samples": count, "unit": unit, "estimator": noisy.value(contract.ESTIMATOR),

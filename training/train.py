@@ -24,7 +24,7 @@ def validation_loss(net, prep_dir, cfg):
     total, n = 0.0, 0
     to = lambda arr: torch.from_numpy(arr.transpose(2, 0, 1).copy())[None]
     with torch.no_grad():
-        for inp_path, ref_path, meta in dataset.pairs(Path(prep_dir) / "valid"):
+        for inp_path, ref_path, meta in dataset.pairs(Path(prep_dir) / "valid", cfg.noisy_spp, cfg.dle_paths):
             ref = np.load(ref_path)
             h, w = ref.shape[:2]
             c = min(h, w) // 16 * 16
@@ -59,7 +59,8 @@ def main(argv=None):
         step = state["step"]
         print(f"resumed at step {step}")
     cfg.save(run / "config.json")
-    data = dataset.Crops(Path(cfg.prep_dir) / "train", cfg.crop, cfg.seed + step)
+    data = dataset.Crops(Path(cfg.prep_dir) / "train", cfg.crop, cfg.seed + step,
+                         noisy_spp=cfg.noisy_spp, dle_paths=cfg.dle_paths)
     loader = torch.utils.data.DataLoader(data, batch_size=cfg.batch, num_workers=0)
     start = time.time()
     log = open(run / "log.jsonl", "a")

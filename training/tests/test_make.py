@@ -59,6 +59,16 @@ def test_local_estimate_family_renders_train_and_valid_scenes_with_the_noisy_see
     assert len(runs) == 2 and all(c[c.index("--dle-paths") + 1:c.index("--dle-paths") + 3] == ["100", "1000"] for c in runs)
 
 
+def test_references_follow_ref_spp():
+    # The stamp named after REF_SPP is a prerequisite of every reference.
+    out = subprocess.run(["make", "-n", "--no-print-directory", "-p", "reference", "REF_SPP=2048", "DATASET=pytest-dry-run",
+                          *[f"{k}={v}" for k, v in STAGES.items()]], cwd=ROOT, capture_output=True, text=True).stdout
+    rule = re.search(r"^data/pytest-dry-run/%_ref\.nrm\.exr:(.*)$", out, re.M)
+    assert rule and "build/dataset/pytest-dry-run/reference-spp-2048" in rule.group(1).split()
+    cmds = dry_run("reference", REF_SPP="2048")
+    assert all(flag(c, "--spp") == "2048" for c in cmds if c[0] == STAGES["TRACE"])
+
+
 def test_noisy_target_follows_noisy_max():
     cmds = dry_run("noisy", NOISY_LEVELS="1 2 4 8")
     runs = [c for c in cmds if c[0] == STAGES["TRACE"]]

@@ -119,3 +119,36 @@ def test_local_estimate_inputs_use_the_largest_noisy_levels_features(tmp_path):
     contract.write(src / contract.image_name("g", "hdr", 300, unit="le"), le, {contract.SAMPLES: 300, contract.SEED: 1000001})
     with pytest.raises(contract.ContractError, match="g_000300le.hdr.exr"):
         preprocess.preprocess_split(src, tmp_path / "prep", [4], [100, 300])
+
+
+def test_refuses_a_reference_with_fewer_samples_than_its_input_and_mismatched_sizes(tmp_path):
+    rng = np.random.default_rng(8)
+    src = tmp_path / "train"
+    src.mkdir()
+    write_ref(src, "g", 1000001, rng)  # 256 spp
+    write_set(src, "g", 1024, 1, rng)
+    with pytest.raises(contract.ContractError, match="256 samples per pixel, fewer than its input"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [1024])
+    src2 = tmp_path / "valid"
+    src2.mkdir()
+    write_ref(src2, "g", 1000001, rng)
+    write_set(src2, "g", 4, 1, rng, h=32, w=40)
+    with pytest.raises(contract.ContractError, match=r"g_000004spp.hdr.exr: 40x32 pixels, its reference g_ref.hdr.exr 48x32"):
+        preprocess.preprocess_split(src2, tmp_path / "prep2", [4])
+
+
+def test_training_pairs_follow_the_configured_levels(tmp_path):
+    # Arrays an earlier configuration left in the directory are not trained on.
+    rng = np.random.default_rng(9)
+    src = tmp_path / "train"
+    src.mkdir()
+    write_ref(src, "g", 1000001, rng)
+    for spp in (4, 16):
+        write_set(src, "g", spp, 1, rng)
+    contract.write(src / contract.image_name("g", "hdr", 100, unit="le"), rng.random((32, 48, 3)),
+                   {contract.SAMPLES: 100, contract.SEED: 1})
+    preprocess.preprocess_split(src, tmp_path / "prep", [4, 16], [100])
+    tags = lambda ps: sorted(p[0].name for p in ps)
+    assert tags(dataset.pairs(tmp_path / "prep")) == ["g_000004spp.npy", "g_000016spp.npy", "g_000100le.npy"]
+    assert tags(dataset.pairs(tmp_path / "prep", [16], [])) == ["g_000016spp.npy"]
+    assert tags(dataset.pairs(tmp_path / "prep", [4], [100])) == ["g_000004spp.npy", "g_000100le.npy"]

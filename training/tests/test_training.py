@@ -86,6 +86,48 @@ def test_kernel_gathers_agree():
     assert torch.allclose(a[:, :, y, x], want, rtol=1e-5)
 
 
+def test_multi_scale_blend_against_a_hand_written_pyramid():
+    # Random kernels and blends, 4 scales: o_3 = f_3, o_s = f_s + a_s (U(o_{s+1}) - U(D(f_s))),
+    # written out with explicit neighbour loops, 2x2 block means and bilinear up-sampling.
+    torch.manual_seed(7)
+    n, h, w, k = 1, 16, 24, model.KERNEL
+    hdr = torch.rand(n, 3, h, w) * 4
+    alb = torch.rand(n, 3, h, w)
+    heads = [torch.randn(n, k * k + (1 if s < model.SCALES - 1 else 0), h >> s, w >> s) * 2
+             for s in range(model.SCALES)]
+    got = model.reconstruct(hdr, alb, heads)
+
+    def filt(img, logits):
+        wgt = torch.softmax(logits[:, :k * k], 1)
+        p = torch.nn.functional.pad(img, (k // 2,) * 4, mode="replicate")
+        out = torch.zeros_like(img)
+        for y in range(img.shape[2]):
+            for x in range(img.shape[3]):
+                for i in range(k * k):
+                    out[:, :, y, x] += wgt[:, i, y, x, None] * p[:, :, y + i // k, x + i % k]
+        return out
+
+    def down(t):
+        return t.reshape(t.shape[0], t.shape[1], t.shape[2] // 2, 2, t.shape[3] // 2, 2).mean((3, 5))
+
+    def up(t):
+        return torch.nn.functional.interpolate(t, scale_factor=2.0, mode="bilinear", align_corners=False)
+
+    a = alb.clamp(min=model.ALBEDO_FLOOR)
+    irr = [hdr / a]
+    for _ in range(model.SCALES - 1):
+        irr.append(down(irr[-1]))
+    o = filt(irr[-1], heads[-1])
+    for s in range(model.SCALES - 2, -1, -1):
+        f = filt(irr[s], heads[s])
+        alpha = torch.sigmoid(heads[s][:, k * k:k * k + 1])
+        o = f + alpha * (up(o) - up(down(f)))
+    want = (o * a).clamp(min=0)
+    assert torch.allclose(got, want, rtol=1e-4, atol=1e-5)
+    # The blend matters: without it (alpha = 0) the result differs.
+    assert not torch.allclose(got, (filt(irr[0], heads[0]) * a).clamp(min=0), rtol=1e-2)
+
+
 @pytest.mark.parametrize("head", model.HEADS)
 def test_scale_equivariance(head):
     # Scaling the radiance and the exposure input inversely scales the result (as denoise's
