@@ -2,7 +2,8 @@
 # receive these values as arguments from the rules; none has its own copy. (The dataset's scene
 # count and image size are data-gen/generate.py's, selected by --preset $(PRESET).)
 #
-# quick fits a 2-core machine: `make reference noisy train eval` in about 45 minutes.
+# quick fits a 2-core machine: `make reference noisy train eval` in about 70 minutes (most of it
+# the dataset: 1024-spp references and noisy levels to 1024 spp, issue 11).
 
 PRESET ?= quick
 ifeq ($(filter $(PRESET),quick full),)

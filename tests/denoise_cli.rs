@@ -38,69 +38,84 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// The fixture models (both output heads of training/model.py) and the suffix of their expected
+/// outputs (tests/fixtures/denoise/generate.py).
+const MODELS: [(&str, &str); 2] = [("tiny.onnx", "expected"), ("tiny_kpn.onnx", "kpn.expected")];
+
 #[test]
 fn output_equals_python_onnxruntime_to_1e_5() {
-    let dir = TempDir::new("dn-parity");
-    let model = fixture("tiny.onnx");
-    for img in ["odd_000004spp", "tiles_000001spp"] {
-        let hdr = copy_features(&dir, img, &["hdr", "alb", "nrm"]);
-        run(&[s(&hdr), "--model", s(&model), "--threads", "2"]).unwrap();
-        let out = read_rgb(&dir.path().join(format!("{img}.dn.exr"))).unwrap();
-        let expected = read_rgb(&fixture(&format!("{img}.expected.exr"))).unwrap();
-        let d = max_relative_difference(&out, &expected);
-        assert!(d <= 1e-5, "{img}: max relative difference {d:e}");
-        // The input's run metadata travels with the result.
-        assert_eq!(out.attribute(header::DENOISER), Some("tiny.onnx"));
-        let t: f64 = out
-            .attribute(header::DENOISE_SECONDS)
-            .unwrap()
-            .parse()
-            .unwrap();
-        assert!(t > 0.0);
+    for (model_name, suffix) in MODELS {
+        let dir = TempDir::new("dn-parity");
+        let model = fixture(model_name);
+        for img in ["odd_000004spp", "tiles_000001spp"] {
+            let hdr = copy_features(&dir, img, &["hdr", "alb", "nrm"]);
+            run(&[s(&hdr), "--model", s(&model), "--threads", "2"]).unwrap();
+            let out = read_rgb(&dir.path().join(format!("{img}.dn.exr"))).unwrap();
+            let expected = read_rgb(&fixture(&format!("{img}.{suffix}.exr"))).unwrap();
+            let d = max_relative_difference(&out, &expected);
+            assert!(
+                d <= 1e-5,
+                "{model_name} {img}: max relative difference {d:e}"
+            );
+            // The input's run metadata travels with the result.
+            assert_eq!(out.attribute(header::DENOISER), Some(model_name));
+            let t: f64 = out
+                .attribute(header::DENOISE_SECONDS)
+                .unwrap()
+                .parse()
+                .unwrap();
+            assert!(t > 0.0);
+        }
     }
 }
 
 #[test]
 fn tiles_with_enough_context_equal_the_whole_image() {
-    let dir = TempDir::new("dn-tiles");
-    let model = fixture("tiny.onnx");
-    let hdr = copy_features(&dir, "tiles_000001spp", &["hdr", "alb", "nrm"]);
-    let whole = dir.path().join("whole.exr");
-    run(&[s(&hdr), "--model", s(&model), "-o", s(&whole)]).unwrap();
-    let whole = read_rgb(&whole).unwrap();
-    // 160 x 96 in 32-pixel cores: 15 tiles, most of them interior. The U-Net's receptive
-    // field radius is below 96 pixels, so 96 pixels of context reproduce the whole image.
-    let tiled = dir.path().join("tiled.exr");
-    run(&[
-        s(&hdr),
-        "--model",
-        s(&model),
-        "-o",
-        s(&tiled),
-        "--tile",
-        "32",
-        "--overlap",
-        "96",
-    ])
-    .unwrap();
-    let d = max_relative_difference(&read_rgb(&tiled).unwrap(), &whole);
-    assert!(d <= 1e-5, "tiled vs whole: {d:e}");
-    // Without context the tiles visibly disagree: the test can fail.
-    let bare = dir.path().join("bare.exr");
-    run(&[
-        s(&hdr),
-        "--model",
-        s(&model),
-        "-o",
-        s(&bare),
-        "--tile",
-        "32",
-        "--overlap",
-        "0",
-    ])
-    .unwrap();
-    let d = max_relative_difference(&read_rgb(&bare).unwrap(), &whole);
-    assert!(d > 1e-3, "tiles without context should differ, got {d:e}");
+    for (model_name, _) in MODELS {
+        let dir = TempDir::new("dn-tiles");
+        let model = fixture(model_name);
+        let hdr = copy_features(&dir, "tiles_000001spp", &["hdr", "alb", "nrm"]);
+        let whole = dir.path().join("whole.exr");
+        run(&[s(&hdr), "--model", s(&model), "-o", s(&whole)]).unwrap();
+        let whole = read_rgb(&whole).unwrap();
+        // 160 x 96 in 32-pixel cores: 15 tiles, most of them interior. The U-Net's receptive
+        // field radius (with the kernels of the coarsest scale, about 82 pixels) is below 96
+        // pixels, so 96 pixels of context reproduce the whole image.
+        let tiled = dir.path().join("tiled.exr");
+        run(&[
+            s(&hdr),
+            "--model",
+            s(&model),
+            "-o",
+            s(&tiled),
+            "--tile",
+            "32",
+            "--overlap",
+            "96",
+        ])
+        .unwrap();
+        let d = max_relative_difference(&read_rgb(&tiled).unwrap(), &whole);
+        assert!(d <= 1e-5, "{model_name}: tiled vs whole: {d:e}");
+        // Without context the tiles visibly disagree: the test can fail.
+        let bare = dir.path().join("bare.exr");
+        run(&[
+            s(&hdr),
+            "--model",
+            s(&model),
+            "-o",
+            s(&bare),
+            "--tile",
+            "32",
+            "--overlap",
+            "0",
+        ])
+        .unwrap();
+        let d = max_relative_difference(&read_rgb(&bare).unwrap(), &whole);
+        assert!(
+            d > 1e-3,
+            "{model_name}: tiles without context should differ, got {d:e}"
+        );
+    }
 }
 
 #[test]

@@ -59,7 +59,10 @@ def main(argv=None):
         step = state["step"]
         print(f"resumed at step {step}")
     cfg.save(run / "config.json")
+    # As many crops as the remaining steps take (a fixed length once ended runs of more than
+    # 100 000 / batch steps early, before the schedule had annealed).
     data = dataset.Crops(Path(cfg.prep_dir) / "train", cfg.crop, cfg.seed + step,
+                         length=max(cfg.steps - step, 0) * cfg.batch,
                          noisy_spp=cfg.noisy_spp, dle_paths=cfg.dle_paths)
     loader = torch.utils.data.DataLoader(data, batch_size=cfg.batch, num_workers=0)
     start = time.time()
