@@ -122,7 +122,7 @@ $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract
 	cd training && ../$(PYTHON) compare_image.py --model ../$@ --split-dir ../$(DATA_DIR)/test \
 		--work-dir ../build/train/$(DATASET)/compare --evaluate $(if $(findstring /,$(EVALUATE)),$(abspath $(EVALUATE)),$(EVALUATE)) \
 		--json ../models/$(DATASET).metrics.json
-	cp runs/$(DATASET)/config.json models/$(DATASET).config.json
+	cp runs/$(DATASET)/run.json models/$(DATASET).config.json
 
 bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs bench-pt bench-sensors bench-edges
 	$(CARGO) bench -p scene-compile --bench compile_1m

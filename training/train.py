@@ -50,13 +50,14 @@ def main(argv=None):
     net = Denoiser(width=cfg.base_width, head=cfg.head).to(device=device, memory_format=torch.channels_last)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=cfg.steps, pct_start=0.15)
-    step = 0
+    step, earlier_seconds, resumed_at = 0, 0.0, []
     if cfg.resume and ckpt.exists():
         state = torch.load(ckpt, weights_only=False, map_location=device)
         net.load_state_dict(state["model"])
         opt.load_state_dict(state["optimizer"])
         sched.load_state_dict(state["scheduler"])
         step = state["step"]
+        earlier_seconds, resumed_at = state.get("seconds", 0.0), state.get("resumed_at", []) + [step]
         print(f"resumed at step {step}")
     cfg.save(run / "config.json")
     # As many crops as the remaining steps take (a fixed length once ended runs of more than
@@ -88,13 +89,23 @@ def main(argv=None):
             log.flush()
             print(f"step {step:5d}  loss {rec['loss']:.4f}  lr {rec['lr']:.2e}  {rec['seconds']:.0f} s", flush=True)
         if step % 200 == 0:
-            torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(), "step": step}, ckpt)
-    torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(), "step": step}, ckpt)
+            save(net, opt, sched, step, earlier_seconds + time.time() - start, resumed_at, ckpt)
+    save(net, opt, sched, step, earlier_seconds + time.time() - start, resumed_at, ckpt)
     net.eval()
     v = validation_loss(net.cpu(), cfg.prep_dir, cfg)
-    summary = {"steps": step, "seconds": time.time() - start, "valid_loss": v}
+    summary = {"steps": step, "seconds": earlier_seconds + time.time() - start, "resumed_at": resumed_at,
+               "valid_loss": v, "device": device.type}
     (run / "summary.json").write_text(json.dumps(summary, indent=2))
-    print(f"train: {step} steps in {summary['seconds']:.0f} s, validation loss {v:.4f}")
+    # What models/<dataset>.config.json records: the configuration and how the run went.
+    (run / "run.json").write_text(json.dumps({**json.loads((run / "config.json").read_text()), "run": summary}, indent=2))
+    print(f"train: {step} steps in {summary['seconds']:.0f} s of training, validation loss {v:.4f}")
+
+
+def save(net, opt, sched, step, seconds, resumed_at, path):
+    """A checkpoint: weights, optimiser and schedule state, the step, the training seconds of all
+    runs so far and the steps at which it was resumed."""
+    torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(),
+                "step": step, "seconds": seconds, "resumed_at": resumed_at}, path)
 
 
 if __name__ == "__main__":

@@ -220,3 +220,30 @@ def test_config_round_trip(tmp_path):
     del old["head"]
     (tmp_path / "old.json").write_text(json.dumps(old))
     assert config.Config.load(tmp_path / "old.json").head == "direct"
+
+
+def test_training_runs_its_steps_and_resumes(tmp_path):
+    # A tiny preprocessed split; a run stopped by its time budget, then resumed to its 5 steps:
+    # the run record counts them and where it was resumed.
+    import preprocess
+    import train
+    import luxest_contract as contract
+
+    rng = np.random.default_rng(3)
+    for split in ("train", "valid"):
+        d = tmp_path / "data" / split
+        d.mkdir(parents=True)
+        contract.write(d / contract.image_name("g", "hdr"), rng.random((32, 32, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
+        for kind in ("hdr", "alb", "nrm"):
+            contract.write(d / contract.image_name("g", kind, 4), rng.random((32, 32, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
+    (tmp_path / "data" / "test").mkdir()
+    args = ["--data-dir", str(tmp_path / "data"), "--prep-dir", str(tmp_path / "prep"), "--run-dir", str(tmp_path / "run"),
+            "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2", "--base-width", "8", "--threads", "1"]
+    preprocess.main(args)
+    train.main(args + ["--steps", "5", "--minutes", "0"])  # out of time at once: a checkpoint at step 0
+    first = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert first["steps"] == 0
+    train.main(args + ["--steps", "5", "--minutes", "5", "--resume"])
+    record = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert record["run"]["steps"] == 5 and record["run"]["resumed_at"] == [first["steps"]]
+    assert record["run"]["seconds"] >= first["seconds"] and record["head"] == "kpn"
