@@ -18,6 +18,7 @@ from the CSV/RON reports of the `evaluate` stage that the rules of pipelines/eva
 Times are wall-clock seconds recorded in the images' headers: render (trace/estimate) +
 features (aov-write) + inference (denoise), excluding file I/O and process start."""
 import argparse
+import functools
 import math
 import os
 from pathlib import Path
@@ -211,14 +212,20 @@ def level_key(r):
     return (r["estimator"], int(r["samples"]))
 
 
+@functools.lru_cache(maxsize=None)
+def channel_means(path):
+    """The linear mean of each channel of an image (read once per path: every row of a report
+    shares its reference)."""
+    return contract.read_rgb(path).reshape(-1, 3).astype("float64").mean(0)
+
+
 def colour_shift(image, reference):
     """max over R, G, B of |mean of the image's channel / mean of the reference's − 1| (linear
     values, whole image): the issue-11 check that a denoiser shifts no colour. None when a file
     is missing (summaries of reports whose images were deleted)."""
     if not (Path(image).exists() and Path(reference).exists()):
         return None
-    a = contract.read_rgb(image).reshape(-1, 3).astype("float64").mean(0)
-    b = contract.read_rgb(reference).reshape(-1, 3).astype("float64").mean(0)
+    a, b = channel_means(image), channel_means(reference)
     shifts = [abs(a[c] / b[c] - 1.0) for c in range(3) if b[c] > 0]
     return float(max(shifts)) if shifts else None
 

@@ -76,24 +76,15 @@ def parse_image_name(filename):
     return ImageName(m.group("name"), int(m.group("count")), False, m.group("kind"), m.group("unit"))
 
 
-def scan(directory):
-    """{name: {spp or None: {kind: path}}} of the path-traced images (not `le`) in a directory."""
+def scan(directory, unit="spp"):
+    """{name: {count or None: {kind: path}}} of the images of one unit in a directory: the
+    camera estimates (`spp`, with the references under None) or the local-estimate images (`le`,
+    keyed by light paths)."""
     out = {}
     for p in sorted(Path(directory).glob("*.exr")):
         n = parse_image_name(p.name)
-        if n and n.unit == "spp":
+        if n and n.unit == unit:
             out.setdefault(n.name, {}).setdefault(n.spp, {})[n.kind] = p
-    return out
-
-
-def scan_le(directory):
-    """{name: {light paths: path}} of the double-local-estimate radiance images (`le`, hdr) in a
-    directory."""
-    out = {}
-    for p in sorted(Path(directory).glob("*.exr")):
-        n = parse_image_name(p.name)
-        if n and n.unit == "le" and n.kind == "hdr":
-            out.setdefault(n.name, {})[n.spp] = p
     return out
 
 

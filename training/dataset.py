@@ -32,17 +32,22 @@ def whole_image_exposures(hdr):
     return [contract.exposure(hdr[..., list(p)]) for p in PERMUTATIONS]
 
 
+def wanted(unit, count, noisy_spp, dle_paths):
+    """Whether an input of `unit` (`spp`: a noisy level, `le`: a local-estimate image) at `count`
+    samples or light paths is among the configured ones (None: every one of that family)."""
+    levels = noisy_spp if unit == "spp" else dle_paths
+    return levels is None or count in levels
+
+
 def pairs(prep_split_dir, noisy_spp=None, dle_paths=None):
     """[(input path, reference path, metadata dict)] of one preprocessed split: the noisy levels
     in `noisy_spp` and the local-estimate images in `dle_paths` (None: all of that family), so
     that arrays left by an earlier configuration are not trained on."""
     out = []
     d = Path(prep_split_dir)
-    wanted = {"spp": noisy_spp, "le": dle_paths}
     for meta_path in sorted(list(d.glob("*spp.json")) + list(d.glob("*le.json"))):
         meta = json.loads(meta_path.read_text())
-        keep = wanted[meta.get("unit", "spp")]
-        if keep is not None and meta["samples"] not in keep:
+        if not wanted(meta.get("unit", "spp"), meta["samples"], noisy_spp, dle_paths):
             continue
         out.append((meta_path.with_suffix(".npy"), d / prep_name(meta["name"], None), meta))
     return out

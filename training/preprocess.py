@@ -42,7 +42,7 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=()):
     (with the features of the scene's largest noisy level, as make eval denoises them)."""
     n = 0
     dst.mkdir(parents=True, exist_ok=True)
-    local_estimates = contract.scan_le(src)
+    local_estimates = contract.scan(src, unit="le")
     for name, levels in contract.scan(src).items():
         if None not in levels or "hdr" not in levels[None]:
             raise contract.ContractError(f"{src}: {name} has no reference image")
@@ -54,17 +54,19 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=()):
             if missing:
                 raise contract.ContractError(f"{src}: {name} at {spp_in_name} spp lacks {', '.join(missing)}")
             inputs.append((feats["hdr"], feats, spp_in_name, "spp"))
-        for paths, path in sorted(local_estimates.get(name, {}).items()):
+        for paths, kinds in sorted(local_estimates.get(name, {}).items()):
+            if "hdr" not in kinds:
+                continue
             if not inputs:
-                raise contract.ContractError(f"{path}: {name} has no noisy level whose features it could use")
-            inputs.append((path, inputs[-1][1], paths, "le"))
-        wanted = {"spp": set(noisy_spp), "le": set(dle_paths)}
+                raise contract.ContractError(f"{kinds['hdr']}: {name} has no noisy level whose features it could use")
+            inputs.append((kinds["hdr"], inputs[-1][1], paths, "le"))
         for hdr_path, feats, count_in_name, unit in inputs:
-            if count_in_name not in wanted[unit]:
+            if not dataset.wanted(unit, count_in_name, noisy_spp, dle_paths):
                 continue
             out = dst / dataset.prep_name(name, count_in_name, unit)
             meta_out = out.with_suffix(".json")
-            newest = max([p.stat().st_mtime for p in [hdr_path] + list(feats.values())] + [levels[None]["hdr"].stat().st_mtime])
+            paths = [hdr_path] + [feats[f] for f in contract.FEATURES[1:]]
+            newest = max(p.stat().st_mtime for p in paths + [levels[None]["hdr"]])
             if meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists():
                 continue
             noisy = contract.read(hdr_path)
@@ -74,8 +76,8 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=()):
                 raise contract.ContractError(
                     f"{ref.path}: {ref.value(contract.SAMPLES)} samples per pixel, fewer than its input {hdr_path} "
                     f"({count}); re-render the references (make reference)")
-            planes = [noisy.pixels] + [contract.read_rgb(feats[f]) for f in contract.FEATURES[1:]]
-            for path, plane in zip([hdr_path] + [feats[f] for f in contract.FEATURES[1:]], planes):
+            planes = [noisy.pixels] + [contract.read_rgb(p) for p in paths[1:]]
+            for path, plane in zip(paths, planes):
                 if plane.shape != ref.pixels.shape:
                     raise contract.ContractError(
                         f"{path}: {plane.shape[1]}x{plane.shape[0]} pixels, its reference {Path(ref.path).name} "

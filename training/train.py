@@ -5,6 +5,7 @@ checkpoints and the run's config in <run_dir>, resumable (--resume), bf16
 autocast with channels_last on CPU. Stops at the step count or the time budget."""
 import json
 import time
+from dataclasses import asdict
 from pathlib import Path
 
 import torch
@@ -97,7 +98,7 @@ def main(argv=None):
                "valid_loss": v, "device": device.type}
     (run / "summary.json").write_text(json.dumps(summary, indent=2))
     # What models/<dataset>.config.json records: the configuration and how the run went.
-    (run / "run.json").write_text(json.dumps({**json.loads((run / "config.json").read_text()), "run": summary}, indent=2))
+    (run / "run.json").write_text(json.dumps({**asdict(cfg), "run": summary}, indent=2))
     print(f"train: {step} steps in {summary['seconds']:.0f} s of training, validation loss {v:.4f}")
 
 
