@@ -97,15 +97,21 @@ fn make_ray(origin: Vec3, direction: Vec3, tnear: f64, tfar: f64) -> sys::RTCRay
     }
 }
 
+/// The valid mask of an 8-ray packet. Embree reads it with aligned vector loads, so it must
+/// sit on a 32-byte boundary like the packet itself (a plain `[i32; 8]` is only 4-aligned:
+/// rtcIntersect8 crashed on one).
+#[repr(C, align(32))]
+struct Valid8([i32; 8]);
+
 /// Up to 8 rays as an Embree packet, with its valid mask (lanes beyond `rays.len()` inactive).
-fn packet8(rays: &[Ray]) -> ([i32; 8], sys::RTCRay8) {
+fn packet8(rays: &[Ray]) -> (Valid8, sys::RTCRay8) {
     assert!(rays.len() <= 8, "a packet holds at most 8 rays");
-    let mut valid = [0i32; 8];
+    let mut valid = Valid8([0; 8]);
     // SAFETY: all-zero bytes are a valid RTCRay8 (plain f32/u32 arrays).
     let mut p: sys::RTCRay8 = unsafe { std::mem::zeroed() };
     for (i, r) in rays.iter().enumerate() {
         let ray = make_ray(r.origin, r.direction, r.tnear, r.tfar);
-        valid[i] = -1;
+        valid.0[i] = -1;
         (p.org_x[i], p.org_y[i], p.org_z[i]) = (ray.org_x, ray.org_y, ray.org_z);
         (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (ray.dir_x, ray.dir_y, ray.dir_z);
         (p.tnear[i], p.tfar[i], p.mask[i]) = (ray.tnear, ray.tfar, ray.mask);
@@ -282,8 +288,10 @@ impl RayTracer {
         };
         p.hit.geomID = [u32::MAX; 8];
         let mut ctx = context(false);
-        // SAFETY: `valid` and `p` are 32-byte-aligned packets of 8 lanes (the sys types' repr).
-        unsafe { sys::rtcIntersect8(valid.as_ptr(), self.scene, &mut ctx, &mut p) };
+        // SAFETY: `valid` (Valid8) and `p` (the sys type's repr) are 32-byte-aligned packets of
+        // 8 lanes.
+        debug_assert_eq!(valid.0.as_ptr() as usize % 32, 0, "valid mask misaligned");
+        unsafe { sys::rtcIntersect8(valid.0.as_ptr(), self.scene, &mut ctx, &mut p) };
         for (i, o) in out.iter_mut().enumerate() {
             *o = (i < rays.len() && p.hit.geomID[i] != u32::MAX).then(|| Hit {
                 t: p.ray.tfar[i] as f64,
@@ -305,7 +313,8 @@ impl RayTracer {
         let (valid, mut p) = packet8(rays);
         let mut ctx = context(false);
         // SAFETY: as in intersect8.
-        unsafe { sys::rtcOccluded8(valid.as_ptr(), self.scene, &mut ctx, &mut p) };
+        debug_assert_eq!(valid.0.as_ptr() as usize % 32, 0, "valid mask misaligned");
+        unsafe { sys::rtcOccluded8(valid.0.as_ptr(), self.scene, &mut ctx, &mut p) };
         for (i, o) in out.iter_mut().enumerate() {
             *o = i < rays.len() && p.tfar[i] == f32::NEG_INFINITY;
         }
