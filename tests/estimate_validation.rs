@@ -474,7 +474,12 @@ fn floor_edge_reference(cam: &luxest_render::camera::PinholeCamera) -> Vec<(f64,
 fn render_floor_edge(paths: u64) -> (estimate::image::ImageResult, Vec<(f64, f64)>) {
     let dir = crate::util::TempDir::new("dle-edge");
     let scene = crate::util::compile_text(&dir, "edge", FLOOR_EDGE);
-    let (world, cam) = luxest_render::world::load_with_camera(&scene, None).unwrap();
+    let (world, cam) = luxest_render::world::load_with_camera(
+        &scene,
+        None,
+        luxest_render::world::Traversal::Robust,
+    )
+    .unwrap();
     let r = estimate::image::render(
         &world,
         &cam,
@@ -560,7 +565,12 @@ fn double_local_estimate_is_unbiased_at_an_edge_where_the_clamped_kernel_is_not(
     // darkens the pixels near the edge, and the same comparison sees it (the test can fail).
     let dir = crate::util::TempDir::new("dle-corner");
     let scene = crate::util::compile_text(&dir, "corner", CORNER);
-    let (world, cam) = luxest_render::world::load_with_camera(&scene, None).unwrap();
+    let (world, cam) = luxest_render::world::load_with_camera(
+        &scene,
+        None,
+        luxest_render::world::Traversal::Robust,
+    )
+    .unwrap();
     let reference = estimate::light_trace::render(
         &world,
         &cam,
@@ -617,7 +627,12 @@ fn images_are_bit_identical_at_any_thread_count() {
     let lxs = dir.path().join("cb.lxs");
     crate::util::scene_compile(&[scene.to_str().unwrap(), "-o", lxs.to_str().unwrap(), "-q"])
         .unwrap();
-    let (world, cam) = luxest_render::world::load_with_camera(&lxs, Some("40x30")).unwrap();
+    let (world, cam) = luxest_render::world::load_with_camera(
+        &lxs,
+        Some("40x30"),
+        luxest_render::world::Traversal::Robust,
+    )
+    .unwrap();
     let dle = |threads| {
         estimate::image::render(
             &world,

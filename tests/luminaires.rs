@@ -642,7 +642,12 @@ fn double_local_estimate_image_sees_the_luminaire_distribution() {
     let dir = TempDir::new("dle-luminaire");
     std::fs::copy(fixtures().join("cos2.ies"), dir.path().join("cos2.ies")).unwrap();
     let scene = crate::util::compile_text(&dir, "lum", FLOOR_VIEW);
-    let (world, cam) = luxest_render::world::load_with_camera(&scene, None).unwrap();
+    let (world, cam) = luxest_render::world::load_with_camera(
+        &scene,
+        None,
+        luxest_render::world::Traversal::Robust,
+    )
+    .unwrap();
     let r = estimate::image::render(
         &world,
         &cam,

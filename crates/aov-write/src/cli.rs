@@ -11,7 +11,7 @@ use luxest_io::naming::{image_path, Kind, Level};
 use luxest_io::num::Count;
 use luxest_io::outputs::OutputPlan;
 use luxest_io::{Error, Result};
-use luxest_render::world::load_with_camera;
+use luxest_render::world::{load_with_camera, Traversal};
 use std::path::PathBuf;
 
 /// The estimator name recorded in the features' headers.
@@ -58,7 +58,7 @@ pub fn run(args: Args) -> Result<()> {
             args.spp
         )));
     }
-    let (world, cam) = load_with_camera(&args.scene, args.resolution.as_deref())?;
+    let (world, cam) = load_with_camera(&args.scene, args.resolution.as_deref(), Traversal::Fast)?;
     let prefix = args
         .out
         .clone()

@@ -20,7 +20,7 @@ use luxest_io::num::{Count, Real};
 use luxest_io::outputs::OutputPlan;
 use luxest_io::sensors::SensorResults;
 use luxest_io::{Error, Result};
-use luxest_render::world::{load_with_camera, World};
+use luxest_render::world::{load_with_camera, Traversal, World};
 use std::path::{Path, PathBuf};
 
 /// Local estimates of illuminance, exact solutions and validation.
@@ -371,7 +371,7 @@ pub fn run(args: Args) -> Result<()> {
             mis_paths,
             light_tracing,
         } => {
-            let (world, cam) = load_with_camera(&scene, resolution.as_deref())?;
+            let (world, cam) = load_with_camera(&scene, resolution.as_deref(), Traversal::Robust)?;
             luxest_io::limits::check_image(
                 "image film",
                 cam.width.into(),

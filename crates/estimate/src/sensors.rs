@@ -10,7 +10,7 @@ use luxest_io::{Error, Result};
 use luxest_render::compiled::CompiledScene;
 use luxest_render::compiled::SensorSet;
 use luxest_render::scene::{IlluminanceKind, SensorPoint};
-use luxest_render::world::World;
+use luxest_render::world::{Traversal, World};
 use std::path::Path;
 
 /// Loads a compiled scene and checks that it has sensors.
@@ -22,7 +22,7 @@ pub fn load_world(path: &Path) -> Result<World> {
             "scene has no sensors (add Points or Grid sensors to the .ron)",
         ));
     }
-    World::load_from(path, scene)
+    World::load_from(path, scene, Traversal::Robust)
 }
 
 /// Every sensor point of the scene, set by set.

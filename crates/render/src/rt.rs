@@ -97,28 +97,6 @@ fn make_ray(origin: Vec3, direction: Vec3, tnear: f64, tfar: f64) -> sys::RTCRay
     }
 }
 
-/// The valid mask of an 8-ray packet. Embree reads it with aligned vector loads, so it must
-/// sit on a 32-byte boundary like the packet itself (a plain `[i32; 8]` is only 4-aligned:
-/// rtcIntersect8 crashed on one).
-#[repr(C, align(32))]
-struct Valid8([i32; 8]);
-
-/// Up to 8 rays as an Embree packet, with its valid mask (lanes beyond `rays.len()` inactive).
-fn packet8(rays: &[Ray]) -> (Valid8, sys::RTCRay8) {
-    assert!(rays.len() <= 8, "a packet holds at most 8 rays");
-    let mut valid = Valid8([0; 8]);
-    // SAFETY: all-zero bytes are a valid RTCRay8 (plain f32/u32 arrays).
-    let mut p: sys::RTCRay8 = unsafe { std::mem::zeroed() };
-    for (i, r) in rays.iter().enumerate() {
-        let ray = make_ray(r.origin, r.direction, r.tnear, r.tfar);
-        valid.0[i] = -1;
-        (p.org_x[i], p.org_y[i], p.org_z[i]) = (ray.org_x, ray.org_y, ray.org_z);
-        (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (ray.dir_x, ray.dir_y, ray.dir_z);
-        (p.tnear[i], p.tfar[i], p.mask[i]) = (ray.tnear, ray.tfar, ray.mask);
-    }
-    (valid, p)
-}
-
 fn empty_hit() -> sys::RTCHit {
     sys::RTCHit {
         Ng_x: 0.0,
@@ -277,49 +255,6 @@ impl RayTracer {
         out.extend(buf.iter().map(to_hit));
     }
 
-    /// Closest hits for up to 8 rays as one packet (`rtcIntersect8`); `out[i]` receives the hit
-    /// of `rays[i]`, lanes beyond `rays.len()` are inactive.
-    pub fn intersect8(&self, rays: &[Ray], out: &mut [Option<Hit>; 8]) {
-        let (valid, ray) = packet8(rays);
-        let mut p = sys::RTCRayHit8 {
-            ray,
-            // SAFETY: all-zero bytes are a valid RTCHit8 (plain f32/u32 arrays).
-            hit: unsafe { std::mem::zeroed() },
-        };
-        p.hit.geomID = [u32::MAX; 8];
-        let mut ctx = context(false);
-        // SAFETY: `valid` (Valid8) and `p` (the sys type's repr) are 32-byte-aligned packets of
-        // 8 lanes.
-        debug_assert_eq!(valid.0.as_ptr() as usize % 32, 0, "valid mask misaligned");
-        unsafe { sys::rtcIntersect8(valid.0.as_ptr(), self.scene, &mut ctx, &mut p) };
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = (i < rays.len() && p.hit.geomID[i] != u32::MAX).then(|| Hit {
-                t: p.ray.tfar[i] as f64,
-                triangle: p.hit.primID[i],
-                u: p.hit.u[i] as f64,
-                v: p.hit.v[i] as f64,
-                geometric_normal: Vec3::new(
-                    p.hit.Ng_x[i] as f64,
-                    p.hit.Ng_y[i] as f64,
-                    p.hit.Ng_z[i] as f64,
-                ),
-            });
-        }
-    }
-
-    /// Visibility for up to 8 segments as one packet (`rtcOccluded8`); `out[i]` is true if
-    /// `rays[i]` is blocked.
-    pub fn occluded8(&self, rays: &[Ray], out: &mut [bool; 8]) {
-        let (valid, mut p) = packet8(rays);
-        let mut ctx = context(false);
-        // SAFETY: as in intersect8.
-        debug_assert_eq!(valid.0.as_ptr() as usize % 32, 0, "valid mask misaligned");
-        unsafe { sys::rtcOccluded8(valid.0.as_ptr(), self.scene, &mut ctx, &mut p) };
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = i < rays.len() && p.tfar[i] == f32::NEG_INFINITY;
-        }
-    }
-
     /// Visibility for a batch of segments (`rtcOccluded1M`); `out[i]` is true if blocked.
     pub fn occluded_many(&self, rays: &[Ray], out: &mut Vec<bool>) {
         let mut buf: Vec<sys::RTCRay> = rays
@@ -343,6 +278,117 @@ impl RayTracer {
         out.extend(buf.iter().map(|r| r.tfar == f32::NEG_INFINITY));
     }
 }
+
+/// Packet queries of one width: the valid-mask type, the packet builder and
+/// `RayTracer::$intersect` / `RayTracer::$occluded`.
+macro_rules! packet_queries {
+    ($width:literal, $align:literal, $valid:ident, $build:ident, $ray:ident, $rayhit:ident,
+     $rtc_intersect:ident, $rtc_occluded:ident, $intersect:ident, $occluded:ident) => {
+        /// The valid mask of a packet. Embree reads it with aligned vector loads, so it sits
+        /// on the packet's own alignment (a plain `[i32; N]` is only 4-aligned: rtcIntersect8
+        /// crashed on one).
+        #[repr(C, align($align))]
+        struct $valid([i32; $width]);
+
+        /// Up to N rays as an Embree packet, with its valid mask (lanes beyond `rays.len()`
+        /// inactive).
+        fn $build(rays: &[Ray]) -> ($valid, sys::$ray) {
+            assert!(
+                rays.len() <= $width,
+                "a packet holds at most {} rays",
+                $width
+            );
+            let mut valid = $valid([0; $width]);
+            // SAFETY: all-zero bytes are a valid packet (plain f32/u32 arrays).
+            let mut p: sys::$ray = unsafe { std::mem::zeroed() };
+            for (i, r) in rays.iter().enumerate() {
+                let ray = make_ray(r.origin, r.direction, r.tnear, r.tfar);
+                valid.0[i] = -1;
+                (p.org_x[i], p.org_y[i], p.org_z[i]) = (ray.org_x, ray.org_y, ray.org_z);
+                (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (ray.dir_x, ray.dir_y, ray.dir_z);
+                (p.tnear[i], p.tfar[i], p.mask[i]) = (ray.tnear, ray.tfar, ray.mask);
+            }
+            (valid, p)
+        }
+
+        impl RayTracer {
+            /// Closest hits for up to N rays as one packet; `out[i]` receives the hit of
+            /// `rays[i]`, lanes beyond `rays.len()` are inactive.
+            pub fn $intersect(&self, rays: &[Ray], out: &mut [Option<Hit>; $width]) {
+                let (valid, ray) = $build(rays);
+                let mut p = sys::$rayhit {
+                    ray,
+                    // SAFETY: all-zero bytes are a valid hit packet (plain f32/u32 arrays).
+                    hit: unsafe { std::mem::zeroed() },
+                };
+                p.hit.geomID = [u32::MAX; $width];
+                let mut ctx = context(false);
+                debug_assert_eq!(
+                    valid.0.as_ptr() as usize % $align,
+                    0,
+                    "valid mask misaligned"
+                );
+                // SAFETY: `valid` and `p` (the sys type's repr) are aligned packets of N lanes.
+                unsafe { sys::$rtc_intersect(valid.0.as_ptr(), self.scene, &mut ctx, &mut p) };
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = (i < rays.len() && p.hit.geomID[i] != u32::MAX).then(|| Hit {
+                        t: p.ray.tfar[i] as f64,
+                        triangle: p.hit.primID[i],
+                        u: p.hit.u[i] as f64,
+                        v: p.hit.v[i] as f64,
+                        geometric_normal: Vec3::new(
+                            p.hit.Ng_x[i] as f64,
+                            p.hit.Ng_y[i] as f64,
+                            p.hit.Ng_z[i] as f64,
+                        ),
+                    });
+                }
+            }
+
+            /// Visibility for up to N segments as one packet; `out[i]` is true if `rays[i]`
+            /// is blocked.
+            pub fn $occluded(&self, rays: &[Ray], out: &mut [bool; $width]) {
+                let (valid, mut p) = $build(rays);
+                let mut ctx = context(false);
+                debug_assert_eq!(
+                    valid.0.as_ptr() as usize % $align,
+                    0,
+                    "valid mask misaligned"
+                );
+                // SAFETY: as in the closest-hit query.
+                unsafe { sys::$rtc_occluded(valid.0.as_ptr(), self.scene, &mut ctx, &mut p) };
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = i < rays.len() && p.tfar[i] == f32::NEG_INFINITY;
+                }
+            }
+        }
+    };
+}
+
+packet_queries!(
+    8,
+    32,
+    Valid8,
+    packet8,
+    RTCRay8,
+    RTCRayHit8,
+    rtcIntersect8,
+    rtcOccluded8,
+    intersect8,
+    occluded8
+);
+packet_queries!(
+    16,
+    64,
+    Valid16,
+    packet16,
+    RTCRay16,
+    RTCRayHit16,
+    rtcIntersect16,
+    rtcOccluded16,
+    intersect16,
+    occluded16
+);
 
 #[cfg(test)]
 mod tests {
@@ -438,7 +484,21 @@ mod tests {
             );
             assert_eq!(occ[i], hits[i].is_some());
         }
-        // Packets of 8, the last one partial (inactive lanes report nothing).
+        // Packets of 16, then of 8, the last one partial (inactive lanes report nothing).
+        let (mut h16, mut o16) = ([None; 16], [false; 16]);
+        for (k, chunk) in rays[..997].chunks(16).enumerate() {
+            rt.intersect16(chunk, &mut h16);
+            rt.occluded16(chunk, &mut o16);
+            for i in 0..16 {
+                let want = hits
+                    .get(16 * k + i)
+                    .copied()
+                    .flatten()
+                    .filter(|_| i < chunk.len());
+                assert_eq!(h16[i], want, "packet {k} lane {i}");
+                assert_eq!(o16[i], want.is_some(), "packet {k} lane {i}");
+            }
+        }
         let (mut h8, mut o8) = ([None; 8], [false; 8]);
         for (k, chunk) in rays[..997].chunks(8).enumerate() {
             rt.intersect8(chunk, &mut h8);

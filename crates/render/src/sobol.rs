@@ -42,9 +42,11 @@ const SOBOL_1: [u32; 32] = {
     v
 };
 
-/// [`SOBOL_1`] applied a byte at a time: entry `[b][v]` is the XOR of the columns of the set
-/// bits of byte value `v` at byte `b` of the index (the shuffled indices use all 32 bits).
-const SOBOL_1_BYTES: [[u32; 256]; 4] = {
+/// [`SOBOL_1`] applied a byte at a time, bit-reversed: entry `[b][v]` is the XOR of the
+/// reversed columns of the set bits of byte value `v` at byte `b` of the index (the shuffled
+/// indices use all 32 bits). Reversed because the Owen scramble works on reversed bits: the
+/// table saves a bit reversal per draw (x86 has no instruction for one).
+const SOBOL_1_REV_BYTES: [[u32; 256]; 4] = {
     let mut t = [[0u32; 256]; 4];
     let mut b = 0;
     while b < 4 {
@@ -54,7 +56,7 @@ const SOBOL_1_BYTES: [[u32; 256]; 4] = {
             let mut j = 0;
             while j < 8 {
                 if v & (1 << j) != 0 {
-                    x ^= SOBOL_1[8 * b + j];
+                    x ^= SOBOL_1[8 * b + j].reverse_bits();
                 }
                 j += 1;
             }
@@ -66,14 +68,20 @@ const SOBOL_1_BYTES: [[u32; 256]; 4] = {
     t
 };
 
-/// Sobol dimension 1 of index `i`, as 32 fraction bits.
+/// Sobol dimension 1 of index `i`, as 32 fraction bits, bit-reversed.
 #[inline]
-fn sobol_1(i: u32) -> u32 {
+fn sobol_1_reversed(i: u32) -> u32 {
     let [b0, b1, b2, b3] = i.to_le_bytes();
-    SOBOL_1_BYTES[0][b0 as usize]
-        ^ SOBOL_1_BYTES[1][b1 as usize]
-        ^ SOBOL_1_BYTES[2][b2 as usize]
-        ^ SOBOL_1_BYTES[3][b3 as usize]
+    SOBOL_1_REV_BYTES[0][b0 as usize]
+        ^ SOBOL_1_REV_BYTES[1][b1 as usize]
+        ^ SOBOL_1_REV_BYTES[2][b2 as usize]
+        ^ SOBOL_1_REV_BYTES[3][b3 as usize]
+}
+
+/// Sobol dimension 1 of index `i`, as 32 fraction bits.
+#[cfg(test)]
+fn sobol_1(i: u32) -> u32 {
+    sobol_1_reversed(i).reverse_bits()
 }
 
 /// Laine and Karras' hash-based permutation with Burley's constants: bit j of the result
@@ -104,7 +112,8 @@ fn unit(x: u32) -> f64 {
 pub struct PixelSampler {
     /// Hash of (seed, pixel): the key of every dimension's scrambles.
     key: u64,
-    index: u32,
+    /// The sample index, bit-reversed (what the index shuffle scrambles).
+    reversed_index: u32,
     dimension: u32,
     /// The independent stream for bounces from [`SOBOL_BOUNCES`] on.
     rng: Rng,
@@ -117,7 +126,7 @@ impl PixelSampler {
     pub fn new(seed: u64, pixel: u64, sample: u32) -> PixelSampler {
         PixelSampler {
             key: splitmix64(seed ^ splitmix64(pixel.wrapping_mul(0x9E37_79B9_7F4A_7C15))),
-            index: sample,
+            reversed_index: sample.reverse_bits(),
             dimension: 0,
             rng: Rng::new(seed, (pixel << 24) | sample as u64),
             sobol: true,
@@ -137,20 +146,28 @@ impl PixelSampler {
         self.dimension = (bounce + 1) * DIMS_PER_BOUNCE;
     }
 
-    /// The shuffled index and the two scramble seeds of the next dimension.
+    /// The shuffled index and the two scramble seeds of the next dimension. The shuffle is
+    /// `owen_scramble(index, h)` with the index's reversal done once per sample.
     #[inline]
     fn next_dimension(&mut self) -> (u32, u32, u32) {
         let h = splitmix64(self.key ^ self.dimension as u64);
         self.dimension += 1;
-        let index = owen_scramble(self.index, h as u32);
+        let index = laine_karras(self.reversed_index, h as u32).reverse_bits();
         (index, (h >> 32) as u32, splitmix64(h) as u32)
+    }
+
+    /// Sobol dimension 0 of shuffled index `i` (its bit reversal), Owen-scrambled:
+    /// `owen_scramble(i.reverse_bits(), seed)` without the two reversals that cancel.
+    #[inline]
+    fn dimension_0(i: u32, seed: u32) -> f64 {
+        unit(laine_karras(i, seed).reverse_bits())
     }
 
     fn sobol_2d(&mut self) -> (f64, f64) {
         let (i, s0, s1) = self.next_dimension();
         (
-            unit(owen_scramble(i.reverse_bits(), s0)),
-            unit(owen_scramble(sobol_1(i), s1)),
+            Self::dimension_0(i, s0),
+            unit(laine_karras(sobol_1_reversed(i), s1).reverse_bits()),
         )
     }
 }
@@ -160,7 +177,7 @@ impl Sampler for PixelSampler {
     fn next_f64(&mut self) -> f64 {
         if self.sobol {
             let (i, s0, _) = self.next_dimension();
-            unit(owen_scramble(i.reverse_bits(), s0))
+            Self::dimension_0(i, s0)
         } else {
             self.rng.next_f64()
         }
@@ -195,6 +212,32 @@ mod tests {
                 .filter(|k| i >> k & 1 == 1)
                 .fold(0, |x, k| x ^ SOBOL_1[k]);
             assert_eq!(sobol_1(i), x, "index {i}");
+        }
+    }
+
+    #[test]
+    fn draws_are_the_scrambles_they_stand_for() {
+        // The reversal-saving forms against the definitions: index shuffle
+        // owen_scramble(index, h), dimension 0 owen_scramble(reverse(i), s0), dimension 1
+        // owen_scramble(sobol_1(i), s1).
+        let mut r = Rng::new(5, 0);
+        for _ in 0..1000 {
+            let (index, h, s0, s1) = (r.next_u32(), r.next_u32(), r.next_u32(), r.next_u32());
+            assert_eq!(
+                laine_karras(index.reverse_bits(), h).reverse_bits(),
+                owen_scramble(index, h)
+            );
+            assert_eq!(
+                PixelSampler::dimension_0(index, s0),
+                unit(owen_scramble(index.reverse_bits(), s0))
+            );
+            let x = (0..32)
+                .filter(|k| index >> k & 1 == 1)
+                .fold(0, |x, k| x ^ SOBOL_1[k]);
+            assert_eq!(
+                laine_karras(sobol_1_reversed(index), s1).reverse_bits(),
+                owen_scramble(x, s1)
+            );
         }
     }
 

@@ -98,11 +98,23 @@ pub fn parse_resolution(r: &str) -> Result<(u32, u32)> {
     }
 }
 
+/// How Embree intersects the scene's triangles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Traversal {
+    /// Embree's robust mode: watertight on shared edges, also for rays that start on an edge
+    /// or in a corner, where the local estimate's sensors and connection points sit.
+    Robust,
+    /// Embree's default mode, about 1.3× the robust mode's ray rate: for estimators whose rays
+    /// start at sampled interior points of surfaces (the camera path tracer and its features).
+    Fast,
+}
+
 /// Loads a compiled scene for a camera stage: the world and its pinhole camera, with an
 /// optional `WIDTHxHEIGHT` resolution override. Errors name the scene file.
 pub fn load_with_camera(
     path: &std::path::Path,
     resolution: Option<&str>,
+    traversal: Traversal,
 ) -> Result<(World, crate::camera::PinholeCamera)> {
     let compiled = CompiledScene::load(path)?;
     let mut camera = compiled
@@ -116,7 +128,7 @@ pub fn load_with_camera(
     let (w, h) = camera.resolution;
     luxest_io::limits::check_image("film", w as u64, h as u64, FILM_BYTES_PER_PIXEL)
         .map_err(luxest_io::Error::Usage)?;
-    let world = World::load_from(path, compiled)?;
+    let world = World::load_from(path, compiled, traversal)?;
     let cam = crate::camera::PinholeCamera::new(&camera)
         .ok_or_else(|| luxest_io::Error::input(path, "degenerate camera"))?;
     Ok((world, cam))
@@ -124,15 +136,24 @@ pub fn load_with_camera(
 
 impl World {
     /// [`World::new`] with errors attributed to the compiled scene's file.
-    pub fn load_from(path: &std::path::Path, scene: CompiledScene) -> Result<World> {
-        World::new(scene).map_err(|e| match e {
+    pub fn load_from(
+        path: &std::path::Path,
+        scene: CompiledScene,
+        traversal: Traversal,
+    ) -> Result<World> {
+        World::with_traversal(scene, traversal).map_err(|e| match e {
             luxest_io::Error::Usage(m) => luxest_io::Error::input(path, m),
             other => other,
         })
     }
 
+    /// The world with [`Traversal::Robust`] ray queries.
     pub fn new(scene: CompiledScene) -> Result<World> {
-        let tracer = RayTracer::for_scene(&scene, true)?;
+        World::with_traversal(scene, Traversal::Robust)
+    }
+
+    pub fn with_traversal(scene: CompiledScene, traversal: Traversal) -> Result<World> {
+        let tracer = RayTracer::for_scene(&scene, traversal == Traversal::Robust)?;
         let weights: Vec<f64> = scene.header.emitters.iter().map(Emitter::flux_lm).collect();
         let emitter_choice = Distribution1D::new(&weights).ok_or_else(|| {
             luxest_io::Error::input(

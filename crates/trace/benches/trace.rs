@@ -22,6 +22,8 @@ enum Query {
     /// `rtcIntersect8` / `rtcOccluded8` on packets of 8 rays of the same bounce from
     /// neighbouring pixels (what a wavefront tracer would submit).
     Packet8,
+    /// `rtcIntersect16` / `rtcOccluded16` on packets of 16 such rays (AVX-512).
+    Packet16,
     /// `rtcIntersect1M` / `rtcOccluded1M` on streams of 256 such rays.
     Stream256,
 }
@@ -71,6 +73,17 @@ fn raw_seconds(
                 }
                 for p in shadow.chunks(8) {
                     tracer.occluded8(p, &mut o);
+                    n += o.iter().filter(|&&x| x).count();
+                }
+            }
+            Query::Packet16 => {
+                let (mut h, mut o) = ([None; 16], [false; 16]);
+                for p in closest.chunks(16) {
+                    tracer.intersect16(p, &mut h);
+                    n += h.iter().filter(|x| x.is_some()).count();
+                }
+                for p in shadow.chunks(16) {
+                    tracer.occluded16(p, &mut o);
                     n += o.iter().filter(|&&x| x).count();
                 }
             }
@@ -127,7 +140,13 @@ fn bench(name: &str, resolution: &str, spp: u32) {
         wavefront(&rec.closest_rays, &rec.closest_depths),
         wavefront(&rec.shadow_rays, &rec.shadow_depths),
     );
-    let t_wave = [Query::Single, Query::Packet8, Query::Stream256].map(|q| (q, best(&wc, &ws, q)));
+    let t_wave = [
+        Query::Single,
+        Query::Packet8,
+        Query::Packet16,
+        Query::Stream256,
+    ]
+    .map(|q| (q, best(&wc, &ws, q)));
     let rec_rays = (rec.closest_rays.len() + rec.shadow_rays.len()) as f64;
     println!(
         "trace {name} {resolution}, {spp} spp, {} triangles: {:.2} s (best of 3), {:.3} M samples/s, {:.2} M rays/s ({:.2} rays/sample); \

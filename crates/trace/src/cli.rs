@@ -11,7 +11,6 @@ use luxest_io::naming::{image_path, Kind, Level};
 use luxest_io::num::{Count, Real};
 use luxest_io::outputs::OutputPlan;
 use luxest_io::{Error, Result};
-use luxest_render::world::load_with_camera;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -83,7 +82,7 @@ pub fn run(args: Args) -> Result<()> {
             )));
         }
     }
-    let (world, camera) = load_with_camera(&args.scene, args.resolution.as_deref())?;
+    let (world, camera) = crate::load(&args.scene, args.resolution.as_deref())?;
     let prefix = args
         .out
         .clone()

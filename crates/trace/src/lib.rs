@@ -16,5 +16,18 @@ pub mod renderer;
 
 pub use cli::{run, Args, ESTIMATOR};
 pub use film::Film;
-pub use luxest_render::world::load_with_camera as load;
+/// Loads a compiled scene for path tracing: its world, with Embree's fast traversal (the path
+/// tracer's rays start at sampled interior points of surfaces, never on the edges and corners
+/// that need the robust mode), and its camera, with an optional `WIDTHxHEIGHT` resolution
+/// override. Errors name the scene file.
+pub fn load(
+    path: &std::path::Path,
+    resolution: Option<&str>,
+) -> luxest_io::Result<(
+    luxest_render::world::World,
+    luxest_render::camera::PinholeCamera,
+)> {
+    use luxest_render::world::{load_with_camera, Traversal};
+    load_with_camera(path, resolution, Traversal::Fast)
+}
 pub use renderer::{pixel_sampler, Renderer, TILE};
