@@ -10,8 +10,11 @@ reflectances are saturated colours. The camera stands somewhere in the room look
 something, or, in a quarter of the rooms, outside a room open at the front (as the Cornell box
 is seen), so that views include empty background. Everything follows from (seed, index), so a scene regenerates byte for byte.
 
-  generate.py --preset quick|full --out DIR     write DIR/<split>/<name>.ron
-  generate.py --preset quick --list             print "<split>/<name>" per scene
+  generate.py --preset quick|full --side N --out DIR   write DIR/<split>/<name>.ron, N x N images
+  generate.py --preset quick --list                    print "<split>/<name>" per scene
+
+The preset selects the number of scenes; the image side comes from pipelines/presets.mk
+(DATASET_SIDE), which passes it.
 
 Splits: scene i goes to test if i % 6 == 5, to valid if i % 6 == 4, else to train.
 """
@@ -21,10 +24,10 @@ import random
 import sys
 from pathlib import Path
 
+# Scenes per preset (the image side is DATASET_SIDE in pipelines/presets.mk).
 PRESETS = {
-    # scenes, image side (pixels)
-    "quick": (24, 160),
-    "full": (240, 384),
+    "quick": 24,
+    "full": 240,
 }
 MESHES = Path(__file__).resolve().parent.parent / "scenes" / "meshes"
 
@@ -34,7 +37,7 @@ def split_of(i):
 
 
 def names(preset):
-    n, _ = PRESETS[preset]
+    n = PRESETS[preset]
     return [(split_of(i), f"gen{i:04d}") for i in range(n)]
 
 
@@ -68,9 +71,8 @@ def light_tint(rng):
     return v3(1.0, rng.uniform(0.75, 1.0), rng.uniform(0.5, 1.0))
 
 
-def scene(preset, index, seed, scene_dir=None):
+def scene(preset, index, seed, side, scene_dir=None):
     rng = random.Random(seed * 1_000_003 + index)
-    _, side = PRESETS[preset]
     w, h, d = rng.uniform(3.0, 7.0), rng.uniform(2.4, 3.6), rng.uniform(3.0, 7.0)
     materials, objects, lights = {}, [], []
 
@@ -186,6 +188,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", default="quick", choices=sorted(PRESETS))
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--side", type=int, help="image side in pixels (required with --out)")
     ap.add_argument("--out", type=Path)
     ap.add_argument("--list", action="store_true")
     args = ap.parse_args()
@@ -194,10 +197,12 @@ def main():
         return
     if args.out is None:
         ap.error("--out is required unless --list")
+    if args.side is None or not 16 <= args.side <= 8192:
+        ap.error("--side: the image side in pixels, 16 to 8192, is required with --out")
     for i, (split, name) in enumerate(names(args.preset)):
         path = args.out / split / f"{name}.ron"
         path.parent.mkdir(parents=True, exist_ok=True)
-        text = scene(args.preset, i, args.seed, path.parent.resolve())
+        text = scene(args.preset, i, args.seed, args.side, path.parent.resolve())
         # Rewrite only what changed, so make rebuilds only what changed.
         if not path.exists() or path.read_text() != text:
             tmp = path.with_suffix(f".ron.{os.getpid()}.tmp")  # unique: make -j may run two generators

@@ -31,8 +31,14 @@ NOISY_SNAPSHOTS := $(subst $(space),$(comma),$(strip $(NOISY_LEVELS)))
 # every call (a fraction of a second) and `make -n` lists their compile and render steps too; a
 # real run re-reads the unchanged scenes' times and skips those steps.
 
-$(GEN_DIR)/%.ron: data-gen/generate.py $(MESHES)
-	@python3 data-gen/generate.py --preset $(PRESET) --out $(GEN_DIR)
+# DATASET_SIDE is part of what a scene is (its camera's resolution): a stamp named after it
+# regenerates the scenes when it changes (the generator rewrites the files whose text changed).
+SIDE_STAMP := build/dataset/$(DATASET)/side-$(DATASET_SIDE)
+$(SIDE_STAMP):
+	mkdir -p $(@D) && rm -f $(@D)/side-* && touch $@
+
+$(GEN_DIR)/%.ron: data-gen/generate.py $(MESHES) $(SIDE_STAMP)
+	@python3 data-gen/generate.py --preset $(PRESET) --side $(DATASET_SIDE) --out $(GEN_DIR)
 
 build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(SCENE_COMPILE)
 	$(SCENE_COMPILE) -q $< -o $@

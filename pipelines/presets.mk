@@ -1,9 +1,8 @@
 # The presets: every number that `PRESET=quick|full` scales, defined once, here. The Python steps
 # receive these values as arguments from the rules; none has its own copy. (The dataset's scene
-# count and image size are data-gen/generate.py's, selected by --preset $(PRESET).)
+# count is data-gen/generate.py's, selected by --preset $(PRESET).)
 #
-# quick fits a 2-core machine: `make reference noisy train eval` in about 70 minutes (most of it
-# the dataset: 1024-spp references and noisy levels to 1024 spp, issue 11).
+# quick fits a 2-core machine: `make reference noisy train eval` in about 45 minutes (issue 11).
 
 PRESET ?= quick
 ifeq ($(filter $(PRESET),quick full),)
@@ -14,7 +13,10 @@ endif
 # also overridable on the command line (`make eval EVAL_DLE="100 1000"`).
 lx_preset = $(1) ?= $(if $(filter full,$(PRESET)),$(3),$(2))
 
-# Dataset (pipelines/dataset.mk): reference samples per pixel; noisy snapshot levels.
+# Dataset (pipelines/dataset.mk): image side in pixels (data-gen/generate.py --side; quick was
+# 160 until 2026-11-23, the side models/default.onnx was trained at: 112 renders in half the
+# time); reference samples per pixel; noisy snapshot levels.
+$(eval $(call lx_preset,DATASET_SIDE,112,384))
 $(eval $(call lx_preset,REF_SPP,1024,4096))
 $(eval $(call lx_preset,NOISY_LEVELS,1 2 4 8 16 32 64 256 1024,1 2 4 8 16 32 64 256 1024))
 # The second input family: double-local-estimate images (estimate image, seed NOISY_SEED) of the
@@ -22,10 +24,10 @@ $(eval $(call lx_preset,NOISY_LEVELS,1 2 4 8 16 32 64 256 1024,1 2 4 8 16 32 64 
 $(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))
 
 # Training (make train): steps of the one-cycle schedule, and the time budget in minutes (quick:
-# 4500 steps of the kernel-predicting model took 22.0 minutes on 2 cores, the schedule ending
-# just within the budget).
-$(eval $(call lx_preset,TRAIN_STEPS,4500,60000))
-$(eval $(call lx_preset,TRAIN_MINUTES,22,600))
+# the kernel-predicting model takes about 0.29 s per step on 2 cores, so 3400 steps end within
+# 17 minutes).
+$(eval $(call lx_preset,TRAIN_STEPS,3400,60000))
+$(eval $(call lx_preset,TRAIN_MINUTES,17,600))
 
 # Evaluation (pipelines/eval.mk): the Cornell-box reference spp and progressive run's last spp,
 # double-local-estimate light paths on the Cornell box, light-tracing paths on the Cornell box

@@ -299,7 +299,7 @@ fn generated_training_scenes_compile_and_are_reproducible() {
     let gen = |out: &std::path::Path| {
         let status = std::process::Command::new("python3")
             .arg(repo_root().join("data-gen/generate.py"))
-            .args(["--preset", "quick", "--out"])
+            .args(["--preset", "quick", "--side", "64", "--out"])
             .arg(out)
             .stderr(std::process::Stdio::null())
             .status()

@@ -69,6 +69,28 @@ def test_references_follow_ref_spp():
     assert all(flag(c, "--spp") == "2048" for c in cmds if c[0] == STAGES["TRACE"])
 
 
+def test_scenes_follow_dataset_side():
+    # The stamp named after DATASET_SIDE is a prerequisite of every generated scene, and the
+    # generator is told the side.
+    out = subprocess.run(["make", "-n", "--no-print-directory", "-p", "reference", "DATASET_SIDE=96", "DATASET=pytest-dry-run",
+                          *[f"{k}={v}" for k, v in STAGES.items()]], cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    rule = re.search(r"^build/dataset/pytest-dry-run/scenes/%\.ron:(.*)$", out.stdout, re.M)
+    assert rule and "build/dataset/pytest-dry-run/side-96" in rule.group(1).split()
+    gen = [shlex.split(line) for line in out.stdout.splitlines() if line.startswith("python3 data-gen/generate.py")]
+    assert gen and all(flag(c, "--side") == "96" and flag(c, "--preset") == "quick" for c in gen)
+
+
+def test_generator_writes_the_side_it_is_given(tmp_path):
+    subprocess.run(["python3", "data-gen/generate.py", "--preset", "quick", "--side", "72", "--out", str(tmp_path)],
+                   cwd=ROOT, check=True, capture_output=True)
+    scenes = sorted(tmp_path.glob("*/gen*.ron"))
+    assert len(scenes) == 24 and all("resolution: (72, 72)" in p.read_text() for p in scenes)
+    r = subprocess.run(["python3", "data-gen/generate.py", "--preset", "quick", "--out", str(tmp_path)],
+                       cwd=ROOT, capture_output=True, text=True)
+    assert r.returncode != 0 and "--side" in r.stderr
+
+
 def test_noisy_target_follows_noisy_max():
     cmds = dry_run("noisy", NOISY_LEVELS="1 2 4 8")
     runs = [c for c in cmds if c[0] == STAGES["TRACE"]]
