@@ -47,6 +47,9 @@ PYTHON := $(VENV)/bin/python
 include pipelines/presets.mk
 include pipelines/naming.mk
 include pipelines/dataset.mk
+# The model `make train` writes and `make eval` scores by default (EVAL_MODEL). Defined before
+# eval.mk, whose per-scene rules expand it when they are defined.
+MODEL := models/$(DATASET).onnx
 include pipelines/validate.mk
 include pipelines/singularity.mk
 include pipelines/eval.mk
@@ -107,9 +110,7 @@ pytest: $(VENV)/$(VENV_STAMP)
 	$(PYTHON) -m pytest training/tests -q
 
 # The denoiser: preprocess the dataset, train (TRAIN_STEPS / TRAIN_MINUTES), export ONNX, and
-# score it on the held-out test scenes with the evaluate stage. PRESET=quick fits 30 minutes on
-# 2 cores.
-MODEL := models/$(DATASET).onnx
+# score it on the held-out test scenes with the evaluate stage (MODEL: defined before eval.mk).
 
 train: $(MODEL)
 

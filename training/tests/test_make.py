@@ -100,6 +100,16 @@ def test_noisy_target_follows_noisy_max():
     assert re.search(r"^data/pytest-dry-run/%_000008spp\.nrm\.exr:", out, re.M)
 
 
+def test_eval_scores_the_trained_model_by_default():
+    # `make reference noisy train eval`: every image make eval denoises, the Cornell box's and
+    # the held-out scenes', goes through the model make train writes (a per-scene rule once
+    # expanded it before it was defined and ran `denoise --model` with no model).
+    cmds = dry_run("eval")
+    denoised = [c for c in cmds if c[0] == STAGES["DENOISE"]]
+    assert any("/dataset/" in flag(c, "-o") for c in denoised) and any("/cornell-box/" in flag(c, "-o") for c in denoised)
+    assert {flag(c, "--model") for c in denoised} == {"models/pytest-dry-run.onnx"}
+
+
 def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     cmds = dry_run("eval", EVAL_MODEL="models/default.onnx")
     traces = [c for c in cmds if c[0] == STAGES["TRACE"] and "cornell-box" in c[1]]
