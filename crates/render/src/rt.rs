@@ -485,32 +485,34 @@ mod tests {
             assert_eq!(occ[i], hits[i].is_some());
         }
         // Packets of 16, then of 8, the last one partial (inactive lanes report nothing).
-        let (mut h16, mut o16) = ([None; 16], [false; 16]);
-        for (k, chunk) in rays[..997].chunks(16).enumerate() {
-            rt.intersect16(chunk, &mut h16);
-            rt.occluded16(chunk, &mut o16);
-            for i in 0..16 {
+        check_packets::<16>(&rays[..997], &hits, |c, h, o| {
+            rt.intersect16(c, h);
+            rt.occluded16(c, o);
+        });
+        check_packets::<8>(&rays[..997], &hits, |c, h, o| {
+            rt.intersect8(c, h);
+            rt.occluded8(c, o);
+        });
+    }
+
+    /// Packet queries of width N (`query` fills hits and occlusion for a chunk) against the
+    /// single-ray hits of the same rays.
+    fn check_packets<const N: usize>(
+        rays: &[Ray],
+        hits: &[Option<Hit>],
+        query: impl Fn(&[Ray], &mut [Option<Hit>; N], &mut [bool; N]),
+    ) {
+        let (mut h, mut o) = ([None; N], [false; N]);
+        for (k, chunk) in rays.chunks(N).enumerate() {
+            query(chunk, &mut h, &mut o);
+            for i in 0..N {
                 let want = hits
-                    .get(16 * k + i)
+                    .get(N * k + i)
                     .copied()
                     .flatten()
                     .filter(|_| i < chunk.len());
-                assert_eq!(h16[i], want, "packet {k} lane {i}");
-                assert_eq!(o16[i], want.is_some(), "packet {k} lane {i}");
-            }
-        }
-        let (mut h8, mut o8) = ([None; 8], [false; 8]);
-        for (k, chunk) in rays[..997].chunks(8).enumerate() {
-            rt.intersect8(chunk, &mut h8);
-            rt.occluded8(chunk, &mut o8);
-            for i in 0..8 {
-                let want = hits
-                    .get(8 * k + i)
-                    .copied()
-                    .flatten()
-                    .filter(|_| i < chunk.len());
-                assert_eq!(h8[i], want, "packet {k} lane {i}");
-                assert_eq!(o8[i], want.is_some(), "packet {k} lane {i}");
+                assert_eq!(h[i], want, "width {N} packet {k} lane {i}");
+                assert_eq!(o[i], want.is_some(), "width {N} packet {k} lane {i}");
             }
         }
     }

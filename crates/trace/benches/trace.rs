@@ -36,6 +36,27 @@ fn wavefront(rays: &[Ray], depths: &[u32]) -> Vec<Ray> {
     idx.into_iter().map(|i| rays[i]).collect()
 }
 
+/// Hits and blocked segments counted over packets of width N (`intersect` and `occluded`: the
+/// tracer's queries of that width).
+fn packets<const N: usize>(
+    closest: &[Ray],
+    shadow: &[Ray],
+    intersect: impl Fn(&[Ray], &mut [Option<luxest_render::rt::Hit>; N]),
+    occluded: impl Fn(&[Ray], &mut [bool; N]),
+) -> usize {
+    let (mut h, mut o) = ([None; N], [false; N]);
+    let mut n = 0;
+    for p in closest.chunks(N) {
+        intersect(p, &mut h);
+        n += h.iter().filter(|x| x.is_some()).count();
+    }
+    for p in shadow.chunks(N) {
+        occluded(p, &mut o);
+        n += o.iter().filter(|&&x| x).count();
+    }
+    n
+}
+
 /// Raw Embree time for the recorded rays, split over `threads`.
 fn raw_seconds(
     world: &luxest_render::world::World,
@@ -66,26 +87,20 @@ fn raw_seconds(
                 }
             }
             Query::Packet8 => {
-                let (mut h, mut o) = ([None; 8], [false; 8]);
-                for p in closest.chunks(8) {
-                    tracer.intersect8(p, &mut h);
-                    n += h.iter().filter(|x| x.is_some()).count();
-                }
-                for p in shadow.chunks(8) {
-                    tracer.occluded8(p, &mut o);
-                    n += o.iter().filter(|&&x| x).count();
-                }
+                n += packets::<8>(
+                    closest,
+                    shadow,
+                    |c, h| tracer.intersect8(c, h),
+                    |c, o| tracer.occluded8(c, o),
+                )
             }
             Query::Packet16 => {
-                let (mut h, mut o) = ([None; 16], [false; 16]);
-                for p in closest.chunks(16) {
-                    tracer.intersect16(p, &mut h);
-                    n += h.iter().filter(|x| x.is_some()).count();
-                }
-                for p in shadow.chunks(16) {
-                    tracer.occluded16(p, &mut o);
-                    n += o.iter().filter(|&&x| x).count();
-                }
+                n += packets::<16>(
+                    closest,
+                    shadow,
+                    |c, h| tracer.intersect16(c, h),
+                    |c, o| tracer.occluded16(c, o),
+                )
             }
             Query::Stream256 => {
                 let (mut h, mut o) = (Vec::new(), Vec::new());
