@@ -152,6 +152,8 @@ impl World {
         World::with_traversal(scene, Traversal::Robust)
     }
 
+    /// The world with the given kind of ray queries (the stage that loads it chooses:
+    /// docs/architecture.md, *Crate graph*).
     pub fn with_traversal(scene: CompiledScene, traversal: Traversal) -> Result<World> {
         let tracer = RayTracer::for_scene(&scene, traversal == Traversal::Robust)?;
         let weights: Vec<f64> = scene.header.emitters.iter().map(Emitter::flux_lm).collect();
