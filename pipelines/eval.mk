@@ -16,6 +16,8 @@
 # images at EVAL_DATA_DLE paths, denoised with the NOISY_MAX features. (3) The cases of `make validate` at EVAL_SENSOR_SCALE times
 # their paths, against exact values. Every image luxest's model denoises in (1) and (2) is also
 # denoised by Intel Open Image Denoise 1.4.3 (the peer; hdr + albedo + normal), scored beside it.
+# The denoising rules name the emission image (aov-write's emi) too: a model trained with it
+# takes it (denoise reads only the features a model's metadata lists).
 
 EVAL_DIR := build/eval/$(PRESET)
 EVAL_MODEL ?= $(MODEL)
@@ -48,9 +50,9 @@ $(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr),$(call eval_cb,hdr)): 
 $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm): $(EVAL_CB_SCENE) $(AOV_WRITE)
 	@mkdir -p $(@D)
 	$(AOV_WRITE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
-$(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm),$(call eval_cb,alb) $(call eval_cb,nrm)): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm) ;
+$(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm),$(call eval_cb,alb) $(call eval_cb,emi) $(call eval_cb,nrm)): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm) ;
 
-$(call lx_image_pattern,$(EVAL_CB),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB),alb) $(call lx_image_pattern,$(EVAL_CB),nrm) $(EVAL_MODEL) $(DENOISE)
+$(call lx_image_pattern,$(EVAL_CB),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB),alb) $(call lx_image_pattern,$(EVAL_CB),nrm) $(call lx_image_pattern,$(EVAL_CB),emi) $(EVAL_MODEL) $(DENOISE)
 	$(DENOISE) $< --model $(EVAL_MODEL) -o $@
 
 $(call lx_le_pattern,$(EVAL_CB),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
@@ -61,8 +63,8 @@ $(call lx_le_pattern,$(EVAL_CB_LT),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
 	@mkdir -p $(@D)
 	$(ESTIMATE) image $< --light-tracing --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
 
-$(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) $(EVAL_MODEL) $(DENOISE)
-	$(DENOISE) $< --model $(EVAL_MODEL) --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
+$(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),emi) $(EVAL_MODEL) $(DENOISE)
+	$(DENOISE) $< --model $(EVAL_MODEL) --alb $(word 2,$^) --nrm $(word 3,$^) --emi $(word 4,$^) -o $@
 
 # Intel Open Image Denoise, the peer, on the same inputs (pipelines/oidn_denoise.py): in an oidn/
 # directory beside them, the scene's name suffixed `-oidn` (the FLIP maps share one directory).
@@ -91,10 +93,10 @@ EVAL_TEST_SCENES := $(patsubst test/%,%,$(filter test/%,$(DATASET_SCENES)))
 
 define eval_test_scene
 # The levels below the last are written by the run whose last normal image marks it.
-$(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm),$(foreach k,hdr alb nrm,$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),$(k))))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) ;
+$(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm),$(foreach k,hdr alb emi nrm,$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),$(k))))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) ;
 $(call lx_ref,$(EVAL_DATA)/$(1),hdr): $(call lx_ref,$(EVAL_DATA)/$(1),nrm) ;
 
-$(call lx_image_pattern,$(EVAL_DS)/$(1),dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) $(EVAL_MODEL) $(DENOISE)
+$(call lx_image_pattern,$(EVAL_DS)/$(1),dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) $(call lx_image_pattern,$(EVAL_DATA)/$(1),emi) $(EVAL_MODEL) $(DENOISE)
 	@mkdir -p $$(@D)
 	$$(DENOISE) $$< --model $(EVAL_MODEL) -o $$@
 
@@ -102,8 +104,8 @@ $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr): build/dataset/$(DATASET)/test/$(1).lx
 	@mkdir -p $$(@D)
 	$$(ESTIMATE) image $$< --paths $$* --seed $(NOISY_SEED) -o $$@
 
-$(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) $(EVAL_MODEL) $(DENOISE)
-	$$(DENOISE) $$< --model $(EVAL_MODEL) --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
+$(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),emi) $(EVAL_MODEL) $(DENOISE)
+	$$(DENOISE) $$< --model $(EVAL_MODEL) --alb $$(word 2,$$^) --nrm $$(word 3,$$^) --emi $$(word 4,$$^) -o $$@
 
 $(call lx_image_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) pipelines/oidn_denoise.py
 	@mkdir -p $$(@D)

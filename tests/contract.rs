@@ -49,6 +49,8 @@ fn naming_json() -> String {
         ("cornell-box", Level::Reference, Kind::Nrm),
         ("room_with_underscores", Level::Spp(16), Kind::StandardError),
         ("room_with_underscores", Level::Spp(16), Kind::Depth),
+        ("gen0001", Level::Spp(4), Kind::Emission),
+        ("cornell-box", Level::Reference, Kind::Emission),
         ("cornell-box", Level::LightPaths(1000), Kind::Hdr),
         ("sobolev", Level::LightPaths(4000), Kind::Denoised),
     ];

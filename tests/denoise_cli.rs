@@ -38,17 +38,26 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// The fixture models (both output heads of training/model.py) and the suffix of their expected
-/// outputs (tests/fixtures/denoise/generate.py).
-const MODELS: [(&str, &str); 2] = [("tiny.onnx", "expected"), ("tiny_kpn.onnx", "kpn.expected")];
+/// The fixture models (both output heads of training/model.py, and the kernel-predicting one
+/// with the emission feature), the suffix of their expected outputs
+/// (tests/fixtures/denoise/generate.py) and the features they take.
+const MODELS: [(&str, &str, &[&str]); 3] = [
+    ("tiny.onnx", "expected", &["hdr", "alb", "nrm"]),
+    ("tiny_kpn.onnx", "kpn.expected", &["hdr", "alb", "nrm"]),
+    (
+        "tiny_emi.onnx",
+        "emi.expected",
+        &["hdr", "alb", "nrm", "emi"],
+    ),
+];
 
 #[test]
 fn output_equals_python_onnxruntime_to_1e_5() {
-    for (model_name, suffix) in MODELS {
+    for (model_name, suffix, features) in MODELS {
         let dir = TempDir::new("dn-parity");
         let model = fixture(model_name);
         for img in ["odd_000004spp", "tiles_000001spp"] {
-            let hdr = copy_features(&dir, img, &["hdr", "alb", "nrm"]);
+            let hdr = copy_features(&dir, img, features);
             run(&[s(&hdr), "--model", s(&model), "--threads", "2"]).unwrap();
             let out = read_rgb(&dir.path().join(format!("{img}.dn.exr"))).unwrap();
             let expected = read_rgb(&fixture(&format!("{img}.{suffix}.exr"))).unwrap();
@@ -71,10 +80,10 @@ fn output_equals_python_onnxruntime_to_1e_5() {
 
 #[test]
 fn tiles_with_enough_context_equal_the_whole_image() {
-    for (model_name, _) in MODELS {
+    for (model_name, _, features) in MODELS {
         let dir = TempDir::new("dn-tiles");
         let model = fixture(model_name);
-        let hdr = copy_features(&dir, "tiles_000001spp", &["hdr", "alb", "nrm"]);
+        let hdr = copy_features(&dir, "tiles_000001spp", features);
         let whole = dir.path().join("whole.exr");
         run(&[s(&hdr), "--model", s(&model), "-o", s(&whole)]).unwrap();
         let whole = read_rgb(&whole).unwrap();
@@ -137,6 +146,18 @@ fn bad_input_gives_one_line_errors_and_no_output() {
         &[s(&hdr), "--model", s(&model)],
         1,
         &["odd_000004spp.nrm.exr", "missing nrm feature"],
+    );
+    // A model that takes the emission needs its image.
+    check(
+        &[
+            s(&hdr),
+            "--model",
+            s(&fixture("tiny_emi.onnx")),
+            "--nrm",
+            s(&fixture("odd_000004spp.nrm.exr")),
+        ],
+        1,
+        &["odd_000004spp.emi.exr", "missing emi feature"],
     );
     // A feature of another size.
     let nrm = dir.path().join("odd_000004spp.nrm.exr");
@@ -221,4 +242,58 @@ fn bad_input_gives_one_line_errors_and_no_output() {
         .filter(|p| p.to_string_lossy().contains(".dn."))
         .collect();
     assert!(outputs.is_empty(), "{outputs:?}");
+}
+
+/// A model with the emission feature passes the emitters around its network: where the noisy
+/// image is nothing but emission (hdr = emi), whatever the (untrained) weights, the result is
+/// the emission exactly, inside the emitter, at its edge and outside it — also for radiance near
+/// the f32 limit, where denoise scales hdr and emi alike by a power of two.
+#[test]
+fn the_emission_model_returns_the_emitters_unfiltered() {
+    for peak in [300.0f32, 1e36] {
+        let dir = TempDir::new("dn-emi");
+        let (w, h) = (70, 45);
+        let mut emi = RgbImage::new(w, h);
+        let mut alb = RgbImage::new(w, h);
+        let mut nrm = RgbImage::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                if (10..30).contains(&x) && (5..20).contains(&y) {
+                    emi.pixels[i] = [peak, peak / 3.0, peak / 7.0];
+                }
+                alb.pixels[i] = [0.5, 0.4, 0.3];
+                nrm.pixels[i] = [0.0, 0.0, 1.0];
+            }
+        }
+        let hdr = dir.path().join("e_000001spp.hdr.exr");
+        write_rgb(&hdr, &emi).unwrap();
+        write_rgb(&dir.path().join("e_000001spp.emi.exr"), &emi).unwrap();
+        write_rgb(&dir.path().join("e_000001spp.alb.exr"), &alb).unwrap();
+        write_rgb(&dir.path().join("e_000001spp.nrm.exr"), &nrm).unwrap();
+        run(&[s(&hdr), "--model", s(&fixture("tiny_emi.onnx"))]).unwrap();
+        let out = read_rgb(&dir.path().join("e_000001spp.dn.exr")).unwrap();
+        for (i, (o, e)) in out.pixels.iter().zip(&emi.pixels).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (o[c] - e[c]).abs() <= 1e-5 * e[c].abs(),
+                    "peak {peak:e}: {o:?} vs the emission {e:?} at ({}, {})",
+                    i % w,
+                    i / w
+                );
+            }
+        }
+        // The model without the feature filters the emitter with the rest: the test can fail.
+        let plain = dir.path().join("plain.exr");
+        run(&[
+            s(&hdr),
+            "--model",
+            s(&fixture("tiny_kpn.onnx")),
+            "-o",
+            s(&plain),
+        ])
+        .unwrap();
+        let plain = read_rgb(&plain).unwrap();
+        assert!(max_relative_difference(&plain, &emi) > 1e-3);
+    }
 }

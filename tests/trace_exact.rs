@@ -311,3 +311,67 @@ fn scene_without_camera_is_an_error() {
     assert_eq!(e.exit_code(), 1);
     assert!(e.to_string().contains("s.lxs: scene has no camera"), "{e}");
 }
+
+/// aov-write's emission image is the emission `trace` adds at its camera rays' first hits, at
+/// the same pixel positions: every value is a whole number of the light's samples (k/n of its
+/// radiance), the light is seen, and nowhere does the emission exceed the path-traced radiance
+/// of the same seed and samples (it would at the light's edges if the positions differed).
+#[test]
+fn emission_feature_is_the_radiance_trace_sees_emitted() {
+    let dir = TempDir::new("aov-emi");
+    let text = std::fs::read_to_string(repo_root().join("scenes/cornell-box.ron")).unwrap();
+    let lxs = compile_text(&dir, "cb", &text);
+    let prefix = dir.path().join("img");
+    let common = [
+        lxs.to_str().unwrap(),
+        "-o",
+        prefix.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--resolution",
+        "64x48",
+        "--seed",
+        "11",
+    ];
+    let argv = std::iter::once("trace").chain(common.iter().copied());
+    trace::run(luxest_io::cli::parse::<trace::Args>(argv).unwrap().unwrap()).unwrap();
+    let argv = std::iter::once("aov-write").chain(common.iter().copied());
+    aov_write::run(
+        luxest_io::cli::parse::<aov_write::Args>(argv)
+            .unwrap()
+            .unwrap(),
+    )
+    .unwrap();
+    let read = |kind: &str| {
+        luxest_io::exr_io::read_rgb(&dir.path().join(format!("img_000004spp.{kind}.exr"))).unwrap()
+    };
+    let (hdr, emi) = (read("hdr"), read("emi"));
+    let light = [17.0f32, 12.0, 4.0];
+    let (mut full, mut partial) = (0, 0);
+    for (h, e) in hdr.pixels.iter().zip(&emi.pixels) {
+        let k = e[0] / light[0] * 4.0;
+        assert!(
+            (k - k.round()).abs() < 1e-5,
+            "{e:?} is not k/4 of the light"
+        );
+        for c in 0..3 {
+            assert!(
+                (e[c] - k.round() / 4.0 * light[c]).abs() < 1e-5 * light[c],
+                "{e:?}: not the light's colour"
+            );
+            assert!(
+                e[c] <= h[c] * (1.0 + 1e-6),
+                "emission {e:?} above radiance {h:?}"
+            );
+        }
+        match k.round() as i32 {
+            4 => full += 1,
+            1..=3 => partial += 1,
+            _ => {}
+        }
+    }
+    assert!(
+        full > 4 && partial > 0,
+        "light seen: {full} full, {partial} partial pixels"
+    );
+}

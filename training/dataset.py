@@ -54,8 +54,9 @@ def pairs(prep_split_dir, noisy_spp=None, dle_paths=None):
 
 
 class Crops(torch.utils.data.Dataset):
-    """Random training crops: (input 9xHxW, reference 3xHxW, exposure) with flips, transposes
-    and a random permutation of the RGB channels applied alike to hdr, albedo and reference;
+    """Random training crops: (input 9 or 12 x H x W, reference 3xHxW, exposure) with flips,
+    transposes and a random permutation of the RGB channels applied alike to hdr, albedo,
+    emission and reference;
     the exposure is the stored whole-image exposure of the input under that permutation."""
 
     def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None):
@@ -84,7 +85,9 @@ class Crops(torch.utils.data.Dataset):
             a, b = a.transpose(1, 0, 2), b.transpose(1, 0, 2)
         k = int(rng.integers(len(PERMUTATIONS)))
         perm = np.array(PERMUTATIONS[k])
-        a = np.concatenate([a[..., perm], a[..., 3 + perm], a[..., 6:9]], axis=-1)
+        # hdr, alb and emi are colours (permuted alike); nrm is a direction.
+        colour = [a[..., perm], a[..., 3 + perm], a[..., 6:9]] + ([a[..., 9 + perm]] if a.shape[-1] == 12 else [])
+        a = np.concatenate(colour, axis=-1)
         b = b[..., perm]
         to = lambda t: torch.from_numpy(np.ascontiguousarray(t.transpose(2, 0, 1)))
         return to(a), to(b), torch.tensor(exposures[k], dtype=torch.float32)

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Exports a trained run to ONNX: inputs `input` (N, 9, H, W) = raw linear hdr + alb + nrm and
+"""Exports a trained run to ONNX: inputs `input` (N, 3 x features, H, W) = raw linear hdr + alb +
+nrm (+ emi: the run's `features`, listed in the metadata `luxest.channels`) and
 `exposure` (N,) = transfer.exposure of each whole image, output `output` (N, 3, H, W) linear
 radiance, dynamic H and W; the log1p transfer and the padding to multiples of 16 are inside the
 graph (transfer.py), the exposure formula is recorded in the metadata."""
@@ -25,15 +26,18 @@ OUTPUTS = {
            f"{model.ALBEDO_FLOOR})",
 }
 """What the graph's output is, per head (model.py), in the metadata's transfer description."""
+EMISSION = ("; with the emi feature: the network filters max(hdr - emi, 0) in place of hdr (and "
+            "sees log1p(emi * exposure) as 3 more channels), and max(emi, 0) is added to its output")
+"""The metadata's addition for models that take the emission (model.py)."""
 
 
 def export(run_dir, out_path, metrics=None):
     cfg = config.Config.load(Path(run_dir) / "config.json")
-    net = Denoiser(width=cfg.base_width, head=cfg.head)
+    net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features)
     net.load_state_dict(torch.load(Path(run_dir) / "checkpoint.pt", weights_only=False)["model"])
     net.eval()
     net.kernel_gather = "slices"
-    x = torch.rand(1, 9, 48, 64)
+    x = torch.rand(1, net.in_channels, 48, 64)
     e = torch.tensor([0.5])
     h, w = torch.export.Dim("h", min=1, max=16384), torch.export.Dim("w", min=1, max=16384)
     tmp = Path(str(out_path) + ".tmp")
@@ -42,10 +46,10 @@ def export(run_dir, out_path, metrics=None):
                       external_data=False)
     model = onnx.load(str(tmp))
     meta = {
-        contract.CHANNELS: ",".join(contract.FEATURES),
+        contract.CHANNELS: ",".join(net.features),
         contract.MODEL_TRANSFER: "log1p(max(hdr, 0) * exposure) in graph; input exposure (N,) = 0.18 / "
         "exp(mean over the whole image of log(max(Y, 0) + 1e-4)), Y = Rec. 709 luminance of hdr; "
-        + OUTPUTS[cfg.head],
+        + OUTPUTS[cfg.head] + (EMISSION if net.emission else ""),
         contract.MODEL_PADDING: "replicate to multiples of 16; in graph",
         contract.MODEL_CONFIG: json.dumps(asdict(cfg)),
     }

@@ -12,8 +12,15 @@ import luxest_contract as contract
 import transfer
 
 
-def denoise(session, hdr, alb, nrm):
-    x = np.concatenate([hdr, alb, nrm], axis=-1).transpose(2, 0, 1)[None].astype(np.float32)
+def channels(session):
+    """The features a model takes, in channel order (its `luxest.channels` metadata)."""
+    meta = session.get_modelmeta().custom_metadata_map
+    return [c.strip() for c in meta.get(contract.CHANNELS, ",".join(contract.FEATURES[:3])).split(",")]
+
+
+def denoise(session, hdr, *features):
+    """`features`: the images of channels(session)[1:], in that order."""
+    x = np.concatenate([hdr, *features], axis=-1).transpose(2, 0, 1)[None].astype(np.float32)
     feed = {"input": x, "exposure": transfer.exposure_np(hdr)}
     return session.run(None, feed)[0][0].transpose(1, 2, 0)
 
@@ -24,6 +31,7 @@ def denoise_split(model, split_dir, out_dir, spp_levels=None):
     session = ort.InferenceSession(str(model), providers=["CPUExecutionProvider"])
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    wanted = channels(session)
     done = []
     for name, levels in contract.scan(split_dir).items():
         for feats in (v for k, v in sorted(levels.items(), key=lambda kv: kv[0] or 0) if k is not None):
@@ -31,7 +39,7 @@ def denoise_split(model, split_dir, out_dir, spp_levels=None):
             spp = noisy.value(contract.SAMPLES, required=True)
             if spp_levels and spp not in spp_levels:
                 continue
-            dn = denoise(session, noisy.pixels, *(contract.read_rgb(feats[k]) for k in contract.FEATURES[1:]))
+            dn = denoise(session, noisy.pixels, *(contract.read_rgb(feats[k]) for k in wanted[1:]))
             header = dict(noisy.header)
             header[contract.DENOISER] = Path(model).name
             path = out / contract.image_name(name, "dn", spp)

@@ -17,6 +17,17 @@ with one of two outputs (`Config.head`):
   with alpha 0 returns any input unchanged, which is what a clean input needs.
 - `direct`: the U-Net predicts the transferred radiance itself (the first models).
 
+With the `emi` feature (aov-write's emitted radiance seen directly, the fourth input, `Config.
+features`), the network filters only what the emitters do not emit straight at the camera: its
+radiance input is hdr - emi (clamped at zero), and the emission is added back unfiltered, so the
+light sources, many times brighter than what they light, keep their radiance and colour (the
+models without the feature lost 2-3 % of the image's mean at the light). The network also sees
+the transferred emi as three more channels (where the emitters are). Only the `kpn` head takes
+it. (Tried and dropped, 2026-11-24: filtering the emission by a kernel of its own from one more
+1x1 head, to antialias the emitter's edge at low spp; step-matched on the quick dataset it
+scored 0.1-0.9 dB below adding it back unfiltered at 1-64 spp on the Cornell box, 2.2 dB at 1024
+spp.)
+
 Both heads are scale-equivariant through the exposure input: hdr times s with the exposure over
 s gives the network the same input and the result times s (denoise's rescaling near the f32
 limit relies on it). `Denoiser` wraps either with the transfer of transfer.py and the padding to
@@ -126,19 +137,33 @@ def reconstruct(hdr, albedo, heads, gather="unfold"):
         return (out * a).clamp(min=0)
 
 
-class Denoiser(nn.Module):
-    """Raw linear (N, 9, H, W) hdr+alb+nrm -> linear (N, 3, H, W) radiance."""
+FEATURE_SETS = (("hdr", "alb", "nrm"), ("hdr", "alb", "nrm", "emi"))
+"""The input features a model can take, in channel order (3 channels each)."""
 
-    def __init__(self, width=24, head="kpn"):
+
+class Denoiser(nn.Module):
+    """Raw linear (N, 3 x len(features), H, W) hdr+alb+nrm[+emi] -> linear (N, 3, H, W)
+    radiance."""
+
+    def __init__(self, width=24, head="kpn", features=FEATURE_SETS[0]):
         super().__init__()
         if head not in HEADS:
             raise ValueError(f"head {head!r}: expected one of {', '.join(HEADS)}")
+        features = tuple(features)
+        if features not in FEATURE_SETS:
+            raise ValueError(f"features {', '.join(features)}: expected one of "
+                             + "; ".join(", ".join(f) for f in FEATURE_SETS))
+        self.emission = "emi" in features
+        if self.emission and head != "kpn":
+            raise ValueError("the emi feature needs the kpn head")
+        self.features = features
+        self.in_channels = 3 * len(features)
         self.head = head
         self.kernel_gather = "unfold"  # export.py sets "slices" (apply_kernels)
         if head == "direct":
-            self.unet = UNet(width=width)
+            self.unet = UNet(in_channels=self.in_channels, width=width)
         else:
-            self.unet = UNet(width=width, out_channels=0)
+            self.unet = UNet(in_channels=self.in_channels, width=width, out_channels=0)
             k2 = KERNEL * KERNEL
             self.heads = nn.ModuleList(
                 nn.Conv2d(c, k2 + (1 if s < SCALES - 1 else 0), 1)
@@ -163,7 +188,13 @@ class Denoiser(nn.Module):
         transferred domain of the loss."""
         hdr = x[:, 0:3]
         exp = exposure.view(-1, 1, 1, 1).to(x.dtype)
-        inp = torch.cat([transfer.forward(hdr, exp), x[:, 3:9]], 1)
+        parts = [None, x[:, 3:9]]
+        if self.emission:
+            emi = x[:, 9:12]
+            hdr = (hdr - emi).clamp(min=0)
+            parts.append(transfer.forward(emi, exp))
+        parts[0] = transfer.forward(hdr, exp)
+        inp = torch.cat(parts, 1)
         if self.head == "direct":
             return self.unet(inp), exp
         feats = self.unet.decoder(inp)
@@ -171,7 +202,10 @@ class Denoiser(nn.Module):
         # several per cent of a kernel weight, which inference in float32 would not see.
         with torch.autocast(x.device.type, enabled=False):
             heads = [head(f.float()) for head, f in zip(self.heads, feats)]
-        return reconstruct(hdr, x[:, 3:6], heads, self.kernel_gather), exp
+            out = reconstruct(hdr, x[:, 3:6], heads, self.kernel_gather)
+            if self.emission:
+                out = out + x[:, 9:12].float().clamp(min=0)
+        return out, exp
 
     def loss_domain(self, out, exp):
         """The output of `transferred` in the transferred domain (where the loss is taken)."""

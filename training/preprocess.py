@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Converts a rendered dataset (data/<dataset>/<split>/*.exr) into float32 arrays for training:
-inputs (H, W, 9) = hdr + alb + nrm per noisy level and per double-local-estimate image (`le`,
+inputs (H, W, 3 x features) = hdr + alb + nrm (+ emi: Config.features) per noisy level and per double-local-estimate image (`le`,
 with the features of the largest noisy level), references (H, W, 3), and per input a JSON of its
 samples, seeds and whole-image exposures (dataset.py). Incremental.
 
@@ -36,7 +36,7 @@ def samples_of(image, expected):
     return spp
 
 
-def preprocess_split(src, dst, noisy_spp, dle_paths=()):
+def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATURES):
     """Writes the arrays of one split directory; returns the number written. Inputs: the noisy
     levels in `noisy_spp`, and the double-local-estimate images at `dle_paths` light paths
     (with the features of the scene's largest noisy level, as make eval denoises them)."""
@@ -50,9 +50,11 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=()):
         ref_out = dst / dataset.prep_name(name, None)
         inputs = []  # (noisy hdr path, feature paths, count, unit)
         for spp_in_name, feats in sorted((k, v) for k, v in levels.items() if k is not None):
-            missing = [f for f in contract.FEATURES if f not in feats]
+            missing = [f for f in features if f not in feats]
             if missing:
-                raise contract.ContractError(f"{src}: {name} at {spp_in_name} spp lacks {', '.join(missing)}")
+                raise contract.ContractError(
+                    f"{src}: {name} at {spp_in_name} spp lacks {', '.join(missing)} (aov-write writes the "
+                    "features; re-render the dataset with make noisy reference)")
             inputs.append((feats["hdr"], feats, spp_in_name, "spp"))
         for paths, kinds in sorted(local_estimates.get(name, {}).items()):
             if "hdr" not in kinds:
@@ -65,9 +67,10 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=()):
                 continue
             out = dst / dataset.prep_name(name, count_in_name, unit)
             meta_out = out.with_suffix(".json")
-            paths = [hdr_path] + [feats[f] for f in contract.FEATURES[1:]]
+            paths = [hdr_path] + [feats[f] for f in features[1:]]
             newest = max(p.stat().st_mtime for p in paths + [levels[None]["hdr"]])
-            if meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists():
+            if (meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists()
+                    and json.loads(meta_out.read_text()).get("channels") == list(features)):
                 continue
             noisy = contract.read(hdr_path)
             count = samples_of(noisy, count_in_name)
@@ -86,7 +89,7 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=()):
             if not np.isfinite(arr).all():
                 raise contract.ContractError(f"{hdr_path}: non-finite values")
             meta = {"name": name, "samples": count, "unit": unit, "estimator": noisy.value(contract.ESTIMATOR),
-                    "seed": noisy.value(contract.SEED), "features": feats["alb"].name,
+                    "seed": noisy.value(contract.SEED), "features": feats["alb"].name, "channels": list(features),
                     "reference_seed": ref.value(contract.SEED), "reference_samples": ref.value(contract.SAMPLES),
                     "exposures": dataset.whole_image_exposures(noisy.pixels)}
             _save(out, arr)
@@ -114,7 +117,7 @@ def main(argv=None):
     try:
         for split in ["train", "valid", "test"]:
             n += preprocess_split(Path(cfg.data_dir) / split, Path(cfg.prep_dir) / split, cfg.noisy_spp,
-                                  cfg.dle_paths)
+                                  cfg.dle_paths, cfg.features)
     except contract.ContractError as e:
         print(f"preprocess: error: {e}", file=sys.stderr)
         sys.exit(1)

@@ -48,7 +48,7 @@ def main(argv=None):
     run = Path(cfg.run_dir)
     run.mkdir(parents=True, exist_ok=True)
     ckpt = run / "checkpoint.pt"
-    net = Denoiser(width=cfg.base_width, head=cfg.head).to(device=device, memory_format=torch.channels_last)
+    net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features).to(device=device, memory_format=torch.channels_last)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=cfg.steps, pct_start=0.15)
     step, earlier_seconds, resumed_at = 0, 0.0, []

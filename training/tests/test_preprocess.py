@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 
 TRAINING = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(TRAINING))
@@ -17,12 +18,12 @@ import preprocess  # noqa: E402
 
 
 def write_set(split_dir, name, spp, seed, rng, h=32, w=48, file_spp=None):
-    """One noisy level (hdr, alb, nrm) with the headers trace / aov-write record."""
+    """One noisy level (hdr, alb, nrm, emi) with the headers trace / aov-write record."""
     header = {contract.SAMPLES: spp, contract.SEED: seed, contract.ESTIMATOR: "path-tracing"}
     # A bright left half, a dim right half: a crop's own exposure differs from the image's.
     hdr = rng.random((h, w, 3)).astype(np.float32) * np.where(np.arange(w) < w // 2, 10.0, 0.1)[None, :, None].astype(np.float32)
     contract.write(split_dir / contract.image_name(name, "hdr", file_spp or spp), hdr, header)
-    for kind in ("alb", "nrm"):
+    for kind in ("alb", "nrm", "emi"):
         contract.write(split_dir / contract.image_name(name, kind, file_spp or spp), rng.random((h, w, 3)), header)
     return hdr
 
@@ -76,6 +77,9 @@ def test_stores_the_whole_image_exposure_for_every_crop(tmp_path):
     contract.write(src / contract.image_name("g", "hdr", 4), hdr, header)
     for kind in ("alb", "nrm"):
         contract.write(src / contract.image_name("g", kind, 4), rng.random((h, w, 3)), header)
+    # The emission: half the radiance, so each crop shows whether it was flipped and permuted
+    # like the radiance.
+    contract.write(src / contract.image_name("g", "emi", 4), 0.5 * hdr, header)
     assert preprocess.preprocess_split(src, tmp_path / "prep", [4]) == 2
     [(inp, ref, meta)] = dataset.pairs(tmp_path / "prep")
     assert (meta["samples"], meta["seed"], meta["reference_seed"]) == (4, 1, 1000001)
@@ -84,6 +88,7 @@ def test_stores_the_whole_image_exposure_for_every_crop(tmp_path):
     seen, differs = set(), 0
     for i in range(len(crops)):
         a, b, e = crops[i]
+        assert a.shape[0] == 12 and torch.allclose(a[9:12], 0.5 * a[0:3], rtol=1e-6)
         perm = tuple(int(r) for r in np.argsort(np.argsort([float(a[j].mean()) for j in range(3)])))
         seen.add(perm)
         whole = contract.exposure(hdr[..., list(perm)])
@@ -152,3 +157,25 @@ def test_training_pairs_follow_the_configured_levels(tmp_path):
     assert tags(dataset.pairs(tmp_path / "prep")) == ["g_000004spp.npy", "g_000016spp.npy", "g_000100le.npy"]
     assert tags(dataset.pairs(tmp_path / "prep", [16], [])) == ["g_000016spp.npy"]
     assert tags(dataset.pairs(tmp_path / "prep", [4], [100])) == ["g_000004spp.npy", "g_000100le.npy"]
+
+
+def test_features_follow_the_configuration(tmp_path):
+    # A dataset rendered before aov-write wrote the emission is refused for an emission model,
+    # naming what is missing and how to get it; a three-feature configuration takes it, and
+    # switching the configuration redoes the arrays (they record their channels).
+    rng = np.random.default_rng(9)
+    src = tmp_path / "train"
+    src.mkdir()
+    write_ref(src, "g", 1000001, rng)
+    write_set(src, "g", 4, 1, rng)
+    (src / contract.image_name("g", "emi", 4)).unlink()
+    with pytest.raises(contract.ContractError, match="g at 4 spp lacks emi .*make noisy reference"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [4])
+    assert preprocess.preprocess_split(src, tmp_path / "prep", [4], features=contract.FEATURES[:3]) == 2
+    [(inp, _, meta)] = dataset.pairs(tmp_path / "prep")
+    assert np.load(inp).shape[-1] == 9 and meta["channels"] == ["hdr", "alb", "nrm"]
+    contract.write(src / contract.image_name("g", "emi", 4), rng.random((32, 48, 3)),
+                   {contract.SAMPLES: 4, contract.SEED: 1})
+    assert preprocess.preprocess_split(src, tmp_path / "prep", [4]) == 1
+    [(inp, _, meta)] = dataset.pairs(tmp_path / "prep")
+    assert np.load(inp).shape[-1] == 12 and meta["channels"] == list(contract.FEATURES)

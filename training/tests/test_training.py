@@ -54,6 +54,33 @@ def test_kernel_head_returns_a_noiseless_uniform_irradiance_image_unchanged():
     assert not torch.allclose(direct, x[:, 0:3], rtol=1e-2)
 
 
+def test_emission_model_passes_the_emitters_around_the_network():
+    # Whatever the (random, untrained) weights: the irradiance the emitter does not emit is
+    # filtered as without it (uniform here, so returned exactly) and the emission is added back
+    # unfiltered, so the light's radiance, colour and edge cannot shift. The model without the
+    # feature blurs the emitter into its surroundings (the test can fail).
+    x = _uniform_irradiance()
+    emi = torch.zeros(1, 3, 48, 64)
+    emi[:, :, 20:30, 10:40] = torch.tensor([170.0, 120.0, 40.0]).view(1, 3, 1, 1)
+    x[:, 0:3] += emi
+    x12 = torch.cat([x, emi], 1)
+    expected = _uniform_irradiance()[:, 0:3] + emi
+    for seed in range(3):
+        torch.manual_seed(seed)
+        net = Denoiser(width=8, head="kpn", features=model.FEATURE_SETS[1]).eval()
+        with torch.no_grad():
+            out = net(x12)
+        assert torch.allclose(out, expected, rtol=1e-5, atol=1e-6), float((out - expected).abs().max())
+    torch.manual_seed(0)
+    with torch.no_grad():
+        plain = Denoiser(width=8, head="kpn").eval()(x)
+    assert not torch.allclose(plain, expected, rtol=1e-2)
+    with pytest.raises(ValueError, match="kpn"):
+        Denoiser(head="direct", features=model.FEATURE_SETS[1])
+    with pytest.raises(ValueError, match="features"):
+        Denoiser(features=("hdr", "emi"))
+
+
 def test_kernel_head_with_identity_kernels_returns_any_input():
     # Centre weight ~1 and blend 0 at every scale: a clean input is left alone exactly.
     torch.manual_seed(4)
@@ -181,22 +208,26 @@ def test_ms_ssim_is_one_for_identical_images_and_less_otherwise():
     assert float(losses.ms_ssim(a, a + 0.2 * torch.randn_like(a))) < 0.9
 
 
-@pytest.mark.parametrize("head", model.HEADS)
-def test_export_matches_onnxruntime(tmp_path, head):
+@pytest.mark.parametrize("head,features", [(h, model.FEATURE_SETS[0]) for h in model.HEADS]
+                         + [("kpn", model.FEATURE_SETS[1])])
+def test_export_matches_onnxruntime(tmp_path, head, features):
     ort = pytest.importorskip("onnxruntime")
     import export
 
     torch.manual_seed(2)
-    cfg = config.Config(base_width=8, head=head)
+    cfg = config.Config(base_width=8, head=head, features=list(features))
     cfg.save(tmp_path / "config.json")
-    net = Denoiser(width=8, head=head)
+    net = Denoiser(width=8, head=head, features=features)
+    c = 3 * len(features)
     torch.save({"model": net.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
     model = tmp_path / "m.onnx"
     export.export(tmp_path, model)
     session = ort.InferenceSession(str(model), providers=["CPUExecutionProvider"])
     net.eval()
     for h, w in [(40, 56), (33, 17)]:
-        x = torch.rand(1, 9, h, w) * torch.tensor([5.0] * 3 + [1.0] * 6).view(1, 9, 1, 1)
+        x = torch.rand(1, c, h, w) * torch.tensor([5.0] * 3 + [1.0] * 6 + [2.0] * (c - 9)).view(1, c, 1, 1)
+        if c == 12:
+            x[:, 9:12, : h // 2] = 0.0  # emission in the lower half only
         a = net(x).detach().numpy()
         e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
         assert abs(float(e[0]) - float(transfer.exposure_of(x[:, 0:3])[0])) <= 1e-6 * float(e[0])
@@ -204,7 +235,8 @@ def test_export_matches_onnxruntime(tmp_path, head):
         assert a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-4 * max(1.0, float(np.abs(a).max()))
     meta = {p.key: p.value for p in __import__("onnx").load(str(model)).metadata_props}
-    assert meta["luxest.channels"] == "hdr,alb,nrm"
+    assert meta["luxest.channels"] == ",".join(features)
+    assert (export.EMISSION in meta["luxest.transfer"]) == ("emi" in features)
     assert json.loads(meta["luxest.config"])["base_width"] == 8
     assert json.loads(meta["luxest.config"])["head"] == head
     assert export.OUTPUTS[head] in meta["luxest.transfer"]
@@ -234,7 +266,7 @@ def test_training_runs_its_steps_and_resumes(tmp_path):
         d = tmp_path / "data" / split
         d.mkdir(parents=True)
         contract.write(d / contract.image_name("g", "hdr"), rng.random((32, 32, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
-        for kind in ("hdr", "alb", "nrm"):
+        for kind in ("hdr", "alb", "nrm", "emi"):
             contract.write(d / contract.image_name("g", kind, 4), rng.random((32, 32, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
     (tmp_path / "data" / "test").mkdir()
     args = ["--data-dir", str(tmp_path / "data"), "--prep-dir", str(tmp_path / "prep"), "--run-dir", str(tmp_path / "run"),

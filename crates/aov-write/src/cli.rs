@@ -17,7 +17,7 @@ use std::path::PathBuf;
 /// The estimator name recorded in the features' headers.
 pub const ESTIMATOR: &str = "first-hit-features";
 
-/// Write albedo / normal (/ depth) feature images with trace's pixel sampling.
+/// Write albedo / normal / emission (/ depth) feature images with trace's pixel sampling.
 #[derive(Parser, Debug)]
 #[command(name = "aov-write", version, about)]
 pub struct Args {
@@ -82,7 +82,7 @@ pub fn run(args: Args) -> Result<()> {
             Level::Spp(target as u64)
         }
     };
-    let mut kinds = vec![Kind::Alb, Kind::Nrm];
+    let mut kinds = vec![Kind::Alb, Kind::Emission, Kind::Nrm];
     if args.depth {
         kinds.push(Kind::Depth);
     }
@@ -109,6 +109,7 @@ pub fn run(args: Args) -> Result<()> {
             img.pixels = match kind {
                 Kind::Alb => film.albedo(),
                 Kind::Nrm => film.normal(),
+                Kind::Emission => film.emission(),
                 _ => film.depth(),
             };
             img.attributes = info.to_attributes();
@@ -118,7 +119,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     plan.commit()?;
     eprintln!(
-        "wrote {}_{}.{{alb,nrm{}}}.exr ({} spp, {:.2} s)",
+        "wrote {}_{}.{{alb,emi,nrm{}}}.exr ({} spp, {:.2} s)",
         prefix.display(),
         final_level,
         if args.depth { ",z" } else { "" },

@@ -1,5 +1,6 @@
 //! First-hit features and their per-pixel f64 sums: albedo as the denoiser sees it, the
-//! shading normal facing the camera, the hit distance — averaged over exactly the pixel samples
+//! shading normal facing the camera, the hit distance, the emitted radiance seen directly (the
+//! part of `trace`'s image a denoiser must leave untouched) — averaged over exactly the pixel samples
 //! `trace` uses ([`pixel_jitter`] with the same seed), and extendable like trace's film, so the
 //! features at n samples do not depend on the snapshots taken on the way.
 
@@ -21,14 +22,34 @@ pub fn albedo(m: &Material) -> Rgb {
     }
 }
 
-/// First-hit features of one camera ray: (albedo, normal facing the camera, depth).
-pub fn first_hit(world: &World, origin: Vec3, dir: Vec3) -> (Rgb, Vec3, f64) {
+/// First-hit features of one camera ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FirstHit {
+    pub albedo: Rgb,
+    /// The shading normal, facing the camera (zero where the ray escapes).
+    pub normal: Vec3,
+    /// Hit distance in m (zero where the ray escapes).
+    pub depth: f64,
+    /// Radiance emitted towards the camera by the surface hit: exactly the term `trace` adds
+    /// at a camera ray's hit (weight one: nothing is sampled before it).
+    pub emission: Rgb,
+}
+
+/// First-hit features of one camera ray.
+pub fn first_hit(world: &World, origin: Vec3, dir: Vec3) -> FirstHit {
     match world.intersect(origin, dir) {
-        None => (Rgb::BLACK, Vec3::ZERO, 0.0),
-        Some(sp) => {
-            let n = if sp.ns.dot(dir) > 0.0 { -sp.ns } else { sp.ns };
-            (albedo(world.material(sp.triangle)), n, sp.distance)
-        }
+        None => FirstHit {
+            albedo: Rgb::BLACK,
+            normal: Vec3::ZERO,
+            depth: 0.0,
+            emission: Rgb::BLACK,
+        },
+        Some(sp) => FirstHit {
+            albedo: albedo(world.material(sp.triangle)),
+            normal: if sp.ns.dot(dir) > 0.0 { -sp.ns } else { sp.ns },
+            depth: sp.distance,
+            emission: world.emitted_radiance(sp.triangle, sp.ng, -dir),
+        },
     }
 }
 
@@ -39,6 +60,7 @@ pub struct FeatureFilm {
     albedo: Vec<[f64; 3]>,
     normal: Vec<[f64; 3]>,
     depth: Vec<f64>,
+    emission: Vec<[f64; 3]>,
     pub samples: u32,
 }
 
@@ -50,6 +72,7 @@ impl FeatureFilm {
             albedo: vec![[0.0; 3]; width * height],
             normal: vec![[0.0; 3]; width * height],
             depth: vec![0.0; width * height],
+            emission: vec![[0.0; 3]; width * height],
             samples: 0,
         }
     }
@@ -69,27 +92,29 @@ impl FeatureFilm {
             (0..w)
                 .map(|x| {
                     let pixel = y * w + x;
-                    let (mut a, mut n, mut d) = (Rgb::BLACK, Vec3::ZERO, 0.0);
+                    let (mut a, mut n, mut d, mut e) = (Rgb::BLACK, Vec3::ZERO, 0.0, Rgb::BLACK);
                     for s in done..target {
                         let (u, v) = pixel_jitter(seed, pixel as u64, s as u64);
-                        let (sa, sn, sd) = first_hit(
+                        let hit = first_hit(
                             world,
                             cam.position,
                             cam.direction(x as f64 + u, y as f64 + v),
                         );
-                        a = a + sa;
-                        n += sn;
-                        d += sd;
+                        a = a + hit.albedo;
+                        n += hit.normal;
+                        d += hit.depth;
+                        e = e + hit.emission;
                     }
-                    (a, n, d)
+                    (a, n, d, e)
                 })
                 .collect::<Vec<_>>()
         });
         for (y, row) in rows.into_iter().enumerate() {
-            for (x, (a, n, d)) in row.into_iter().enumerate() {
+            for (x, (a, n, d, e)) in row.into_iter().enumerate() {
                 let p = y * w + x;
                 for k in 0..3 {
                     self.albedo[p][k] += a.0[k];
+                    self.emission[p][k] += e.0[k];
                 }
                 self.normal[p][0] += n.x;
                 self.normal[p][1] += n.y;
@@ -106,6 +131,15 @@ impl FeatureFilm {
         self.albedo
             .iter()
             .map(|a| a.map(|v| (v / n) as f32))
+            .collect()
+    }
+
+    /// Mean emitted radiance seen directly per pixel.
+    pub fn emission(&self) -> Vec<[f32; 3]> {
+        let n = self.samples.max(1) as f64;
+        self.emission
+            .iter()
+            .map(|e| e.map(|v| (v / n) as f32))
             .collect()
     }
 

@@ -1,5 +1,6 @@
-//! The model's input features (hdr, alb, nrm) and the files they are read from, found next to
-//! the noisy image by the OIDN naming (`<img>.hdr.exr` → `<img>.alb.exr`, output `<img>.dn.exr`).
+//! The model's input features (hdr, alb, nrm, and for models trained with it emi) and the files
+//! they are read from, found next to the noisy image by the OIDN naming (`<img>.hdr.exr` →
+//! `<img>.alb.exr`, output `<img>.dn.exr`).
 
 use luxest_io::naming::{self, Kind};
 use std::path::{Path, PathBuf};
@@ -10,6 +11,9 @@ pub enum Feature {
     Hdr,
     Alb,
     Nrm,
+    /// The emitted radiance seen directly (aov-write's `emi`): a model that takes it denoises
+    /// hdr − emi and adds it back.
+    Emi,
 }
 
 impl Feature {
@@ -19,14 +23,20 @@ impl Feature {
             Feature::Hdr => Kind::Hdr,
             Feature::Alb => Kind::Alb,
             Feature::Nrm => Kind::Nrm,
+            Feature::Emi => Kind::Emission,
         }
+    }
+    /// Whether the feature is radiance (scaled with hdr near the f32 limit), not a property of
+    /// the surface.
+    pub fn is_radiance(self) -> bool {
+        matches!(self, Feature::Hdr | Feature::Emi)
     }
     /// The feature's name in file names and in the model's `luxest.channels` metadata.
     pub fn name(self) -> &'static str {
         self.kind().tag()
     }
     pub(crate) fn parse(s: &str) -> Option<Feature> {
-        [Feature::Hdr, Feature::Alb, Feature::Nrm]
+        [Feature::Hdr, Feature::Alb, Feature::Nrm, Feature::Emi]
             .into_iter()
             .find(|f| f.name() == s.trim())
     }

@@ -197,10 +197,11 @@ impl Denoiser {
         // result / exposure), so the hdr image is scaled by an exact power of two 2^-k into
         // range and the exposure by 2^k: the model's input is bit-identical, and the result is
         // scaled back by 2^k in f64.
-        let peak = inputs[0]
-            .pixels
+        let peak = inputs
             .iter()
-            .flatten()
+            .zip(&self.features)
+            .filter(|(_, f)| f.is_radiance())
+            .flat_map(|(image, _)| image.pixels.iter().flatten())
             .fold(0.0f64, |m, v| m.max((*v as f64).abs()));
         let k = if peak > LARGEST_MODEL_INPUT {
             (peak / LARGEST_MODEL_INPUT).log2().ceil() as i32
@@ -266,11 +267,15 @@ impl Denoiser {
         let (w, h) = (x1 - x0, y1 - y0);
         let plane = w * h;
         let mut data = vec![0f32; 3 * inputs.len() * plane];
-        for (f, image) in inputs.iter().enumerate() {
+        for (f, (image, feature)) in inputs.iter().zip(&self.features).enumerate() {
             for y in 0..h {
                 let row = &image.pixels[(y0 + y) * image.width + x0..][..w];
-                // Only the radiance is scaled (by a power of two: exact); features are not.
-                let scale = if f == 0 { hdr_scale } else { 1.0 };
+                // Only radiance is scaled (by a power of two: exact); surface features are not.
+                let scale = if feature.is_radiance() {
+                    hdr_scale
+                } else {
+                    1.0
+                };
                 for (x, p) in row.iter().enumerate() {
                     for c in 0..3 {
                         data[(3 * f + c) * plane + y * w + x] = p[c] * scale;

@@ -28,6 +28,9 @@ pub enum Kind {
     Nrm,
     /// First-hit distance.
     Depth,
+    /// First-hit emitted radiance: the emitters the camera sees directly, averaged over the
+    /// pixel samples (what the denoiser leaves untouched and adds back).
+    Emission,
     /// Per-pixel standard error of the luminance of the matching `hdr` image.
     StandardError,
     /// A denoised `hdr` image.
@@ -35,11 +38,12 @@ pub enum Kind {
 }
 
 impl Kind {
-    pub const ALL: [Kind; 6] = [
+    pub const ALL: [Kind; 7] = [
         Kind::Hdr,
         Kind::Alb,
         Kind::Nrm,
         Kind::Depth,
+        Kind::Emission,
         Kind::StandardError,
         Kind::Denoised,
     ];
@@ -51,6 +55,7 @@ impl Kind {
             Kind::Alb => "alb",
             Kind::Nrm => "nrm",
             Kind::Depth => "z",
+            Kind::Emission => "emi",
             Kind::StandardError => "se",
             Kind::Denoised => "dn",
         }
