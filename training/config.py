@@ -23,6 +23,7 @@ class Config:
     ms_ssim_weight: float = 0.2          # loss = (1 - w) L1 + w (1 - MS-SSIM)
     seed: int = 1
     threads: int = 2
+    precision: str = "auto"              # autocast: bf16 | fp32 | auto (train.autocast_dtype)
     resume: bool = False
 
     def save(self, path):
@@ -36,6 +37,7 @@ class Config:
         # Runs from before the `head` option predicted the radiance directly.
         values.setdefault("head", "direct")
         values.setdefault("dle_paths", [])
+        values.setdefault("precision", "auto")
         return Config(**values)
 
 

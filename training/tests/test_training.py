@@ -279,3 +279,21 @@ def test_training_runs_its_steps_and_resumes(tmp_path):
     record = json.loads((tmp_path / "run" / "run.json").read_text())
     assert record["run"]["steps"] == 5 and record["run"]["resumed_at"] == [first["steps"]]
     assert record["run"]["seconds"] >= first["seconds"] and record["head"] == "kpn"
+    expected = "bf16" if train.autocast_dtype(torch.device("cpu"), "auto") is not None else "fp32"
+    assert record["precision"] == "auto" and record["run"]["autocast"] == expected
+
+
+def test_autocast_follows_the_precision_and_the_cpu():
+    # auto: bf16 where PyTorch has native bf16 kernels (CUDA, AVX-512/AMX CPUs), float32 on
+    # AVX2-only CPUs, where emulated bf16 made a step 8x slower; explicit choices are kept.
+    import train
+
+    cpu, cuda = torch.device("cpu"), torch.device("cuda")
+    assert train.autocast_dtype(cpu, "auto", "AVX2") is None
+    assert train.autocast_dtype(cpu, "auto", "DEFAULT") is None
+    assert train.autocast_dtype(cpu, "auto", "AVX512") is torch.bfloat16
+    assert train.autocast_dtype(cuda, "auto") is torch.bfloat16
+    assert train.autocast_dtype(cpu, "bf16", "AVX2") is torch.bfloat16
+    assert train.autocast_dtype(cpu, "fp32", "AVX512") is None
+    with pytest.raises(SystemExit, match="--precision 'fp16'"):
+        train.autocast_dtype(cpu, "fp16", "AVX2")
