@@ -44,6 +44,14 @@ PYTHON := $(VENV)/bin/python
 # Every file make builds is kept: none is a throwaway intermediate (compiled scenes, renders).
 .SECONDARY:
 
+# $(call lx_stamp,DIR,NAME,VALUE): the file DIR/NAME-VALUE, the only NAME-* in DIR, made when make
+# reads the makefiles (in a dry run too) if it is missing, the others removed; its path. A
+# prerequisite of the outputs that depend on VALUE, so that a changed VALUE makes them out of date.
+# Not made by a rule: under `.SECONDARY:` GNU make 4.3 treats a missing file that has a rule and no
+# prerequisites as present, and a changed value went unnoticed (REF_SPP, DATASET_SIDE until
+# 2026-11-25; training/tests/test_make.py runs make to check).
+lx_stamp = $(shell mkdir -p $(1) && { [ -e $(1)/$(2)-$(3) ] || { rm -f $(1)/$(2)-*; touch $(1)/$(2)-$(3); }; } && echo $(1)/$(2)-$(3))
+
 include pipelines/presets.mk
 include pipelines/naming.mk
 include pipelines/dataset.mk

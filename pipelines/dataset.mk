@@ -33,9 +33,7 @@ NOISY_SNAPSHOTS := $(subst $(space),$(comma),$(strip $(NOISY_LEVELS)))
 
 # DATASET_SIDE is part of what a scene is (its camera's resolution): a stamp named after it
 # regenerates the scenes when it changes (the generator rewrites the files whose text changed).
-SIDE_STAMP := build/dataset/$(DATASET)/side-$(DATASET_SIDE)
-$(SIDE_STAMP):
-	mkdir -p $(@D) && rm -f $(@D)/side-* && touch $@
+SIDE_STAMP := $(call lx_stamp,build/dataset/$(DATASET),side,$(DATASET_SIDE))
 
 $(GEN_DIR)/%.ron: data-gen/generate.py $(MESHES) $(SIDE_STAMP)
 	@python3 data-gen/generate.py --preset $(PRESET) --side $(DATASET_SIDE) --out $(GEN_DIR)
@@ -46,9 +44,7 @@ build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(SCENE_COMPILE)
 # REF_SPP is part of what a reference is: a stamp named after it (the only one of its kind) is a
 # prerequisite of every reference, so changing REF_SPP re-renders them (preprocess.py also
 # refuses a reference with fewer samples than its input).
-REF_SPP_STAMP := build/dataset/$(DATASET)/reference-spp-$(REF_SPP)
-$(REF_SPP_STAMP):
-	mkdir -p $(@D) && rm -f $(@D)/reference-spp-* && touch $@
+REF_SPP_STAMP := $(call lx_stamp,build/dataset/$(DATASET),reference-spp,$(REF_SPP))
 
 # The normal image is written last, so it marks a complete set.
 $(call lx_ref,$(DATA_DIR)/%,nrm): build/dataset/$(DATASET)/%.lxs $(TRACE) $(AOV_WRITE) $(REF_SPP_STAMP)

@@ -27,6 +27,12 @@ EVAL_CB_SCENE := build/cornell-box/scene.lxs
 REPORTS ?= reports
 EVAL_CSV := $(REPORTS)/csv
 EVAL_DLE_FEATURES_SPP := 64
+# Which model denoised an image is part of what the image is: a stamp named after EVAL_MODEL
+# (lx_stamp) is a prerequisite of every image luxest's model denoises, so switching EVAL_MODEL to
+# another file re-denoises them even when that file is older than the images (they once stayed,
+# and a summary named a model that had not made them). Made only when a goal is make eval's, so
+# that other targets (make run, make test) do not switch it.
+EVAL_MODEL_STAMP := $(if $(filter eval $(EVAL_DIR)/% $(REPORTS)/%,$(MAKECMDGOALS)),$(call lx_stamp,$(EVAL_DIR),model,$(subst /,+,$(EVAL_MODEL))))
 
 # (1) Snapshots: powers of two and multiples of 64 up to EVAL_PROG_SPP, ascending.
 EVAL_SNAPSHOTS := $(shell (seq 64 64 $(EVAL_PROG_SPP); p=1; while [ $$p -le $(EVAL_PROG_SPP) ]; do echo $$p; p=$$((p * 2)); done) | sort -n -u)
@@ -52,7 +58,7 @@ $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm): $(EVAL_CB_SCENE) $(AOV_WRITE)
 	$(AOV_WRITE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
 $(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm),$(call eval_cb,alb) $(call eval_cb,emi) $(call eval_cb,nrm)): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm) ;
 
-$(call lx_image_pattern,$(EVAL_CB),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB),alb) $(call lx_image_pattern,$(EVAL_CB),nrm) $(call lx_image_pattern,$(EVAL_CB),emi) $(EVAL_MODEL) $(DENOISE)
+$(call lx_image_pattern,$(EVAL_CB),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB),alb) $(call lx_image_pattern,$(EVAL_CB),nrm) $(call lx_image_pattern,$(EVAL_CB),emi) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	$(DENOISE) $< --model $(EVAL_MODEL) -o $@
 
 $(call lx_le_pattern,$(EVAL_CB),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
@@ -63,7 +69,7 @@ $(call lx_le_pattern,$(EVAL_CB_LT),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
 	@mkdir -p $(@D)
 	$(ESTIMATE) image $< --light-tracing --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
 
-$(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),emi) $(EVAL_MODEL) $(DENOISE)
+$(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),emi) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	$(DENOISE) $< --model $(EVAL_MODEL) --alb $(word 2,$^) --nrm $(word 3,$^) --emi $(word 4,$^) -o $@
 
 # Intel Open Image Denoise, the peer, on the same inputs (pipelines/oidn_denoise.py): in an oidn/
@@ -96,7 +102,7 @@ define eval_test_scene
 $(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm),$(foreach k,hdr alb emi nrm,$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),$(k))))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) ;
 $(call lx_ref,$(EVAL_DATA)/$(1),hdr): $(call lx_ref,$(EVAL_DATA)/$(1),nrm) ;
 
-$(call lx_image_pattern,$(EVAL_DS)/$(1),dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) $(call lx_image_pattern,$(EVAL_DATA)/$(1),emi) $(EVAL_MODEL) $(DENOISE)
+$(call lx_image_pattern,$(EVAL_DS)/$(1),dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) $(call lx_image_pattern,$(EVAL_DATA)/$(1),emi) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	@mkdir -p $$(@D)
 	$$(DENOISE) $$< --model $(EVAL_MODEL) -o $$@
 
@@ -104,7 +110,7 @@ $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr): build/dataset/$(DATASET)/test/$(1).lx
 	@mkdir -p $$(@D)
 	$$(ESTIMATE) image $$< --paths $$* --seed $(NOISY_SEED) -o $$@
 
-$(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),emi) $(EVAL_MODEL) $(DENOISE)
+$(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),emi) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	$$(DENOISE) $$< --model $(EVAL_MODEL) --alb $$(word 2,$$^) --nrm $$(word 3,$$^) --emi $$(word 4,$$^) -o $$@
 
 $(call lx_image_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) pipelines/oidn_denoise.py

@@ -1,5 +1,6 @@
 """The Make rules' data flow (`make -n`, nothing is run): seeds of the dataset and of make eval,
 the noisy target following NOISY_MAX, and every stage called through its variable."""
+import os
 import re
 import shlex
 import subprocess
@@ -17,8 +18,9 @@ for _p in STAGES.values():
 
 def dry_run(*targets, **variables):
     """The commands `make -n` would run, with every stage replaced by a path that does not exist
-    as a make target (so no cargo build is planned) and a dataset that does not exist."""
-    v = {**STAGES, "DATASET": "pytest-dry-run", **variables}
+    as a make target (so no cargo build is planned), a dataset that does not exist and make
+    eval's directory in a temporary one (a dry run of make eval writes its model stamp)."""
+    v = {**STAGES, "DATASET": "pytest-dry-run", "EVAL_DIR": str(_STAGE_DIR / "eval"), **variables}
     args = ["make", "-n", "--no-print-directory", *targets] + [f"{k}={val}" for k, val in v.items()]
     r = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
@@ -130,8 +132,39 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     assert [c for c in cmds if c[0] == STAGES["EVALUATE"] and c[1] == "images"]
     # Every program run is a stage variable or the summary: no stage runs behind make's back.
     r = subprocess.run(["make", "-n", "--no-print-directory", "eval", "EVAL_MODEL=models/default.onnx", "DATASET=pytest-dry-run",
+                        f"EVAL_DIR={_STAGE_DIR / 'eval'}",
                         *[f"{k}={v}" for k, v in STAGES.items()]], cwd=ROOT, capture_output=True, text=True)
     others = [line for line in r.stdout.splitlines()
               if line.strip() and not line.startswith((str(_STAGE_DIR), "mkdir", "python3 data-gen", "python3 pipelines/validate.py scene",
                                                        ".venv/bin/python pipelines/eval.py", "\t"))]
     assert others == [], others
+
+
+def test_switching_eval_model_re_denoises_even_with_an_older_model(tmp_path):
+    # A real make run of one Cornell snapshot's denoised image with a stand-in denoiser: after
+    # model A denoised it, EVAL_MODEL=B (a file older than the image) makes it out of date, and
+    # so does going back to A (also older). Without the model stamp make kept A's image for B.
+    ev, scene = tmp_path / "eval", tmp_path / "scene.lxs"
+    denoise = tmp_path / "denoise.sh"
+    denoise.write_text('#!/bin/sh\nwhile [ "$1" != -o ]; do shift; done\necho "$MODEL_USED" > "$2"\n')
+    denoise.chmod(0o755)
+    a, b = tmp_path / "a.onnx", tmp_path / "b.onnx"
+    inputs = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi")]
+    (ev / "cornell-box").mkdir(parents=True)
+    for p in [scene, denoise, a, b, *map(Path, STAGES.values()), *inputs]:
+        p.touch(exist_ok=True)
+        os.utime(p, (1_000_000, 1_000_000))  # all older than anything make writes
+    target = ev / "cornell-box" / "cb_000001spp.dn.exr"
+
+    def make(model, *flags):
+        args = ["make", "--no-print-directory", *flags, str(target), f"EVAL_DIR={ev}", f"EVAL_CB_SCENE={scene}",
+                "EVAL_PROG_SPP=2", f"EVAL_MODEL={model}", "DATASET=pytest-dry-run",
+                *[f"{k}={v}" for k, v in STAGES.items() if k != "DENOISE"], f"DENOISE={denoise}"]
+        return subprocess.run(args, cwd=ROOT, capture_output=True, text=True, env={**os.environ, "MODEL_USED": str(model)})
+
+    assert make(a).returncode == 0 and target.read_text().strip() == str(a)
+    assert make(a, "-q").returncode == 0  # up to date
+    assert make(b, "-q").returncode == 1  # b is older than the image, yet the image is out of date
+    assert make(b).returncode == 0 and target.read_text().strip() == str(b)
+    assert make(a, "-q").returncode == 1
+    assert sorted(p.name for p in ev.glob("model-*")) == [f"model-{str(a).replace('/', '+')}"]
