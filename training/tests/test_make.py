@@ -1,5 +1,6 @@
 """The Make rules' data flow (`make -n`, nothing is run): seeds of the dataset and of make eval,
-the noisy target following NOISY_MAX, and every stage called through its variable."""
+the noisy target following NOISY_MAX, and every stage called through its variable; and one real
+make run with a stand-in denoiser (make eval's model stamp)."""
 import os
 import re
 import shlex
@@ -16,13 +17,18 @@ for _p in STAGES.values():
     Path(_p).touch()
 
 
-def dry_run(*targets, **variables):
-    """The commands `make -n` would run, with every stage replaced by a path that does not exist
-    as a make target (so no cargo build is planned), a dataset that does not exist and make
-    eval's directory in a temporary one (a dry run of make eval writes its model stamp)."""
+def make(*args, **variables):
+    """make with every stage replaced by a path that does not exist as a make target (so no cargo
+    build is planned), a dataset that does not exist and make eval's directory in a temporary one
+    (make eval writes its model stamp even in a dry run); `variables` override these."""
     v = {**STAGES, "DATASET": "pytest-dry-run", "EVAL_DIR": str(_STAGE_DIR / "eval"), **variables}
-    args = ["make", "-n", "--no-print-directory", *targets] + [f"{k}={val}" for k, val in v.items()]
-    r = subprocess.run(args, cwd=ROOT, capture_output=True, text=True)
+    return subprocess.run(["make", "--no-print-directory", *args] + [f"{k}={val}" for k, val in v.items()],
+                          cwd=ROOT, capture_output=True, text=True)
+
+
+def dry_run(*targets, **variables):
+    """The stage commands `make -n` would run (see `make`)."""
+    r = make("-n", *targets, **variables)
     assert r.returncode == 0, r.stderr
     return [shlex.split(line) for line in r.stdout.splitlines() if line.startswith(str(_STAGE_DIR))]
 
@@ -53,9 +59,7 @@ def test_local_estimate_family_renders_train_and_valid_scenes_with_the_noisy_see
     assert {flag(c, "--seed") for c in dle} == {flag(traces[0], "--seed")}
     assert all(re.search(r"/(train|valid)/gen\d{4}_00(0100|1000)le\.hdr\.exr$", flag(c, "-o")) for c in dle)
     # Training is told which light-path counts to use.
-    r = subprocess.run(["make", "-n", "--no-print-directory", "-W", "training/train.py", "models/pytest-dry-run.onnx",
-                        "DATASET=pytest-dry-run", "DATASET_DLE=100 1000", *[f"{k}={v}" for k, v in STAGES.items()]],
-                       cwd=ROOT, capture_output=True, text=True)
+    r = make("-n", "-W", "training/train.py", "models/pytest-dry-run.onnx", DATASET_DLE="100 1000")
     lines = r.stdout.replace("\\\n", " ").splitlines()
     runs = [shlex.split(line.split("&&", 1)[1]) for line in lines if "preprocess.py" in line or "train.py" in line]
     assert len(runs) == 2 and all(c[c.index("--dle-paths") + 1:c.index("--dle-paths") + 3] == ["100", "1000"] for c in runs)
@@ -63,8 +67,7 @@ def test_local_estimate_family_renders_train_and_valid_scenes_with_the_noisy_see
 
 def test_references_follow_ref_spp():
     # The stamp named after REF_SPP is a prerequisite of every reference.
-    out = subprocess.run(["make", "-n", "--no-print-directory", "-p", "reference", "REF_SPP=2048", "DATASET=pytest-dry-run",
-                          *[f"{k}={v}" for k, v in STAGES.items()]], cwd=ROOT, capture_output=True, text=True).stdout
+    out = make("-n", "-p", "reference", REF_SPP="2048").stdout
     rule = re.search(r"^data/pytest-dry-run/%_ref\.nrm\.exr:(.*)$", out, re.M)
     assert rule and "build/dataset/pytest-dry-run/reference-spp-2048" in rule.group(1).split()
     cmds = dry_run("reference", REF_SPP="2048")
@@ -74,8 +77,7 @@ def test_references_follow_ref_spp():
 def test_scenes_follow_dataset_side():
     # The stamp named after DATASET_SIDE is a prerequisite of every generated scene, and the
     # generator is told the side.
-    out = subprocess.run(["make", "-n", "--no-print-directory", "-p", "reference", "DATASET_SIDE=96", "DATASET=pytest-dry-run",
-                          *[f"{k}={v}" for k, v in STAGES.items()]], cwd=ROOT, capture_output=True, text=True)
+    out = make("-n", "-p", "reference", DATASET_SIDE="96")
     assert out.returncode == 0, out.stderr
     rule = re.search(r"^build/dataset/pytest-dry-run/scenes/%\.ron:(.*)$", out.stdout, re.M)
     assert rule and "build/dataset/pytest-dry-run/side-96" in rule.group(1).split()
@@ -97,8 +99,7 @@ def test_noisy_target_follows_noisy_max():
     cmds = dry_run("noisy", NOISY_LEVELS="1 2 4 8")
     runs = [c for c in cmds if c[0] == STAGES["TRACE"]]
     assert runs and all(flag(c, "--spp") == "8" and flag(c, "--snapshots") == "1,2,4,8" for c in runs)
-    out = subprocess.run(["make", "-n", "--no-print-directory", "-p", "noisy", "NOISY_LEVELS=1 2 4 8", "DATASET=pytest-dry-run",
-                          *[f"{k}={v}" for k, v in STAGES.items()]], cwd=ROOT, capture_output=True, text=True).stdout
+    out = make("-n", "-p", "noisy", NOISY_LEVELS="1 2 4 8").stdout
     assert re.search(r"^data/pytest-dry-run/%_000008spp\.nrm\.exr:", out, re.M)
 
 
@@ -131,9 +132,7 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     assert lt and all(flag(c, "--seed") == flag(prog[0], "--seed") for c in lt)
     assert [c for c in cmds if c[0] == STAGES["EVALUATE"] and c[1] == "images"]
     # Every program run is a stage variable or the summary: no stage runs behind make's back.
-    r = subprocess.run(["make", "-n", "--no-print-directory", "eval", "EVAL_MODEL=models/default.onnx", "DATASET=pytest-dry-run",
-                        f"EVAL_DIR={_STAGE_DIR / 'eval'}",
-                        *[f"{k}={v}" for k, v in STAGES.items()]], cwd=ROOT, capture_output=True, text=True)
+    r = make("-n", "eval", EVAL_MODEL="models/default.onnx")
     others = [line for line in r.stdout.splitlines()
               if line.strip() and not line.startswith((str(_STAGE_DIR), "mkdir", "python3 data-gen", "python3 pipelines/validate.py scene",
                                                        ".venv/bin/python pipelines/eval.py", "\t"))]
@@ -146,7 +145,9 @@ def test_switching_eval_model_re_denoises_even_with_an_older_model(tmp_path):
     # so does going back to A (also older). Without the model stamp make kept A's image for B.
     ev, scene = tmp_path / "eval", tmp_path / "scene.lxs"
     denoise = tmp_path / "denoise.sh"
-    denoise.write_text('#!/bin/sh\nwhile [ "$1" != -o ]; do shift; done\necho "$MODEL_USED" > "$2"\n')
+    # Writes the --model it was given into its -o file.
+    denoise.write_text('#!/bin/sh\nwhile [ $# -gt 0 ]; do case "$1" in --model) m="$2";; -o) o="$2";; esac; shift; done\n'
+                       'echo "$m" > "$o"\n')
     denoise.chmod(0o755)
     a, b = tmp_path / "a.onnx", tmp_path / "b.onnx"
     inputs = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi")]
@@ -156,15 +157,12 @@ def test_switching_eval_model_re_denoises_even_with_an_older_model(tmp_path):
         os.utime(p, (1_000_000, 1_000_000))  # all older than anything make writes
     target = ev / "cornell-box" / "cb_000001spp.dn.exr"
 
-    def make(model, *flags):
-        args = ["make", "--no-print-directory", *flags, str(target), f"EVAL_DIR={ev}", f"EVAL_CB_SCENE={scene}",
-                "EVAL_PROG_SPP=2", f"EVAL_MODEL={model}", "DATASET=pytest-dry-run",
-                *[f"{k}={v}" for k, v in STAGES.items() if k != "DENOISE"], f"DENOISE={denoise}"]
-        return subprocess.run(args, cwd=ROOT, capture_output=True, text=True, env={**os.environ, "MODEL_USED": str(model)})
+    def denoise_with(model, *flags):
+        return make(*flags, str(target), EVAL_DIR=ev, EVAL_CB_SCENE=scene, EVAL_PROG_SPP=2, EVAL_MODEL=model, DENOISE=denoise)
 
-    assert make(a).returncode == 0 and target.read_text().strip() == str(a)
-    assert make(a, "-q").returncode == 0  # up to date
-    assert make(b, "-q").returncode == 1  # b is older than the image, yet the image is out of date
-    assert make(b).returncode == 0 and target.read_text().strip() == str(b)
-    assert make(a, "-q").returncode == 1
+    assert denoise_with(a).returncode == 0 and target.read_text().strip() == str(a)
+    assert denoise_with(a, "-q").returncode == 0  # up to date
+    assert denoise_with(b, "-q").returncode == 1  # b is older than the image, yet the image is out of date
+    assert denoise_with(b).returncode == 0 and target.read_text().strip() == str(b)
+    assert denoise_with(a, "-q").returncode == 1
     assert sorted(p.name for p in ev.glob("model-*")) == [f"model-{str(a).replace('/', '+')}"]
