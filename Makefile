@@ -73,7 +73,7 @@ RUN_PREFIX := build/$(DEFAULT_SCENE)/$(DEFAULT_SCENE)
 run: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE) $(TRACE) $(AOV_WRITE) $(DENOISE)
 	$(SCENE_COMPILE) --info $< > build/$(DEFAULT_SCENE)/scene.info.ron
 	$(TRACE) $< --spp 64 --snapshots 1,4,16 --resolution 256x256 --preview $(RUN_PREFIX)_$(call lx_count,64)spp.png
-	$(AOV_WRITE) $< --spp 64 --snapshots 1,4,16 --resolution 256x256
+	$(AOV_WRITE) $< --spp 64 --snapshots 1,4,16 --min-samples $(FEATURE_SPP) --resolution 256x256
 	$(DENOISE) --model $(DEFAULT_MODEL) --preview $(foreach s,1 4 16 64,$(call lx_image,$(RUN_PREFIX),$(s),hdr))
 	$(ESTIMATE) sensors $< --paths 200000 --csv $(RUN_PREFIX).sensors.csv
 	$(ESTIMATE) image $< --paths 300 --resolution 256x256 --preview $(RUN_PREFIX)_$(call lx_count,300)le.png

@@ -7,7 +7,8 @@
 #                                                paths, seed NOISY_SEED (train and valid scenes;
 #                                                training pairs it with the NOISY_MAX features)
 # (pipelines/presets.mk). trace and aov-write get the same --seed for each image, so the features
-# have exactly the pixel positions of the radiance they go with; the reference's seed differs
+# have the pixel positions of the radiance they go with (albedo and normal at least FEATURE_SPP
+# samples: trace's and the next of the same sequence); the reference's seed differs
 # from the noisy one, so it shares none of their samples. Splits (train / valid / test) come from
 # data-gen/generate.py. Incremental: a scene is re-rendered only when its .ron (or a stage
 # binary) changes; make prints each step.
@@ -46,14 +47,23 @@ build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(SCENE_COMPILE)
 # refuses a reference with fewer samples than its input).
 REF_SPP_STAMP := $(call lx_stamp,build/dataset/$(DATASET),reference-spp,$(REF_SPP))
 
-# The normal image is written last, so it marks a complete set.
-$(call lx_ref,$(DATA_DIR)/%,nrm): build/dataset/$(DATASET)/%.lxs $(TRACE) $(AOV_WRITE) $(REF_SPP_STAMP)
-	$(TRACE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) -o $(DATA_DIR)/$*
-	$(AOV_WRITE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) -o $(DATA_DIR)/$*
+# FEATURE_SPP is part of what a feature image is: a stamp named after it is a prerequisite of
+# every feature set (aov-write --min-samples), so changing it re-renders the features only.
+FEATURE_SPP_STAMP := $(call lx_stamp,build/dataset/$(DATASET),feature-spp,$(FEATURE_SPP))
 
-$(call lx_image,$(DATA_DIR)/%,$(NOISY_MAX),nrm): build/dataset/$(DATASET)/%.lxs $(TRACE) $(AOV_WRITE)
+# Radiance (trace) and features (aov-write) in rules of their own, so that a change of one
+# stage or of FEATURE_SPP does not re-render the other. The normal image is written last, so
+# it marks a complete feature set; the radiance of the last level marks a complete progressive
+# run.
+$(call lx_ref,$(DATA_DIR)/%,hdr): build/dataset/$(DATASET)/%.lxs $(TRACE) $(REF_SPP_STAMP)
+	$(TRACE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) -o $(DATA_DIR)/$*
+$(call lx_ref,$(DATA_DIR)/%,nrm): build/dataset/$(DATASET)/%.lxs $(AOV_WRITE) $(REF_SPP_STAMP) $(FEATURE_SPP_STAMP)
+	$(AOV_WRITE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) --min-samples $(FEATURE_SPP) -o $(DATA_DIR)/$*
+
+$(call lx_image,$(DATA_DIR)/%,$(NOISY_MAX),hdr): build/dataset/$(DATASET)/%.lxs $(TRACE)
 	$(TRACE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) -o $(DATA_DIR)/$*
-	$(AOV_WRITE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) -o $(DATA_DIR)/$*
+$(call lx_image,$(DATA_DIR)/%,$(NOISY_MAX),nrm): build/dataset/$(DATASET)/%.lxs $(AOV_WRITE) $(FEATURE_SPP_STAMP)
+	$(AOV_WRITE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) --min-samples $(FEATURE_SPP) -o $(DATA_DIR)/$*
 
 # The local-estimate family (not for the test scenes: make eval renders theirs).
 DATASET_LE_SCENES := $(filter-out test/%,$(DATASET_SCENES))
@@ -64,6 +74,6 @@ endef
 $(foreach s,$(DATASET_LE_SCENES),$(foreach n,$(DATASET_DLE),$(eval $(call dataset_le,$(s),$(n)))))
 
 dataset-scenes: $(patsubst %,build/dataset/$(DATASET)/%.lxs,$(DATASET_SCENES))
-reference: $(foreach s,$(DATASET_SCENES),$(call lx_ref,$(DATA_DIR)/$(s),nrm))
-noisy: $(foreach s,$(DATASET_SCENES),$(call lx_image,$(DATA_DIR)/$(s),$(NOISY_MAX),nrm)) \
+reference: $(foreach s,$(DATASET_SCENES),$(foreach k,hdr nrm,$(call lx_ref,$(DATA_DIR)/$(s),$(k))))
+noisy: $(foreach s,$(DATASET_SCENES),$(foreach k,hdr nrm,$(call lx_image,$(DATA_DIR)/$(s),$(NOISY_MAX),$(k)))) \
 	$(foreach s,$(DATASET_LE_SCENES),$(foreach n,$(DATASET_DLE),$(call lx_le,$(DATA_DIR)/$(s),$(n),hdr)))

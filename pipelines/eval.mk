@@ -53,9 +53,10 @@ $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr): $(EVAL_CB_SCENE) $(TRACE)
 	$(TRACE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
 $(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr),$(call eval_cb,hdr)): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr) ;
 
-$(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm): $(EVAL_CB_SCENE) $(AOV_WRITE)
+# Features of at least FEATURE_SPP samples (pipelines/presets.mk), stamped like the dataset's.
+$(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm): $(EVAL_CB_SCENE) $(AOV_WRITE) $(call lx_stamp,$(EVAL_DIR),feature-spp,$(FEATURE_SPP))
 	@mkdir -p $(@D)
-	$(AOV_WRITE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
+	$(AOV_WRITE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --min-samples $(FEATURE_SPP) --resolution $(EVAL_RES) -o $(EVAL_CB)
 $(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm),$(call eval_cb,alb) $(call eval_cb,emi) $(call eval_cb,nrm)): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm) ;
 
 $(call lx_image_pattern,$(EVAL_CB),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB),alb) $(call lx_image_pattern,$(EVAL_CB),nrm) $(call lx_image_pattern,$(EVAL_CB),emi) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
@@ -98,9 +99,10 @@ EVAL_DS := $(EVAL_DIR)/dataset
 EVAL_TEST_SCENES := $(patsubst test/%,%,$(filter test/%,$(DATASET_SCENES)))
 
 define eval_test_scene
-# The levels below the last are written by the run whose last normal image marks it.
-$(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm),$(foreach k,hdr alb emi nrm,$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),$(k))))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) ;
-$(call lx_ref,$(EVAL_DATA)/$(1),hdr): $(call lx_ref,$(EVAL_DATA)/$(1),nrm) ;
+# The levels below the last are written by the runs whose last images mark them (the radiance
+# by trace's, the features by aov-write's: pipelines/dataset.mk).
+$(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),hdr),$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),hdr) ;
+$(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm),$(foreach k,alb emi nrm,$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),$(k))))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) ;
 
 $(call lx_image_pattern,$(EVAL_DS)/$(1),dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) $(call lx_image_pattern,$(EVAL_DATA)/$(1),emi) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	@mkdir -p $$(@D)

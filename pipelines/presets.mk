@@ -20,6 +20,12 @@ lx_preset = $(1) ?= $(if $(filter full,$(PRESET)),$(3),$(2))
 $(eval $(call lx_preset,DATASET_SIDE,112,384))
 $(eval $(call lx_preset,REF_SPP,1024,4096))
 $(eval $(call lx_preset,NOISY_LEVELS,1 2 4 8 16 32 64 256 1024,1 2 4 8 16 32 64 256 1024))
+# The denoiser's albedo and normal features average at least FEATURE_SPP samples per pixel
+# (aov-write --min-samples): antialiased, as Intel Open Image Denoise recommends, for the levels
+# below it (the emission feature keeps each level's own samples). 16 first hits per pixel cost
+# about as much as 2 spp of trace; on the Cornell box they lift both denoisers at 1-4 spp by
+# 1.5-4.5 dB (docs/measurements.md).
+$(eval $(call lx_preset,FEATURE_SPP,16,16))
 # The second input family: double-local-estimate images (estimate image, seed NOISY_SEED) of the
 # train and valid scenes at these light-path counts, denoised with the NOISY_MAX features.
 $(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))

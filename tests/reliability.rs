@@ -1355,6 +1355,10 @@ fn numeric_options_outside_their_range_are_usage_errors() {
             with_scene(aov_write_stage, &["--spp", "4", "--snapshots", "5"]),
             "5 exceeds --spp 4",
         ),
+        (
+            with_scene(aov_write_stage, &["--spp", "4", "--min-samples", "0"]),
+            "samples per pixel",
+        ),
     ];
     for (i, (r, want)) in cases.into_iter().enumerate() {
         let (code, msg) = r.expect_err(&format!("case {i} must be refused"));

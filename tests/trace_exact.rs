@@ -375,3 +375,89 @@ fn emission_feature_is_the_radiance_trace_sees_emitted() {
         "light seen: {full} full, {partial} partial pixels"
     );
 }
+
+/// `--min-samples N`: the albedo and normal of a level below N are exactly those of N samples of
+/// the same sequence (a run to N without the option), recorded as such in the header; the
+/// emission keeps the level's own samples (it is what trace's image of those samples
+/// contains); levels of N or more samples are as without the option.
+#[test]
+fn features_average_at_least_min_samples_and_the_emission_its_own() {
+    let dir = TempDir::new("aov-min");
+    let text = std::fs::read_to_string(repo_root().join("scenes/cornell-box.ron")).unwrap();
+    let lxs = compile_text(&dir, "cb", &text);
+    let run = |name: &str, extra: &[&str]| {
+        let prefix = dir.path().join(name);
+        let mut argv = vec![
+            "aov-write",
+            lxs.to_str().unwrap(),
+            "--resolution",
+            "32x24",
+            "--seed",
+            "5",
+            "--threads",
+            "2",
+            "-o",
+            prefix.to_str().unwrap(),
+        ];
+        argv.extend_from_slice(extra);
+        aov_write::run(
+            luxest_io::cli::parse::<aov_write::Args>(argv)
+                .unwrap()
+                .unwrap(),
+        )
+        .unwrap();
+    };
+    run(
+        "a",
+        &["--spp", "4", "--snapshots", "1,2", "--min-samples", "3"],
+    );
+    run("b", &["--spp", "4", "--snapshots", "1,2,3"]);
+    let read = |name: &str| luxest_io::exr_io::read_rgb(&dir.path().join(name)).unwrap();
+    let samples = |name: &str| {
+        read(name)
+            .attribute(header::SAMPLES)
+            .unwrap_or_default()
+            .to_string()
+    };
+    for level in ["000001spp", "000002spp"] {
+        for kind in ["alb", "nrm"] {
+            let (a, b) = (
+                read(&format!("a_{level}.{kind}.exr")),
+                read(&format!("b_000003spp.{kind}.exr")),
+            );
+            assert_eq!(a.pixels, b.pixels, "{level}.{kind}");
+            assert_eq!(samples(&format!("a_{level}.{kind}.exr")), "3");
+        }
+        let (a, b) = (
+            read(&format!("a_{level}.emi.exr")),
+            read(&format!("b_{level}.emi.exr")),
+        );
+        assert_eq!(a.pixels, b.pixels, "{level}.emi");
+        assert_eq!(
+            samples(&format!("a_{level}.emi.exr")),
+            samples(&format!("b_{level}.emi.exr"))
+        );
+    }
+    for kind in ["alb", "nrm", "emi"] {
+        let name = format!("000004spp.{kind}.exr");
+        assert_eq!(
+            read(&format!("a_{name}")).pixels,
+            read(&format!("b_{name}")).pixels
+        );
+    }
+    // Antialiased: a 1-spp albedo of one sample per pixel is one material's at every pixel; the
+    // three-sample one mixes materials at edges.
+    let one = read("b_000001spp.alb.exr");
+    let three = read("a_000001spp.alb.exr");
+    let mixed = |img: &luxest_io::exr_io::RgbImage| {
+        img.pixels
+            .iter()
+            .filter(|p| !one.pixels.iter().any(|q| q == *p))
+            .count()
+    };
+    assert_eq!(mixed(&one), 0);
+    assert!(
+        mixed(&three) > 0,
+        "no pixel of three samples mixes materials"
+    );
+}

@@ -45,8 +45,27 @@ def test_dataset_references_have_their_own_seed_and_features_share_traces():
     ref_seeds = {flag(c, "--seed") for c in traces if "--reference" in c}
     noisy_seeds = {flag(c, "--seed") for c in traces if "--reference" not in c}
     assert len(ref_seeds) == len(noisy_seeds) == 1 and ref_seeds.isdisjoint(noisy_seeds)
-    # aov-write gets exactly trace's arguments for each image set (same seed, spp, snapshots).
-    assert sorted(c[1:] for c in traces) == sorted(c[1:] for c in aovs)
+    # aov-write gets exactly trace's arguments for each image set (same seed, spp, snapshots),
+    # and the features' least samples per pixel.
+    assert all(flag(c, "--min-samples") == "16" for c in aovs)
+    assert sorted(c[1:] for c in traces) == sorted([a for a in c[1:] if a not in ("--min-samples", "16")] for c in aovs)
+
+
+def test_features_follow_feature_spp():
+    # The stamp named after FEATURE_SPP is a prerequisite of every feature set and of no
+    # radiance (changing it re-renders only the features), and aov-write is told it; make eval's
+    # Cornell-box features too.
+    out = make("-n", "-p", "reference", "noisy", FEATURE_SPP="32").stdout
+    stamp = "build/dataset/pytest-dry-run/feature-spp-32"
+    for level in ("ref", "001024spp"):
+        nrm = re.search(rf"^data/pytest-dry-run/%_{level}\.nrm\.exr:(.*)$", out, re.M)
+        hdr = re.search(rf"^data/pytest-dry-run/%_{level}\.hdr\.exr:(.*)$", out, re.M)
+        assert nrm and stamp in nrm.group(1).split(), level
+        assert hdr and stamp not in hdr.group(1).split() and "feature-spp" not in hdr.group(1), level
+    cmds = dry_run("reference", "noisy", "eval", FEATURE_SPP="32", EVAL_MODEL="models/default.onnx")
+    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"]]
+    assert any("cornell-box" in c[1] for c in aovs) and all(flag(c, "--min-samples") == "32" for c in aovs)
+    assert not [c for c in cmds if c[0] == STAGES["TRACE"] and "--min-samples" in c]
 
 
 def test_local_estimate_family_renders_train_and_valid_scenes_with_the_noisy_seed():
@@ -68,8 +87,9 @@ def test_local_estimate_family_renders_train_and_valid_scenes_with_the_noisy_see
 def test_references_follow_ref_spp():
     # The stamp named after REF_SPP is a prerequisite of every reference.
     out = make("-n", "-p", "reference", REF_SPP="2048").stdout
-    rule = re.search(r"^data/pytest-dry-run/%_ref\.nrm\.exr:(.*)$", out, re.M)
-    assert rule and "build/dataset/pytest-dry-run/reference-spp-2048" in rule.group(1).split()
+    for kind in ("hdr", "nrm"):
+        rule = re.search(rf"^data/pytest-dry-run/%_ref\.{kind}\.exr:(.*)$", out, re.M)
+        assert rule and "build/dataset/pytest-dry-run/reference-spp-2048" in rule.group(1).split(), kind
     cmds = dry_run("reference", REF_SPP="2048")
     assert all(flag(c, "--spp") == "2048" for c in cmds if c[0] == STAGES["TRACE"])
 
@@ -152,7 +172,7 @@ def test_switching_eval_model_re_denoises_even_with_an_older_model(tmp_path):
     a, b = tmp_path / "a.onnx", tmp_path / "b.onnx"
     inputs = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi")]
     (ev / "cornell-box").mkdir(parents=True)
-    for p in [scene, denoise, a, b, *map(Path, STAGES.values()), *inputs]:
+    for p in [scene, denoise, a, b, ev / "feature-spp-16", *map(Path, STAGES.values()), *inputs]:
         p.touch(exist_ok=True)
         os.utime(p, (1_000_000, 1_000_000))  # all older than anything make writes
     target = ev / "cornell-box" / "cb_000001spp.dn.exr"
@@ -166,3 +186,23 @@ def test_switching_eval_model_re_denoises_even_with_an_older_model(tmp_path):
     assert denoise_with(b).returncode == 0 and target.read_text().strip() == str(b)
     assert denoise_with(a, "-q").returncode == 1
     assert sorted(p.name for p in ev.glob("model-*")) == [f"model-{str(a).replace('/', '+')}"]
+
+
+def test_changing_feature_spp_re_renders_the_features_and_not_the_radiance(tmp_path):
+    # A real make run (question mode, nothing is rendered) on make eval's Cornell-box images, all
+    # older than anything make writes: up to date with the FEATURE_SPP their stamp names; another
+    # FEATURE_SPP makes the features out of date and leaves the radiance as it is.
+    ev, scene = tmp_path / "eval", tmp_path / "scene.lxs"
+    images = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi")]
+    (ev / "cornell-box").mkdir(parents=True)
+    for p in [scene, ev / "feature-spp-16", *map(Path, STAGES.values()), *images]:
+        p.touch(exist_ok=True)
+        os.utime(p, (1_000_000, 1_000_000))
+
+    def question(kind, feature_spp):
+        return make("-q", str(ev / "cornell-box" / f"cb_000002spp.{kind}.exr"), EVAL_DIR=ev, EVAL_CB_SCENE=scene,
+                    EVAL_PROG_SPP=2, FEATURE_SPP=feature_spp).returncode
+
+    assert question("nrm", 16) == 0 and question("hdr", 16) == 0
+    assert question("nrm", 32) == 1 and question("hdr", 32) == 0
+    assert sorted(p.name for p in ev.glob("feature-spp-*")) == ["feature-spp-32"]

@@ -36,6 +36,14 @@ pub struct Args {
     /// Write the final images as the reference (_ref).
     #[arg(long)]
     pub reference: bool,
+    /// Albedo, normal and depth average at least this many samples per pixel: the features of
+    /// an image of s < N samples are those of N samples, the first s of them trace's own, so
+    /// that they are antialiased (as Intel Open Image Denoise recommends) at the cost of N
+    /// first hits per pixel. The emission always averages exactly the image's samples (a
+    /// denoiser subtracts it from trace's radiance of those samples). `luxest.samples` records
+    /// the samples of each feature image.
+    #[arg(long, value_parser = SPP, default_value_t = 1)]
+    pub min_samples: u32,
     /// Also write depth (.z.exr, R = G = B = distance in m).
     #[arg(long)]
     pub depth: bool,
@@ -94,27 +102,49 @@ pub fn run(args: Args) -> Result<()> {
         .map(|(t, k)| image_path(&prefix, level_of(t), k))
         .collect();
     let mut plan = OutputPlan::new([&args.scene], &outputs)?;
-    for &target in &counts {
-        film.advance(&world, &cam, args.common.seed, threads, target);
-        let level = level_of(target);
+    // The samples each image of a level averages: the emission exactly the level's, the other
+    // features at least --min-samples. One film advances through every such count in order and
+    // each image is taken where its count is reached.
+    let samples_of = |target: u32, kind: Kind| {
+        if kind == Kind::Emission {
+            target
+        } else {
+            target.max(args.min_samples)
+        }
+    };
+    let mut checkpoints: Vec<u32> = counts
+        .iter()
+        .flat_map(|&t| kinds.iter().map(move |&k| (t, k)))
+        .map(|(t, k)| samples_of(t, k))
+        .collect();
+    checkpoints.sort_unstable();
+    checkpoints.dedup();
+    for &samples in &checkpoints {
+        film.advance(&world, &cam, args.common.seed, threads, samples);
         let info = RunInfo::new(
             ESTIMATOR,
-            target as u64,
+            samples as u64,
             args.common.seed,
             start.elapsed().as_secs_f64(),
             &world.scene.content_hash,
         );
-        for &kind in &kinds {
-            let mut img = RgbImage::new(film.width, film.height);
-            img.pixels = match kind {
-                Kind::Alb => film.albedo(),
-                Kind::Nrm => film.normal(),
-                Kind::Emission => film.emission(),
-                _ => film.depth(),
-            };
-            img.attributes = info.to_attributes();
-            img.set_attribute(header::PIXEL_FILTER, "box");
-            write_rgb_to(&mut plan, &image_path(&prefix, level, kind), &img)?;
+        for &target in &counts {
+            for &kind in kinds.iter().filter(|&&k| samples_of(target, k) == samples) {
+                let mut img = RgbImage::new(film.width, film.height);
+                img.pixels = match kind {
+                    Kind::Alb => film.albedo(),
+                    Kind::Nrm => film.normal(),
+                    Kind::Emission => film.emission(),
+                    _ => film.depth(),
+                };
+                img.attributes = info.to_attributes();
+                img.set_attribute(header::PIXEL_FILTER, "box");
+                write_rgb_to(
+                    &mut plan,
+                    &image_path(&prefix, level_of(target), kind),
+                    &img,
+                )?;
+            }
         }
     }
     plan.commit()?;

@@ -1,7 +1,10 @@
 //! aov-write: the denoiser's auxiliary features, first-hit albedo and shading normal (and
-//! optionally depth), averaged over exactly the pixel samples `trace` uses
-//! ([`luxest_render::camera::pixel_jitter`] with the same seed), written in the Intel Open Image
-//! Denoise training-toolkit layout: `<prefix>_<spp>spp.alb.exr`, `.nrm.exr` (and `_ref.`).
+//! optionally depth) and the emitted radiance seen directly, averaged over the pixel samples
+//! `trace` uses ([`luxest_render::camera::pixel_jitter`] with the same seed), written in the Intel
+//! Open Image Denoise training-toolkit layout: `<prefix>_<spp>spp.alb.exr`, `.emi.exr`,
+//! `.nrm.exr` (and `_ref.`). The emission averages exactly the image's samples; albedo, normal
+//! and depth at least `--min-samples` (trace's first samples and the next ones of the same
+//! sequence), so that a denoiser gets antialiased features of a 1-spp image.
 //!
 //! Conventions (as OIDN expects): albedo in [0, 1] — the reflectance of diffuse surfaces, the
 //! sum diffuse + specular of glossy ones, the reflectance of mirrors and 1 for dielectrics;
