@@ -1,8 +1,8 @@
 # Denoiser datasets: `make reference noisy` renders every generated scene of the preset into
 # data/<dataset>/<split>/ in the Intel Open Image Denoise training-toolkit naming
 # (pipelines/naming.mk):
-#   <name>_ref.{hdr,alb,emi,nrm}.exr             reference: REF_SPP samples per pixel, seed REF_SEED
-#   <name>_<spp, 6 digits>spp.{hdr,alb,emi,nrm}.exr  noisy levels NOISY_LEVELS, seed NOISY_SEED
+#   <name>_ref.{hdr,alb,emi,ema,nrm}.exr         reference: REF_SPP samples per pixel, seed REF_SEED
+#   <name>_<spp, 6 digits>spp.{hdr,alb,emi,ema,nrm}.exr  noisy levels NOISY_LEVELS, seed NOISY_SEED
 #   <name>_<paths, 6 digits>le.hdr.exr           double local estimate at DATASET_DLE light
 #                                                paths, seed NOISY_SEED (train and valid scenes;
 #                                                training pairs it with the NOISY_MAX features)

@@ -10,7 +10,8 @@ Naming (the Intel Open Image Denoise training-toolkit layout):
     <name>_<spp, 6 digits>spp.<kind>.exr     a noisy image at spp samples per pixel
     <name>_ref.<kind>.exr                     the reference
     <name>_<paths, 6 digits>le.<kind>.exr     a double-local-estimate image of `paths` light paths
-kind: hdr (radiance), alb (albedo), nrm (normal), z (depth), emi (emitted radiance seen directly),
+kind: hdr (radiance), alb (albedo), nrm (normal), z (depth), emi (emitted radiance seen directly,
+the image's own samples), ema (the same, antialiased: at least aov-write's --min-samples),
 se (standard error), dn (denoised).
 Counts have at least 6 digits; a name that does not follow the layout parses to None, as in Rust.
 
@@ -25,12 +26,12 @@ import numpy as np
 
 # --- File naming -------------------------------------------------------------------------------
 
-FEATURES = ("hdr", "alb", "nrm", "emi")
+FEATURES = ("hdr", "alb", "nrm", "emi", "ema")
 """The denoiser's input features, in the order of the model's input channels: a model takes the
-first three or all four (its `luxest.channels` metadata says which; luxest-io's denoise reads
-the same)."""
+first three, four or all five (its `luxest.channels` metadata says which; luxest-io's denoise
+reads the same)."""
 
-KINDS = ("hdr", "alb", "nrm", "z", "emi", "se", "dn")
+KINDS = ("hdr", "alb", "nrm", "z", "emi", "ema", "se", "dn")
 """Every image kind (luxest-io `naming::Kind`)."""
 
 _NAME = re.compile(r"^(?P<name>.+)_(?:(?P<count>\d{6,})(?P<unit>spp|le)|(?P<ref>ref))\.(?P<kind>[a-z]+)\.exr$")

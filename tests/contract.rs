@@ -51,6 +51,7 @@ fn naming_json() -> String {
         ("room_with_underscores", Level::Spp(16), Kind::Depth),
         ("gen0001", Level::Spp(4), Kind::Emission),
         ("cornell-box", Level::Reference, Kind::Emission),
+        ("gen0001", Level::Spp(1), Kind::EmissionAntialiased),
         ("cornell-box", Level::LightPaths(1000), Kind::Hdr),
         ("sobolev", Level::LightPaths(4000), Kind::Denoised),
     ];

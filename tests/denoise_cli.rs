@@ -39,15 +39,20 @@ fn s(p: &Path) -> &str {
 }
 
 /// The fixture models (both output heads of training/model.py, and the kernel-predicting one
-/// with the emission feature), the suffix of their expected outputs
+/// with the emission feature, and with the antialiased emission too), the suffix of their expected outputs
 /// (tests/fixtures/denoise/generate.py) and the features they take.
-const MODELS: [(&str, &str, &[&str]); 3] = [
+const MODELS: [(&str, &str, &[&str]); 4] = [
     ("tiny.onnx", "expected", &["hdr", "alb", "nrm"]),
     ("tiny_kpn.onnx", "kpn.expected", &["hdr", "alb", "nrm"]),
     (
         "tiny_emi.onnx",
         "emi.expected",
         &["hdr", "alb", "nrm", "emi"],
+    ),
+    (
+        "tiny_ema.onnx",
+        "ema.expected",
+        &["hdr", "alb", "nrm", "emi", "ema"],
     ),
 ];
 
@@ -158,6 +163,20 @@ fn bad_input_gives_one_line_errors_and_no_output() {
         ],
         1,
         &["odd_000004spp.emi.exr", "missing emi feature"],
+    );
+    // And one that adds back the antialiased emission, that one too.
+    check(
+        &[
+            s(&hdr),
+            "--model",
+            s(&fixture("tiny_ema.onnx")),
+            "--nrm",
+            s(&fixture("odd_000004spp.nrm.exr")),
+            "--emi",
+            s(&fixture("odd_000004spp.emi.exr")),
+        ],
+        1,
+        &["odd_000004spp.ema.exr", "missing ema feature"],
     );
     // A feature of another size.
     let nrm = dir.path().join("odd_000004spp.nrm.exr");

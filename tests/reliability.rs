@@ -374,8 +374,8 @@ fn estimate_exact_refuses_parameters_outside_their_domain() {
     .unwrap();
 }
 
-/// Writes a uniform 20x12 image of `value` with albedo, normal and (zero) emission features
-/// beside it; returns the hdr path.
+/// Writes a uniform 20x12 image of `value` with albedo, normal and (zero) emission features (emi,
+/// ema) beside it; returns the hdr path.
 fn uniform_with_features(dir: &TempDir, name: &str, value: f32) -> std::path::PathBuf {
     use luxest_io::exr_io::{write_rgb, RgbImage};
     let mut img = RgbImage::new(20, 12);
@@ -388,12 +388,14 @@ fn uniform_with_features(dir: &TempDir, name: &str, value: f32) -> std::path::Pa
     let mut nrm = RgbImage::new(20, 12);
     nrm.pixels.iter_mut().for_each(|p| *p = [0.0, 0.0, 1.0]);
     write_rgb(&dir.path().join(format!("{name}.nrm.exr")), &nrm).unwrap();
-    // No emitter in view (models trained with the emission feature read it; others ignore it).
-    write_rgb(
-        &dir.path().join(format!("{name}.emi.exr")),
-        &RgbImage::new(20, 12),
-    )
-    .unwrap();
+    // No emitter in view (models with the emission features read them; others ignore them).
+    for kind in ["emi", "ema"] {
+        write_rgb(
+            &dir.path().join(format!("{name}.{kind}.exr")),
+            &RgbImage::new(20, 12),
+        )
+        .unwrap();
+    }
     hdr
 }
 

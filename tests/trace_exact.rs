@@ -376,10 +376,10 @@ fn emission_feature_is_the_radiance_trace_sees_emitted() {
     );
 }
 
-/// `--min-samples N`: the albedo and normal of a level below N are exactly those of N samples of
-/// the same sequence (a run to N without the option), recorded as such in the header; the
-/// emission keeps the level's own samples (it is what trace's image of those samples
-/// contains); levels of N or more samples are as without the option.
+/// `--min-samples N`: the albedo, normal and antialiased emission (`ema`) of a level below N are
+/// exactly those of N samples of the same sequence (a run to N without the option), recorded as
+/// such in the header; the emission (`emi`) keeps the level's own samples (it is what trace's
+/// image of those samples contains); levels of N or more samples are as without the option.
 #[test]
 fn features_average_at_least_min_samples_and_the_emission_its_own() {
     let dir = TempDir::new("aov-min");
@@ -437,7 +437,18 @@ fn features_average_at_least_min_samples_and_the_emission_its_own() {
             samples(&format!("a_{level}.emi.exr")),
             samples(&format!("b_{level}.emi.exr"))
         );
+        // The antialiased emission is the emission of the features' samples.
+        let (a, b) = (
+            read(&format!("a_{level}.ema.exr")),
+            read("b_000003spp.emi.exr"),
+        );
+        assert_eq!(a.pixels, b.pixels, "{level}.ema");
+        assert_eq!(samples(&format!("a_{level}.ema.exr")), "3");
     }
+    assert_eq!(
+        read("a_000004spp.ema.exr").pixels,
+        read("a_000004spp.emi.exr").pixels
+    );
     for kind in ["alb", "nrm", "emi"] {
         let name = format!("000004spp.{kind}.exr");
         assert_eq!(

@@ -85,9 +85,8 @@ class Crops(torch.utils.data.Dataset):
             a, b = a.transpose(1, 0, 2), b.transpose(1, 0, 2)
         k = int(rng.integers(len(PERMUTATIONS)))
         perm = np.array(PERMUTATIONS[k])
-        # hdr, alb and emi are colours (permuted alike); nrm is a direction.
-        colour = [a[..., perm], a[..., 3 + perm], a[..., 6:9]] + ([a[..., 9 + perm]] if a.shape[-1] == 12 else [])
-        a = np.concatenate(colour, axis=-1)
+        # hdr, alb, emi and ema are colours (permuted alike); nrm (the third feature) is a direction.
+        a = np.concatenate([a[..., 6:9] if i == 2 else a[..., 3 * i + perm] for i in range(a.shape[-1] // 3)], axis=-1)
         b = b[..., perm]
         to = lambda t: torch.from_numpy(np.ascontiguousarray(t.transpose(2, 0, 1)))
         return to(a), to(b), torch.tensor(exposures[k], dtype=torch.float32)

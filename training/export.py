@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Exports a trained run to ONNX: inputs `input` (N, 3 x features, H, W) = raw linear hdr + alb +
-nrm (+ emi: the run's `features`, listed in the metadata `luxest.channels`) and
+nrm (+ emi [+ ema]: the run's `features`, listed in the metadata `luxest.channels`) and
 `exposure` (N,) = transfer.exposure of each whole image, output `output` (N, 3, H, W) linear
 radiance, dynamic H and W; the log1p transfer and the padding to multiples of 16 are inside the
 graph (transfer.py), the exposure formula is recorded in the metadata."""
 import argparse
 import json
+import tempfile
 from dataclasses import asdict
 from pathlib import Path
 
@@ -29,10 +30,44 @@ OUTPUTS = {
 EMISSION = ("; with the emi feature: the network filters max(hdr - emi, 0) in place of hdr (and "
             "sees log1p(emi * exposure) as 3 more channels), and max(emi, 0) is added to its output")
 """The metadata's addition for models that take the emission (model.py)."""
+EMISSION_AA = ("; with the ema feature (the emission antialiased): max(ema, 0) is added in place of "
+               "max(emi, 0)")
+"""The metadata's addition for models that add back the antialiased emission."""
 
 
-def export(run_dir, out_path, metrics=None):
+def run_from_onnx(model_path, run_dir):
+    """Writes a run directory (config.json, checkpoint.pt) holding the configuration and weights
+    of an exported model, read from its metadata (`luxest.config`) and initializers, so that a
+    committed model can be exported again (e.g. with --antialiased-emission) without its run."""
+    from onnx import numpy_helper
+
+    m = onnx.load(str(model_path))
+    meta = {p.key: p.value for p in m.metadata_props}
+    if contract.MODEL_CONFIG not in meta:
+        raise ValueError(f"{model_path}: no {contract.MODEL_CONFIG} metadata (not exported by export.py)")
+    values = json.loads(meta[contract.MODEL_CONFIG])
+    values = {k: v for k, v in values.items() if k in config.Config.__dataclass_fields__}
+    cfg = config.Config(**values)
+    net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features)
+    weights = {i.name: numpy_helper.to_array(i) for i in m.graph.initializer}
+    state = net.state_dict()
+    missing = [k for k in state if k not in weights or tuple(weights[k].shape) != tuple(state[k].shape)]
+    if missing:
+        raise ValueError(f"{model_path}: lacks the weights {', '.join(missing[:3])}")
+    net.load_state_dict({k: torch.from_numpy(weights[k].copy()) for k in state})
+    Path(run_dir).mkdir(parents=True, exist_ok=True)
+    cfg.save(Path(run_dir) / "config.json")
+    torch.save({"model": net.state_dict(), "step": None}, Path(run_dir) / "checkpoint.pt")
+
+
+def export(run_dir, out_path, metrics=None, antialiased_emission=False):
+    """`antialiased_emission`: export a run trained with the emi feature alone as a model that
+    adds back ema instead (the network does not see ema, so the weights are the same; model.py)."""
     cfg = config.Config.load(Path(run_dir) / "config.json")
+    if antialiased_emission:
+        if "emi" not in cfg.features:
+            raise ValueError(f"{run_dir}: --antialiased-emission needs a run with the emi feature")
+        cfg.features = [f for f in cfg.features if f != "ema"] + ["ema"]
     net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features)
     net.load_state_dict(torch.load(Path(run_dir) / "checkpoint.pt", weights_only=False)["model"])
     net.eval()
@@ -49,7 +84,7 @@ def export(run_dir, out_path, metrics=None):
         contract.CHANNELS: ",".join(net.features),
         contract.MODEL_TRANSFER: "log1p(max(hdr, 0) * exposure) in graph; input exposure (N,) = 0.18 / "
         "exp(mean over the whole image of log(max(Y, 0) + 1e-4)), Y = Rec. 709 luminance of hdr; "
-        + OUTPUTS[cfg.head] + (EMISSION if net.emission else ""),
+        + OUTPUTS[cfg.head] + (EMISSION if net.emission else "") + (EMISSION_AA if "ema" in net.features else ""),
         contract.MODEL_PADDING: "replicate to multiples of 16; in graph",
         contract.MODEL_CONFIG: json.dumps(asdict(cfg)),
     }
@@ -65,10 +100,19 @@ def export(run_dir, out_path, metrics=None):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--run-dir", required=True)
+    src = ap.add_mutually_exclusive_group(required=True)
+    src.add_argument("--run-dir", help="the training run (config.json, checkpoint.pt)")
+    src.add_argument("--from-onnx", help="a model exported by this script: its configuration and weights")
     ap.add_argument("--out", required=True)
+    ap.add_argument("--antialiased-emission", action="store_true",
+                    help="export a run trained with the emi feature as a model that adds back ema (same weights)")
     args = ap.parse_args(argv)
-    export(args.run_dir, args.out)
+    if args.from_onnx:
+        with tempfile.TemporaryDirectory() as tmp:
+            run_from_onnx(args.from_onnx, tmp)
+            export(tmp, args.out, antialiased_emission=args.antialiased_emission)
+    else:
+        export(args.run_dir, args.out, antialiased_emission=args.antialiased_emission)
 
 
 if __name__ == "__main__":

@@ -26,7 +26,10 @@ the transferred emi as three more channels (where the emitters are). Only the `k
 it. (Tried and dropped, 2026-11-24: filtering the emission by a kernel of its own from one more
 1x1 head, to antialias the emitter's edge at low spp; step-matched on the quick dataset it
 scored 0.1-0.9 dB below adding it back unfiltered at 1-64 spp on the Cornell box, 2.2 dB at 1024
-spp.)
+spp.) With the `ema` feature as well (the fifth input: the emission over at least aov-write's
+--min-samples, antialiased like the albedo), that is what is added back, while emi, the image's
+own samples, is still what is subtracted: at 1 spp an emitter's edge pixel has either all or none
+of the emitter's radiance in hdr and emi, and the fraction it covers in ema.
 
 Both heads are scale-equivariant through the exposure input: hdr times s with the exposure over
 s gives the network the same input and the result times s (denoise's rescaling near the f32
@@ -137,8 +140,10 @@ def reconstruct(hdr, albedo, heads, gather="unfold"):
         return (out * a).clamp(min=0)
 
 
-FEATURE_SETS = (("hdr", "alb", "nrm"), ("hdr", "alb", "nrm", "emi"))
-"""The input features a model can take, in channel order (3 channels each)."""
+FEATURE_SETS = (("hdr", "alb", "nrm"), ("hdr", "alb", "nrm", "emi"), ("hdr", "alb", "nrm", "emi", "ema"))
+"""The input features a model can take, in channel order (3 channels each). `ema` (the emission
+antialiased, aov-write --min-samples) is only added back, in place of `emi`; the network does not
+see it, so a model with it has the weights of one without it."""
 
 
 class Denoiser(nn.Module):
@@ -158,12 +163,15 @@ class Denoiser(nn.Module):
             raise ValueError("the emi feature needs the kpn head")
         self.features = features
         self.in_channels = 3 * len(features)
+        # The channel of the emission added back: ema where the model takes it, else emi.
+        self.added_emission = 3 * features.index("ema" if "ema" in features else "emi") if self.emission else None
+        network_channels = 3 * len([f for f in features if f != "ema"])
         self.head = head
         self.kernel_gather = "unfold"  # export.py sets "slices" (apply_kernels)
         if head == "direct":
-            self.unet = UNet(in_channels=self.in_channels, width=width)
+            self.unet = UNet(in_channels=network_channels, width=width)
         else:
-            self.unet = UNet(in_channels=self.in_channels, width=width, out_channels=0)
+            self.unet = UNet(in_channels=network_channels, width=width, out_channels=0)
             k2 = KERNEL * KERNEL
             self.heads = nn.ModuleList(
                 nn.Conv2d(c, k2 + (1 if s < SCALES - 1 else 0), 1)
@@ -204,7 +212,8 @@ class Denoiser(nn.Module):
             heads = [head(f.float()) for head, f in zip(self.heads, feats)]
             out = reconstruct(hdr, x[:, 3:6], heads, self.kernel_gather)
             if self.emission:
-                out = out + x[:, 9:12].float().clamp(min=0)
+                a = self.added_emission
+                out = out + x[:, a:a + 3].float().clamp(min=0)
         return out, exp
 
     def loss_domain(self, out, exp):

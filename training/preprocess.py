@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Converts a rendered dataset (data/<dataset>/<split>/*.exr) into float32 arrays for training:
-inputs (H, W, 3 x features) = hdr + alb + nrm (+ emi: Config.features) per noisy level and per double-local-estimate image (`le`,
+inputs (H, W, 3 x features) = hdr + alb + nrm (+ emi [+ ema]: Config.features) per noisy level and per double-local-estimate image (`le`,
 with the features of the largest noisy level), references (H, W, 3), and per input a JSON of its
 samples, seeds and whole-image exposures (dataset.py). Incremental.
 

@@ -147,6 +147,10 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     # The peer (Intel Open Image Denoise) denoises exactly the same inputs.
     oidn = [c for c in cmds if c[0] == STAGES["OIDN_DENOISE"] and "/cornell-box/" in c[1]]
     assert sorted(c[1] for c in oidn) == sorted(c[1] for c in denoised)
+    # The double-local-estimate images are denoised with the features of one snapshot, the
+    # antialiased emission among them.
+    le = [c for c in denoised if re.search(r"le\.hdr\.exr$", c[1])]
+    assert le and all(flag(c, "--ema").endswith("spp.ema.exr") and flag(c, "--emi").endswith("spp.emi.exr") for c in le)
     # The light-tracing baseline is scored as it is (not denoised), from the noisy seed.
     lt = [c for c in images if "--light-tracing" in c]
     assert lt and all(flag(c, "--seed") == flag(prog[0], "--seed") for c in lt)
@@ -170,7 +174,7 @@ def test_switching_eval_model_re_denoises_even_with_an_older_model(tmp_path):
                        'echo "$m" > "$o"\n')
     denoise.chmod(0o755)
     a, b = tmp_path / "a.onnx", tmp_path / "b.onnx"
-    inputs = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi")]
+    inputs = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi", "ema")]
     (ev / "cornell-box").mkdir(parents=True)
     for p in [scene, denoise, a, b, ev / "feature-spp-16", *map(Path, STAGES.values()), *inputs]:
         p.touch(exist_ok=True)
@@ -193,7 +197,7 @@ def test_changing_feature_spp_re_renders_the_features_and_not_the_radiance(tmp_p
     # older than anything make writes: up to date with the FEATURE_SPP their stamp names; another
     # FEATURE_SPP makes the features out of date and leaves the radiance as it is.
     ev, scene = tmp_path / "eval", tmp_path / "scene.lxs"
-    images = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi")]
+    images = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi", "ema")]
     (ev / "cornell-box").mkdir(parents=True)
     for p in [scene, ev / "feature-spp-16", *map(Path, STAGES.values()), *images]:
         p.touch(exist_ok=True)

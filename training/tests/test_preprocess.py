@@ -18,12 +18,12 @@ import preprocess  # noqa: E402
 
 
 def write_set(split_dir, name, spp, seed, rng, h=32, w=48, file_spp=None):
-    """One noisy level (hdr, alb, nrm, emi) with the headers trace / aov-write record."""
+    """One noisy level (hdr, alb, nrm, emi, ema) with the headers trace / aov-write record."""
     header = {contract.SAMPLES: spp, contract.SEED: seed, contract.ESTIMATOR: "path-tracing"}
     # A bright left half, a dim right half: a crop's own exposure differs from the image's.
     hdr = rng.random((h, w, 3)).astype(np.float32) * np.where(np.arange(w) < w // 2, 10.0, 0.1)[None, :, None].astype(np.float32)
     contract.write(split_dir / contract.image_name(name, "hdr", file_spp or spp), hdr, header)
-    for kind in ("alb", "nrm", "emi"):
+    for kind in ("alb", "nrm", "emi", "ema"):
         contract.write(split_dir / contract.image_name(name, kind, file_spp or spp), rng.random((h, w, 3)), header)
     return hdr
 
@@ -77,9 +77,10 @@ def test_stores_the_whole_image_exposure_for_every_crop(tmp_path):
     contract.write(src / contract.image_name("g", "hdr", 4), hdr, header)
     for kind in ("alb", "nrm"):
         contract.write(src / contract.image_name("g", kind, 4), rng.random((h, w, 3)), header)
-    # The emission: half the radiance, so each crop shows whether it was flipped and permuted
-    # like the radiance.
+    # The emission: half the radiance, its antialiased version a quarter, so each crop shows
+    # whether they were flipped and permuted like the radiance.
     contract.write(src / contract.image_name("g", "emi", 4), 0.5 * hdr, header)
+    contract.write(src / contract.image_name("g", "ema", 4), 0.25 * hdr, header)
     assert preprocess.preprocess_split(src, tmp_path / "prep", [4]) == 2
     [(inp, ref, meta)] = dataset.pairs(tmp_path / "prep")
     assert (meta["samples"], meta["seed"], meta["reference_seed"]) == (4, 1, 1000001)
@@ -88,7 +89,8 @@ def test_stores_the_whole_image_exposure_for_every_crop(tmp_path):
     seen, differs = set(), 0
     for i in range(len(crops)):
         a, b, e = crops[i]
-        assert a.shape[0] == 12 and torch.allclose(a[9:12], 0.5 * a[0:3], rtol=1e-6)
+        assert a.shape[0] == 15 and torch.allclose(a[9:12], 0.5 * a[0:3], rtol=1e-6)
+        assert torch.allclose(a[12:15], 0.25 * a[0:3], rtol=1e-6)
         perm = tuple(int(r) for r in np.argsort(np.argsort([float(a[j].mean()) for j in range(3)])))
         seen.add(perm)
         whole = contract.exposure(hdr[..., list(perm)])
@@ -176,6 +178,10 @@ def test_features_follow_the_configuration(tmp_path):
     assert np.load(inp).shape[-1] == 9 and meta["channels"] == ["hdr", "alb", "nrm"]
     contract.write(src / contract.image_name("g", "emi", 4), rng.random((32, 48, 3)),
                    {contract.SAMPLES: 4, contract.SEED: 1})
+    assert preprocess.preprocess_split(src, tmp_path / "prep", [4], features=contract.FEATURES[:4]) == 1
+    [(inp, _, meta)] = dataset.pairs(tmp_path / "prep")
+    assert np.load(inp).shape[-1] == 12 and meta["channels"] == list(contract.FEATURES[:4])
+    # The antialiased emission: all five (the default).
     assert preprocess.preprocess_split(src, tmp_path / "prep", [4]) == 1
     [(inp, _, meta)] = dataset.pairs(tmp_path / "prep")
-    assert np.load(inp).shape[-1] == 12 and meta["channels"] == list(contract.FEATURES)
+    assert np.load(inp).shape[-1] == 15 and meta["channels"] == list(contract.FEATURES)

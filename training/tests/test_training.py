@@ -81,6 +81,32 @@ def test_emission_model_passes_the_emitters_around_the_network():
         Denoiser(features=("hdr", "emi"))
 
 
+def test_antialiased_emission_is_added_back_in_place_of_the_images_own():
+    # At 1 spp an edge pixel of the emitter holds all of its radiance (hdr and emi) or none; ema
+    # holds the fraction it covers. A model with ema subtracts emi and adds back ema: same
+    # weights as without it (the network does not see ema), and whatever they are, the output
+    # differs from the emi model's by exactly ema - emi.
+    x = _uniform_irradiance()
+    emi = torch.zeros(1, 3, 48, 64)
+    light = torch.tensor([170.0, 120.0, 40.0]).view(1, 3, 1, 1)
+    emi[:, :, 20:30, 10:40] = light
+    emi[:, :, 30, 10:40:2] = light[..., 0]  # the edge row: every other pixel's sample hit the light
+    ema = emi.clone()
+    ema[:, :, 30, 10:40] = 0.5 * light[..., 0]
+    x[:, 0:3] += emi
+    for seed in range(2):
+        torch.manual_seed(seed)
+        net4 = Denoiser(width=8, head="kpn", features=model.FEATURE_SETS[1]).eval()
+        net5 = Denoiser(width=8, head="kpn", features=model.FEATURE_SETS[2]).eval()
+        net5.load_state_dict(net4.state_dict())  # the same parameters
+        with torch.no_grad():
+            a = net4(torch.cat([x, emi], 1))
+            b = net5(torch.cat([x, emi, ema], 1))
+        assert net5.in_channels == 15
+        assert torch.allclose(b - a, ema - emi, rtol=1e-5, atol=1e-4), float((b - a - (ema - emi)).abs().max())
+        assert torch.allclose(b[:, :, 30, 10:40], _uniform_irradiance()[:, 0:3, 30, 10:40] + 0.5 * light[:, :, 0], rtol=1e-5)
+
+
 def test_kernel_head_with_identity_kernels_returns_any_input():
     # Centre weight ~1 and blend 0 at every scale: a clean input is left alone exactly.
     torch.manual_seed(4)
@@ -209,7 +235,7 @@ def test_ms_ssim_is_one_for_identical_images_and_less_otherwise():
 
 
 @pytest.mark.parametrize("head,features", [(h, model.FEATURE_SETS[0]) for h in model.HEADS]
-                         + [("kpn", model.FEATURE_SETS[1])])
+                         + [("kpn", model.FEATURE_SETS[1]), ("kpn", model.FEATURE_SETS[2])])
 def test_export_matches_onnxruntime(tmp_path, head, features):
     ort = pytest.importorskip("onnxruntime")
     import export
@@ -226,8 +252,8 @@ def test_export_matches_onnxruntime(tmp_path, head, features):
     net.eval()
     for h, w in [(40, 56), (33, 17)]:
         x = torch.rand(1, c, h, w) * torch.tensor([5.0] * 3 + [1.0] * 6 + [2.0] * (c - 9)).view(1, c, 1, 1)
-        if c == 12:
-            x[:, 9:12, : h // 2] = 0.0  # emission in the lower half only
+        if c >= 12:
+            x[:, 9:c, : h // 2] = 0.0  # emission in the lower half only
         a = net(x).detach().numpy()
         e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
         assert abs(float(e[0]) - float(transfer.exposure_of(x[:, 0:3])[0])) <= 1e-6 * float(e[0])
@@ -237,9 +263,37 @@ def test_export_matches_onnxruntime(tmp_path, head, features):
     meta = {p.key: p.value for p in __import__("onnx").load(str(model)).metadata_props}
     assert meta["luxest.channels"] == ",".join(features)
     assert (export.EMISSION in meta["luxest.transfer"]) == ("emi" in features)
+    assert (export.EMISSION_AA in meta["luxest.transfer"]) == ("ema" in features)
     assert json.loads(meta["luxest.config"])["base_width"] == 8
     assert json.loads(meta["luxest.config"])["head"] == head
     assert export.OUTPUTS[head] in meta["luxest.transfer"]
+
+
+def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(tmp_path):
+    ort = pytest.importorskip("onnxruntime")
+    import export
+
+    torch.manual_seed(5)
+    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[1]))
+    cfg.save(tmp_path / "config.json")
+    net4 = Denoiser(width=8, head="kpn", features=model.FEATURE_SETS[1]).eval()
+    torch.save({"model": net4.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
+    export.export(tmp_path, tmp_path / "m.onnx", antialiased_emission=True)
+    session = ort.InferenceSession(str(tmp_path / "m.onnx"), providers=["CPUExecutionProvider"])
+    meta = {p.key: p.value for p in __import__("onnx").load(str(tmp_path / "m.onnx")).metadata_props}
+    assert meta["luxest.channels"] == "hdr,alb,nrm,emi,ema" and export.EMISSION_AA in meta["luxest.transfer"]
+    x = torch.rand(1, 12, 32, 48) * 3.0
+    ema = torch.rand(1, 3, 32, 48) * 7.0
+    e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
+    b = session.run(None, {"input": torch.cat([x, ema], 1).numpy(), "exposure": e})[0]
+    with torch.no_grad():
+        a = net4(x, torch.from_numpy(e)).numpy()
+    added = (ema - x[:, 9:12]).numpy()
+    assert np.max(np.abs(b - a - added)) <= 1e-4 * max(1.0, float(np.abs(b).max()))
+    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[0]))
+    cfg.save(tmp_path / "config.json")
+    with pytest.raises(ValueError, match="emi"):
+        export.export(tmp_path, tmp_path / "n.onnx", antialiased_emission=True)
 
 
 def test_config_round_trip(tmp_path):
@@ -266,7 +320,7 @@ def test_training_runs_its_steps_and_resumes(tmp_path):
         d = tmp_path / "data" / split
         d.mkdir(parents=True)
         contract.write(d / contract.image_name("g", "hdr"), rng.random((32, 32, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
-        for kind in ("hdr", "alb", "nrm", "emi"):
+        for kind in ("hdr", "alb", "nrm", "emi", "ema"):
             contract.write(d / contract.image_name("g", kind, 4), rng.random((32, 32, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
     (tmp_path / "data" / "test").mkdir()
     args = ["--data-dir", str(tmp_path / "data"), "--prep-dir", str(tmp_path / "prep"), "--run-dir", str(tmp_path / "run"),

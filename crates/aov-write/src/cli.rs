@@ -39,8 +39,9 @@ pub struct Args {
     /// Albedo, normal and depth average at least this many samples per pixel: the features of
     /// an image of s < N samples are those of N samples, the first s of them trace's own, so
     /// that they are antialiased (as Intel Open Image Denoise recommends) at the cost of N
-    /// first hits per pixel. The emission always averages exactly the image's samples (a
-    /// denoiser subtracts it from trace's radiance of those samples). `luxest.samples` records
+    /// first hits per pixel. The emission (`emi`) always averages exactly the image's samples
+    /// (a denoiser subtracts it from trace's radiance of those samples); `ema` is the emission
+    /// over as many samples as the albedo (what a denoiser adds back). `luxest.samples` records
     /// the samples of each feature image.
     #[arg(long, value_parser = SPP, default_value_t = 1)]
     pub min_samples: u32,
@@ -90,7 +91,12 @@ pub fn run(args: Args) -> Result<()> {
             Level::Spp(target as u64)
         }
     };
-    let mut kinds = vec![Kind::Alb, Kind::Emission, Kind::Nrm];
+    let mut kinds = vec![
+        Kind::Alb,
+        Kind::Emission,
+        Kind::EmissionAntialiased,
+        Kind::Nrm,
+    ];
     if args.depth {
         kinds.push(Kind::Depth);
     }
@@ -134,7 +140,7 @@ pub fn run(args: Args) -> Result<()> {
                 img.pixels = match kind {
                     Kind::Alb => film.albedo(),
                     Kind::Nrm => film.normal(),
-                    Kind::Emission => film.emission(),
+                    Kind::Emission | Kind::EmissionAntialiased => film.emission(),
                     _ => film.depth(),
                 };
                 img.attributes = info.to_attributes();
@@ -149,7 +155,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     plan.commit()?;
     eprintln!(
-        "wrote {}_{}.{{alb,emi,nrm{}}}.exr ({} spp, {:.2} s)",
+        "wrote {}_{}.{{alb,emi,ema,nrm{}}}.exr ({} spp, {:.2} s)",
         prefix.display(),
         final_level,
         if args.depth { ",z" } else { "" },

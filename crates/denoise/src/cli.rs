@@ -16,8 +16,8 @@ use std::time::Instant;
 /// Denoise path-traced (or local-estimate) radiance images with an ONNX U-Net.
 ///
 /// Each NOISY file `<img>.hdr.exr` needs the features the model takes next to it
-/// (`<img>.alb.exr`, `<img>.nrm.exr`, and `<img>.emi.exr` for models that take the emission,
-/// as aov-write names them) unless --alb/--nrm/--emi name them;
+/// (`<img>.alb.exr`, `<img>.nrm.exr`, and `<img>.emi.exr` / `<img>.ema.exr` for models that
+/// take the emission, as aov-write names them) unless --alb/--nrm/--emi/--ema name them;
 /// the result is `<img>.dn.exr` with the input's header attributes plus luxest.denoiser,
 /// luxest.denoiseSeconds (wall-clock seconds of inference, excluding I/O) and
 /// luxest.featureSeconds (the render seconds recorded in the feature images, i.e. what the
@@ -46,6 +46,10 @@ pub struct Args {
     /// Emission image, for models that take it (only with one input) [default: <img>.emi.exr].
     #[arg(long)]
     pub emi: Option<PathBuf>,
+    /// Antialiased emission image, for models that take it (only with one input) [default:
+    /// <img>.ema.exr].
+    #[arg(long)]
+    pub ema: Option<PathBuf>,
     /// Tile core size in pixels (a multiple of 16); larger images are denoised in tiles.
     #[arg(long, default_value_t = Tiling::default().tile)]
     pub tile: usize,
@@ -76,10 +80,14 @@ pub fn run(args: Args) -> Result<()> {
     tiling.validate()?;
     let single = args.noisy.len() == 1;
     if !single
-        && (args.out.is_some() || args.alb.is_some() || args.nrm.is_some() || args.emi.is_some())
+        && (args.out.is_some()
+            || args.alb.is_some()
+            || args.nrm.is_some()
+            || args.emi.is_some()
+            || args.ema.is_some())
     {
         return Err(Error::Usage(
-            "-o/--out, --alb, --nrm and --emi need exactly one input image".into(),
+            "-o/--out, --alb, --nrm, --emi and --ema need exactly one input image".into(),
         ));
     }
     let mut denoiser = Denoiser::load(&args.model, args.common.thread_count())?;
@@ -176,6 +184,7 @@ fn job(args: &Args, denoiser: &Denoiser, model_name: &str, noisy: &Path) -> Resu
             Feature::Alb => args.alb.clone().or_else(|| feature_path(noisy, feature)),
             Feature::Nrm => args.nrm.clone().or_else(|| feature_path(noisy, feature)),
             Feature::Emi => args.emi.clone().or_else(|| feature_path(noisy, feature)),
+            Feature::Ema => args.ema.clone().or_else(|| feature_path(noisy, feature)),
         };
         let path = path.ok_or_else(|| {
             Error::input(

@@ -1,4 +1,4 @@
-//! The model's input features (hdr, alb, nrm, and for models trained with it emi) and the files
+//! The model's input features (hdr, alb, nrm, and for models trained with them emi, ema) and the files
 //! they are read from, found next to the noisy image by the OIDN naming (`<img>.hdr.exr` →
 //! `<img>.alb.exr`, output `<img>.dn.exr`).
 
@@ -11,9 +11,12 @@ pub enum Feature {
     Hdr,
     Alb,
     Nrm,
-    /// The emitted radiance seen directly (aov-write's `emi`): a model that takes it denoises
-    /// hdr − emi and adds it back.
+    /// The emitted radiance seen directly (aov-write's `emi`, the image's own samples): a model
+    /// that takes it denoises hdr − emi and adds it back.
     Emi,
+    /// The same over at least aov-write's `--min-samples` (`ema`, antialiased): a model that
+    /// takes it adds it back in place of `emi` (which it still subtracts).
+    Ema,
 }
 
 impl Feature {
@@ -24,21 +27,28 @@ impl Feature {
             Feature::Alb => Kind::Alb,
             Feature::Nrm => Kind::Nrm,
             Feature::Emi => Kind::Emission,
+            Feature::Ema => Kind::EmissionAntialiased,
         }
     }
     /// Whether the feature is radiance (scaled with hdr near the f32 limit), not a property of
     /// the surface.
     pub fn is_radiance(self) -> bool {
-        matches!(self, Feature::Hdr | Feature::Emi)
+        matches!(self, Feature::Hdr | Feature::Emi | Feature::Ema)
     }
     /// The feature's name in file names and in the model's `luxest.channels` metadata.
     pub fn name(self) -> &'static str {
         self.kind().tag()
     }
     pub(crate) fn parse(s: &str) -> Option<Feature> {
-        [Feature::Hdr, Feature::Alb, Feature::Nrm, Feature::Emi]
-            .into_iter()
-            .find(|f| f.name() == s.trim())
+        [
+            Feature::Hdr,
+            Feature::Alb,
+            Feature::Nrm,
+            Feature::Emi,
+            Feature::Ema,
+        ]
+        .into_iter()
+        .find(|f| f.name() == s.trim())
     }
 }
 

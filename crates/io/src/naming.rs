@@ -28,9 +28,12 @@ pub enum Kind {
     Nrm,
     /// First-hit distance.
     Depth,
-    /// First-hit emitted radiance: the emitters the camera sees directly, averaged over the
-    /// pixel samples (what the denoiser leaves untouched and adds back).
+    /// First-hit emitted radiance: the emitters the camera sees directly, averaged over exactly
+    /// the image's pixel samples (what a denoiser subtracts from the image).
     Emission,
+    /// The same emitted radiance averaged over at least aov-write's `--min-samples` (antialiased
+    /// like the albedo and normal): what a denoiser adds back.
+    EmissionAntialiased,
     /// Per-pixel standard error of the luminance of the matching `hdr` image.
     StandardError,
     /// A denoised `hdr` image.
@@ -38,12 +41,13 @@ pub enum Kind {
 }
 
 impl Kind {
-    pub const ALL: [Kind; 7] = [
+    pub const ALL: [Kind; 8] = [
         Kind::Hdr,
         Kind::Alb,
         Kind::Nrm,
         Kind::Depth,
         Kind::Emission,
+        Kind::EmissionAntialiased,
         Kind::StandardError,
         Kind::Denoised,
     ];
@@ -56,6 +60,7 @@ impl Kind {
             Kind::Nrm => "nrm",
             Kind::Depth => "z",
             Kind::Emission => "emi",
+            Kind::EmissionAntialiased => "ema",
             Kind::StandardError => "se",
             Kind::Denoised => "dn",
         }
