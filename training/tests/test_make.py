@@ -66,6 +66,9 @@ def test_features_follow_feature_spp():
     aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"]]
     assert any("cornell-box" in c[1] for c in aovs) and all(flag(c, "--min-samples") == "32" for c in aovs)
     assert not [c for c in cmds if c[0] == STAGES["TRACE"] and "--min-samples" in c]
+    # The main job's features too.
+    run = [c for c in dry_run("run", FEATURE_SPP="32") if c[0] == STAGES["AOV_WRITE"]]
+    assert len(run) == 1 and flag(run[0], "--min-samples") == "32"
 
 
 def test_local_estimate_family_renders_train_and_valid_scenes_with_the_noisy_seed():
