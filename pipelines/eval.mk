@@ -57,9 +57,9 @@ $(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr),$(call eval_cb,hdr)): 
 $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm): $(EVAL_CB_SCENE) $(AOV_WRITE) $(call lx_stamp,$(EVAL_DIR),feature-spp,$(FEATURE_SPP))
 	@mkdir -p $(@D)
 	$(AOV_WRITE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --min-samples $(FEATURE_SPP) --resolution $(EVAL_RES) -o $(EVAL_CB)
-$(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm),$(call eval_cb,alb) $(call eval_cb,emi) $(call eval_cb,ema) $(call eval_cb,nrm)): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm) ;
+$(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm),$(foreach k,$(LX_FEATURES),$(call eval_cb,$(k)))): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm) ;
 
-$(call lx_image_pattern,$(EVAL_CB),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB),alb) $(call lx_image_pattern,$(EVAL_CB),nrm) $(call lx_image_pattern,$(EVAL_CB),emi) $(call lx_image_pattern,$(EVAL_CB),ema) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
+$(call lx_image_pattern,$(EVAL_CB),dn): $(foreach k,hdr $(LX_FEATURES),$(call lx_image_pattern,$(EVAL_CB),$(k))) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	$(DENOISE) $< --model $(EVAL_MODEL) -o $@
 
 $(call lx_le_pattern,$(EVAL_CB),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
@@ -70,8 +70,8 @@ $(call lx_le_pattern,$(EVAL_CB_LT),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
 	@mkdir -p $(@D)
 	$(ESTIMATE) image $< --light-tracing --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
 
-$(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),emi) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),ema) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
-	$(DENOISE) $< --model $(EVAL_MODEL) --alb $(word 2,$^) --nrm $(word 3,$^) --emi $(word 4,$^) --ema $(word 5,$^) -o $@
+$(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_features,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP)) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
+	$(DENOISE) $< --model $(EVAL_MODEL) $(call lx_feature_flags,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP)) -o $@
 
 # Intel Open Image Denoise, the peer, on the same inputs (pipelines/oidn_denoise.py): in an oidn/
 # directory beside them, the scene's name suffixed `-oidn` (the FLIP maps share one directory).
@@ -102,9 +102,9 @@ define eval_test_scene
 # The levels below the last are written by the runs whose last images mark them (the radiance
 # by trace's, the features by aov-write's: pipelines/dataset.mk).
 $(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),hdr),$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),hdr) ;
-$(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm),$(foreach k,alb emi ema nrm,$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),$(k))))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) ;
+$(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm),$(foreach k,$(LX_FEATURES),$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),$(k))))): $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) ;
 
-$(call lx_image_pattern,$(EVAL_DS)/$(1),dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) $(call lx_image_pattern,$(EVAL_DATA)/$(1),emi) $(call lx_image_pattern,$(EVAL_DATA)/$(1),ema) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
+$(call lx_image_pattern,$(EVAL_DS)/$(1),dn): $(foreach k,hdr $(LX_FEATURES),$(call lx_image_pattern,$(EVAL_DATA)/$(1),$(k))) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	@mkdir -p $$(@D)
 	$$(DENOISE) $$< --model $(EVAL_MODEL) -o $$@
 
@@ -112,8 +112,8 @@ $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr): build/dataset/$(DATASET)/test/$(1).lx
 	@mkdir -p $$(@D)
 	$$(ESTIMATE) image $$< --paths $$* --seed $(NOISY_SEED) -o $$@
 
-$(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),emi) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),ema) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
-	$$(DENOISE) $$< --model $(EVAL_MODEL) --alb $$(word 2,$$^) --nrm $$(word 3,$$^) --emi $$(word 4,$$^) --ema $$(word 5,$$^) -o $$@
+$(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_features,$(EVAL_DATA)/$(1),$(NOISY_MAX)) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
+	$$(DENOISE) $$< --model $(EVAL_MODEL) $(call lx_feature_flags,$(EVAL_DATA)/$(1),$(NOISY_MAX)) -o $$@
 
 $(call lx_image_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) pipelines/oidn_denoise.py
 	@mkdir -p $$(@D)

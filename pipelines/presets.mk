@@ -23,8 +23,9 @@ $(eval $(call lx_preset,NOISY_LEVELS,1 2 4 8 16 32 64 256 1024,1 2 4 8 16 32 64 
 # The denoiser's albedo and normal features average at least FEATURE_SPP samples per pixel
 # (aov-write --min-samples): antialiased, as Intel Open Image Denoise recommends, for the levels
 # below it (the emission feature keeps each level's own samples). 16 first hits per pixel cost
-# about as much as 2 spp of trace; on the Cornell box they lift both denoisers at 1-4 spp by
-# 1.5-4.5 dB (docs/measurements.md).
+# about as much as 2 spp of trace; on the Cornell box at 1 spp they lift luxest's denoiser by
+# 3.1 dB (4.6 with the antialiased emission it adds back) and OIDN by 1.6 dB, less at 2-8 spp
+# (docs/measurements.md, *Antialiased features*).
 $(eval $(call lx_preset,FEATURE_SPP,16,16))
 # The second input family: double-local-estimate images (estimate image, seed NOISY_SEED) of the
 # train and valid scenes at these light-path counts, denoised with the NOISY_MAX features.

@@ -8,6 +8,8 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+import luxest_contract as contract
+
 ROOT = Path(__file__).resolve().parents[2]
 # Stand-in stage programs: files make sees as up-to-date prerequisites (no cargo build planned).
 _STAGE_DIR = Path(tempfile.mkdtemp(prefix="luxest-stages-"))
@@ -166,6 +168,17 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     assert others == [], others
 
 
+def old_cornell_box(ev, *more):
+    """make eval's Cornell-box images of 1 and 2 spp (radiance and every feature), the feature
+    stamp of FEATURE_SPP 16, the stand-in stages and `more`: empty files, all older than
+    anything make writes."""
+    images = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", *contract.FEATURES[1:])]
+    (ev / "cornell-box").mkdir(parents=True)
+    for p in [ev / "feature-spp-16", *map(Path, STAGES.values()), *images, *more]:
+        p.touch(exist_ok=True)
+        os.utime(p, (1_000_000, 1_000_000))
+
+
 def test_switching_eval_model_re_denoises_even_with_an_older_model(tmp_path):
     # A real make run of one Cornell snapshot's denoised image with a stand-in denoiser: after
     # model A denoised it, EVAL_MODEL=B (a file older than the image) makes it out of date, and
@@ -177,11 +190,7 @@ def test_switching_eval_model_re_denoises_even_with_an_older_model(tmp_path):
                        'echo "$m" > "$o"\n')
     denoise.chmod(0o755)
     a, b = tmp_path / "a.onnx", tmp_path / "b.onnx"
-    inputs = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi", "ema")]
-    (ev / "cornell-box").mkdir(parents=True)
-    for p in [scene, denoise, a, b, ev / "feature-spp-16", *map(Path, STAGES.values()), *inputs]:
-        p.touch(exist_ok=True)
-        os.utime(p, (1_000_000, 1_000_000))  # all older than anything make writes
+    old_cornell_box(ev, scene, denoise, a, b)
     target = ev / "cornell-box" / "cb_000001spp.dn.exr"
 
     def denoise_with(model, *flags):
@@ -200,11 +209,7 @@ def test_changing_feature_spp_re_renders_the_features_and_not_the_radiance(tmp_p
     # older than anything make writes: up to date with the FEATURE_SPP their stamp names; another
     # FEATURE_SPP makes the features out of date and leaves the radiance as it is.
     ev, scene = tmp_path / "eval", tmp_path / "scene.lxs"
-    images = [ev / "cornell-box" / f"cb_00000{s}spp.{k}.exr" for s in (1, 2) for k in ("hdr", "alb", "nrm", "emi", "ema")]
-    (ev / "cornell-box").mkdir(parents=True)
-    for p in [scene, ev / "feature-spp-16", *map(Path, STAGES.values()), *images]:
-        p.touch(exist_ok=True)
-        os.utime(p, (1_000_000, 1_000_000))
+    old_cornell_box(ev, scene)
 
     def question(kind, feature_spp):
         return make("-q", str(ev / "cornell-box" / f"cb_000002spp.{kind}.exr"), EVAL_DIR=ev, EVAL_CB_SCENE=scene,

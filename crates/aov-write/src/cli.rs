@@ -134,22 +134,28 @@ pub fn run(args: Args) -> Result<()> {
             start.elapsed().as_secs_f64(),
             &world.scene.content_hash,
         );
-        for &target in &counts {
-            for &kind in kinds.iter().filter(|&&k| samples_of(target, k) == samples) {
-                let mut img = RgbImage::new(film.width, film.height);
-                img.pixels = match kind {
-                    Kind::Alb => film.albedo(),
-                    Kind::Nrm => film.normal(),
-                    Kind::Emission | Kind::EmissionAntialiased => film.emission(),
-                    _ => film.depth(),
-                };
-                img.attributes = info.to_attributes();
-                img.set_attribute(header::PIXEL_FILTER, "box");
-                write_rgb_to(
-                    &mut plan,
-                    &image_path(&prefix, level_of(target), kind),
-                    &img,
-                )?;
+        // Each kind's image is made once per count and written for every level that takes it
+        // there (the levels below --min-samples share their albedo and normal).
+        for &kind in &kinds {
+            let levels: Vec<Level> = counts
+                .iter()
+                .filter(|&&t| samples_of(t, kind) == samples)
+                .map(|&t| level_of(t))
+                .collect();
+            if levels.is_empty() {
+                continue;
+            }
+            let mut img = RgbImage::new(film.width, film.height);
+            img.pixels = match kind {
+                Kind::Alb => film.albedo(),
+                Kind::Nrm => film.normal(),
+                Kind::Emission | Kind::EmissionAntialiased => film.emission(),
+                _ => film.depth(),
+            };
+            img.attributes = info.to_attributes();
+            img.set_attribute(header::PIXEL_FILTER, "box");
+            for level in levels {
+                write_rgb_to(&mut plan, &image_path(&prefix, level, kind), &img)?;
             }
         }
     }

@@ -64,6 +64,20 @@ pub struct Args {
     pub common: CommonArgs,
 }
 
+impl Args {
+    /// The file named on the command line for a feature (--alb, --nrm, --emi, --ema; hdr is the
+    /// input itself).
+    fn feature(&self, feature: Feature) -> Option<&PathBuf> {
+        match feature {
+            Feature::Hdr => None,
+            Feature::Alb => self.alb.as_ref(),
+            Feature::Nrm => self.nrm.as_ref(),
+            Feature::Emi => self.emi.as_ref(),
+            Feature::Ema => self.ema.as_ref(),
+        }
+    }
+}
+
 /// One input image's denoising: where its features are and where its result goes.
 struct Job {
     noisy: PathBuf,
@@ -79,13 +93,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     tiling.validate()?;
     let single = args.noisy.len() == 1;
-    if !single
-        && (args.out.is_some()
-            || args.alb.is_some()
-            || args.nrm.is_some()
-            || args.emi.is_some()
-            || args.ema.is_some())
-    {
+    if !single && (args.out.is_some() || Feature::ALL.iter().any(|&f| args.feature(f).is_some())) {
         return Err(Error::Usage(
             "-o/--out, --alb, --nrm, --emi and --ema need exactly one input image".into(),
         ));
@@ -181,10 +189,10 @@ fn job(args: &Args, denoiser: &Denoiser, model_name: &str, noisy: &Path) -> Resu
     for &feature in denoiser.features() {
         let path = match feature {
             Feature::Hdr => Some(noisy.to_path_buf()),
-            Feature::Alb => args.alb.clone().or_else(|| feature_path(noisy, feature)),
-            Feature::Nrm => args.nrm.clone().or_else(|| feature_path(noisy, feature)),
-            Feature::Emi => args.emi.clone().or_else(|| feature_path(noisy, feature)),
-            Feature::Ema => args.ema.clone().or_else(|| feature_path(noisy, feature)),
+            _ => args
+                .feature(feature)
+                .cloned()
+                .or_else(|| feature_path(noisy, feature)),
         };
         let path = path.ok_or_else(|| {
             Error::input(

@@ -20,6 +20,14 @@ pub enum Feature {
 }
 
 impl Feature {
+    /// Every feature, in channel order.
+    pub const ALL: [Feature; 5] = [
+        Feature::Hdr,
+        Feature::Alb,
+        Feature::Nrm,
+        Feature::Emi,
+        Feature::Ema,
+    ];
     /// The image kind of the feature's files (`<img>_<spp>spp.<tag>.exr`).
     pub fn kind(self) -> Kind {
         match self {
@@ -40,15 +48,7 @@ impl Feature {
         self.kind().tag()
     }
     pub(crate) fn parse(s: &str) -> Option<Feature> {
-        [
-            Feature::Hdr,
-            Feature::Alb,
-            Feature::Nrm,
-            Feature::Emi,
-            Feature::Ema,
-        ]
-        .into_iter()
-        .find(|f| f.name() == s.trim())
+        Feature::ALL.into_iter().find(|f| f.name() == s.trim())
     }
 }
 
