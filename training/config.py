@@ -4,13 +4,15 @@ import argparse
 import json
 from dataclasses import asdict, dataclass, field
 
+import luxest_contract as contract
+
 
 @dataclass
 class Config:
     data_dir: str = "data/quick"        # data/<dataset> with train/ valid/ test/
     prep_dir: str = "build/train/quick"  # preprocessed .npy arrays
     run_dir: str = "runs/quick"          # checkpoints, config.json, log
-    features: list = field(default_factory=lambda: ["hdr", "alb", "nrm", "emi", "ema"])  # model.FEATURE_SETS
+    features: list = field(default_factory=lambda: list(contract.FEATURES))  # model.FEATURE_SETS
     noisy_spp: list = field(default_factory=lambda: [1, 2, 4, 8, 16, 32, 64, 256, 1024])
     dle_paths: list = field(default_factory=lambda: [100, 300, 1000])  # local-estimate inputs
     crop: int = 64                       # training crop side (multiple of 16)

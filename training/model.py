@@ -43,6 +43,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+import luxest_contract as contract
 import transfer
 
 HEADS = ("kpn", "direct")
@@ -140,8 +141,9 @@ def reconstruct(hdr, albedo, heads, gather="unfold"):
         return (out * a).clamp(min=0)
 
 
-FEATURE_SETS = (("hdr", "alb", "nrm"), ("hdr", "alb", "nrm", "emi"), ("hdr", "alb", "nrm", "emi", "ema"))
-"""The input features a model can take, in channel order (3 channels each). `ema` (the emission
+FEATURE_SETS = tuple(contract.FEATURES[:n] for n in (3, 4, 5))
+"""The input features a model can take, in channel order (3 channels each): hdr, alb, nrm, then
+emi and ema (luxest_contract.FEATURES). `ema` (the emission
 antialiased, aov-write --min-samples) is only added back, in place of `emi`; the network does not
 see it, so a model with it has the weights of one without it."""
 
