@@ -12,9 +12,11 @@ is seen), so that views include empty background. Everything follows from (seed,
 
   generate.py --preset quick|full --side N --out DIR   write DIR/<split>/<name>.ron, N x N images
   generate.py --preset quick --list                    print "<split>/<name>" per scene
+  ... --scenes N                                       N scenes instead of the preset's count
 
-The preset selects the number of scenes; the image side comes from pipelines/presets.mk
-(DATASET_SIDE), which passes it.
+The preset selects the number of scenes (--scenes overrides it: pipelines/presets.mk
+DATASET_COUNT); the image side comes from pipelines/presets.mk (DATASET_SIDE), which passes it.
+Scene i does not depend on the count, so a dataset of more scenes contains the smaller one's.
 
 Splits: scene i goes to test if i % 6 == 5, to valid if i % 6 == 4, else to train.
 """
@@ -36,8 +38,8 @@ def split_of(i):
     return "test" if i % 6 == 5 else "valid" if i % 6 == 4 else "train"
 
 
-def names(preset):
-    n = PRESETS[preset]
+def names(preset, count=None):
+    n = PRESETS[preset] if count is None else count
     return [(split_of(i), f"gen{i:04d}") for i in range(n)]
 
 
@@ -190,16 +192,21 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--side", type=int, help="image side in pixels (required with --out)")
     ap.add_argument("--out", type=Path)
+    ap.add_argument("--scenes", type=int, help="number of scenes (default: the preset's); scene i "
+                    "is the same whatever the count, so a larger count adds scenes to every split")
     ap.add_argument("--list", action="store_true")
     args = ap.parse_args()
+    if args.scenes is not None and not 6 <= args.scenes <= 100_000:
+        ap.error(f"--scenes {args.scenes}: expected 6 to 100000 (at least one scene per split)")
+    scenes = names(args.preset, args.scenes)
     if args.list:
-        print(" ".join(f"{s}/{n}" for s, n in names(args.preset)))
+        print(" ".join(f"{s}/{n}" for s, n in scenes))
         return
     if args.out is None:
         ap.error("--out is required unless --list")
     if args.side is None or not 16 <= args.side <= 8192:
         ap.error("--side: the image side in pixels, 16 to 8192, is required with --out")
-    for i, (split, name) in enumerate(names(args.preset)):
+    for i, (split, name) in enumerate(scenes):
         path = args.out / split / f"{name}.ron"
         path.parent.mkdir(parents=True, exist_ok=True)
         text = scene(args.preset, i, args.seed, args.side, path.parent.resolve())
@@ -208,7 +215,7 @@ def main():
             tmp = path.with_suffix(f".ron.{os.getpid()}.tmp")  # unique: make -j may run two generators
             tmp.write_text(text)
             tmp.replace(path)
-    print(f"{len(names(args.preset))} scenes in {args.out}", file=sys.stderr)
+    print(f"{len(scenes)} scenes in {args.out}", file=sys.stderr)
 
 
 if __name__ == "__main__":

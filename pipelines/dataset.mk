@@ -16,7 +16,8 @@
 DATASET ?= $(PRESET)
 GEN_DIR := build/dataset/$(DATASET)/scenes
 DATA_DIR := data/$(DATASET)
-DATASET_SCENES := $(shell python3 data-gen/generate.py --preset $(PRESET) --list)
+GENERATE := python3 data-gen/generate.py --preset $(PRESET) $(if $(DATASET_COUNT),--scenes $(DATASET_COUNT))
+DATASET_SCENES := $(shell $(GENERATE) --list)
 comma := ,
 empty :=
 space := $(empty) $(empty)
@@ -37,7 +38,7 @@ NOISY_SNAPSHOTS := $(subst $(space),$(comma),$(strip $(NOISY_LEVELS)))
 SIDE_STAMP := $(call lx_stamp,build/dataset/$(DATASET),side,$(DATASET_SIDE))
 
 $(GEN_DIR)/%.ron: data-gen/generate.py $(MESHES) $(SIDE_STAMP)
-	@python3 data-gen/generate.py --preset $(PRESET) --side $(DATASET_SIDE) --out $(GEN_DIR)
+	@$(GENERATE) --side $(DATASET_SIDE) --out $(GEN_DIR)
 
 build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(SCENE_COMPILE)
 	$(SCENE_COMPILE) -q $< -o $@

@@ -14,9 +14,12 @@ endif
 # also overridable on the command line (`make eval EVAL_DLE="100 1000"`).
 lx_preset = $(1) ?= $(if $(filter full,$(PRESET)),$(3),$(2))
 
-# Dataset (pipelines/dataset.mk): image side in pixels (data-gen/generate.py --side; quick was
+# Dataset (pipelines/dataset.mk): the number of generated scenes, empty for the preset's own
+# (data-gen/generate.py: quick 24, full 240; scene i is the same whatever the count, and every
+# sixth is a test scene), image side in pixels (data-gen/generate.py --side; quick was
 # 160 until 2026-11-23, the side models/default.onnx was trained at: 112 renders in half the
 # time); reference samples per pixel; noisy snapshot levels.
+DATASET_COUNT ?=
 $(eval $(call lx_preset,DATASET_SIDE,112,384))
 $(eval $(call lx_preset,REF_SPP,1024,4096))
 $(eval $(call lx_preset,NOISY_LEVELS,1 2 4 8 16 32 64 256 1024,1 2 4 8 16 32 64 256 1024))

@@ -120,6 +120,26 @@ def test_generator_writes_the_side_it_is_given(tmp_path):
     assert r.returncode != 0 and "--side" in r.stderr
 
 
+def test_dataset_count_adds_scenes_and_keeps_the_smaller_datasets(tmp_path):
+    # DATASET_COUNT reaches the generator; scene i is the same text whatever the count, and
+    # every sixth scene (index 5 mod 6) is a test scene, so held-out scenes stay held out.
+    traced = {flag(c, "-o") for c in dry_run("reference", DATASET_COUNT="30") if c[0] == STAGES["TRACE"]}
+    assert len(traced) == 30 and "data/pytest-dry-run/test/gen0029" in traced
+    assert len({flag(c, "-o") for c in dry_run("reference") if c[0] == STAGES["TRACE"]}) == 24
+    for n in (24, 30):
+        subprocess.run(["python3", "data-gen/generate.py", "--scenes", str(n), "--side", "32", "--out",
+                        str(tmp_path / str(n))], cwd=ROOT, check=True, capture_output=True)
+    small = sorted(p.relative_to(tmp_path / "24") for p in (tmp_path / "24").glob("*/*.ron"))
+    large = sorted(p.relative_to(tmp_path / "30") for p in (tmp_path / "30").glob("*/*.ron"))
+    assert len(small) == 24 and len(large) == 30 and set(small) < set(large)
+    assert all((tmp_path / "24" / p).read_text() == (tmp_path / "30" / p).read_text() for p in small)
+    assert sorted(p.stem for p in (tmp_path / "30" / "test").glob("*.ron")) == [
+        f"gen{i:04d}" for i in range(30) if i % 6 == 5]
+    r = subprocess.run(["python3", "data-gen/generate.py", "--scenes", "5", "--list"], cwd=ROOT,
+                       capture_output=True, text=True)
+    assert r.returncode != 0 and "--scenes 5" in r.stderr
+
+
 def test_noisy_target_follows_noisy_max():
     cmds = dry_run("noisy", NOISY_LEVELS="1 2 4 8")
     runs = [c for c in cmds if c[0] == STAGES["TRACE"]]
