@@ -122,6 +122,11 @@ pytest: $(VENV)/$(VENV_STAMP)
 
 train: $(MODEL)
 
+# A model named on the command line (`make eval EVAL_MODEL=models/quick.onnx`) is an input: make
+# does not retrain it, even when it is the one `make train` writes and training/*.py is newer,
+# unless `train` is a goal too. Plain `make eval` trains the model it scores when it is missing
+# or out of date.
+ifeq ($(if $(filter command line,$(origin EVAL_MODEL)),$(if $(filter train,$(MAKECMDGOALS)),,$(filter $(MODEL),$(EVAL_MODEL)))),)
 $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract.py $(EVALUATE) | reference noisy
 	cd training && ../$(PYTHON) preprocess.py --data-dir ../$(DATA_DIR) --prep-dir ../build/train/$(DATASET) \
 		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE)
@@ -132,6 +137,7 @@ $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract
 		--work-dir ../build/train/$(DATASET)/compare --evaluate $(if $(findstring /,$(EVALUATE)),$(abspath $(EVALUATE)),$(EVALUATE)) \
 		--json ../models/$(DATASET).metrics.json
 	cp runs/$(DATASET)/run.json models/$(DATASET).config.json
+endif
 
 bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs bench-pt bench-sensors bench-edges
 	$(CARGO) bench -p scene-compile --bench compile_1m

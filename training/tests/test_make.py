@@ -158,6 +158,24 @@ def test_eval_scores_the_trained_model_by_default():
     assert {flag(c, "--model") for c in denoised} == {"models/pytest-dry-run.onnx"}
 
 
+def test_a_model_named_on_the_command_line_is_not_retrained(tmp_path):
+    # `make eval EVAL_MODEL=<the model make train writes>` scores that file as it is, even when
+    # training/*.py is newer (it once retrained it, overwriting a run); plain `make eval` and
+    # `make train eval` still train it.
+    model = tmp_path / "m.onnx"
+    model.touch()
+    os.utime(model, (0, 0))  # older than every training script
+
+    def trains(*goals, **variables):
+        r = make("-n", *goals, MODEL=model, **variables)
+        assert r.returncode == 0, r.stderr
+        return "train.py" in r.stdout
+
+    assert not trains("eval", EVAL_MODEL=model)
+    assert trains("eval")
+    assert trains("train", "eval", EVAL_MODEL=model)
+
+
 def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     cmds = dry_run("eval", EVAL_MODEL="models/default.onnx")
     traces = [c for c in cmds if c[0] == STAGES["TRACE"] and "cornell-box" in c[1]]
