@@ -2,8 +2,8 @@
 # receive these values as arguments from the rules; none has its own copy. (The dataset's scene
 # count is data-gen/generate.py's, selected by --preset $(PRESET).)
 #
-# quick fits a 2-core machine: `make reference noisy train eval` in 42 minutes from a clean clone
-# (2026-11-23, release build included; issue 11 asks for at most 45).
+# quick fits a 2-core machine: `make reference noisy train eval` in 41 minutes from a clean clone
+# (2026-11-26, release build included; issue 11 asks for at most 45).
 
 PRESET ?= quick
 ifeq ($(filter $(PRESET),quick full),)
