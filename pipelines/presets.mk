@@ -1,6 +1,6 @@
 # The presets: every number that `PRESET=quick|full` scales, defined once, here. The Python steps
 # receive these values as arguments from the rules; none has its own copy. (The dataset's scene
-# count is data-gen/generate.py's, selected by --preset $(PRESET).)
+# count is data-gen/generate.py's, selected by --preset $(PRESET), unless DATASET_COUNT names one.)
 #
 # quick fits a 2-core machine: `make reference noisy train eval` in 41 minutes from a clean clone
 # (2026-11-26, release build included; issue 11 asks for at most 45).
@@ -15,8 +15,8 @@ endif
 lx_preset = $(1) ?= $(if $(filter full,$(PRESET)),$(3),$(2))
 
 # Dataset (pipelines/dataset.mk): the number of generated scenes, empty for the preset's own
-# (data-gen/generate.py: quick 24, full 240; scene i is the same whatever the count, and every
-# sixth is a test scene), image side in pixels (data-gen/generate.py --side; quick was
+# (data-gen/generate.py's PRESETS; scene i is the same whatever the count, and its split too),
+# image side in pixels (data-gen/generate.py --side; quick was
 # 160 until 2026-11-23, the side models/default.onnx was trained at: 112 renders in half the
 # time); reference samples per pixel; noisy snapshot levels.
 DATASET_COUNT ?=
