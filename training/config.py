@@ -25,6 +25,7 @@ class Config:
     ms_ssim_weight: float = 0.2          # loss = (1 - w) L1 + w (1 - MS-SSIM)
     seed: int = 1
     threads: int = 2
+    workers: int = -1                    # DataLoader worker processes (-1: none on CPU, 8 on a GPU)
     precision: str = "auto"              # autocast: bf16 | fp32 | auto (train.autocast_dtype)
     resume: bool = False
 

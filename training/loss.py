@@ -30,14 +30,14 @@ def _ssim_parts(a, b, win, c1=0.01 ** 2, c2=0.03 ** 2):
 
 
 def ms_ssim(a, b):
-    win = _window(a.shape[1]).to(a.dtype)
+    win = _window(a.shape[1]).to(device=a.device, dtype=a.dtype)
     value = 1.0
     for i, w in enumerate(WEIGHTS):
         lum, cs = _ssim_parts(a, b, win)
         if i == len(WEIGHTS) - 1:
-            value = value * (lum.clamp(min=1e-6) * cs) ** w
+            value = value * (lum.clamp(min=1e-6) * cs) ** float(w)
         else:
-            value = value * cs ** w
+            value = value * cs ** float(w)
             a, b = F.avg_pool2d(a, 2), F.avg_pool2d(b, 2)
     return value.mean()
 

@@ -19,7 +19,7 @@ def exposure_of(hdr):
     """The whole-image exposure of each image of an (N, 3, H, W) tensor, as (N,) float32 —
     for callers holding whole images as tensors (tests, parity checks)."""
     a = hdr.detach().to("cpu", torch.float64).permute(0, 2, 3, 1).numpy()
-    return torch.tensor([contract.exposure(img) for img in a], dtype=torch.float32)
+    return torch.tensor([contract.exposure(img) for img in a], dtype=torch.float32, device=hdr.device)
 
 
 def forward(hdr, exp):

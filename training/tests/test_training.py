@@ -206,13 +206,19 @@ def test_transfer_round_trip_and_exposure():
     assert torch.allclose(transfer.exposure_of(x[2:] * 10.0), e[2:].view(-1) / 10.0, rtol=1e-3)
 
 
+DEVICES = ["cpu"] + (["cuda"] if torch.cuda.is_available() else [])
+
+
+@pytest.mark.parametrize("device", DEVICES)
 @pytest.mark.parametrize("head", model.HEADS)
-def test_one_training_step_lowers_the_loss(head):
+def test_one_training_step_lowers_the_loss(head, device):
+    # On a GPU too, where present (the MS-SSIM window was once made on the CPU whatever the
+    # device: the first CUDA training stopped at its first step).
     torch.manual_seed(1)
-    net = Denoiser(width=8, head=head)
-    ref = torch.rand(4, 3, 32, 32)
+    net = Denoiser(width=8, head=head).to(device)
+    ref = torch.rand(4, 3, 32, 32, device=device)
     noisy = ref * (1 + 0.5 * torch.randn_like(ref)).clamp(min=0)
-    inp = torch.cat([noisy, torch.rand(4, 3, 32, 32), torch.rand(4, 3, 32, 32)], 1)
+    inp = torch.cat([noisy, torch.rand(4, 3, 32, 32, device=device), torch.rand(4, 3, 32, 32, device=device)], 1)
     opt = torch.optim.Adam(net.parameters(), lr=1e-3)
 
     def current():
@@ -351,3 +357,31 @@ def test_autocast_follows_the_precision_and_the_cpu():
     assert train.autocast_dtype(cpu, "fp32", "AVX512") is None
     with pytest.raises(SystemExit, match="--precision 'fp16'"):
         train.autocast_dtype(cpu, "fp16", "AVX2")
+
+
+def test_loader_workers_cut_the_same_crops(tmp_path):
+    # Worker processes (automatic on a GPU) cut exactly the crops one process cuts: a crop
+    # depends only on (seed, index), so a run is reproducible whatever the loader.
+    import preprocess
+    import train
+    import dataset
+    import luxest_contract as contract
+
+    rng = np.random.default_rng(5)
+    d = tmp_path / "data" / "train"
+    d.mkdir(parents=True)
+    contract.write(d / contract.image_name("g", "hdr"), rng.random((40, 40, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
+    for kind in ("hdr", "alb", "nrm", "emi", "ema"):
+        contract.write(d / contract.image_name("g", kind, 4), rng.random((40, 40, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
+    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4])
+    data = dataset.Crops(tmp_path / "prep" / "train", 16, seed=7, length=12)
+    batches = [list(torch.utils.data.DataLoader(data, batch_size=4, num_workers=w)) for w in (0, 2)]
+    assert len(batches[0]) == len(batches[1]) == 3
+    for one, two in zip(*batches):
+        for x, y in zip(one, two):
+            assert torch.equal(x, y)
+    cpu, cuda = torch.device("cpu"), torch.device("cuda")
+    assert train.loader_workers(-1, cpu) == 0 and train.loader_workers(-1, cuda) == 8
+    assert train.loader_workers(3, cpu) == 3
+    with pytest.raises(SystemExit, match="--workers -2"):
+        train.loader_workers(-2, cpu)
