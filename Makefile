@@ -139,7 +139,7 @@ $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract
 	cp runs/$(DATASET)/run.json models/$(DATASET).config.json
 endif
 
-bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs bench-pt bench-sensors bench-edges
+bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scene.lxs build/bench-1m/scene.lxs bench-pt bench-sensors bench-edges bench-denoise
 	$(CARGO) bench -p scene-compile --bench compile_1m
 	$(CARGO) bench -p estimate --bench estimate
 	$(CARGO) bench -p trace --bench trace
