@@ -28,6 +28,7 @@ class Config:
     workers: int = -1                    # DataLoader worker processes (-1: none on CPU, 8 on a GPU)
     precision: str = "auto"              # autocast: bf16 | fp32 | auto (train.autocast_dtype)
     resume: bool = False
+    init_from: str = ""                  # start from this model's weights (an exported .onnx or a run's checkpoint.pt); a new schedule
 
     def save(self, path):
         with open(path, "w") as f:

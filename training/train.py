@@ -80,6 +80,12 @@ def main(argv=None):
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=cfg.steps, pct_start=0.15)
     dtype = autocast_dtype(device, cfg.precision)
     step, earlier_seconds, resumed_at = 0, 0.0, []
+    if cfg.init_from and not (cfg.resume and ckpt.exists()):
+        try:
+            net.load_state_dict(initial_weights(cfg.init_from, cfg))
+        except RuntimeError as e:
+            raise SystemExit(f"train: --init-from {cfg.init_from}: weights of another network ({str(e).splitlines()[0]})")
+        print(f"weights from {cfg.init_from}")
     if cfg.resume and ckpt.exists():
         state = torch.load(ckpt, weights_only=False, map_location=device)
         net.load_state_dict(state["model"])
@@ -130,6 +136,31 @@ def main(argv=None):
     # What models/<dataset>.config.json records: the configuration and how the run went.
     (run / "run.json").write_text(json.dumps({**asdict(cfg), "run": summary}, indent=2))
     print(f"train: {step} steps in {summary['seconds']:.0f} s of training, validation loss {v:.4f}")
+
+
+def initial_weights(path, cfg):
+    """The state dict of `path` (a model exported by export.py, or a run's checkpoint.pt) for a
+    run of `cfg`: a fine-tuning starts from it with its own schedule; a network of another shape
+    is refused in one line."""
+    import tempfile
+
+    import export
+
+    path = Path(path)
+    if not path.is_file():
+        raise SystemExit(f"train: --init-from {path}: no such file")
+    with tempfile.TemporaryDirectory() as tmp:
+        if path.suffix == ".onnx":
+            export.run_from_onnx(path, tmp)
+            src = config.Config.load(Path(tmp) / "config.json")
+            state = torch.load(Path(tmp) / "checkpoint.pt", weights_only=False)["model"]
+        else:
+            src = None
+            state = torch.load(path, weights_only=False, map_location="cpu")["model"]
+    if src is not None and (src.base_width, src.head, list(src.features)) != (cfg.base_width, cfg.head, list(cfg.features)):
+        raise SystemExit(f"train: --init-from {path}: a width-{src.base_width} {src.head} model on {','.join(src.features)}, "
+                         f"this run trains width {cfg.base_width} {cfg.head} on {','.join(cfg.features)}")
+    return state
 
 
 def save(net, opt, sched, step, seconds, resumed_at, path):

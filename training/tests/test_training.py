@@ -385,3 +385,38 @@ def test_loader_workers_cut_the_same_crops(tmp_path):
     assert train.loader_workers(3, cpu) == 3
     with pytest.raises(SystemExit, match="--workers -2"):
         train.loader_workers(-2, cpu)
+
+
+def test_a_run_starts_from_an_exported_models_weights(tmp_path):
+    # --init-from: a fine-tuning starts from the weights of an exported model (or a checkpoint)
+    # with its own schedule; a network of another width is refused in one line.
+    import export
+    import preprocess
+    import train
+    import luxest_contract as contract
+
+    rng = np.random.default_rng(4)
+    d = tmp_path / "data" / "train"
+    d.mkdir(parents=True)
+    contract.write(d / contract.image_name("g", "hdr"), rng.random((32, 32, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
+    for kind in ("hdr", "alb", "nrm", "emi", "ema"):
+        contract.write(d / contract.image_name("g", kind, 4), rng.random((32, 32, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
+    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
+    args = ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
+            "--threads", "1", "--steps", "2"]
+    train.main(args + ["--run-dir", str(tmp_path / "first"), "--base-width", "8"])
+    export.export(tmp_path / "first", tmp_path / "first.onnx")
+    train.main(args + ["--run-dir", str(tmp_path / "second"), "--base-width", "8", "--minutes", "0", "--init-from", str(tmp_path / "first.onnx")])
+    first = torch.load(tmp_path / "first" / "checkpoint.pt", weights_only=False)["model"]
+    second = torch.load(tmp_path / "second" / "checkpoint.pt", weights_only=False)["model"]
+    assert first.keys() == second.keys() and all(torch.equal(first[k], second[k]) for k in first)
+    # Not the initialisation it would have had otherwise.
+    train.main(args + ["--run-dir", str(tmp_path / "fresh"), "--base-width", "8", "--minutes", "0", "--seed", "9"])
+    fresh = torch.load(tmp_path / "fresh" / "checkpoint.pt", weights_only=False)["model"]
+    assert not all(torch.equal(first[k], fresh[k]) for k in first)
+    with pytest.raises(SystemExit, match="a width-8 kpn model .* this run trains width 16"):
+        train.main(args + ["--base-width", "16", "--minutes", "0", "--run-dir", str(tmp_path / "third"),
+                           "--init-from", str(tmp_path / "first.onnx")])
+    with pytest.raises(SystemExit, match="weights of another network"):
+        train.main(args + ["--base-width", "16", "--minutes", "0", "--run-dir", str(tmp_path / "fourth"),
+                           "--init-from", str(tmp_path / "first" / "checkpoint.pt")])
