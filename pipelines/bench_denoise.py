@@ -114,9 +114,13 @@ def main(argv=None):
         fail(f"--rounds {args.rounds} / --side {args.side}: expected at least 1 round and a side of 64")
     out, work = Path(args.out), Path(args.work_dir)
     out_csv = out.with_suffix(".csv")
+    if out.suffix == ".csv":
+        fail(f"{out}: the Markdown table's name (the CSV goes beside it as {out_csv.name})")
     for p in (out, out_csv):
         if p.resolve() == Path(args.input).resolve() or (p.exists() and not p.is_file()):
             fail(f"{p}: not a file this benchmark may write")
+    if Path(args.input).resolve().parent in ((work / "small").resolve(), (work / "large").resolve()):
+        fail(f"{args.input}: inside the work directory, whose copies would overwrite it")
     kinds = [k for k in args.features.split(",") if k]
     inputs = prepare(args.input, kinds, args.side, work)
     if megapixels(inputs["large"]) <= megapixels(inputs["small"]):

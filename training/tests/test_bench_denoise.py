@@ -80,3 +80,11 @@ def test_bad_input_one_line_and_nothing_written(tmp_path):
     r = bench(tmp_path, hdr, (0, 0), (0, 0), "--features", "alb,nrm", "--denoise", "/no/such/denoiser")
     assert r.returncode == 1 and r.stderr.strip() == "bench_denoise: error: /no/such/denoiser: cannot run it (No such file or directory)"
     assert not list((tmp_path / "out").iterdir())
+    r = bench(tmp_path, hdr, (0, 0), (0, 0), "--features", "alb,nrm", "-o", str(tmp_path / "out" / "bench.csv"))
+    assert r.returncode == 1 and "the Markdown table's name" in r.stderr
+    # An input inside the work directory's copies would be overwritten by them.
+    (tmp_path / "work" / "small").mkdir(parents=True, exist_ok=True)
+    inside = scene(tmp_path / "work" / "small")
+    r = bench(tmp_path, inside, (0, 0), (0, 0))
+    assert r.returncode == 1 and "inside the work directory" in r.stderr
+    assert not list((tmp_path / "out").iterdir())
