@@ -38,32 +38,27 @@ def fail(message):
 
 def prepare(hdr_path, kinds, side, work):
     """Copies of the snapshot `hdr_path` and its feature images (`kinds`, named as aov-write
-    names them) into work/small/ and, tiled to side², work/large/; returns {size: hdr path}."""
-    out = {}
+    names them) into work/small/ and, tiled to side², work/large/, each source read once;
+    returns ({size: hdr path}, {size: megapixels})."""
     parsed = contract.parse_image_name(Path(hdr_path).name)
     if parsed is None or parsed.kind != "hdr" or parsed.reference:
         fail(f"{hdr_path}: not a noisy image `<name>_<count>spp.hdr.exr` (or `le`)")
-    name, spp, unit = parsed.name, parsed.spp, parsed.unit
-    for size_dir in ("small", "large"):
-        d = work / size_dir
-        d.mkdir(parents=True, exist_ok=True)
-        for kind in ("hdr",) + tuple(kinds):
-            src = Path(hdr_path).with_name(contract.image_name(name, kind, spp, unit))
-            if not src.is_file():
-                fail(f"{src}: missing (make eval renders the Cornell box's snapshots and features)")
-            image = contract.read(src)
-            px = image.pixels
-            if size_dir == "large":
-                h, w, _ = px.shape
-                px = np.tile(px, (-(-side // h), -(-side // w), 1))[:side, :side]
-            contract.write(d / src.name, px, image.header)
-        out[size_dir] = d / Path(hdr_path).name
-    return out
-
-
-def megapixels(path):
-    h, w, _ = contract.read(path).pixels.shape
-    return h * w / 1e6
+    sizes = ("small", "large")
+    for size_dir in sizes:
+        (work / size_dir).mkdir(parents=True, exist_ok=True)
+    mp = {}
+    for kind in ("hdr",) + tuple(kinds):
+        src = Path(hdr_path).with_name(contract.image_name(parsed.name, kind, parsed.spp, parsed.unit))
+        if not src.is_file():
+            fail(f"{src}: missing (make eval renders the Cornell box's snapshots and features)")
+        image = contract.read(src)
+        h, w, _ = image.pixels.shape
+        large = np.tile(image.pixels, (-(-side // h), -(-side // w), 1))[:side, :side]
+        for size_dir, px in zip(sizes, (image.pixels, large)):
+            contract.write(work / size_dir / src.name, px, image.header)
+            if kind == "hdr":
+                mp[size_dir] = px.shape[0] * px.shape[1] / 1e6
+    return {s: work / s / Path(hdr_path).name for s in sizes}, mp
 
 
 def run(cmd):
@@ -122,10 +117,9 @@ def main(argv=None):
     if Path(args.input).resolve().parent in ((work / "small").resolve(), (work / "large").resolve()):
         fail(f"{args.input}: inside the work directory, whose copies would overwrite it")
     kinds = [k for k in args.features.split(",") if k]
-    inputs = prepare(args.input, kinds, args.side, work)
-    if megapixels(inputs["large"]) <= megapixels(inputs["small"]):
+    inputs, mp = prepare(args.input, kinds, args.side, work)
+    if mp["large"] <= mp["small"]:
         fail(f"--side {args.side}: the large image must be larger than the input")
-    mp = {k: megapixels(v) for k, v in inputs.items()}
     cpu = {(d, s): [] for d in ("luxest", "oidn") for s in inputs}
     wall = {(d, s): [] for d in ("luxest", "oidn") for s in inputs}
     for r in range(args.rounds):

@@ -314,20 +314,27 @@ def test_config_round_trip(tmp_path):
     assert config.Config.load(tmp_path / "old.json").head == "direct"
 
 
+def tiny_split(d, side, rng):
+    """A rendered split of one scene `g` in directory `d` (created): a 64-spp reference (seed 2)
+    and a 4-spp level (seed 1) with every feature, side x side random pixels drawn from `rng`."""
+    import luxest_contract as contract
+
+    d.mkdir(parents=True)
+    contract.write(d / contract.image_name("g", "hdr"), rng.random((side, side, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
+    for kind in contract.FEATURES:
+        contract.write(d / contract.image_name("g", kind, 4), rng.random((side, side, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
+    return d
+
+
 def test_training_runs_its_steps_and_resumes(tmp_path):
     # A tiny preprocessed split; a run stopped by its time budget, then resumed to its 5 steps:
     # the run record counts them and where it was resumed.
     import preprocess
     import train
-    import luxest_contract as contract
 
     rng = np.random.default_rng(3)
     for split in ("train", "valid"):
-        d = tmp_path / "data" / split
-        d.mkdir(parents=True)
-        contract.write(d / contract.image_name("g", "hdr"), rng.random((32, 32, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
-        for kind in ("hdr", "alb", "nrm", "emi", "ema"):
-            contract.write(d / contract.image_name("g", kind, 4), rng.random((32, 32, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
+        tiny_split(tmp_path / "data" / split, 32, rng)
     (tmp_path / "data" / "test").mkdir()
     args = ["--data-dir", str(tmp_path / "data"), "--prep-dir", str(tmp_path / "prep"), "--run-dir", str(tmp_path / "run"),
             "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2", "--base-width", "8", "--threads", "1"]
@@ -365,14 +372,8 @@ def test_loader_workers_cut_the_same_crops(tmp_path):
     import preprocess
     import train
     import dataset
-    import luxest_contract as contract
 
-    rng = np.random.default_rng(5)
-    d = tmp_path / "data" / "train"
-    d.mkdir(parents=True)
-    contract.write(d / contract.image_name("g", "hdr"), rng.random((40, 40, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
-    for kind in ("hdr", "alb", "nrm", "emi", "ema"):
-        contract.write(d / contract.image_name("g", kind, 4), rng.random((40, 40, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
+    d = tiny_split(tmp_path / "data" / "train", 40, np.random.default_rng(5))
     preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4])
     data = dataset.Crops(tmp_path / "prep" / "train", 16, seed=7, length=12)
     batches = [list(torch.utils.data.DataLoader(data, batch_size=4, num_workers=w)) for w in (0, 2)]
@@ -393,14 +394,8 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     import export
     import preprocess
     import train
-    import luxest_contract as contract
 
-    rng = np.random.default_rng(4)
-    d = tmp_path / "data" / "train"
-    d.mkdir(parents=True)
-    contract.write(d / contract.image_name("g", "hdr"), rng.random((32, 32, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
-    for kind in ("hdr", "alb", "nrm", "emi", "ema"):
-        contract.write(d / contract.image_name("g", kind, 4), rng.random((32, 32, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
+    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(4))
     preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
     args = ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
             "--threads", "1", "--steps", "2"]
