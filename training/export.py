@@ -10,6 +10,7 @@ import tempfile
 from dataclasses import asdict
 from pathlib import Path
 
+import numpy as np
 import onnx
 import torch
 
@@ -51,6 +52,11 @@ def run_from_onnx(model_path, run_dir):
     net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features)
     weights = {i.name: numpy_helper.to_array(i) for i in m.graph.initializer}
     state = net.state_dict()
+    for k in state:  # a decoder join's weight exported in two halves (model.UNet.split_joins)
+        block = k.removeprefix("unet.").removesuffix(".0.0.weight")
+        up, skip = (f"unet.joins.{block}_{part}" for part in ("up", "skip"))
+        if k not in weights and up in weights and skip in weights:
+            weights[k] = np.concatenate([weights[up], weights[skip]], axis=1)
     missing = [k for k in state if k not in weights or tuple(weights[k].shape) != tuple(state[k].shape)]
     if missing:
         raise ValueError(f"{model_path}: lacks the weights {', '.join(missing[:3])}")
@@ -72,6 +78,7 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
     net.load_state_dict(torch.load(Path(run_dir) / "checkpoint.pt", weights_only=False)["model"])
     net.eval()
     net.kernel_gather = "slices"
+    net.unet.split_joins()  # no Concat node in the decoder (model.UNet.split_joins)
     x = torch.rand(1, net.in_channels, 48, 64)
     e = torch.tensor([0.5])
     h, w = torch.export.Dim("h", min=1, max=16384), torch.export.Dim("w", min=1, max=16384)

@@ -79,6 +79,7 @@ class UNet(nn.Module):
         self.dec1 = nn.Sequential(conv(c3 + c2, c2), conv(c2, c2))
         self.dec0 = nn.Sequential(conv(c2 + c1, c1), conv(c1, c1))
         self.out = nn.Conv2d(c1, out_channels, 3, padding=1) if out_channels else None
+        self.joins = None  # split_joins (export)
 
     def decoder(self, x):
         e0 = self.enc0(x)                      # H
@@ -86,12 +87,38 @@ class UNet(nn.Module):
         e2 = self.enc2(F.max_pool2d(e1, 2))    # H/4
         e3 = self.enc3(F.max_pool2d(e2, 2))    # H/8
         b = self.bottleneck(F.max_pool2d(e3, 2))  # H/16
-        up = lambda t: F.interpolate(t, scale_factor=2.0, mode="nearest")
-        d3 = self.dec3(torch.cat([up(b), e3], 1))    # H/8
-        d2 = self.dec2(torch.cat([up(d3), e2], 1))   # H/4
-        d1 = self.dec1(torch.cat([up(d2), e1], 1))   # H/2
-        d0 = self.dec0(torch.cat([up(d1), e0], 1))   # H
+        d3 = self.join("dec3", b, e3)    # H/8
+        d2 = self.join("dec2", d3, e2)   # H/4
+        d1 = self.join("dec1", d2, e1)   # H/2
+        d0 = self.join("dec0", d1, e0)   # H
         return [d0, d1, d2, d3]
+
+    def join(self, name, coarse, skip):
+        """Decoder block `name` over the concatenation of `coarse` upsampled (nearest) and
+        `skip`; after `split_joins` as a sum of two convolutions instead (same function)."""
+        block = getattr(self, name)
+        up = F.interpolate(coarse, scale_factor=2.0, mode="nearest")
+        if self.joins is None:
+            return block(torch.cat([up, skip], 1))
+        conv = block[0][0]
+        y = (F.conv2d(up, self.joins[name + "_up"], conv.bias, padding=1)
+             + F.conv2d(skip, self.joins[name + "_skip"], None, padding=1))
+        return block[1:](F.relu(y))
+
+    def split_joins(self):
+        """For export (export.py): each decoder block's first convolution over [upsampled,
+        skip] becomes the sum of one convolution per part, with the weight's two halves as
+        parameters `joins.<block>_up` / `_skip` (the whole weight then is not in the graph;
+        export.run_from_onnx joins them again). The same function up to float rounding, and no
+        Concat node, which ONNX Runtime runs outside its blocked-channel layout with a reordering
+        before and after."""
+        joins = {}
+        for name, skip in zip(("dec3", "dec2", "dec1", "dec0"), reversed(self.channels)):
+            w = getattr(self, name)[0][0].weight.detach()
+            c = w.shape[1] - skip
+            joins[name + "_up"] = nn.Parameter(w[:, :c].clone(), requires_grad=False)
+            joins[name + "_skip"] = nn.Parameter(w[:, c:].clone(), requires_grad=False)
+        self.joins = nn.ParameterDict(joins)
 
     def forward(self, x):
         return self.out(self.decoder(x)[0])

@@ -240,6 +240,22 @@ def test_ms_ssim_is_one_for_identical_images_and_less_otherwise():
     assert float(losses.ms_ssim(a, a + 0.2 * torch.randn_like(a))) < 0.9
 
 
+def test_split_joins_compute_the_same_decoder():
+    # Export takes each decoder block's first convolution over [upsampled, skip] as the sum of
+    # one convolution per part (no Concat node); the decoder's outputs must not change.
+    torch.manual_seed(9)
+    net = model.UNet(in_channels=9, width=8, out_channels=0).eval()
+    x = torch.rand(2, 9, 48, 32)
+    with torch.no_grad():
+        a = net.decoder(x)
+        net.split_joins()
+        b = net.decoder(x)
+    for s, (u, v) in enumerate(zip(a, b)):
+        assert u.shape == v.shape
+        assert torch.allclose(u, v, rtol=1e-5, atol=1e-6), s
+    assert float(a[0].abs().max()) > 0
+
+
 @pytest.mark.parametrize("head,features", [(h, model.FEATURE_SETS[0]) for h in model.HEADS]
                          + [("kpn", model.FEATURE_SETS[1]), ("kpn", model.FEATURE_SETS[2])])
 def test_export_matches_onnxruntime(tmp_path, head, features):

@@ -1,15 +1,18 @@
 //! `make bench` for denoise: milliseconds per megapixel of the default model (models/default.onnx)
-//! on 2 threads, for one 512² tile and for a 1024² image in the default tiling (768² cores with
-//! 96 pixels of context, so the context overhead is included). Inputs are synthetic features of
-//! the right statistics (inference time does not depend on the values).
+//! on 2 threads, in the default tiling (1024² cores with 96 pixels of context) for 512², 1024²
+//! (one tile) and 2048² (four tiles: the context overhead included), and for 1024² in 256² tiles.
+//! Inputs are synthetic features of the right statistics (inference time does not depend on the
+//! values), as many as the model takes (no emission). Run: `cargo bench -p denoise`; the
+//! comparison with the peer is `make bench-denoise`.
 
-use denoise::{Denoiser, Tiling};
+use denoise::{Denoiser, Feature, Tiling};
 use luxest_io::exr_io::RgbImage;
 use std::path::Path;
 use std::time::Instant;
 
-fn features(size: usize) -> Vec<RgbImage> {
-    let mut images = vec![RgbImage::new(size, size); 3];
+fn features(size: usize, kinds: &[Feature]) -> Vec<RgbImage> {
+    // hdr, alb, nrm, then emi / ema (zero: no emitter in view) where the model takes them.
+    let mut images = vec![RgbImage::new(size, size); kinds.len()];
     for y in 0..size {
         for x in 0..size {
             let i = y * size + x;
@@ -36,6 +39,7 @@ fn main() {
     for (size, tiling) in [
         (512, Tiling::default()),
         (1024, Tiling::default()),
+        (2048, Tiling::default()),
         (
             1024,
             Tiling {
@@ -44,7 +48,7 @@ fn main() {
             },
         ),
     ] {
-        let images = features(size);
+        let images = features(size, denoiser.features());
         let refs: Vec<&RgbImage> = images.iter().collect();
         denoiser.denoise(&refs, tiling).unwrap(); // warm-up: allocations, kernel selection
         let runs = 3;

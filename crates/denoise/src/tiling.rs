@@ -12,11 +12,13 @@ pub struct Tiling {
 }
 
 impl Default for Tiling {
-    /// 768² cores with 96 pixels of context: the default U-Net's receptive-field radius is
-    /// below 96 (tested), and one such tile needs about 0.6 GB of activations.
+    /// 1024² cores with 96 pixels of context: the default U-Net's receptive-field radius is
+    /// below 96 (tested); a 1-megapixel image is one tile (the context of smaller cores costs
+    /// more than it saves: 768² cores did 41 % more pixels at 1024², 25 % more CPU time), and
+    /// the largest tile (1216² inside a large image) needs about 1.6 GB of activations.
     fn default() -> Tiling {
         Tiling {
-            tile: 768,
+            tile: 1024,
             overlap: 96,
         }
     }
