@@ -282,6 +282,13 @@ def test_export_matches_onnxruntime(tmp_path, head, features):
         b = session.run(None, {"input": x.numpy(), "exposure": e})[0]
         assert a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-4 * max(1.0, float(np.abs(a).max()))
+    graph = __import__("onnx").load(str(model)).graph
+    # The decoder joins are exported without Concat (model.UNet.split_joins): no Concat takes
+    # an upsampled map.
+    producer = {o: n.op_type for n in graph.node for o in n.output}
+    joins = [n.name for n in graph.node if n.op_type == "Concat"
+             and any(producer.get(i) in ("Resize", "Upsample") for i in n.input)]
+    assert not joins and any(n.op_type == "Resize" for n in graph.node)
     meta = {p.key: p.value for p in __import__("onnx").load(str(model)).metadata_props}
     assert meta["luxest.channels"] == ",".join(features)
     assert (export.EMISSION in meta["luxest.transfer"]) == ("emi" in features)

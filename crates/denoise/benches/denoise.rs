@@ -12,6 +12,7 @@ use std::time::Instant;
 
 fn features(size: usize, kinds: &[Feature]) -> Vec<RgbImage> {
     // hdr, alb, nrm, then emi / ema (zero: no emitter in view) where the model takes them.
+    assert_eq!(kinds[..3], [Feature::Hdr, Feature::Alb, Feature::Nrm]);
     let mut images = vec![RgbImage::new(size, size); kinds.len()];
     for y in 0..size {
         for x in 0..size {

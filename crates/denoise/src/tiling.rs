@@ -13,7 +13,7 @@ pub struct Tiling {
 
 impl Default for Tiling {
     /// 1024² cores with 96 pixels of context: the default U-Net's receptive-field radius is
-    /// below 96 (tested); a 1-megapixel image is one tile (the context of smaller cores costs
+    /// below 96 (tested); an image of up to 1024² is one tile (the context of smaller cores costs
     /// more than it saves: 768² cores did 41 % more pixels at 1024², 25 % more CPU time), and
     /// the largest tile (1216² inside a large image) needs about 1.6 GB of activations.
     fn default() -> Tiling {
