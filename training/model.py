@@ -111,7 +111,8 @@ class UNet(nn.Module):
         parameters `joins.<block>_up` / `_skip` (the whole weight then is not in the graph;
         export.run_from_onnx joins them again). The same function up to float rounding, and no
         Concat node, which ONNX Runtime runs outside its blocked-channel layout with a reordering
-        before and after."""
+        before and after. Export only: the halves are copies, so a split network is not trained
+        or loaded into afterwards."""
         joins = {}
         for name, skip in zip(("dec3", "dec2", "dec1", "dec0"), reversed(self.channels)):
             w = getattr(self, name)[0][0].weight.detach()
