@@ -12,7 +12,7 @@
 # EVAL_PROG_SPP, its features at the same snapshots, every snapshot denoised; double-local-
 # estimate images at EVAL_DLE light paths, each denoised with the 64-spp features; light-tracing
 # images at EVAL_LT paths (the baseline). (2) The
-# held-out test scenes of the dataset: noisy levels of `make noisy` denoised; local-estimate
+# held-out test scenes of the dataset (references: EVAL_HELDOUT_REF_SPP): noisy levels of `make noisy` denoised; local-estimate
 # images at EVAL_DATA_DLE paths, denoised with the NOISY_MAX features. (3) The cases of `make validate` at EVAL_SENSOR_SCALE times
 # their paths, against exact values. Every image luxest's model denoises in (1) and (2) is also
 # denoised by Intel Open Image Denoise 1.4.3 (the peer; hdr + albedo + normal), scored beside it.
@@ -97,6 +97,15 @@ $(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb
 EVAL_DATA := $(DATA_DIR)/test
 EVAL_DS := $(EVAL_DIR)/dataset
 EVAL_TEST_SCENES := $(patsubst test/%,%,$(filter test/%,$(DATASET_SCENES)))
+# Their references: the dataset's own (REF_SPP samples, seed REF_SEED) unless
+# EVAL_HELDOUT_REF_SPP asks for another count; then make eval renders its own from the dataset's
+# compiled scene, with the same seed (independent of every noisy level and local-estimate image),
+# into a directory named after the count. The quick dataset's references have as many samples as
+# its top noisy level, so their own noise is half of that level's error against them
+# (docs/measurements.md). A stamp named after the count makes the reports follow a change of it.
+EVAL_HELDOUT_REF_SPP ?= $(REF_SPP)
+eval_heldout_ref = $(if $(filter $(REF_SPP),$(EVAL_HELDOUT_REF_SPP)),$(call lx_ref,$(EVAL_DATA)/$(1),hdr),$(call lx_ref,$(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/$(1),hdr))
+EVAL_HELDOUT_REF_STAMP := $(if $(filter eval $(EVAL_DIR)/% $(REPORTS)/%,$(MAKECMDGOALS)),$(call lx_stamp,$(EVAL_DIR),heldout-ref-spp,$(EVAL_HELDOUT_REF_SPP)))
 
 define eval_test_scene
 # The levels below the last are written by the runs whose last images mark them (the radiance
@@ -123,12 +132,16 @@ $(call lx_le_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_le_pattern,$(EVAL_
 	@mkdir -p $$(@D)
 	$(OIDN_DENOISE) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
 
-$(EVAL_CSV)/dataset-$(1).images.csv: $(call lx_ref,$(EVAL_DATA)/$(1),hdr) \
+$(call lx_ref,$(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/$(1),hdr): build/dataset/$(DATASET)/test/$(1).lxs $(TRACE)
+	@mkdir -p $$(@D)
+	$$(TRACE) $$< --spp $(EVAL_HELDOUT_REF_SPP) --reference --seed $(REF_SEED) -o $(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/$(1)
+
+$(EVAL_CSV)/dataset-$(1).images.csv: $(call eval_heldout_ref,$(1)) $(EVAL_HELDOUT_REF_STAMP) \
 		$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr) $(call lx_image,$(EVAL_DS)/$(1),$(s),dn) $(call lx_image,$(EVAL_DS)/oidn/$(1)-oidn,$(s),dn)) \
 		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/oidn/$(1)-oidn,$(n),dn)) \
 		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/$(1),$(n),hdr) $(call lx_le,$(EVAL_DS)/$(1),$(n),dn)) $(EVALUATE)
 	@mkdir -p $$(@D)
-	$$(EVALUATE) images --reference $$< $$(filter-out $$< $(EVALUATE),$$^) -o $$@ --ron $$(@:.csv=.ron)
+	$$(EVALUATE) images --reference $$< $$(filter-out $$< $(EVALUATE) $(EVAL_HELDOUT_REF_STAMP),$$^) -o $$@ --ron $$(@:.csv=.ron)
 endef
 $(foreach n,$(EVAL_TEST_SCENES),$(eval $(call eval_test_scene,$(n))))
 
@@ -150,6 +163,6 @@ $(REPORTS)/summary.md: $(EVAL_REPORTS) pipelines/eval.py python/luxest_contract.
 		--cornell $(EVAL_CSV)/cornell-box.images.csv --dataset $(filter $(EVAL_CSV)/dataset-%,$^) \
 		--sensors $(filter $(EVAL_CSV)/sensors-%,$^) \
 		--ref-spp $(EVAL_REF_SPP) --ref-seed $(REF_SEED) --noisy-seed $(NOISY_SEED) \
-		--dataset-ref-spp $(REF_SPP) --sensor-scale $(EVAL_SENSOR_SCALE)
+		--dataset-ref-spp $(EVAL_HELDOUT_REF_SPP) --sensor-scale $(EVAL_SENSOR_SCALE)
 
 eval: $(REPORTS)/summary.md

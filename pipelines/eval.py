@@ -351,9 +351,9 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
     # Dataset.
     if ds_mean:
         lines += [f"## Held-out test scenes ({', '.join(ds_names)})", "",
-                  f"Noisy levels and references as rendered by `make reference noisy` (references: {args.dataset_ref_spp} spp "
-                  "with their own seed, so the error floor at high spp is partly the reference's own noise). Means over the "
-                  "scenes.", ""]
+                  f"Noisy levels as rendered by `make reference noisy`; references of {args.dataset_ref_spp} spp with their own "
+                  "seed (`EVAL_HELDOUT_REF_SPP`; the dataset's own when it equals `REF_SPP`), so the error floor at high spp is "
+                  "partly the reference's own noise. Means over the scenes.", ""]
         rows = [[m["estimator"], m["samples"], m["scenes"], f"{m['total_seconds']:.2f}", f"{m['psnr_db']:.2f}", f"{m['ssim']:.4f}",
                  f"{m['flip']:.4f}", f"{m['rel_mse']:.3e}"] for m in ds_mean]
         lines += [table(["estimator", "spp / paths", "scenes", "seconds", "PSNR dB", "SSIM", "FLIP", "relMSE"], rows), ""]

@@ -206,6 +206,30 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     assert others == [], others
 
 
+def test_held_out_references_follow_eval_heldout_ref_spp():
+    # By default the held-out scenes are scored against the dataset's own references; with
+    # EVAL_HELDOUT_REF_SPP make eval renders its own (that many samples, the reference seed, from
+    # the dataset's compiled scene) and scores every held-out image against them.
+    def plan(**v):
+        cmds = dry_run("eval", EVAL_MODEL="models/default.onnx", **v)
+        # (The dry-run dataset does not exist, so its own references are planned too: left out.)
+        refs = [c for c in cmds if c[0] == STAGES["TRACE"] and "--reference" in c
+                and not flag(c, "-o").startswith("data/") and "cornell-box" not in c[1]]
+        scored = [c for c in cmds if c[0] == STAGES["EVALUATE"] and c[1] == "images" and "dataset-" in flag(c, "-o")]
+        return refs, scored, cmds
+    refs, scored, _ = plan()
+    assert refs == [] and len(scored) == 4  # quick: 4 held-out scenes
+    assert all(flag(c, "--reference").startswith("data/pytest-dry-run/test/") for c in scored)
+    refs, scored, cmds = plan(EVAL_HELDOUT_REF_SPP="4096")
+    assert len(refs) == len(scored) == 4
+    noisy_seed = {flag(c, "--seed") for c in cmds if c[0] == STAGES["TRACE"] and "--reference" not in c}
+    assert all(flag(c, "--spp") == "4096" and flag(c, "--seed") not in noisy_seed for c in refs)
+    made = {flag(c, "-o") + "_ref.hdr.exr" for c in refs}
+    assert {flag(c, "--reference") for c in scored} == made and all("/ref-4096/" in m for m in made)
+    # The stamp is a prerequisite, not an image to score.
+    assert not any("heldout-ref-spp" in a for c in scored for a in c)
+
+
 def old_cornell_box(ev, *more):
     """make eval's Cornell-box images of 1 and 2 spp (radiance and every feature), the feature
     stamp of FEATURE_SPP 16, the stand-in stages and `more`: empty files, all older than
