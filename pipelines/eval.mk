@@ -107,6 +107,10 @@ EVAL_HELDOUT_REF_SPP ?= $(REF_SPP)
 eval_heldout_ref = $(if $(filter $(REF_SPP),$(EVAL_HELDOUT_REF_SPP)),$(call lx_ref,$(EVAL_DATA)/$(1),hdr),$(call lx_ref,$(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/$(1),hdr))
 EVAL_HELDOUT_REF_STAMP := $(if $(filter eval $(EVAL_DIR)/% $(REPORTS)/%,$(MAKECMDGOALS)),$(call lx_stamp,$(EVAL_DIR),heldout-ref-spp,$(EVAL_HELDOUT_REF_SPP)))
 
+$(call lx_ref,$(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/%,hdr): build/dataset/$(DATASET)/test/%.lxs $(TRACE)
+	@mkdir -p $(@D)
+	$(TRACE) $< --spp $(EVAL_HELDOUT_REF_SPP) --reference --seed $(REF_SEED) -o $(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/$*
+
 define eval_test_scene
 # The levels below the last are written by the runs whose last images mark them (the radiance
 # by trace's, the features by aov-write's: pipelines/dataset.mk).
@@ -131,10 +135,6 @@ $(call lx_image_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_image_pattern,$
 $(call lx_le_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) pipelines/oidn_denoise.py
 	@mkdir -p $$(@D)
 	$(OIDN_DENOISE) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
-
-$(call lx_ref,$(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/$(1),hdr): build/dataset/$(DATASET)/test/$(1).lxs $(TRACE)
-	@mkdir -p $$(@D)
-	$$(TRACE) $$< --spp $(EVAL_HELDOUT_REF_SPP) --reference --seed $(REF_SEED) -o $(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/$(1)
 
 $(EVAL_CSV)/dataset-$(1).images.csv: $(call eval_heldout_ref,$(1)) $(EVAL_HELDOUT_REF_STAMP) \
 		$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr) $(call lx_image,$(EVAL_DS)/$(1),$(s),dn) $(call lx_image,$(EVAL_DS)/oidn/$(1)-oidn,$(s),dn)) \
