@@ -36,10 +36,9 @@ EMISSION_AA = ("; with the ema feature (the emission antialiased): max(ema, 0) i
 """The metadata's addition for models that add back the antialiased emission."""
 
 
-def run_from_onnx(model_path, run_dir):
-    """Writes a run directory (config.json, checkpoint.pt) holding the configuration and weights
-    of an exported model, read from its metadata (`luxest.config`) and initializers, so that a
-    committed model can be exported again (e.g. with --antialiased-emission) without its run."""
+def load_onnx(model_path):
+    """(Config, state dict) of an exported model, read from its metadata (`luxest.config`) and
+    initializers."""
     from onnx import numpy_helper
 
     m = onnx.load(str(model_path))
@@ -60,10 +59,17 @@ def run_from_onnx(model_path, run_dir):
     missing = [k for k in state if k not in weights or tuple(weights[k].shape) != tuple(state[k].shape)]
     if missing:
         raise ValueError(f"{model_path}: lacks the weights {', '.join(missing[:3])}")
-    net.load_state_dict({k: torch.from_numpy(weights[k].copy()) for k in state})
+    return cfg, {k: torch.from_numpy(weights[k].copy()) for k in state}
+
+
+def run_from_onnx(model_path, run_dir):
+    """Writes a run directory (config.json, checkpoint.pt) holding the configuration and weights
+    of an exported model (load_onnx), so that a committed model can be exported again (e.g. with
+    --antialiased-emission) without its run."""
+    cfg, state = load_onnx(model_path)
     Path(run_dir).mkdir(parents=True, exist_ok=True)
     cfg.save(Path(run_dir) / "config.json")
-    torch.save({"model": net.state_dict(), "step": None}, Path(run_dir) / "checkpoint.pt")
+    torch.save({"model": state, "step": None}, Path(run_dir) / "checkpoint.pt")
 
 
 def export(run_dir, out_path, metrics=None, antialiased_emission=False):

@@ -109,7 +109,7 @@ class UNet(nn.Module):
         """For export (export.py): each decoder block's first convolution over [upsampled,
         skip] becomes the sum of one convolution per part, with the weight's two halves as
         parameters `joins.<block>_up` / `_skip` (the whole weight then is not in the graph;
-        export.run_from_onnx joins them again). The same function up to float rounding, and no
+        export.load_onnx joins them again). The same function up to float rounding, and no
         Concat node, which ONNX Runtime runs outside its blocked-channel layout with a reordering
         before and after. Export only: the halves are copies, so a split network is not trained
         or loaded into afterwards."""

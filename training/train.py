@@ -142,21 +142,16 @@ def initial_weights(path, cfg):
     """The state dict of `path` (a model exported by export.py, or a run's checkpoint.pt) for a
     run of `cfg`: a fine-tuning starts from it with its own schedule; a network of another shape
     is refused in one line."""
-    import tempfile
-
     import export
 
     path = Path(path)
     if not path.is_file():
         raise SystemExit(f"train: --init-from {path}: no such file")
-    with tempfile.TemporaryDirectory() as tmp:
-        if path.suffix == ".onnx":
-            export.run_from_onnx(path, tmp)
-            src = config.Config.load(Path(tmp) / "config.json")
-            state = torch.load(Path(tmp) / "checkpoint.pt", weights_only=False)["model"]
-        else:
-            src = None
-            state = torch.load(path, weights_only=False, map_location="cpu")["model"]
+    if path.suffix == ".onnx":
+        src, state = export.load_onnx(path)
+    else:
+        src = None
+        state = torch.load(path, weights_only=False, map_location="cpu")["model"]
     if src is not None and (src.base_width, src.head, list(src.features)) != (cfg.base_width, cfg.head, list(cfg.features)):
         raise SystemExit(f"train: --init-from {path}: a width-{src.base_width} {src.head} model on {','.join(src.features)}, "
                          f"this run trains width {cfg.base_width} {cfg.head} on {','.join(cfg.features)}")
