@@ -32,6 +32,24 @@ DLE_PLAIN = "luxest double local estimate, plain"
 PTRACER = "Mitsuba 3 llvm_ad_rgb ptracer"
 
 
+def host_summary(cpuinfo="/proc/cpuinfo"):
+    """The CPU the benchmark ran on, from `cpuinfo`: the peers' vector code depends on it
+    (Mitsuba's LLVM backend compiles its wavefront for 16 lanes with AVX-512, 8 with AVX2),
+    luxest's does not."""
+    model, flags, cpus = "unknown CPU", set(), os.cpu_count()
+    try:
+        for line in open(cpuinfo):
+            key, _, value = line.partition(":")
+            if key.strip() == "model name":
+                model = value.strip()
+            elif key.strip() == "flags":
+                flags = set(value.split())
+    except OSError:
+        pass
+    simd = "AVX-512" if "avx512f" in flags else "AVX2 (no AVX-512)" if "avx2" in flags else "no AVX2"
+    return f"{model}, {cpus} CPUs, {simd}"
+
+
 def child_cpu(cmd):
     """Runs `cmd`; returns (its user + system CPU seconds, stdout)."""
     r0 = os.times()
@@ -123,7 +141,7 @@ def main(argv=None):
                    check=True, capture_output=True)
     rel = {row["image"]: float(row["rel_mse"]) for row in csv.DictReader(open(report))}
     lines = [f"Speed at equal error: `{a.scene}` at {a.resolution}, reference `{a.reference}`, {a.reps} interleaved "
-             f"repetitions ({time.strftime('%Y-%m-%d %H:%M')}).", "",
+             f"repetitions ({time.strftime('%Y-%m-%d %H:%M')}; {host_summary()}).", "",
              "| method | budget | CPU-s (each rep) | M samples or paths / CPU-s | relMSE (each rep) |",
              "|---|---|---|---|---|"]
     to_target = {}  # (method, target) -> CPU-s
