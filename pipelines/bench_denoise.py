@@ -16,7 +16,6 @@ Output: a Markdown table (`-o`) with a row per denoiser and the peer's column ke
 beside it (`.csv`)."""
 import argparse
 import csv
-import os
 import resource
 import shlex
 import statistics
@@ -29,6 +28,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
 import luxest_contract as contract  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from host import host_summary  # noqa: E402
 
 
 def fail(message):
@@ -149,7 +151,7 @@ def main(argv=None):
     small_side = round((mp["small"] * 1e6) ** 0.5)
     lines = [
         f"# Denoiser inference: luxest against Intel Open Image Denoise ({Path(args.input).name})", "",
-        f"Whole processes on {os.cpu_count()} cores, {args.rounds} interleaved rounds, medians; CPU seconds = "
+        f"Whole processes on {host_summary()}, {args.rounds} interleaved rounds, medians; CPU seconds = "
         "user + system of the process (all threads). Per megapixel: the marginal cost between the "
         f"{small_side}² input and its {args.side}² tiling (start-up and model load cancel).", "",
         f"| denoiser | CPU-s, {small_side}² | CPU-s, {args.side}² | wall s, {args.side}² | CPU-s per megapixel | wall s per megapixel |",

@@ -24,30 +24,13 @@ from luxest_contract import image_name  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from atomic import write_text  # noqa: E402
+from host import host_summary  # noqa: E402
 
 TARGETS = (1e-2, 1e-3)
 MITSUBA = Path(__file__).resolve().parent / "mitsuba_render.py"
 DLE = "luxest double local estimate"
 DLE_PLAIN = "luxest double local estimate, plain"
 PTRACER = "Mitsuba 3 llvm_ad_rgb ptracer"
-
-
-def host_summary(cpuinfo="/proc/cpuinfo"):
-    """The CPU the benchmark ran on, from `cpuinfo`: the peers' vector code depends on it
-    (Mitsuba's LLVM backend compiles its wavefront for 16 lanes with AVX-512, 8 with AVX2),
-    luxest's does not."""
-    model, flags, cpus = "unknown CPU", set(), os.cpu_count()
-    try:
-        for line in open(cpuinfo):
-            key, _, value = line.partition(":")
-            if key.strip() == "model name":
-                model = value.strip()
-            elif key.strip() == "flags":
-                flags = set(value.split())
-    except OSError:
-        pass
-    simd = "AVX-512" if "avx512f" in flags else "AVX2 (no AVX-512)" if "avx2" in flags else "no AVX2"
-    return f"{model}, {cpus} CPUs, {simd}"
 
 
 def child_cpu(cmd):

@@ -29,6 +29,7 @@ from luxest_contract import luminance, read_sensors_csv, sensors_name  # noqa: E
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from atomic import write_text  # noqa: E402
 from bench_pt import child_cpu  # noqa: E402
+from host import host_summary  # noqa: E402
 from mitsuba_render import scene_xml  # noqa: E402
 
 TARGET = 0.01
@@ -141,7 +142,7 @@ def main(argv=None):
     z = {i: (mi_value[i] - s[2]) / (mi_se[i] ** 2 + s[3] ** 2) ** 0.5 for i, s in lit}
     lines = [f"Sensors at 1 % standard error: `{a.scene}`, {len(lit)} lit sensors of {len(sensors)}; luxest `estimate sensors` "
              f"{a.paths} paths ({t_lx:.1f} CPU-s), Mitsuba 3 `{a.variant}` `{a.integrator}` irradiance meters (disk radius {a.disk_radius:g} m, "
-             f"{a.replicates} x {a.spp} samples each) ({time.strftime('%Y-%m-%d %H:%M')}).", "",
+             f"{a.replicates} x {a.spp} samples each) ({time.strftime('%Y-%m-%d %H:%M')}; {host_summary()}).", "",
              f"luxest `estimate gather` (backward estimate) {a.gather_samples} samples per sensor ({t_ga:.1f} CPU-s).", "",
              "| | luxest local estimate | luxest backward estimate | Mitsuba 3 irradiance meters |", "|---|---|---|---|",
              f"| every lit sensor at 1 % | {lx_all:.1f} CPU-s (one run, the slowest sensor) | {ga_all:.2f} CPU-s (per sensor, summed) "

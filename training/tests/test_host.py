@@ -1,12 +1,12 @@
-"""pipelines/bench_pt.py names the host's vector width in its report: Mitsuba's speed, the
-benchmark's peer column, depends on it."""
+"""pipelines/host.py: the peer benchmarks (bench_pt, bench_sensors, bench_denoise) name the host's
+CPU and vector width in their reports: the peers' speed depends on it."""
 import os
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "pipelines"))
-import bench_pt  # noqa: E402
+import host  # noqa: E402
 
 CPUINFO = """processor\t: 0
 model name\t: AMD EPYC 9B14
@@ -23,5 +23,5 @@ def test_host_summary_names_the_cpu_and_its_widest_vectors(tmp_path):
     for extra, simd in cases.items():
         info = tmp_path / "cpuinfo"
         info.write_text(CPUINFO.format(extra=extra))
-        assert bench_pt.host_summary(info) == f"AMD EPYC 9B14, {os.cpu_count()} CPUs, {simd}"
-    assert bench_pt.host_summary(tmp_path / "missing").startswith("unknown CPU")
+        assert host.host_summary(info) == f"AMD EPYC 9B14, {os.cpu_count()} CPUs, {simd}"
+    assert host.host_summary(tmp_path / "missing").startswith("unknown CPU")
