@@ -22,6 +22,7 @@ class Config:
     lr: float = 2e-3                     # peak learning rate of the one-cycle schedule
     minutes: float = 18.0                # training time budget
     steps: int = 3000                    # schedule length (stops earlier if out of time)
+    schedule: str = "steps"              # the one cycle spans `steps` (steps) or `minutes` (time; steps a cap)
     ms_ssim_weight: float = 0.2          # loss = (1 - w) L1 + w (1 - MS-SSIM)
     seed: int = 1
     threads: int = 2
@@ -42,6 +43,7 @@ class Config:
         values.setdefault("head", "direct")
         values.setdefault("dle_paths", [])
         values.setdefault("precision", "auto")
+        values.setdefault("schedule", "steps")
         return Config(**values)
 
 

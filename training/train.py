@@ -2,8 +2,11 @@
 """Trains the denoiser: Adam with a one-cycle schedule on random crops, L1 + MS-SSIM in the
 transferred domain (each crop with its whole image's exposure, stored by preprocess.py),
 checkpoints and the run's config in <run_dir>, resumable (--resume), channels_last, bf16
-autocast where it pays (--precision). Stops at the step count or the time budget."""
+autocast where it pays (--precision). Stops at the step count or the time budget; with
+`--schedule time` the one cycle spans the time budget (all resumed runs together), so that a
+run on a machine of unknown speed anneals when its time is up."""
 import json
+import math
 import time
 from dataclasses import asdict
 from pathlib import Path
@@ -32,6 +35,57 @@ def autocast_dtype(device, precision, cpu_capability=None):
         else:
             precision = "bf16"
     return torch.bfloat16 if precision == "bf16" else None
+
+
+class TimeOneCycle:
+    """The one-cycle schedule of torch's OneCycleLR (pct_start 0.15, cosine phases, Adam's beta1
+    cycled 0.95 -> 0.85 -> 0.95, start max_lr / 25, end that / 1e4) as a function of the
+    progress max(step / steps, seconds / budget): the cycle ends at whichever limit comes
+    first. Stateless: a resumed run recomputes the rates from its step and its seconds."""
+
+    PCT, DIV, FINAL_DIV, BETA_LOW, BETA_HIGH = 0.15, 25.0, 1e4, 0.85, 0.95
+
+    def __init__(self, opt, max_lr, steps, seconds):
+        self.opt, self.max_lr, self.steps, self.seconds = opt, max_lr, steps, seconds
+        self.last = self.rates(0.0)
+        self.apply(*self.last)
+
+    def rates(self, progress):
+        """(learning rate, beta1) at `progress` in [0, 1]."""
+        start = self.max_lr / self.DIV
+        end = start / self.FINAL_DIV
+        cos = lambda a, b, t: b + (a - b) / 2.0 * (1.0 + math.cos(math.pi * t))  # a at t = 0, b at 1
+        p = min(max(progress, 0.0), 1.0)
+        if p <= self.PCT:
+            t = p / self.PCT
+            return cos(start, self.max_lr, t), cos(self.BETA_HIGH, self.BETA_LOW, t)
+        t = (p - self.PCT) / (1.0 - self.PCT)
+        return cos(self.max_lr, end, t), cos(self.BETA_LOW, self.BETA_HIGH, t)
+
+    def progress(self, step, seconds):
+        return max(step / max(self.steps, 1), seconds / self.seconds if self.seconds > 0 else 1.0)
+
+    def apply(self, lr, beta1):
+        for g in self.opt.param_groups:
+            g["lr"] = lr
+            g["betas"] = (beta1, g["betas"][1])
+
+    def at(self, step, seconds):
+        """Sets the rates of the step about to be taken after `step` steps and `seconds`."""
+        self.last = self.rates(self.progress(step, seconds))
+        self.apply(*self.last)
+
+    def done(self, step, seconds):
+        return self.progress(step, seconds) >= 1.0
+
+    def get_last_lr(self):
+        return [self.last[0]]
+
+    def state_dict(self):
+        return {}
+
+    def load_state_dict(self, state):
+        pass
 
 
 def loader_workers(workers, device):
@@ -77,7 +131,13 @@ def main(argv=None):
     ckpt = run / "checkpoint.pt"
     net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features).to(device=device, memory_format=torch.channels_last)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
-    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=cfg.steps, pct_start=0.15)
+    if cfg.schedule not in ("steps", "time"):
+        raise SystemExit(f"train: --schedule {cfg.schedule!r}: expected steps or time")
+    by_time = cfg.schedule == "time"
+    if by_time:
+        sched = TimeOneCycle(opt, cfg.lr, cfg.steps, cfg.minutes * 60)
+    else:
+        sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=cfg.lr, total_steps=cfg.steps, pct_start=0.15)
     dtype = autocast_dtype(device, cfg.precision)
     step, earlier_seconds, resumed_at = 0, 0.0, []
     if cfg.init_from and not (cfg.resume and ckpt.exists()):
@@ -106,7 +166,11 @@ def main(argv=None):
     log = open(run / "log.jsonl", "a")
     net.train()
     for a, b, e in loader:
-        if step >= cfg.steps or time.time() - start > cfg.minutes * 60:
+        if by_time:  # the budget of all runs together: the cycle ends with it
+            if sched.done(step, earlier_seconds + time.time() - start):
+                break
+            sched.at(step, earlier_seconds + time.time() - start)
+        elif step >= cfg.steps or time.time() - start > cfg.minutes * 60:
             break
         a = a.to(device=device, memory_format=torch.channels_last)
         b, e = b.to(device), e.to(device)
@@ -117,7 +181,8 @@ def main(argv=None):
         opt.zero_grad()
         value.backward()
         opt.step()
-        sched.step()
+        if not by_time:
+            sched.step()
         step += 1
         if step % 50 == 0 or step == 1:
             rec = {"step": step, "loss": float(value.detach()), "lr": sched.get_last_lr()[0], "seconds": time.time() - start}

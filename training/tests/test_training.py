@@ -438,3 +438,43 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     with pytest.raises(SystemExit, match="weights of another network"):
         train.main(args + ["--base-width", "16", "--minutes", "0", "--run-dir", str(tmp_path / "fourth"),
                            "--init-from", str(tmp_path / "first" / "checkpoint.pt")])
+
+
+def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
+    # --schedule time: the rates of torch's OneCycleLR at the same fraction of the cycle,
+    # the fraction being the larger of steps / cap and seconds / budget; a run ends its cycle
+    # at the cap (or the budget) and a resumed one goes on from its step.
+    import preprocess
+    import train
+
+    n = 100001
+    net = torch.nn.Linear(2, 2)
+    ref_opt = torch.optim.Adam(net.parameters(), lr=1e-3)
+    ref = torch.optim.lr_scheduler.OneCycleLR(ref_opt, max_lr=1e-3, total_steps=n, pct_start=0.15)
+    expected = {}
+    for k in range(n):
+        if k in (0, 5000, 15000, 40000, 90000, 100000):
+            expected[k] = (ref.get_last_lr()[0], ref_opt.param_groups[0]["betas"][0])
+        if k < n - 1:
+            ref_opt.step()
+            ref.step()
+    opt = torch.optim.Adam(net.parameters(), lr=1e-3)
+    sched = train.TimeOneCycle(opt, 1e-3, steps=n - 1, seconds=600.0)
+    for k, (lr, beta) in expected.items():
+        sched.at(k, 0.0)
+        assert abs(sched.get_last_lr()[0] - lr) < 1e-3 * 1e-3 and abs(opt.param_groups[0]["betas"][0] - beta) < 1e-4
+        sched.at(0, 600.0 * k / (n - 1))  # the same point of the cycle reached by time
+        assert abs(opt.param_groups[0]["lr"] - lr) < 1e-6
+    assert sched.done(0, 600.0) and sched.done(n - 1, 0.0) and not sched.done(10, 10.0)
+
+    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(6))
+    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
+    args = ["--prep-dir", str(tmp_path / "prep"), "--run-dir", str(tmp_path / "run"), "--noisy-spp", "4", "--dle-paths",
+            "--crop", "32", "--batch", "2", "--base-width", "8", "--threads", "1", "--schedule", "time"]
+    train.main(args + ["--steps", "3", "--minutes", "5"])
+    assert json.loads((tmp_path / "run" / "summary.json").read_text())["steps"] == 3
+    train.main(args + ["--steps", "5", "--minutes", "5", "--resume"])
+    record = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert record["run"]["steps"] == 5 and record["run"]["resumed_at"] == [3] and record["schedule"] == "time"
+    with pytest.raises(SystemExit, match="--schedule 'epochs'"):
+        train.main(args + ["--schedule", "epochs"])
