@@ -39,6 +39,9 @@ $(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))
 # 17 minutes).
 $(eval $(call lx_preset,TRAIN_STEPS,3400,60000))
 $(eval $(call lx_preset,TRAIN_MINUTES,17,600))
+# TRAIN_SCHEDULE=time makes the one cycle span TRAIN_MINUTES instead of TRAIN_STEPS (then a cap):
+# for a machine whose speed is not known beforehand (train.py --schedule).
+TRAIN_SCHEDULE ?= steps
 
 # Evaluation (pipelines/eval.mk): the Cornell-box reference spp and progressive run's last spp,
 # double-local-estimate light paths on the Cornell box, light-tracing paths on the Cornell box

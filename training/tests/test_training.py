@@ -478,3 +478,30 @@ def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
     assert record["run"]["steps"] == 5 and record["run"]["resumed_at"] == [3] and record["schedule"] == "time"
     with pytest.raises(SystemExit, match="--schedule 'epochs'"):
         train.main(args + ["--schedule", "epochs"])
+
+
+@pytest.mark.parametrize("name", ["default", "wide"])
+def test_committed_models_keep_the_contract(name):
+    # Each committed model: its record (models/<name>.config.json) describes the network in its
+    # metadata, and run by onnxruntime as denoise feeds it (infer.denoise: the whole image's
+    # exposure), it returns a noiseless image of uniform irradiance unchanged (the kernel head's
+    # property, whatever the weights), emitters added back as they are (emi subtracted, ema added).
+    import export
+    import infer
+    import onnxruntime as ort
+
+    root = Path(__file__).resolve().parents[2]
+    cfg, _ = export.load_onnx(root / "models" / f"{name}.onnx")
+    record = json.loads((root / "models" / f"{name}.config.json").read_text())
+    assert (cfg.base_width, cfg.head, list(cfg.features)) == (record["base_width"], record["head"], record["features"])
+    x = _uniform_irradiance(h=40, w=56)[0].permute(1, 2, 0).numpy()
+    hdr, alb, nrm = x[..., 0:3].copy(), x[..., 3:6], x[..., 6:9]
+    emission = np.zeros_like(hdr)
+    emission[30:34, 10:20] = [40.0, 35.0, 30.0]
+    session = ort.InferenceSession(str(root / "models" / f"{name}.onnx"), providers=["CPUExecutionProvider"])
+    kinds = infer.channels(session)
+    assert kinds == list(cfg.features) and kinds[:3] == ["hdr", "alb", "nrm"]
+    feats = {"alb": alb, "nrm": nrm, "emi": emission, "ema": emission}
+    out = infer.denoise(session, hdr + emission, *[feats[k] for k in kinds[1:]])
+    expected = hdr + emission
+    assert np.allclose(out, expected, rtol=2e-4, atol=1e-6), float(np.abs(out - expected).max())
