@@ -147,6 +147,9 @@ def main(argv=None):
             raise SystemExit(f"train: --init-from {cfg.init_from}: weights of another network ({str(e).splitlines()[0]})")
         print(f"weights from {cfg.init_from}")
     if cfg.resume and ckpt.exists():
+        saved = config.Config.load(run / "config.json") if (run / "config.json").exists() else cfg
+        if saved.schedule != cfg.schedule:  # the other kind's state would silently restart the cycle
+            raise SystemExit(f"train: --resume {run}: the run's schedule is {saved.schedule!r}, not {cfg.schedule!r}")
         state = torch.load(ckpt, weights_only=False, map_location=device)
         net.load_state_dict(state["model"])
         opt.load_state_dict(state["optimizer"])
