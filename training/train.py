@@ -170,9 +170,10 @@ def main(argv=None):
     net.train()
     for a, b, e in loader:
         if by_time:  # the budget of all runs together: the cycle ends with it
-            if sched.done(step, earlier_seconds + time.time() - start):
+            elapsed = earlier_seconds + time.time() - start
+            if sched.done(step, elapsed):
                 break
-            sched.at(step, earlier_seconds + time.time() - start)
+            sched.at(step, elapsed)
         elif step >= cfg.steps or time.time() - start > cfg.minutes * 60:
             break
         a = a.to(device=device, memory_format=torch.channels_last)
