@@ -27,6 +27,7 @@ class Config:
     seed: int = 1
     threads: int = 2
     workers: int = -1                    # DataLoader worker processes (-1: none on CPU, 8 on a GPU)
+    cropper: str = "auto"                # where crops are cut: loader (DataLoader), device (the split in GPU memory), auto
     precision: str = "auto"              # autocast: bf16 | fp32 | auto (train.autocast_dtype)
     resume: bool = False
     init_from: str = ""                  # start from this model's weights (an exported .onnx or a run's checkpoint.pt); a new schedule
@@ -44,6 +45,7 @@ class Config:
         values.setdefault("dle_paths", [])
         values.setdefault("precision", "auto")
         values.setdefault("schedule", "steps")
+        values.setdefault("cropper", "auto")
         return Config(**values)
 
 

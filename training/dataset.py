@@ -60,7 +60,8 @@ class Crops(torch.utils.data.Dataset):
     the exposure is the stored whole-image exposure of the input under that permutation."""
 
     def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None):
-        self.pairs = [(np.load(i, mmap_mode="r"), np.load(r, mmap_mode="r"), m["exposures"])
+        refs = {}  # a scene's inputs share its reference array (DeviceCrops holds it once)
+        self.pairs = [(np.load(i, mmap_mode="r"), refs.setdefault(r, np.load(r, mmap_mode="r")), m["exposures"])
                       for i, r, m in pairs(prep_split_dir, noisy_spp, dle_paths)]
         if not self.pairs:
             raise FileNotFoundError(f"{prep_split_dir}: no preprocessed pairs (run preprocess.py)")
@@ -69,24 +70,92 @@ class Crops(torch.utils.data.Dataset):
     def __len__(self):
         return self.length
 
-    def __getitem__(self, i):
+    def draw(self, i):
+        """The random choices of crop i, from (seed, i) alone: (pair index, top, left, flip the
+        columns, flip the rows, transpose, index into PERMUTATIONS)."""
         rng = np.random.default_rng((self.seed, i))
-        inp, ref, exposures = self.pairs[rng.integers(len(self.pairs))]
-        h, w = ref.shape[:2]
+        p = int(rng.integers(len(self.pairs)))
+        h, w = self.pairs[p][1].shape[:2]
         c = self.crop
-        y, x = rng.integers(0, h - c + 1), rng.integers(0, w - c + 1)
+        y, x = int(rng.integers(0, h - c + 1)), int(rng.integers(0, w - c + 1))
+        flip_x, flip_y, swap = (bool(rng.random() < 0.5) for _ in range(3))
+        return p, y, x, flip_x, flip_y, swap, int(rng.integers(len(PERMUTATIONS)))
+
+    def __getitem__(self, i):
+        p, y, x, flip_x, flip_y, swap, k = self.draw(i)
+        inp, ref, exposures = self.pairs[p]
+        c = self.crop
         a = np.array(inp[y:y + c, x:x + c], dtype=np.float32)
         b = np.array(ref[y:y + c, x:x + c], dtype=np.float32)
-        if rng.random() < 0.5:
+        if flip_x:
             a, b = a[:, ::-1], b[:, ::-1]
-        if rng.random() < 0.5:
+        if flip_y:
             a, b = a[::-1], b[::-1]
-        if rng.random() < 0.5:
+        if swap:
             a, b = a.transpose(1, 0, 2), b.transpose(1, 0, 2)
-        k = int(rng.integers(len(PERMUTATIONS)))
-        perm = np.array(PERMUTATIONS[k])
-        # hdr, alb, emi and ema are colours (permuted alike); nrm (the third feature) is a direction.
-        a = np.concatenate([a[..., 6:9] if i == 2 else a[..., 3 * i + perm] for i in range(a.shape[-1] // 3)], axis=-1)
-        b = b[..., perm]
+        order = channel_order(k, a.shape[-1])
+        a, b = a[..., order], b[..., order[:3]]
         to = lambda t: torch.from_numpy(np.ascontiguousarray(t.transpose(2, 0, 1)))
         return to(a), to(b), torch.tensor(exposures[k], dtype=torch.float32)
+
+
+def channel_order(k, channels):
+    """The input channels in the order of RGB permutation `k` (PERMUTATIONS): hdr, alb, emi and
+    ema are colours, permuted alike; nrm (the third feature) is a direction, kept. Its first three
+    entries permute a reference."""
+    perm = PERMUTATIONS[k]
+    return [3 * g + (j if g == 2 else perm[j]) for g in range(channels // 3) for j in range(3)]
+
+
+class DeviceCrops:
+    """The crops of a `Crops` cut on `device` (a GPU) from the whole split held in its memory,
+    a batch in one gather: crop i is exactly `crops[i]`, without worker processes, which on a GPU
+    cut crops more slowly than it trains on them. A batch's (N, C, H, W) tensors are views of
+    (N, H, W, C) ones: channels_last already."""
+
+    def __init__(self, crops, device):
+        self.crops, self.device = crops, torch.device(device)
+        channels = {inp.shape[-1] for inp, _, _ in crops.pairs}
+        if len(channels) != 1:
+            raise ValueError(f"inputs of {sorted(channels)} channels in one split")
+        flat = lambda arr: torch.from_numpy(np.array(arr, dtype=np.float32)).reshape(-1, arr.shape[-1])  # a copy
+        inputs, refs, ref_at, starts, ref_starts, widths = [], [], {}, [], [], []
+        n = m = 0
+        for inp, ref, _ in crops.pairs:
+            if id(ref) not in ref_at:
+                ref_at[id(ref)] = m
+                refs.append(flat(ref))
+                m += ref.shape[0] * ref.shape[1]
+            starts.append(n)
+            ref_starts.append(ref_at[id(ref)])
+            widths.append(inp.shape[1])
+            inputs.append(flat(inp))
+            n += inp.shape[0] * inp.shape[1]
+        to = lambda t: t.to(self.device)
+        self.inputs, self.refs = to(torch.cat(inputs)), to(torch.cat(refs))
+        long = lambda v: to(torch.tensor(v, dtype=torch.int64))
+        self.starts, self.ref_starts, self.widths = long(starts), long(ref_starts), long(widths)
+        self.orders = long([channel_order(k, self.inputs.shape[1]) for k in range(len(PERMUTATIONS))])
+        self.exposures = to(torch.tensor([e for _, _, e in crops.pairs], dtype=torch.float32))
+        grid = torch.arange(crops.crop, device=self.device)
+        self.rows, self.cols = grid.view(1, -1, 1), grid.view(1, 1, -1)
+
+    def batch(self, indices):
+        """(inputs, references, exposures) of crops `indices`, as a DataLoader batches them."""
+        draws = torch.tensor([self.crops.draw(i) for i in indices], dtype=torch.int64)
+        if self.device.type == "cuda":  # one asynchronous copy (a pageable one waits for the GPU)
+            draws = draws.pin_memory().to(self.device, non_blocking=True)
+        p, y, x, flip_x, flip_y, swap, k = (c.view(-1, 1, 1) for c in draws.to(self.device).unbind(1))
+        flip_x, flip_y, swap = flip_x.bool(), flip_y.bool(), swap.bool()
+        last = self.crops.crop - 1
+        r = torch.where(swap, self.cols, self.rows)  # output pixel (u, v) reads (v, u) when swapped
+        s = torch.where(swap, self.rows, self.cols)
+        r = torch.where(flip_y, last - r, r) + y
+        s = torch.where(flip_x, last - s, s) + x
+        pixel = r * self.widths[p] + s
+        a = self.inputs[self.starts[p] + pixel]  # (N, c, c, C)
+        b = self.refs[self.ref_starts[p] + pixel]
+        order = self.orders[k.view(-1)][:, None, None, :]
+        a = torch.gather(a, 3, order.expand_as(a))
+        b = torch.gather(b, 3, order[..., :3].expand_as(b))
+        return a.permute(0, 3, 1, 2), b.permute(0, 3, 1, 2), self.exposures[p.view(-1), k.view(-1)]

@@ -97,6 +97,27 @@ def loader_workers(workers, device):
     return workers if workers >= 0 else (0 if device.type == "cpu" else 8)
 
 
+def cropper(choice, device):
+    """Where crops are cut: `device` (the whole split in the training device's memory, a batch in
+    one gather: dataset.DeviceCrops) or `loader` (a DataLoader, worker processes per
+    loader_workers); `auto` takes device on a GPU, where worker processes cut crops more slowly
+    than it trains, and loader on a CPU. Both cut the same crops."""
+    if choice not in ("auto", "device", "loader"):
+        raise SystemExit(f"train: --cropper {choice!r}: expected auto, device or loader")
+    if choice == "auto":
+        return "loader" if device.type == "cpu" else "device"
+    return choice
+
+
+def batches(data, cfg, device):
+    """The training batches of `data` (dataset.Crops), cut where `cropper` says."""
+    if cropper(cfg.cropper, device) == "device":
+        cut = dataset.DeviceCrops(data, device)
+        return (cut.batch(range(j * cfg.batch, (j + 1) * cfg.batch)) for j in range(len(data) // cfg.batch))
+    return iter(torch.utils.data.DataLoader(data, batch_size=cfg.batch, num_workers=loader_workers(cfg.workers, device),
+                                            pin_memory=device.type == "cuda"))
+
+
 def validation_loss(net, prep_dir, cfg):
     """Mean loss on centre crops of the valid split (all noisy levels), each transferred with
     its whole image's stored exposure."""
@@ -163,8 +184,7 @@ def main(argv=None):
     data = dataset.Crops(Path(cfg.prep_dir) / "train", cfg.crop, cfg.seed + step,
                          length=max(cfg.steps - step, 0) * cfg.batch,
                          noisy_spp=cfg.noisy_spp, dle_paths=cfg.dle_paths)
-    loader = torch.utils.data.DataLoader(data, batch_size=cfg.batch, num_workers=loader_workers(cfg.workers, device),
-                                         pin_memory=device.type == "cuda")
+    loader = batches(data, cfg, device)
     start = time.time()
     log = open(run / "log.jsonl", "a")
     net.train()

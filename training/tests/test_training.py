@@ -411,6 +411,44 @@ def test_loader_workers_cut_the_same_crops(tmp_path):
         train.loader_workers(-2, cpu)
 
 
+def test_crops_cut_on_the_device_are_the_loaders(tmp_path):
+    # dataset.DeviceCrops (the split in the training device's memory, automatic on a GPU) cuts
+    # bit for bit the batches the DataLoader cuts: two scenes of different shapes, two levels
+    # each sharing their scene's reference, every flip, transpose and channel order.
+    import luxest_contract as contract
+    import preprocess
+    import train
+    import dataset
+
+    rng = np.random.default_rng(11)
+    d = tmp_path / "data" / "train"
+    d.mkdir(parents=True)
+    for name, (h, w) in (("g", (40, 56)), ("k", (48, 36))):
+        contract.write(d / contract.image_name(name, "hdr"), rng.random((h, w, 3)) * 4, {contract.SAMPLES: 64, contract.SEED: 2})
+        for spp in (4, 16):
+            for kind in contract.FEATURES:
+                contract.write(d / contract.image_name(name, kind, spp), rng.random((h, w, 3)), {contract.SAMPLES: spp, contract.SEED: 1})
+    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4, 16])
+    data = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=96)
+    assert len(data.pairs) == 4 and len({id(r) for _, r, _ in data.pairs}) == 2
+    draws = [data.draw(i) for i in range(96)]
+    assert {d[3:6] for d in draws} == {(a, b, c) for a in (False, True) for b in (False, True) for c in (False, True)}
+    assert {d[6] for d in draws} == set(range(len(dataset.PERMUTATIONS)))
+    cfg = config.parse(["--batch", "8", "--cropper", "device"])
+    cpu = torch.device("cpu")
+    ours = list(train.batches(data, cfg, cpu))
+    theirs = list(torch.utils.data.DataLoader(data, batch_size=8))
+    assert len(ours) == len(theirs) == 12
+    for one, two in zip(ours, theirs):
+        for x, y in zip(one, two):
+            assert x.shape == y.shape and torch.equal(x, y)
+        assert one[0].is_contiguous(memory_format=torch.channels_last)
+    assert train.cropper("auto", cpu) == "loader" and train.cropper("auto", torch.device("cuda")) == "device"
+    assert train.cropper("loader", torch.device("cuda")) == "loader"
+    with pytest.raises(SystemExit, match="--cropper 'gpu'"):
+        train.cropper("gpu", cpu)
+
+
 def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     # --init-from: a fine-tuning starts from the weights of an exported model (or a checkpoint)
     # with its own schedule; a network of another width is refused in one line.
