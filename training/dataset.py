@@ -61,8 +61,11 @@ class Crops(torch.utils.data.Dataset):
 
     def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None):
         refs = {}  # a scene's inputs share its reference array (DeviceCrops holds it once)
-        self.pairs = [(np.load(i, mmap_mode="r"), refs.setdefault(r, np.load(r, mmap_mode="r")), m["exposures"])
-                      for i, r, m in pairs(prep_split_dir, noisy_spp, dle_paths)]
+        self.pairs = []
+        for i, r, m in pairs(prep_split_dir, noisy_spp, dle_paths):
+            if r not in refs:
+                refs[r] = np.load(r, mmap_mode="r")
+            self.pairs.append((np.load(i, mmap_mode="r"), refs[r], m["exposures"]))
         if not self.pairs:
             raise FileNotFoundError(f"{prep_split_dir}: no preprocessed pairs (run preprocess.py)")
         self.crop, self.seed, self.length = crop, seed, length

@@ -113,7 +113,7 @@ def batches(data, cfg, device):
     """The training batches of `data` (dataset.Crops), cut where `cropper` says."""
     if cropper(cfg.cropper, device) == "device":
         cut = dataset.DeviceCrops(data, device)
-        return (cut.batch(range(j * cfg.batch, (j + 1) * cfg.batch)) for j in range(len(data) // cfg.batch))
+        return (cut.batch(range(j, min(j + cfg.batch, len(data)))) for j in range(0, len(data), cfg.batch))
     return iter(torch.utils.data.DataLoader(data, batch_size=cfg.batch, num_workers=loader_workers(cfg.workers, device),
                                             pin_memory=device.type == "cuda"))
 

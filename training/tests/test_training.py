@@ -443,6 +443,12 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path):
         for x, y in zip(one, two):
             assert x.shape == y.shape and torch.equal(x, y)
         assert one[0].is_contiguous(memory_format=torch.channels_last)
+    # A length that is not a multiple of the batch ends in a partial batch, as the DataLoader's.
+    short = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=10)
+    ours = list(train.batches(short, config.parse(["--batch", "4", "--cropper", "device"]), cpu))
+    theirs = list(torch.utils.data.DataLoader(short, batch_size=4))
+    assert [len(b[0]) for b in ours] == [len(b[0]) for b in theirs] == [4, 4, 2]
+    assert all(torch.equal(x, y) for one, two in zip(ours, theirs) for x, y in zip(one, two))
     assert train.cropper("auto", cpu) == "loader" and train.cropper("auto", torch.device("cuda")) == "device"
     assert train.cropper("loader", torch.device("cuda")) == "loader"
     with pytest.raises(SystemExit, match="--cropper 'gpu'"):
