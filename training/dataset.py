@@ -148,7 +148,9 @@ class DeviceCrops:
         draws = torch.tensor([self.crops.draw(i) for i in indices], dtype=torch.int64)
         if self.device.type == "cuda":  # one asynchronous copy (a pageable one waits for the GPU)
             draws = draws.pin_memory().to(self.device, non_blocking=True)
-        p, y, x, flip_x, flip_y, swap, k = (c.view(-1, 1, 1) for c in draws.to(self.device).unbind(1))
+        else:
+            draws = draws.to(self.device)
+        p, y, x, flip_x, flip_y, swap, k = (c.view(-1, 1, 1) for c in draws.unbind(1))
         flip_x, flip_y, swap = flip_x.bool(), flip_y.bool(), swap.bool()
         last = self.crops.crop - 1
         r = torch.where(swap, self.cols, self.rows)  # output pixel (u, v) reads (v, u) when swapped
