@@ -19,6 +19,7 @@ class Config:
     batch: int = 16
     base_width: int = 24                 # U-Net channels of the first level
     head: str = "kpn"                    # output: kpn (kernel-predicting) or direct (model.py)
+    detail_gate: bool = False            # kpn: each finer scale predicts how much of its detail to keep (model.py)
     lr: float = 2e-3                     # peak learning rate of the one-cycle schedule
     minutes: float = 18.0                # training time budget
     steps: int = 3000                    # schedule length (stops earlier if out of time)
@@ -39,13 +40,20 @@ class Config:
     @staticmethod
     def load(path):
         with open(path) as f:
-            values = json.load(f)
+            return Config.from_values(json.load(f))
+
+    @staticmethod
+    def from_values(values):
+        """A Config from saved values (a run's config.json, a model's metadata), options added
+        since filled in as the runs before them had them; unknown keys are dropped."""
+        values = {k: v for k, v in values.items() if k in Config.__dataclass_fields__}
         # Runs from before the `head` option predicted the radiance directly.
         values.setdefault("head", "direct")
         values.setdefault("dle_paths", [])
         values.setdefault("precision", "auto")
         values.setdefault("schedule", "steps")
         values.setdefault("cropper", "auto")
+        values.setdefault("detail_gate", False)
         return Config(**values)
 
 
@@ -56,7 +64,7 @@ def parse(argv=None, description=""):
     for k, v in asdict(defaults).items():
         flag = "--" + k.replace("_", "-")
         if isinstance(v, bool):
-            ap.add_argument(flag, action="store_true", default=v)
+            ap.add_argument(flag, action=argparse.BooleanOptionalAction, default=v)
         elif isinstance(v, list):
             ap.add_argument(flag, type=type(v[0]), nargs="*", default=v)
         else:

@@ -17,7 +17,6 @@ import torch
 import config
 import luxest_contract as contract
 import model
-from model import Denoiser
 
 
 OUTPUTS = {
@@ -28,6 +27,9 @@ OUTPUTS = {
            f"{model.ALBEDO_FLOOR})",
 }
 """What the graph's output is, per head (model.py), in the metadata's transfer description."""
+DETAIL_GATE = ("; with the detail gate: each finer scale keeps a predicted fraction sigmoid(logit) "
+               "of its filtered detail f - U(D(f)) before the blend")
+"""The metadata's addition for `kpn` models with detail gates (model.py)."""
 EMISSION = ("; with the emi feature: the network filters max(hdr - emi, 0) in place of hdr (and "
             "sees log1p(emi * exposure) as 3 more channels), and max(emi, 0) is added to its output")
 """The metadata's addition for models that take the emission (model.py)."""
@@ -45,10 +47,8 @@ def load_onnx(model_path):
     meta = {p.key: p.value for p in m.metadata_props}
     if contract.MODEL_CONFIG not in meta:
         raise ValueError(f"{model_path}: no {contract.MODEL_CONFIG} metadata (not exported by export.py)")
-    values = json.loads(meta[contract.MODEL_CONFIG])
-    values = {k: v for k, v in values.items() if k in config.Config.__dataclass_fields__}
-    cfg = config.Config(**values)
-    net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features)
+    cfg = config.Config.from_values(json.loads(meta[contract.MODEL_CONFIG]))
+    net = model.denoiser(cfg)
     weights = {i.name: numpy_helper.to_array(i) for i in m.graph.initializer}
     state = net.state_dict()
     for k in state:  # a decoder join's weight exported in two halves (model.UNet.split_joins)
@@ -80,7 +80,7 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
         if "emi" not in cfg.features:
             raise ValueError(f"{run_dir}: --antialiased-emission needs a run with the emi feature")
         cfg.features = [f for f in cfg.features if f != "ema"] + ["ema"]
-    net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features)
+    net = model.denoiser(cfg)
     net.load_state_dict(torch.load(Path(run_dir) / "checkpoint.pt", weights_only=False)["model"])
     net.eval()
     net.kernel_gather = "slices"
@@ -92,21 +92,21 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
     torch.onnx.export(net, (x, e), str(tmp), input_names=["input", "exposure"],
                       output_names=["output"], dynamic_shapes={"x": {2: h, 3: w}, "exposure": None},
                       external_data=False)
-    model = onnx.load(str(tmp))
+    proto = onnx.load(str(tmp))
     meta = {
         contract.CHANNELS: ",".join(net.features),
         contract.MODEL_TRANSFER: "log1p(max(hdr, 0) * exposure) in graph; input exposure (N,) = 0.18 / "
         "exp(mean over the whole image of log(max(Y, 0) + 1e-4)), Y = Rec. 709 luminance of hdr; "
-        + OUTPUTS[cfg.head] + (EMISSION if net.emission else "") + (EMISSION_AA if "ema" in net.features else ""),
+        + OUTPUTS[cfg.head] + (DETAIL_GATE if net.detail_gate else "") + (EMISSION if net.emission else "") + (EMISSION_AA if "ema" in net.features else ""),
         contract.MODEL_PADDING: "replicate to multiples of 16; in graph",
         contract.MODEL_CONFIG: json.dumps(asdict(cfg)),
     }
     if metrics:
         meta[contract.MODEL_METRICS] = json.dumps(metrics)
     for k, v in meta.items():
-        p = model.metadata_props.add()
+        p = proto.metadata_props.add()
         p.key, p.value = k, v
-    onnx.save(model, str(tmp))
+    onnx.save(proto, str(tmp))
     tmp.replace(out_path)
     print(f"export: wrote {out_path}")
 

@@ -15,6 +15,13 @@ with one of two outputs (`Config.head`):
   blend of the scales is not a convex combination; the output is clamped at zero); a noiseless
   image of uniform irradiance comes back unchanged whatever the weights, and the identity kernel
   with alpha 0 returns any input unchanged, which is what a clean input needs.
+  With `detail_gate` (`Config.detail_gate`) each finer scale also predicts how much of its own
+  filtered detail to keep, beta_s = sigmoid(one more logit) in [0, 1]:
+  o_s = U(D(f_s)) + beta_s (f_s - U(D(f_s))) + alpha_s (U(o_{s+1}) - U(D(f_s))). Without it
+  (beta = 1) the detail band of a 5x5 mean of the noisy input is always kept, a floor on the
+  noise left on flat surfaces at low spp (measured, docs/measurements.md, *The detail gate*);
+  with beta 0 and alpha 1 a pixel takes the coarser result alone (bilinear). A uniform image and
+  the identity (beta 1, alpha 0, identity kernel) still come back unchanged.
 - `direct`: the U-Net predicts the transferred radiance itself (the first models).
 
 With the `emi` feature (aov-write's emitted radiance seen directly, the fourth input, `Config.
@@ -51,6 +58,10 @@ KERNEL = 5
 """Side of the per-pixel filter kernels of the `kpn` head, at every scale."""
 SCALES = 4
 """Scales of the `kpn` head: 1, 1/2, 1/4, 1/8 (the U-Net's decoder levels)."""
+DETAIL_GATE_INIT = 5.0
+"""The bias of a detail gate's logit added to a model trained without gates (`add_detail_gates`):
+beta = sigmoid(5) = 0.993, so the fine-tuning starts within 0.7 % of the detail band of the
+model it starts from."""
 ALBEDO_FLOOR = 0.01
 """Demodulation divides by max(albedo, ALBEDO_FLOOR) and remodulates by the same value, so a
 black albedo (background, black materials) neither divides by zero nor changes the result when
@@ -147,10 +158,11 @@ def apply_kernels(img, logits, gather="unfold"):
     return num / e.sum(1, keepdim=True)
 
 
-def reconstruct(hdr, albedo, heads, gather="unfold"):
+def reconstruct(hdr, albedo, heads, gather="unfold", detail_gate=False):
     """The `kpn` output (linear radiance) from the linear hdr and albedo (N, 3, H, W; H and W
     multiples of 2^(SCALES-1)) and the heads' predictions per scale, finest first: (N, KERNEL²
-    [+ 1 blend logit except at the coarsest], H_s, W_s). In float32 whatever the autocast."""
+    [+ 1 blend logit (+ 1 detail-gate logit with `detail_gate`) except at the coarsest], H_s,
+    W_s). In float32 whatever the autocast."""
     with torch.autocast(hdr.device.type, enabled=False):
         a = albedo.float().clamp(min=ALBEDO_FLOOR)
         irr = [hdr.float().clamp(min=0) / a]
@@ -163,7 +175,11 @@ def reconstruct(hdr, albedo, heads, gather="unfold"):
             pred = heads[s].float()
             f = apply_kernels(irr[s], pred[:, :k2], gather)
             alpha = torch.sigmoid(pred[:, k2:k2 + 1])
-            out = f + alpha * (up(out) - up(F.avg_pool2d(f, 2)))
+            low = up(F.avg_pool2d(f, 2))
+            if detail_gate:  # beta f + (1 - beta) U(D(f)): exactly f where beta is 1
+                beta = torch.sigmoid(pred[:, k2 + 1:k2 + 2])
+                f = beta * f + (1 - beta) * low
+            out = f + alpha * (up(out) - low)
         # The blend is not a convex combination (a dark pixel beside a firefly can go below
         # zero); the loss sees max(out, 0) through the transfer, and so does the graph.
         return (out * a).clamp(min=0)
@@ -176,11 +192,36 @@ antialiased, aov-write --min-samples) is only added back, in place of `emi`; the
 see it, so a model with it has the weights of one without it."""
 
 
+def has_detail_gates(state):
+    """Whether a `kpn` state dict's heads predict detail gates (their first head's outputs)."""
+    w = state.get("heads.0.weight")
+    return w is not None and w.shape[0] == KERNEL * KERNEL + 2
+
+
+def add_detail_gates(state):
+    """A `kpn` state dict without detail gates with them added: one more output of every finer
+    scale's 1x1 head, weights 0 and bias DETAIL_GATE_INIT (beta = 0.993 everywhere), the rest
+    unchanged, for a fine-tuning with `detail_gate` that starts from a model without it."""
+    state = dict(state)
+    for s in range(SCALES - 1):
+        w, b = state[f"heads.{s}.weight"], state[f"heads.{s}.bias"]
+        if w.shape[0] != KERNEL * KERNEL + 1:
+            raise ValueError(f"heads.{s}: {w.shape[0]} outputs, expected {KERNEL * KERNEL + 1} (no detail gate)")
+        state[f"heads.{s}.weight"] = torch.cat([w, torch.zeros_like(w[:1])])
+        state[f"heads.{s}.bias"] = torch.cat([b, torch.full_like(b[:1], DETAIL_GATE_INIT)])
+    return state
+
+
+def denoiser(cfg):
+    """The Denoiser of a configuration (config.Config): width, head, features, detail gate."""
+    return Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate)
+
+
 class Denoiser(nn.Module):
     """Raw linear (N, 3 x len(features), H, W) hdr+alb+nrm[+emi] -> linear (N, 3, H, W)
     radiance."""
 
-    def __init__(self, width=24, head="kpn", features=FEATURE_SETS[0]):
+    def __init__(self, width=24, head="kpn", features=FEATURE_SETS[0], detail_gate=False):
         super().__init__()
         if head not in HEADS:
             raise ValueError(f"head {head!r}: expected one of {', '.join(HEADS)}")
@@ -191,6 +232,9 @@ class Denoiser(nn.Module):
         self.emission = "emi" in features
         if self.emission and head != "kpn":
             raise ValueError("the emi feature needs the kpn head")
+        if detail_gate and head != "kpn":
+            raise ValueError("the detail gate needs the kpn head")
+        self.detail_gate = bool(detail_gate)
         self.features = features
         self.in_channels = 3 * len(features)
         # The channel of the emission added back: ema where the model takes it, else emi.
@@ -203,8 +247,9 @@ class Denoiser(nn.Module):
         else:
             self.unet = UNet(in_channels=network_channels, width=width, out_channels=0)
             k2 = KERNEL * KERNEL
+            blend = 2 if self.detail_gate else 1
             self.heads = nn.ModuleList(
-                nn.Conv2d(c, k2 + (1 if s < SCALES - 1 else 0), 1)
+                nn.Conv2d(c, k2 + (blend if s < SCALES - 1 else 0), 1)
                 for s, c in enumerate(self.unet.channels[:SCALES]))
 
     def forward(self, x, exposure=None):
@@ -240,7 +285,7 @@ class Denoiser(nn.Module):
         # several per cent of a kernel weight, which inference in float32 would not see.
         with torch.autocast(x.device.type, enabled=False):
             heads = [head(f.float()) for head, f in zip(self.heads, feats)]
-            out = reconstruct(hdr, x[:, 3:6], heads, self.kernel_gather)
+            out = reconstruct(hdr, x[:, 3:6], heads, self.kernel_gather, self.detail_gate)
             if self.emission:
                 a = self.added_emission
                 out = out + x[:, a:a + 3].float().clamp(min=0)

@@ -16,7 +16,7 @@ import torch
 import config
 import dataset
 import loss as losses
-from model import Denoiser
+import model
 import transfer
 
 
@@ -150,7 +150,7 @@ def main(argv=None):
     run = Path(cfg.run_dir)
     run.mkdir(parents=True, exist_ok=True)
     ckpt = run / "checkpoint.pt"
-    net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features).to(device=device, memory_format=torch.channels_last)
+    net = model.denoiser(cfg).to(device=device, memory_format=torch.channels_last)
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     if cfg.schedule not in ("steps", "time"):
         raise SystemExit(f"train: --schedule {cfg.schedule!r}: expected steps or time")
@@ -230,7 +230,8 @@ def main(argv=None):
 def initial_weights(path, cfg):
     """The state dict of `path` (a model exported by export.py, or a run's checkpoint.pt) for a
     run of `cfg`: a fine-tuning starts from it with its own schedule; a network of another shape
-    is refused in one line."""
+    is refused in one line. A `kpn` model without detail gates gets them (model.add_detail_gates)
+    when the run has them; the reverse is refused."""
     import export
 
     path = Path(path)
@@ -244,6 +245,16 @@ def initial_weights(path, cfg):
     if src is not None and (src.base_width, src.head, list(src.features)) != (cfg.base_width, cfg.head, list(cfg.features)):
         raise SystemExit(f"train: --init-from {path}: a width-{src.base_width} {src.head} model on {','.join(src.features)}, "
                          f"this run trains width {cfg.base_width} {cfg.head} on {','.join(cfg.features)}")
+    if cfg.head == "kpn" and "heads.0.weight" in state:
+        gated = model.has_detail_gates(state)
+        if gated and not cfg.detail_gate:
+            raise SystemExit(f"train: --init-from {path}: a model with detail gates, this run trains one without (--detail-gate)")
+        if cfg.detail_gate and not gated:
+            try:
+                state = model.add_detail_gates(state)
+            except ValueError as e:
+                raise SystemExit(f"train: --init-from {path}: weights of another network ({e})")
+            print(f"detail gates added to the weights of {path} (bias {model.DETAIL_GATE_INIT})")
     return state
 
 

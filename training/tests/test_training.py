@@ -43,9 +43,9 @@ def test_kernel_head_returns_a_noiseless_uniform_irradiance_image_unchanged():
     # and the blends add U(o) - U(D(f)) = 0; the albedo texture is remodulated exactly. The
     # direct head, untrained, does not (so the check can fail).
     x = _uniform_irradiance()
-    for seed in range(3):
+    for seed in range(4):
         torch.manual_seed(seed)
-        net = Denoiser(width=8, head="kpn").eval()
+        net = Denoiser(width=8, head="kpn", detail_gate=seed % 2 == 1).eval()
         with torch.no_grad():
             out = net(x)
         assert torch.allclose(out, x[:, 0:3], rtol=1e-5, atol=1e-7), float((out - x[:, 0:3]).abs().max())
@@ -107,19 +107,28 @@ def test_antialiased_emission_is_added_back_in_place_of_the_images_own():
         assert torch.allclose(b[:, :, 30, 10:40], _uniform_irradiance()[:, 0:3, 30, 10:40] + 0.5 * light[:, :, 0], rtol=1e-5)
 
 
-def test_kernel_head_with_identity_kernels_returns_any_input():
-    # Centre weight ~1 and blend 0 at every scale: a clean input is left alone exactly.
+@pytest.mark.parametrize("gate", [False, True])
+def test_kernel_head_with_identity_kernels_returns_any_input(gate):
+    # Centre weight ~1, blend 0 (and detail kept whole) at every scale: a clean input is left
+    # alone exactly.
     torch.manual_seed(4)
     x = torch.rand(2, 9, 32, 48) * torch.tensor([20.0] * 3 + [1.0] * 6).view(1, 9, 1, 1)
     k2 = model.KERNEL * model.KERNEL
     heads = []
     for s in range(model.SCALES):
         n, h, w = x.shape[0], x.shape[2] >> s, x.shape[3] >> s
-        logits = torch.full((n, k2 + (1 if s < model.SCALES - 1 else 0), h, w), -60.0)
+        logits = torch.full((n, k2 + ((2 if gate else 1) if s < model.SCALES - 1 else 0), h, w), -60.0)
         logits[:, k2 // 2] = 60.0
+        if gate and s < model.SCALES - 1:
+            logits[:, k2 + 1] = 60.0
         heads.append(logits)
-    out = model.reconstruct(x[:, 0:3], x[:, 3:6], heads)
+    out = model.reconstruct(x[:, 0:3], x[:, 3:6], heads, detail_gate=gate)
     assert torch.allclose(out, x[:, 0:3], rtol=1e-5, atol=1e-6)
+    if gate:  # the gate closed: the finest scale's detail is gone (the check can fail)
+        for logits in heads[:-1]:
+            logits[:, k2 + 1] = -60.0
+        out = model.reconstruct(x[:, 0:3], x[:, 3:6], heads, detail_gate=gate)
+        assert not torch.allclose(out, x[:, 0:3], rtol=1e-2)
 
 
 def test_kernel_gathers_agree():
@@ -139,16 +148,19 @@ def test_kernel_gathers_agree():
     assert torch.allclose(a[:, :, y, x], want, rtol=1e-5)
 
 
-def test_multi_scale_blend_against_a_hand_written_pyramid():
+@pytest.mark.parametrize("gate", [False, True])
+def test_multi_scale_blend_against_a_hand_written_pyramid(gate):
     # Random kernels and blends, 4 scales: o_3 = f_3, o_s = f_s + a_s (U(o_{s+1}) - U(D(f_s))),
+    # with the detail gate o_s = U(D(f_s)) + b_s (f_s - U(D(f_s))) + a_s (U(o_{s+1}) - U(D(f_s))),
     # written out with explicit neighbour loops, 2x2 block means and bilinear up-sampling.
     torch.manual_seed(7)
     n, h, w, k = 1, 16, 24, model.KERNEL
     hdr = torch.rand(n, 3, h, w) * 4
     alb = torch.rand(n, 3, h, w)
-    heads = [torch.randn(n, k * k + (1 if s < model.SCALES - 1 else 0), h >> s, w >> s) * 2
+    extra = 2 if gate else 1
+    heads = [torch.randn(n, k * k + (extra if s < model.SCALES - 1 else 0), h >> s, w >> s) * 2
              for s in range(model.SCALES)]
-    got = model.reconstruct(hdr, alb, heads)
+    got = model.reconstruct(hdr, alb, heads, detail_gate=gate)
 
     def filt(img, logits):
         wgt = torch.softmax(logits[:, :k * k], 1)
@@ -174,7 +186,8 @@ def test_multi_scale_blend_against_a_hand_written_pyramid():
     for s in range(model.SCALES - 2, -1, -1):
         f = filt(irr[s], heads[s])
         alpha = torch.sigmoid(heads[s][:, k * k:k * k + 1])
-        o = f + alpha * (up(o) - up(down(f)))
+        beta = torch.sigmoid(heads[s][:, k * k + 1:k * k + 2]) if gate else 1.0
+        o = up(down(f)) + beta * (f - up(down(f))) + alpha * (up(o) - up(down(f)))
     want = (o * a).clamp(min=0)
     assert torch.allclose(got, want, rtol=1e-4, atol=1e-5)
     # The blend matters: without it (alpha = 0) the result differs.
@@ -256,16 +269,17 @@ def test_split_joins_compute_the_same_decoder():
     assert float(a[0].abs().max()) > 0
 
 
-@pytest.mark.parametrize("head,features", [(h, model.FEATURE_SETS[0]) for h in model.HEADS]
-                         + [("kpn", model.FEATURE_SETS[1]), ("kpn", model.FEATURE_SETS[2])])
-def test_export_matches_onnxruntime(tmp_path, head, features):
+@pytest.mark.parametrize("head,features,gate", [(h, model.FEATURE_SETS[0], False) for h in model.HEADS]
+                         + [("kpn", model.FEATURE_SETS[1], False), ("kpn", model.FEATURE_SETS[2], False),
+                            ("kpn", model.FEATURE_SETS[2], True)])
+def test_export_matches_onnxruntime(tmp_path, head, features, gate):
     ort = pytest.importorskip("onnxruntime")
     import export
 
     torch.manual_seed(2)
-    cfg = config.Config(base_width=8, head=head, features=list(features))
+    cfg = config.Config(base_width=8, head=head, features=list(features), detail_gate=gate)
     cfg.save(tmp_path / "config.json")
-    net = Denoiser(width=8, head=head, features=features)
+    net = Denoiser(width=8, head=head, features=features, detail_gate=gate)
     c = 3 * len(features)
     torch.save({"model": net.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
     model = tmp_path / "m.onnx"
@@ -296,6 +310,9 @@ def test_export_matches_onnxruntime(tmp_path, head, features):
     assert json.loads(meta["luxest.config"])["base_width"] == 8
     assert json.loads(meta["luxest.config"])["head"] == head
     assert export.OUTPUTS[head] in meta["luxest.transfer"]
+    assert (export.DETAIL_GATE in meta["luxest.transfer"]) == gate
+    back, state = export.load_onnx(model)
+    assert back.detail_gate == gate and all(torch.equal(state[k], v) for k, v in net.state_dict().items())
 
 
 def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(tmp_path):
@@ -335,6 +352,12 @@ def test_config_round_trip(tmp_path):
     del old["head"]
     (tmp_path / "old.json").write_text(json.dumps(old))
     assert config.Config.load(tmp_path / "old.json").head == "direct"
+    # ... and one saved before the detail gate had none; a flag turns it on and off.
+    del old["detail_gate"]
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    assert config.Config.load(tmp_path / "old.json").detail_gate is False
+    assert config.parse(["--detail-gate"]).detail_gate is True
+    assert config.parse(["--detail-gate", "--no-detail-gate"]).detail_gate is False
 
 
 def tiny_split(d, side, rng):
@@ -482,6 +505,30 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     with pytest.raises(SystemExit, match="weights of another network"):
         train.main(args + ["--base-width", "16", "--minutes", "0", "--run-dir", str(tmp_path / "fourth"),
                            "--init-from", str(tmp_path / "first" / "checkpoint.pt")])
+    # A run with detail gates from a model without them: its weights, and gates that keep 0.993
+    # of the detail, so the output starts within that fraction of the detail band of the model's.
+    for src in (tmp_path / "first.onnx", tmp_path / "first" / "checkpoint.pt"):
+        gated_dir = tmp_path / f"gated-{src.suffix[1:]}"
+        train.main(args + ["--run-dir", str(gated_dir), "--base-width", "8", "--minutes", "0", "--detail-gate",
+                           "--init-from", str(src)])
+        gated = torch.load(gated_dir / "checkpoint.pt", weights_only=False)["model"]
+        assert model.has_detail_gates(gated) and not model.has_detail_gates(first)
+        assert all(torch.equal(first[k], gated[k]) for k in first if not k.startswith("heads."))
+        k2 = model.KERNEL ** 2
+        assert torch.equal(gated["heads.0.weight"][:k2 + 1], first["heads.0.weight"])
+        assert torch.equal(gated["heads.0.bias"][k2 + 1], torch.tensor(model.DETAIL_GATE_INIT))
+    a = model.denoiser(config.Config(base_width=8)).eval()
+    b = model.denoiser(config.Config(base_width=8, detail_gate=True)).eval()
+    a.load_state_dict(first)
+    b.load_state_dict(gated)
+    x = torch.rand(1, a.in_channels, 32, 32) * 2
+    x[:, 9:] = 0.0  # no emission
+    with torch.no_grad():
+        ya, yb = a(x), b(x)
+    assert 0 < float((ya - yb).abs().max()) <= 0.01 * float(ya.abs().max())
+    with pytest.raises(SystemExit, match="a model with detail gates"):
+        train.main(args + ["--base-width", "8", "--minutes", "0", "--run-dir", str(tmp_path / "fifth"),
+                           "--init-from", str(gated_dir / "checkpoint.pt")])
 
 
 def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
