@@ -19,9 +19,9 @@ with one of two outputs (`Config.head`):
   filtered detail to keep, beta_s = sigmoid(one more logit) in [0, 1]:
   o_s = U(D(f_s)) + beta_s (f_s - U(D(f_s))) + alpha_s (U(o_{s+1}) - U(D(f_s))). Without it
   (beta = 1) the detail band of a 5x5 mean of the noisy input is always kept, a floor on the
-  noise left on flat surfaces at low spp (measured, docs/measurements.md, *The detail gate*);
-  with beta 0 and alpha 1 a pixel takes the coarser result alone (bilinear). A uniform image and
-  the identity (beta 1, alpha 0, identity kernel) still come back unchanged.
+  noise left on flat surfaces at low spp (docs/measurements.md, *A fourth GPU run: the detail
+  gate*); with beta 0 and alpha 1 a pixel takes the coarser result alone (bilinear). A uniform
+  image and the identity (beta 1, alpha 0, identity kernel) still come back unchanged.
 - `direct`: the U-Net predicts the transferred radiance itself (the first models).
 
 With the `emi` feature (aov-write's emitted radiance seen directly, the fourth input, `Config.
