@@ -19,7 +19,7 @@ class Config:
     batch: int = 16
     base_width: int = 24                 # U-Net channels of the first level
     head: str = "kpn"                    # output: kpn (kernel-predicting) or direct (model.py)
-    detail_gate: bool = False            # kpn: each finer scale predicts how much of its detail to keep (model.py)
+    detail_gate: bool = True             # kpn: each finer scale predicts how much of its detail to keep (model.py; --no-detail-gate)
     lr: float = 2e-3                     # peak learning rate of the one-cycle schedule
     minutes: float = 18.0                # training time budget
     steps: int = 3000                    # schedule length (stops earlier if out of time)
@@ -44,8 +44,9 @@ class Config:
 
     @staticmethod
     def from_values(values):
-        """A Config from saved values (a run's config.json, a model's metadata), options added
-        since filled in as the runs before them had them; unknown keys are dropped."""
+        """A Config from saved values (a run's config.json, a model's metadata `luxest.config`):
+        keys missing from older saves get the value those runs had (head direct, dle_paths [],
+        detail_gate false, ...); unknown keys are dropped."""
         values = {k: v for k, v in values.items() if k in Config.__dataclass_fields__}
         # Runs from before the `head` option predicted the radiance directly.
         values.setdefault("head", "direct")

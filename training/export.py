@@ -28,7 +28,8 @@ OUTPUTS = {
 }
 """What the graph's output is, per head (model.py), in the metadata's transfer description."""
 DETAIL_GATE = ("; with the detail gate: each finer scale keeps a predicted fraction sigmoid(logit) "
-               "of its filtered detail f - U(D(f)) before the blend")
+               "of its filtered detail f - U(D(f)) (U(D(f)): f's 2x2 means, bilinearly upsampled) "
+               "before the blend")
 """The metadata's addition for `kpn` models with detail gates (model.py)."""
 EMISSION = ("; with the emi feature: the network filters max(hdr - emi, 0) in place of hdr (and "
             "sees log1p(emi * exposure) as 3 more channels), and max(emi, 0) is added to its output")

@@ -18,9 +18,9 @@ with one of two outputs (`Config.head`):
   With `detail_gate` (`Config.detail_gate`) each finer scale also predicts how much of its own
   filtered detail to keep, beta_s = sigmoid(one more logit) in [0, 1]:
   o_s = U(D(f_s)) + beta_s (f_s - U(D(f_s))) + alpha_s (U(o_{s+1}) - U(D(f_s))). Without it
-  (beta = 1) the detail band of a 5x5 mean of the noisy input is always kept, a floor on the
-  noise left on flat surfaces at low spp (docs/measurements.md, *A fourth GPU run: the detail
-  gate*); with beta 0 and alpha 1 a pixel takes the coarser result alone (bilinear). A uniform
+  (beta = 1) the detail band of a 5x5 weighted mean of the noisy irradiance is always kept, a
+  floor on the noise left on flat surfaces at low spp (docs/measurements.md, *A fourth GPU
+  run*); with beta 0 and alpha 1 a pixel takes the coarser result alone (bilinear). A uniform
   image and the identity (beta 1, alpha 0, identity kernel) still come back unchanged.
 - `direct`: the U-Net predicts the transferred radiance itself (the first models).
 
@@ -233,7 +233,7 @@ class Denoiser(nn.Module):
         if self.emission and head != "kpn":
             raise ValueError("the emi feature needs the kpn head")
         if detail_gate and head != "kpn":
-            raise ValueError("the detail gate needs the kpn head")
+            raise ValueError("the detail gate needs the kpn head (--no-detail-gate)")
         self.detail_gate = bool(detail_gate)
         self.features = features
         self.in_channels = 3 * len(features)

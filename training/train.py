@@ -150,7 +150,10 @@ def main(argv=None):
     run = Path(cfg.run_dir)
     run.mkdir(parents=True, exist_ok=True)
     ckpt = run / "checkpoint.pt"
-    net = model.denoiser(cfg).to(device=device, memory_format=torch.channels_last)
+    try:
+        net = model.denoiser(cfg).to(device=device, memory_format=torch.channels_last)
+    except ValueError as e:
+        raise SystemExit(f"train: {e}")
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
     if cfg.schedule not in ("steps", "time"):
         raise SystemExit(f"train: --schedule {cfg.schedule!r}: expected steps or time")
@@ -171,6 +174,10 @@ def main(argv=None):
         saved = config.Config.load(run / "config.json") if (run / "config.json").exists() else cfg
         if saved.schedule != cfg.schedule:  # the other kind's state would silently restart the cycle
             raise SystemExit(f"train: --resume {run}: the run's schedule is {saved.schedule!r}, not {cfg.schedule!r}")
+        shape = ("base_width", "head", "features", "detail_gate")
+        if any(getattr(saved, k) != getattr(cfg, k) for k in shape):  # its weights would not load
+            raise SystemExit(f"train: --resume {run}: the run trains " + ", ".join(f"{k} {getattr(saved, k)}" for k in shape)
+                             + "; this one " + ", ".join(f"{k} {getattr(cfg, k)}" for k in shape))
         state = torch.load(ckpt, weights_only=False, map_location=device)
         net.load_state_dict(state["model"])
         opt.load_state_dict(state["optimizer"])

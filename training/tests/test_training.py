@@ -40,7 +40,8 @@ def _uniform_irradiance(h=48, w=64, seed=3):
 
 def test_kernel_head_returns_a_noiseless_uniform_irradiance_image_unchanged():
     # Whatever the (random, untrained) weights: every scale's kernels average equal irradiance
-    # and the blends add U(o) - U(D(f)) = 0; the albedo texture is remodulated exactly. The
+    # and the blends add U(o) - U(D(f)) = 0 (with detail gates also beta f + (1 - beta) U(D(f))
+    # = f); the albedo texture is remodulated exactly. The
     # direct head, untrained, does not (so the check can fail).
     x = _uniform_irradiance()
     for seed in range(4):
@@ -124,7 +125,7 @@ def test_kernel_head_with_identity_kernels_returns_any_input(gate):
         heads.append(logits)
     out = model.reconstruct(x[:, 0:3], x[:, 3:6], heads, detail_gate=gate)
     assert torch.allclose(out, x[:, 0:3], rtol=1e-5, atol=1e-6)
-    if gate:  # the gate closed: the finest scale's detail is gone (the check can fail)
+    if gate:  # the gates closed: the finer scales' detail is gone (the check can fail)
         for logits in heads[:-1]:
             logits[:, k2 + 1] = -60.0
         out = model.reconstruct(x[:, 0:3], x[:, 3:6], heads, detail_gate=gate)
@@ -282,9 +283,9 @@ def test_export_matches_onnxruntime(tmp_path, head, features, gate):
     net = Denoiser(width=8, head=head, features=features, detail_gate=gate)
     c = 3 * len(features)
     torch.save({"model": net.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
-    model = tmp_path / "m.onnx"
-    export.export(tmp_path, model)
-    session = ort.InferenceSession(str(model), providers=["CPUExecutionProvider"])
+    onnx_path = tmp_path / "m.onnx"
+    export.export(tmp_path, onnx_path)
+    session = ort.InferenceSession(str(onnx_path), providers=["CPUExecutionProvider"])
     net.eval()
     for h, w in [(40, 56), (33, 17)]:
         x = torch.rand(1, c, h, w) * torch.tensor([5.0] * 3 + [1.0] * 6 + [2.0] * (c - 9)).view(1, c, 1, 1)
@@ -296,14 +297,14 @@ def test_export_matches_onnxruntime(tmp_path, head, features, gate):
         b = session.run(None, {"input": x.numpy(), "exposure": e})[0]
         assert a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-4 * max(1.0, float(np.abs(a).max()))
-    graph = __import__("onnx").load(str(model)).graph
+    graph = __import__("onnx").load(str(onnx_path)).graph
     # The decoder joins are exported without Concat (model.UNet.split_joins): no Concat takes
     # an upsampled map.
     producer = {o: n.op_type for n in graph.node for o in n.output}
     joins = [n.name for n in graph.node if n.op_type == "Concat"
              and any(producer.get(i) in ("Resize", "Upsample") for i in n.input)]
     assert not joins and any(n.op_type == "Resize" for n in graph.node)
-    meta = {p.key: p.value for p in __import__("onnx").load(str(model)).metadata_props}
+    meta = {p.key: p.value for p in __import__("onnx").load(str(onnx_path)).metadata_props}
     assert meta["luxest.channels"] == ",".join(features)
     assert (export.EMISSION in meta["luxest.transfer"]) == ("emi" in features)
     assert (export.EMISSION_AA in meta["luxest.transfer"]) == ("ema" in features)
@@ -311,7 +312,7 @@ def test_export_matches_onnxruntime(tmp_path, head, features, gate):
     assert json.loads(meta["luxest.config"])["head"] == head
     assert export.OUTPUTS[head] in meta["luxest.transfer"]
     assert (export.DETAIL_GATE in meta["luxest.transfer"]) == gate
-    back, state = export.load_onnx(model)
+    back, state = export.load_onnx(onnx_path)
     assert back.detail_gate == gate and all(torch.equal(state[k], v) for k, v in net.state_dict().items())
 
 
@@ -320,7 +321,7 @@ def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(tmp_pat
     import export
 
     torch.manual_seed(5)
-    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[1]))
+    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[1]), detail_gate=False)
     cfg.save(tmp_path / "config.json")
     net4 = Denoiser(width=8, head="kpn", features=model.FEATURE_SETS[1]).eval()
     torch.save({"model": net4.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
@@ -336,7 +337,7 @@ def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(tmp_pat
         a = net4(x, torch.from_numpy(e)).numpy()
     added = (ema - x[:, 9:12]).numpy()
     assert np.max(np.abs(b - a - added)) <= 1e-4 * max(1.0, float(np.abs(b).max()))
-    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[0]))
+    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[0]), detail_gate=False)
     cfg.save(tmp_path / "config.json")
     with pytest.raises(ValueError, match="emi"):
         export.export(tmp_path, tmp_path / "n.onnx", antialiased_emission=True)
@@ -352,12 +353,17 @@ def test_config_round_trip(tmp_path):
     del old["head"]
     (tmp_path / "old.json").write_text(json.dumps(old))
     assert config.Config.load(tmp_path / "old.json").head == "direct"
-    # ... and one saved before the detail gate had none; a flag turns it on and off.
+    # ... and one saved before the detail gate (on by default since) had none; a key of no
+    # current option (a model's metadata written by a later version) is dropped; a flag turns
+    # the detail gate on and off.
     del old["detail_gate"]
     (tmp_path / "old.json").write_text(json.dumps(old))
     assert config.Config.load(tmp_path / "old.json").detail_gate is False
-    assert config.parse(["--detail-gate"]).detail_gate is True
-    assert config.parse(["--detail-gate", "--no-detail-gate"]).detail_gate is False
+    assert config.Config().detail_gate is True
+    (tmp_path / "later.json").write_text(json.dumps({**asdict(cfg), "no_such_option": 3}))
+    assert asdict(config.Config.load(tmp_path / "later.json")) == asdict(cfg)
+    assert config.parse([]).detail_gate is True
+    assert config.parse(["--no-detail-gate"]).detail_gate is False
 
 
 def tiny_split(d, side, rng):
@@ -488,7 +494,7 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(4))
     preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
     args = ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
-            "--threads", "1", "--steps", "2"]
+            "--threads", "1", "--steps", "2", "--no-detail-gate"]
     train.main(args + ["--run-dir", str(tmp_path / "first"), "--base-width", "8"])
     export.export(tmp_path / "first", tmp_path / "first.onnx")
     train.main(args + ["--run-dir", str(tmp_path / "second"), "--base-width", "8", "--minutes", "0", "--init-from", str(tmp_path / "first.onnx")])
@@ -507,6 +513,11 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
                            "--init-from", str(tmp_path / "first" / "checkpoint.pt")])
     # A run with detail gates from a model without them: its weights, and gates that keep 0.993
     # of the detail, so the output starts within that fraction of the detail band of the model's.
+    k2 = model.KERNEL ** 2
+    a = model.denoiser(config.Config(base_width=8, detail_gate=False)).eval()
+    a.load_state_dict(first)
+    x = torch.rand(1, a.in_channels, 32, 32) * 2
+    x[:, 9:] = 0.0  # no emission
     for src in (tmp_path / "first.onnx", tmp_path / "first" / "checkpoint.pt"):
         gated_dir = tmp_path / f"gated-{src.suffix[1:]}"
         train.main(args + ["--run-dir", str(gated_dir), "--base-width", "8", "--minutes", "0", "--detail-gate",
@@ -514,21 +525,38 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
         gated = torch.load(gated_dir / "checkpoint.pt", weights_only=False)["model"]
         assert model.has_detail_gates(gated) and not model.has_detail_gates(first)
         assert all(torch.equal(first[k], gated[k]) for k in first if not k.startswith("heads."))
-        k2 = model.KERNEL ** 2
-        assert torch.equal(gated["heads.0.weight"][:k2 + 1], first["heads.0.weight"])
-        assert torch.equal(gated["heads.0.bias"][k2 + 1], torch.tensor(model.DETAIL_GATE_INIT))
-    a = model.denoiser(config.Config(base_width=8)).eval()
-    b = model.denoiser(config.Config(base_width=8, detail_gate=True)).eval()
-    a.load_state_dict(first)
-    b.load_state_dict(gated)
-    x = torch.rand(1, a.in_channels, 32, 32) * 2
-    x[:, 9:] = 0.0  # no emission
-    with torch.no_grad():
-        ya, yb = a(x), b(x)
-    assert 0 < float((ya - yb).abs().max()) <= 0.01 * float(ya.abs().max())
-    with pytest.raises(SystemExit, match="a model with detail gates"):
-        train.main(args + ["--base-width", "8", "--minutes", "0", "--run-dir", str(tmp_path / "fifth"),
-                           "--init-from", str(gated_dir / "checkpoint.pt")])
+        for s in range(model.SCALES):
+            w, b = gated[f"heads.{s}.weight"], gated[f"heads.{s}.bias"]
+            assert torch.equal(w[:k2 + 1], first[f"heads.{s}.weight"]) and torch.equal(b[:k2 + 1], first[f"heads.{s}.bias"])
+            if s < model.SCALES - 1:  # a gate of weights 0 and bias DETAIL_GATE_INIT
+                assert w.shape[0] == k2 + 2 and not w[k2 + 1].any() and float(b[k2 + 1]) == model.DETAIL_GATE_INIT
+            else:
+                assert w.shape[0] == k2
+        # The same network with those gate logits written out: beta = sigmoid(5) everywhere.
+        b = model.denoiser(config.Config(base_width=8, detail_gate=True)).eval()
+        b.load_state_dict(gated)
+        with torch.no_grad():
+            yb = b(x)
+            feats = a.unet.decoder(torch.cat([transfer.forward(x[:, 0:3], transfer.exposure_of(x[:, 0:3]).view(-1, 1, 1, 1)),
+                                              x[:, 3:9], transfer.forward(x[:, 9:12], transfer.exposure_of(x[:, 0:3]).view(-1, 1, 1, 1))], 1))
+            heads = [h(f) for h, f in zip(a.heads, feats)]
+            heads = [torch.cat([h, torch.full_like(h[:, :1], model.DETAIL_GATE_INIT)], 1) if s < model.SCALES - 1 else h
+                     for s, h in enumerate(heads)]
+            want = model.reconstruct(x[:, 0:3], x[:, 3:6], heads, detail_gate=True) + x[:, 12:15]
+            ya = a(x)
+        assert torch.allclose(yb, want, rtol=1e-4, atol=1e-5), float((yb - want).abs().max())
+        assert float((ya - yb).abs().max()) > 0  # the gates start a little below 1
+    export.export(gated_dir, tmp_path / "gated.onnx")
+    for src in (gated_dir / "checkpoint.pt", tmp_path / "gated.onnx"):
+        with pytest.raises(SystemExit, match="a model with detail gates"):
+            train.main(args + ["--base-width", "8", "--minutes", "0", "--run-dir", str(tmp_path / "fifth"),
+                               "--init-from", str(src)])
+    # Resuming a run with another network (here: without its gates) is refused in one line.
+    with pytest.raises(SystemExit, match="the run trains .*detail_gate True; this one .*detail_gate False"):
+        train.main(args + ["--run-dir", str(gated_dir), "--base-width", "8", "--steps", "3", "--resume"])
+    with pytest.raises(SystemExit, match="the detail gate needs the kpn head"):
+        train.main(args + ["--run-dir", str(tmp_path / "sixth"), "--base-width", "8", "--head", "direct", "--detail-gate",
+                           "--features", "hdr", "alb", "nrm"])
 
 
 def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
