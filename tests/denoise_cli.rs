@@ -39,9 +39,9 @@ fn s(p: &Path) -> &str {
 }
 
 /// The fixture models (both output heads of training/model.py, and the kernel-predicting one
-/// with the emission feature, and with the antialiased emission too), the suffix of their expected outputs
+/// with the emission feature, with the antialiased emission too, and with detail gates), the suffix of their expected outputs
 /// (tests/fixtures/denoise/generate.py) and the features they take.
-const MODELS: [(&str, &str, &[&str]); 4] = [
+const MODELS: [(&str, &str, &[&str]); 5] = [
     ("tiny.onnx", "expected", &["hdr", "alb", "nrm"]),
     ("tiny_kpn.onnx", "kpn.expected", &["hdr", "alb", "nrm"]),
     (
@@ -52,6 +52,11 @@ const MODELS: [(&str, &str, &[&str]); 4] = [
     (
         "tiny_ema.onnx",
         "ema.expected",
+        &["hdr", "alb", "nrm", "emi", "ema"],
+    ),
+    (
+        "tiny_gate.onnx",
+        "gate.expected",
         &["hdr", "alb", "nrm", "emi", "ema"],
     ),
 ];
