@@ -2,8 +2,8 @@
 # receive these values as arguments from the rules; none has its own copy. (The dataset's scene
 # count is data-gen/generate.py's, selected by --preset $(PRESET), unless DATASET_COUNT names one.)
 #
-# quick fits a 2-core machine: `make reference noisy train eval` in 41 minutes from a clean clone
-# (2026-11-26, release build included; issue 11 asks for at most 45).
+# quick fits a 2-core machine: `make reference noisy train eval` in 42 minutes from a clean clone
+# (2026-11-26, evening, release build included; issue 11 asks for at most 45).
 
 PRESET ?= quick
 ifeq ($(filter $(PRESET),quick full),)
@@ -35,8 +35,10 @@ $(eval $(call lx_preset,FEATURE_SPP,16,16))
 $(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))
 
 # Training (make train): steps of the one-cycle schedule, and the time budget in minutes (quick:
-# the kernel-predicting model takes about 0.29 s per step on 2 cores, so 3400 steps end within
-# 17 minutes).
+# the kernel-predicting model took about 0.29 s per step on 2 cores, so 3400 steps ended within 17
+# minutes; with the detail gates, 5-8 % more a step, a clean-clone run of 2026-11-26 evening took
+# 0.33 s and stopped at 3065 steps, its rate at 4 % of the peak: docs/measurements.md, *The quick
+# pipeline with detail gates*).
 $(eval $(call lx_preset,TRAIN_STEPS,3400,60000))
 $(eval $(call lx_preset,TRAIN_MINUTES,17,600))
 # TRAIN_SCHEDULE=time makes the one cycle span TRAIN_MINUTES instead of TRAIN_STEPS (then a cap):
