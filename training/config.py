@@ -7,6 +7,11 @@ from dataclasses import asdict, dataclass, field
 import luxest_contract as contract
 
 
+NETWORK = ("base_width", "head", "features", "detail_gate")
+"""The options that fix the network's shape (model.denoiser): a run resumes, and a committed
+model's record matches its metadata, only when these agree."""
+
+
 @dataclass
 class Config:
     data_dir: str = "data/quick"        # data/<dataset> with train/ valid/ test/

@@ -192,10 +192,16 @@ antialiased, aov-write --min-samples) is only added back, in place of `emi`; the
 see it, so a model with it has the weights of one without it."""
 
 
+def head_outputs(scale, detail_gate):
+    """Outputs of the `kpn` head's 1x1 convolution at `scale` (0 the finest): the KERNEL² kernel
+    logits, and at every finer scale the blend logit and, with detail gates, the gate's."""
+    return KERNEL * KERNEL + ((2 if detail_gate else 1) if scale < SCALES - 1 else 0)
+
+
 def has_detail_gates(state):
     """Whether a `kpn` state dict's heads predict detail gates (their first head's outputs)."""
     w = state.get("heads.0.weight")
-    return w is not None and w.shape[0] == KERNEL * KERNEL + 2
+    return w is not None and w.shape[0] == head_outputs(0, True)
 
 
 def add_detail_gates(state):
@@ -205,8 +211,8 @@ def add_detail_gates(state):
     state = dict(state)
     for s in range(SCALES - 1):
         w, b = state[f"heads.{s}.weight"], state[f"heads.{s}.bias"]
-        if w.shape[0] != KERNEL * KERNEL + 1:
-            raise ValueError(f"heads.{s}: {w.shape[0]} outputs, expected {KERNEL * KERNEL + 1} (no detail gate)")
+        if w.shape[0] != head_outputs(s, False):
+            raise ValueError(f"heads.{s}: {w.shape[0]} outputs, expected {head_outputs(s, False)} (no detail gate)")
         state[f"heads.{s}.weight"] = torch.cat([w, torch.zeros_like(w[:1])])
         state[f"heads.{s}.bias"] = torch.cat([b, torch.full_like(b[:1], DETAIL_GATE_INIT)])
     return state
@@ -246,11 +252,8 @@ class Denoiser(nn.Module):
             self.unet = UNet(in_channels=network_channels, width=width)
         else:
             self.unet = UNet(in_channels=network_channels, width=width, out_channels=0)
-            k2 = KERNEL * KERNEL
-            blend = 2 if self.detail_gate else 1
-            self.heads = nn.ModuleList(
-                nn.Conv2d(c, k2 + (blend if s < SCALES - 1 else 0), 1)
-                for s, c in enumerate(self.unet.channels[:SCALES]))
+            self.heads = nn.ModuleList(nn.Conv2d(c, head_outputs(s, self.detail_gate), 1)
+                                       for s, c in enumerate(self.unet.channels[:SCALES]))
 
     def forward(self, x, exposure=None):
         """`exposure` (N,) float: the exposure of each whole image; if None, x must hold whole

@@ -174,10 +174,9 @@ def main(argv=None):
         saved = config.Config.load(run / "config.json") if (run / "config.json").exists() else cfg
         if saved.schedule != cfg.schedule:  # the other kind's state would silently restart the cycle
             raise SystemExit(f"train: --resume {run}: the run's schedule is {saved.schedule!r}, not {cfg.schedule!r}")
-        shape = ("base_width", "head", "features", "detail_gate")
-        if any(getattr(saved, k) != getattr(cfg, k) for k in shape):  # its weights would not load
-            raise SystemExit(f"train: --resume {run}: the run trains " + ", ".join(f"{k} {getattr(saved, k)}" for k in shape)
-                             + "; this one " + ", ".join(f"{k} {getattr(cfg, k)}" for k in shape))
+        if any(getattr(saved, k) != getattr(cfg, k) for k in config.NETWORK):  # its weights would not load
+            raise SystemExit(f"train: --resume {run}: the run trains " + ", ".join(f"{k} {getattr(saved, k)}" for k in config.NETWORK)
+                             + "; this one " + ", ".join(f"{k} {getattr(cfg, k)}" for k in config.NETWORK))
         state = torch.load(ckpt, weights_only=False, map_location=device)
         net.load_state_dict(state["model"])
         opt.load_state_dict(state["optimizer"])

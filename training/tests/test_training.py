@@ -615,8 +615,8 @@ def test_committed_models_keep_the_contract(name):
     root = Path(__file__).resolve().parents[2]
     cfg, _ = export.load_onnx(root / "models" / f"{name}.onnx")
     record = json.loads((root / "models" / f"{name}.config.json").read_text())
-    assert (cfg.base_width, cfg.head, list(cfg.features), cfg.detail_gate) == (
-        record["base_width"], record["head"], record["features"], record.get("detail_gate", False))
+    recorded = config.Config.from_values(record)
+    assert [getattr(cfg, k) for k in config.NETWORK] == [getattr(recorded, k) for k in config.NETWORK]
     x = _uniform_irradiance(h=40, w=56)[0].permute(1, 2, 0).numpy()
     hdr, alb, nrm = x[..., 0:3].copy(), x[..., 3:6], x[..., 6:9]
     emission = np.zeros_like(hdr)
