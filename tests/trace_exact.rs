@@ -472,3 +472,110 @@ fn features_average_at_least_min_samples_and_the_emission_its_own() {
         "no pixel of three samples mixes materials"
     );
 }
+
+/// Features through perfect specular surfaces (Intel Open Image Denoise's recommendation): the
+/// Cornell box with every diffuse reflectance 0.6, its back wall a mirror of reflectance 0.5 and
+/// its tall block glass, at one sample per pixel. A pixel seeing the mirror has the albedo of
+/// what the mirror shows times 0.5 (0.3, or 0 where it shows the open front), never the
+/// mirror's own 0.5; glass shows a Fresnel blend of what lies behind and in front of it, not
+/// 1; the light seen in the mirror is in the emission image at half its radiance, and the
+/// emission nowhere exceeds the radiance trace sees through the same samples (it adds exactly
+/// that term: the mirror's reflection is not sampled, and Russian roulette starts later).
+#[test]
+fn features_follow_mirrors_and_glass() {
+    let dir = TempDir::new("aov-delta");
+    let mut text = std::fs::read_to_string(repo_root().join("scenes/cornell-box.ron")).unwrap();
+    for (name, old) in [
+        ("white", "(0.725, 0.71, 0.68)"),
+        ("red", "(0.63, 0.065, 0.05)"),
+        ("green", "(0.14, 0.45, 0.091)"),
+        ("light", "(0.78, 0.78, 0.78)"),
+    ] {
+        let line = format!("\"{name}\": Lambertian(reflectance: {old}),");
+        assert!(text.contains(&line), "{line}");
+        text = text.replace(
+            &line,
+            &format!("\"{name}\": Lambertian(reflectance: (0.6, 0.6, 0.6)),"),
+        );
+    }
+    text = text.replace(
+        "materials: {",
+        "materials: {\n        \"mirror\": Mirror(reflectance: (0.5, 0.5, 0.5)),\n        \"glass\": Dielectric(ior: 1.5),",
+    );
+    // The back wall's and the tall block's faces: the material line after each name.
+    let mut out = String::new();
+    let mut pending = None;
+    for line in text.lines() {
+        if line.contains("name: \"back-wall\"") {
+            pending = Some("mirror");
+        } else if line.contains("name: \"tall-block-") {
+            pending = Some("glass");
+        }
+        match pending {
+            Some(m) if line.contains("material: \"white\"") => {
+                out.push_str(&line.replace("white", m));
+                pending = None;
+            }
+            _ => out.push_str(line),
+        }
+        out.push('\n');
+    }
+    let lxs = compile_text(&dir, "cb", &out);
+    let prefix = dir.path().join("img");
+    let common = [
+        lxs.to_str().unwrap(),
+        "-o",
+        prefix.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--resolution",
+        "64x48",
+        "--seed",
+        "3",
+    ];
+    let argv = std::iter::once("trace").chain(common.iter().copied());
+    trace::run(luxest_io::cli::parse::<trace::Args>(argv).unwrap().unwrap()).unwrap();
+    let argv = std::iter::once("aov-write").chain(common.iter().copied());
+    aov_write::run(
+        luxest_io::cli::parse::<aov_write::Args>(argv)
+            .unwrap()
+            .unwrap(),
+    )
+    .unwrap();
+    let read = |kind: &str| {
+        luxest_io::exr_io::read_rgb(&dir.path().join(format!("img_000001spp.{kind}.exr"))).unwrap()
+    };
+    let (hdr, alb, emi) = (read("hdr"), read("alb"), read("emi"));
+    let near = |a: f32, b: f32| (a - b).abs() < 1e-6;
+    let in_mirror = alb.pixels.iter().filter(|a| near(a[0], 0.3)).count();
+    assert!(
+        in_mirror > alb.pixels.len() / 20,
+        "{in_mirror} pixels show 0.5 times a 0.6 surface"
+    );
+    for a in &alb.pixels {
+        assert!(!near(a[0], 0.5), "the mirror's own reflectance as albedo");
+    }
+    // Glass's own albedo (1) only where a path runs out of delta vertices inside it.
+    let above = alb.pixels.iter().filter(|a| a[0] > 0.6 + 1e-6).count();
+    assert!(
+        above <= 3,
+        "{above} pixels with an albedo above every surface's (glass as 1?)"
+    );
+    let light = [17.0f32, 12.0, 4.0];
+    let mut mirrored = 0;
+    for (h, e) in hdr.pixels.iter().zip(&emi.pixels) {
+        for c in 0..3 {
+            assert!(
+                e[c] <= h[c] * (1.0 + 1e-6),
+                "emission {e:?} above radiance {h:?}"
+            );
+        }
+        if (0..3).all(|c| near(e[c] / light[c], 0.5)) {
+            mirrored += 1;
+        }
+    }
+    assert!(
+        mirrored > 0,
+        "the light seen in the mirror, at half its radiance"
+    );
+}

@@ -1,11 +1,13 @@
-//! First-hit features and their per-pixel f64 sums: albedo as the denoiser sees it, the
-//! shading normal facing the camera, the hit distance, the emitted radiance seen directly (the
-//! part of `trace`'s image a denoiser must leave untouched) — averaged over exactly the pixel samples
+//! The denoiser's features of a camera ray and their per-pixel f64 sums: albedo as the denoiser
+//! sees it and the shading normal facing the ray, both of the first non-delta surface (through
+//! mirrors and smooth glass, [`first_hit`]), the hit distance, the emitted radiance seen directly
+//! or in a mirror (the part of `trace`'s image a denoiser must leave untouched) — averaged over exactly the pixel samples
 //! `trace` uses ([`pixel_jitter`] with the same seed), and extendable like trace's film, so the
 //! features at n samples do not depend on the snapshots taken on the way.
 
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use luxest_render::bsdf::{self, Transport};
 use luxest_render::camera::{pixel_jitter, PinholeCamera};
 use luxest_render::parallel::run_batches;
 use luxest_render::scene::Material;
@@ -22,34 +24,117 @@ pub fn albedo(m: &Material) -> Rgb {
     }
 }
 
-/// First-hit features of one camera ray.
+/// Features of one camera ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FirstHit {
     pub albedo: Rgb,
-    /// The shading normal, facing the camera (zero where the ray escapes).
+    /// The shading normal, facing the ray (zero where the ray escapes).
     pub normal: Vec3,
-    /// Hit distance in m (zero where the ray escapes).
+    /// Distance in m to the first surface hit (zero where the ray escapes).
     pub depth: f64,
-    /// Radiance emitted towards the camera by the surface hit: exactly the term `trace` adds
-    /// at a camera ray's hit (weight one: nothing is sampled before it).
+    /// Radiance emitted towards the camera by the surface hit or, through one mirror at the
+    /// first hit, by the surface seen in it: exactly the terms `trace` adds at those vertices
+    /// (weight one at the first, the mirror's reflectance at the second: nothing is sampled
+    /// before them, and Russian roulette starts later).
     pub emission: Rgb,
 }
 
-/// First-hit features of one camera ray.
+impl FirstHit {
+    const MISS: FirstHit = FirstHit {
+        albedo: Rgb::BLACK,
+        normal: Vec3::ZERO,
+        depth: 0.0,
+        emission: Rgb::BLACK,
+    };
+}
+
+/// Delta vertices (mirror or smooth-dielectric hits) a feature ray follows at most.
+pub const MAX_DELTA_VERTICES: u32 = 8;
+
+/// Features of one camera ray, as Intel Open Image Denoise recommends for perfect specular
+/// surfaces: albedo and normal of the first non-delta (diffuse or glossy) surface along the
+/// delta path — through a mirror, its reflectance times the albedo of the surface seen in it;
+/// at the first smooth dielectric, the Fresnel blend of the reflected and transmitted paths'
+/// features, at a later one its likelier branch alone (no random choice: the features stay
+/// noise-free); at most [`MAX_DELTA_VERTICES`] delta vertices, the last one's own features. The
+/// emission: see [`FirstHit::emission`]. The geometry is `trace`'s (flat normals, its offsets).
 pub fn first_hit(world: &World, origin: Vec3, dir: Vec3) -> FirstHit {
-    match world.intersect(origin, dir) {
-        None => FirstHit {
-            albedo: Rgb::BLACK,
-            normal: Vec3::ZERO,
-            depth: 0.0,
-            emission: Rgb::BLACK,
+    along(world, origin, dir, 0, false)
+}
+
+fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> FirstHit {
+    let Some(sp) = world.intersect(origin, dir) else {
+        return FirstHit::MISS;
+    };
+    let m = world.material(sp.triangle);
+    let wo = -dir;
+    let own = FirstHit {
+        albedo: albedo(m),
+        normal: if sp.ns.dot(dir) > 0.0 { -sp.ns } else { sp.ns },
+        depth: sp.distance,
+        emission: world.emitted_radiance(sp.triangle, sp.ng, wo),
+    };
+    if vertices >= MAX_DELTA_VERTICES {
+        return own;
+    }
+    // A branch of the delta path: trace's own sample (uc picks reflection below the Fresnel
+    // reflectance, refraction above it) and the features where it leads.
+    let branch = |uc: f64, split: bool| {
+        let s = bsdf::sample(m, wo, sp.ng, sp.ng, (0.5, 0.5), uc, Transport::Radiance)?;
+        Some(along(
+            world,
+            world.offset(sp.position, sp.ng, s.wi),
+            s.wi,
+            vertices + 1,
+            split,
+        ))
+    };
+    match m {
+        Material::Mirror { reflectance } => match branch(0.0, split) {
+            Some(next) => FirstHit {
+                albedo: *reflectance * next.albedo,
+                normal: next.normal,
+                depth: own.depth,
+                emission: if vertices == 0 {
+                    own.emission + *reflectance * next.emission
+                } else {
+                    own.emission
+                },
+            },
+            None => own,
         },
-        Some(sp) => FirstHit {
-            albedo: albedo(world.material(sp.triangle)),
-            normal: if sp.ns.dot(dir) > 0.0 { -sp.ns } else { sp.ns },
-            depth: sp.distance,
-            emission: world.emitted_radiance(sp.triangle, sp.ng, -dir),
-        },
+        Material::Dielectric { ior } => {
+            // trace's Fresnel reflectance at this vertex (bsdf::sample with flat normals).
+            let n = if wo.dot(sp.ng) > 0.0 { sp.ng } else { -sp.ng };
+            let eta = if wo.dot(sp.ng) > 0.0 {
+                *ior
+            } else {
+                1.0 / *ior
+            };
+            let (f, _) = bsdf::fresnel_dielectric(wo.dot(n).max(0.0), eta);
+            let branches = if split {
+                // Later dielectrics: the likelier branch alone, so that one camera ray's
+                // features stay one path (no noise, no blow-up).
+                vec![(if f >= 0.5 { 0.0 } else { 1.0 }, 1.0)]
+            } else {
+                vec![(0.0, f), (1.0, 1.0 - f)]
+            };
+            let (mut a, mut nrm) = (Rgb::BLACK, Vec3::ZERO);
+            for (uc, w) in branches {
+                if w > 0.0 {
+                    if let Some(h) = branch(uc, true) {
+                        a = a + h.albedo * w;
+                        nrm += h.normal * w;
+                    }
+                }
+            }
+            FirstHit {
+                albedo: a,
+                normal: nrm,
+                ..own
+            }
+        }
+        _ => own,
     }
 }
 
