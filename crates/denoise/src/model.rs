@@ -74,6 +74,11 @@ impl Denoiser {
             .map_err(|e| ort_err(&e))?
             .with_intra_threads(threads.max(1))
             .map_err(|e| ort_err(&e))?
+            // Idle pool threads sleep instead of spinning between operators: spinning counts
+            // as CPU time and steals the cores from the other threads of a shared machine
+            // (docs/measurements.md, *denoise*).
+            .with_intra_op_spinning(false)
+            .map_err(|e| ort_err(&e))?
             .with_inter_threads(1)
             .map_err(|e| ort_err(&e))?
             .commit_from_memory(&bytes)
