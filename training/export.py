@@ -82,7 +82,7 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
             raise ValueError(f"{run_dir}: --antialiased-emission needs a run with the emi feature")
         cfg.features = [f for f in cfg.features if f != "ema"] + ["ema"]
     net = model.denoiser(cfg)
-    net.load_state_dict(torch.load(Path(run_dir) / "checkpoint.pt", weights_only=False)["model"])
+    net.load_state_dict(torch.load(Path(run_dir) / "checkpoint.pt", weights_only=False, map_location="cpu")["model"])
     net.eval()
     net.kernel_gather = "slices"
     net.unet.split_joins()  # no Concat node in the decoder (model.UNet.split_joins)
