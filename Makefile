@@ -80,8 +80,16 @@ run: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE) $(TRACE) $(AOV_WRITE) $(DENOIS
 
 scenes: $(COMPILED)
 
-# The stage binaries: one rule for all of them.
-$(addprefix $(RELEASE)/,scene-compile trace aov-write estimate denoise evaluate report): $(RELEASE)/%: $(RUST_SOURCES)
+# The stage binaries: one rule for all of them. Each depends on the sources cargo's dep-info lists
+# for it (target/release/<stage>.d, written beside the binary; its target, an absolute path, cut
+# off), so an edit of one stage's crate rebuilds that stage alone and leaves the images the others
+# made current; before the first build, or when a listed file is gone, on every source.
+STAGE_BINS := scene-compile trace aov-write estimate denoise evaluate report
+CARGO_MANIFESTS := $(shell find crates -name Cargo.toml) Cargo.toml Cargo.lock
+stage_listed = $(if $(wildcard $(RELEASE)/$(1).d),$(shell sed -e '1s/^[^:]*: *//' -e '1q' $(RELEASE)/$(1).d))
+stage_sources = $(if $(1),$(if $(filter-out $(wildcard $(1)),$(1)),$(RUST_SOURCES),$(1)),$(RUST_SOURCES))
+$(foreach b,$(STAGE_BINS),$(eval $(RELEASE)/$(b): $(call stage_sources,$(call stage_listed,$(b))) $(CARGO_MANIFESTS)))
+$(addprefix $(RELEASE)/,$(STAGE_BINS)): $(RELEASE)/%:
 	$(CARGO) build --release -p $*
 	@touch $@
 

@@ -11,7 +11,7 @@
 # samples: trace's and the next of the same sequence); the reference's seed differs
 # from the noisy one, so it shares none of their samples. Splits (train / valid / test) come from
 # data-gen/generate.py. Incremental: a scene is re-rendered only when its .ron (or a stage
-# binary) changes; make prints each step.
+# binary: rebuilt when a source cargo lists for it changes, Makefile) changes; make prints each step.
 
 DATASET ?= $(PRESET)
 GEN_DIR := build/dataset/$(DATASET)/scenes
