@@ -333,15 +333,7 @@ fn emission_feature_is_the_radiance_trace_sees_emitted() {
         "--seed",
         "11",
     ];
-    let argv = std::iter::once("trace").chain(common.iter().copied());
-    trace::run(luxest_io::cli::parse::<trace::Args>(argv).unwrap().unwrap()).unwrap();
-    let argv = std::iter::once("aov-write").chain(common.iter().copied());
-    aov_write::run(
-        luxest_io::cli::parse::<aov_write::Args>(argv)
-            .unwrap()
-            .unwrap(),
-    )
-    .unwrap();
+    trace_and_features(&common);
     let read = |kind: &str| {
         luxest_io::exr_io::read_rgb(&dir.path().join(format!("img_000004spp.{kind}.exr"))).unwrap()
     };
@@ -533,15 +525,7 @@ fn features_follow_mirrors_and_glass() {
         "--seed",
         "3",
     ];
-    let argv = std::iter::once("trace").chain(common.iter().copied());
-    trace::run(luxest_io::cli::parse::<trace::Args>(argv).unwrap().unwrap()).unwrap();
-    let argv = std::iter::once("aov-write").chain(common.iter().copied());
-    aov_write::run(
-        luxest_io::cli::parse::<aov_write::Args>(argv)
-            .unwrap()
-            .unwrap(),
-    )
-    .unwrap();
+    trace_and_features(&common);
     let read = |kind: &str| {
         luxest_io::exr_io::read_rgb(&dir.path().join(format!("img_000001spp.{kind}.exr"))).unwrap()
     };
@@ -578,4 +562,17 @@ fn features_follow_mirrors_and_glass() {
         mirrored > 0,
         "the light seen in the mirror, at half its radiance"
     );
+}
+
+/// `trace` and then `aov-write` with the same arguments (scene, prefix, samples, seed, ...).
+fn trace_and_features(args: &[&str]) {
+    let argv = std::iter::once("trace").chain(args.iter().copied());
+    trace::run(luxest_io::cli::parse::<trace::Args>(argv).unwrap().unwrap()).unwrap();
+    let argv = std::iter::once("aov-write").chain(args.iter().copied());
+    aov_write::run(
+        luxest_io::cli::parse::<aov_write::Args>(argv)
+            .unwrap()
+            .unwrap(),
+    )
+    .unwrap();
 }

@@ -105,22 +105,17 @@ fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> 
         },
         Material::Dielectric { ior } => {
             // trace's Fresnel reflectance at this vertex (bsdf::sample with flat normals).
-            let n = if wo.dot(sp.ng) > 0.0 { sp.ng } else { -sp.ng };
-            let eta = if wo.dot(sp.ng) > 0.0 {
-                *ior
-            } else {
-                1.0 / *ior
-            };
-            let (f, _) = bsdf::fresnel_dielectric(wo.dot(n).max(0.0), eta);
-            let branches = if split {
-                // Later dielectrics: the likelier branch alone, so that one camera ray's
-                // features stay one path (no noise, no blow-up).
-                vec![(if f >= 0.5 { 0.0 } else { 1.0 }, 1.0)]
-            } else {
-                vec![(0.0, f), (1.0, 1.0 - f)]
+            let f = bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance;
+            // Weights of the reflected and transmitted branches; at later dielectrics the
+            // likelier branch alone, so that one camera ray's features stay one path (no
+            // noise, no blow-up).
+            let (reflected, transmitted) = match (split, f >= 0.5) {
+                (false, _) => (f, 1.0 - f),
+                (true, true) => (1.0, 0.0),
+                (true, false) => (0.0, 1.0),
             };
             let (mut a, mut nrm) = (Rgb::BLACK, Vec3::ZERO);
-            for (uc, w) in branches {
+            for (uc, w) in [(0.0, reflected), (1.0, transmitted)] {
                 if w > 0.0 {
                     if let Some(h) = branch(uc, true) {
                         a = a + h.albedo * w;

@@ -48,6 +48,36 @@ pub fn fresnel_dielectric(cos_i: f64, eta: f64) -> (f64, f64) {
     (0.5 * (rs * rs + rp * rp), cos_t)
 }
 
+/// A smooth dielectric interface as seen from `wo`: the shading normal on `wo`'s side (the side
+/// follows the geometric normal), the relative index of refraction, the cosine on that side, and
+/// the Fresnel reflectance with the transmitted cosine ([`fresnel_dielectric`]).
+pub struct DielectricSide {
+    pub n: Vec3,
+    pub eta: f64,
+    pub cos_o: f64,
+    pub reflectance: f64,
+    pub cos_t: f64,
+}
+
+/// The interface of a dielectric of index `ior` (inside relative to the side `ng` points to),
+/// as [`sample`] sees it.
+pub fn dielectric_side(wo: Vec3, ng: Vec3, ns: Vec3, ior: f64) -> DielectricSide {
+    let (n, eta) = if wo.dot(ng) > 0.0 {
+        (ns, ior)
+    } else {
+        (-ns, 1.0 / ior)
+    };
+    let cos_o = wo.dot(n).max(0.0);
+    let (reflectance, cos_t) = fresnel_dielectric(cos_o, eta);
+    DielectricSide {
+        n,
+        eta,
+        cos_o,
+        reflectance,
+        cos_t,
+    }
+}
+
 pub fn is_delta(m: &Material) -> bool {
     matches!(m, Material::Mirror { .. } | Material::Dielectric { .. })
 }
@@ -212,14 +242,13 @@ pub fn sample(
             })
         }
         Material::Dielectric { ior } => {
-            let entering = wo.dot(ng) > 0.0;
-            let (n, eta) = if entering {
-                (ns, *ior)
-            } else {
-                (-ns, 1.0 / *ior)
-            };
-            let cos_o = wo.dot(n).max(0.0);
-            let (f, cos_t) = fresnel_dielectric(cos_o, eta);
+            let DielectricSide {
+                n,
+                eta,
+                cos_o,
+                reflectance: f,
+                cos_t,
+            } = dielectric_side(wo, ng, ns, *ior);
             if uc < f {
                 let wi = reflect(wo, n);
                 return Some(BsdfSample {
