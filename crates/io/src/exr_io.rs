@@ -5,6 +5,9 @@
 
 use crate::error::{Error, Result};
 use crate::outputs::OutputPlan;
+use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
+use exr::block::writer::ChunksWriter;
+use exr::image::write::layers::WritableLayers;
 use exr::prelude::*;
 use std::path::Path;
 
@@ -110,15 +113,74 @@ pub fn encode_rgb(path: &Path, image: &RgbImage) -> Result<Vec<u8>> {
         line_order: LineOrder::Increasing,
     };
     let layer = Layer::new((image.width, image.height), attributes, encoding, channels);
+    let bounds = IntegerBounds::new(layer.attributes.layer_position, layer.size);
+    let headers = layer.infer_headers(&ImageAttributes::new(bounds));
+    let order: Vec<usize> = headers[0]
+        .channels
+        .list
+        .iter()
+        .map(|c| match c.name.to_string().as_str() {
+            "R" => 0,
+            "G" => 1,
+            _ => 2,
+        })
+        .collect();
+    let lines = headers[0].compression.scan_lines_per_block();
     let mut buffer = std::io::Cursor::new(Vec::new());
-    Image::from_layer(layer)
-        .write()
-        .non_parallel()
-        .to_buffered(&mut buffer)
-        .map_err(|e| Error::input(path, format!("cannot encode EXR: {e}")))?;
+    exr::block::write(&mut buffer, headers, true, |_, writer| {
+        for (index, y0) in (0..image.height).step_by(lines).enumerate() {
+            let rows = &image.pixels[y0 * w..(y0 + lines).min(image.height) * w];
+            let block = CompressedScanLineBlock {
+                y_coordinate: y0 as i32,
+                compressed_pixels_le: zip_block(rows, w, &order),
+            };
+            let chunk = Chunk {
+                layer_index: 0,
+                compressed_block: CompressedBlock::ScanLine(block),
+            };
+            writer.write_chunk(index, chunk)?;
+        }
+        Ok(())
+    })
+    .map_err(|e| Error::input(path, format!("cannot encode EXR: {e}")))?;
     let mut bytes = buffer.into_inner();
     sort_header_attributes(&mut bytes);
     Ok(bytes)
+}
+
+/// Deflate level of the ZIP blocks: 1, the fastest. The `exr` crate compresses at level 4, which
+/// took 3.5 times as long for 2 % smaller files of radiance (a 1024² denoised image: 0.12 s
+/// against 0.034 s, 4.6 against 4.7 MB), a cost every stage paid for each image it wrote.
+const ZIP_LEVEL: u8 = 1;
+
+/// One ZIP scanline block of `rows` (whole rows of `width` pixels), as OpenEXR's ZIP compressor
+/// stores it: per scanline the channels in the header's order (`order`: the RGB index of each),
+/// each row of little-endian f32; the bytes split into even- and odd-indexed halves, each byte
+/// replaced by its difference to the previous one plus 128, then zlib-compressed. Where that is
+/// not smaller than the raw bytes, the raw bytes (readers tell them apart by size).
+fn zip_block(rows: &[[f32; 3]], width: usize, order: &[usize]) -> Vec<u8> {
+    let mut raw = Vec::with_capacity(rows.len() * 12);
+    for row in rows.chunks(width) {
+        for &c in order {
+            for p in row {
+                raw.extend_from_slice(&p[c].to_le_bytes());
+            }
+        }
+    }
+    let half = raw.len().div_ceil(2);
+    let mut packed = vec![0u8; raw.len()];
+    for (i, &b) in raw.iter().enumerate() {
+        packed[if i % 2 == 0 { i / 2 } else { half + i / 2 }] = b;
+    }
+    for i in (1..packed.len()).rev() {
+        packed[i] = packed[i].wrapping_sub(packed[i - 1]).wrapping_add(128);
+    }
+    let compressed = miniz_oxide::deflate::compress_to_vec_zlib(&packed, ZIP_LEVEL);
+    if compressed.len() < raw.len() {
+        compressed
+    } else {
+        raw
+    }
 }
 
 /// Puts the header attributes of a single-part EXR in name order, in place.
@@ -395,18 +457,23 @@ pub fn read_rgb_bytes(path: &Path, bytes: Vec<u8>) -> Result<RgbImage> {
     let mut pixels = vec![[0f32; 3]; width * height];
     for (k, name) in ["R", "G", "B"].iter().enumerate() {
         let channel = find(name)?;
-        let values: Vec<f32> = match &channel.sample_data {
-            FlatSamples::F32(v) => v.clone(),
-            FlatSamples::F16(v) => v.iter().map(|h| h.to_f32()).collect(),
+        match &channel.sample_data {
+            FlatSamples::F32(v) => {
+                for (p, &v) in pixels.iter_mut().zip(v) {
+                    p[k] = v;
+                }
+            }
+            FlatSamples::F16(v) => {
+                for (p, h) in pixels.iter_mut().zip(v) {
+                    p[k] = h.to_f32();
+                }
+            }
             FlatSamples::U32(_) => {
                 return Err(Error::input(
                     path,
                     format!("channel {name} holds integers, expected float"),
                 ))
             }
-        };
-        for (p, v) in pixels.iter_mut().zip(values) {
-            p[k] = v;
         }
     }
     let mut attributes: Vec<(String, String)> = layer
@@ -468,6 +535,48 @@ mod tests {
         for (i, key) in crate::header::ALL.iter().enumerate() {
             assert_eq!(back.attribute(key), Some(i.to_string().as_str()));
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn zip_blocks_read_back_whatever_their_size_and_content() {
+        // Sizes with a partial last block of 16 scanlines, one column and one pixel; content
+        // smooth (compressed) and pseudo-random bit patterns (stored raw: deflate cannot shrink
+        // them), each read back bit for bit by the `exr` crate's own ZIP decoder.
+        let dir = std::env::temp_dir().join(format!("luxest-exr-zip-{}", std::process::id()));
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut random = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            f32::from_bits((state as u32 & 0x7f7f_ffff) | ((state >> 32) as u32 & 0x8000_0000))
+        };
+        for (w, h) in [(37, 17), (1, 40), (1, 1), (64, 16)] {
+            for smooth in [true, false] {
+                let mut img = RgbImage::new(w, h);
+                for (i, p) in img.pixels.iter_mut().enumerate() {
+                    *p = if smooth {
+                        [i as f32 * 0.5, 1.0, (i % w) as f32 * 1e-3]
+                    } else {
+                        [random(), random(), random()]
+                    };
+                }
+                let path = dir.join(format!("{w}x{h}-{smooth}.exr"));
+                write_rgb(&path, &img).unwrap();
+                let back = read_rgb(&path).unwrap();
+                let bits = |im: &RgbImage| -> Vec<u32> {
+                    im.pixels.iter().flatten().map(|v| v.to_bits()).collect()
+                };
+                assert_eq!(bits(&back), bits(&img), "{w}x{h}, smooth {smooth}");
+            }
+        }
+        // The raw fallback is taken where deflate does not shrink a block, and not elsewhere.
+        let noisy: Vec<[f32; 3]> = (0..64 * 16)
+            .map(|_| [random(), random(), random()])
+            .collect();
+        assert_eq!(zip_block(&noisy, 64, &[2, 1, 0]).len(), 64 * 16 * 12);
+        let flat = vec![[1.0f32; 3]; 64 * 16];
+        assert!(zip_block(&flat, 64, &[2, 1, 0]).len() < 200);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
