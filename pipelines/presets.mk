@@ -41,9 +41,11 @@ $(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))
 # pipeline with detail gates*).
 $(eval $(call lx_preset,TRAIN_STEPS,3400,60000))
 $(eval $(call lx_preset,TRAIN_MINUTES,17,600))
-# TRAIN_SCHEDULE=time makes the one cycle span TRAIN_MINUTES instead of TRAIN_STEPS (then a cap):
-# for a machine whose speed is not known beforehand (train.py --schedule).
-TRAIN_SCHEDULE ?= steps
+# TRAIN_SCHEDULE=time (the default) makes the one cycle span TRAIN_MINUTES, or TRAIN_STEPS if
+# those come first (train.py --schedule): the learning rate anneals to its end whatever the
+# machine's speed. With `steps` the cycle spans TRAIN_STEPS alone, and a run the time budget cuts
+# short ends with its rate still high (the clean-clone run above: 4 % of the peak).
+TRAIN_SCHEDULE ?= time
 
 # Evaluation (pipelines/eval.mk): the Cornell-box reference spp and progressive run's last spp,
 # double-local-estimate light paths on the Cornell box, light-tracing paths on the Cornell box
