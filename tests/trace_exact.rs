@@ -321,22 +321,7 @@ fn emission_feature_is_the_radiance_trace_sees_emitted() {
     let dir = TempDir::new("aov-emi");
     let text = std::fs::read_to_string(repo_root().join("scenes/cornell-box.ron")).unwrap();
     let lxs = compile_text(&dir, "cb", &text);
-    let prefix = dir.path().join("img");
-    let common = [
-        lxs.to_str().unwrap(),
-        "-o",
-        prefix.to_str().unwrap(),
-        "--spp",
-        "4",
-        "--resolution",
-        "64x48",
-        "--seed",
-        "11",
-    ];
-    trace_and_features(&common);
-    let read = |kind: &str| {
-        luxest_io::exr_io::read_rgb(&dir.path().join(format!("img_000004spp.{kind}.exr"))).unwrap()
-    };
+    let read = trace_and_features(&dir, &lxs, 4, 11);
     let (hdr, emi) = (read("hdr"), read("emi"));
     let light = [17.0f32, 12.0, 4.0];
     let (mut full, mut partial) = (0, 0);
@@ -513,22 +498,7 @@ fn features_follow_mirrors_and_glass() {
         out.push('\n');
     }
     let lxs = compile_text(&dir, "cb", &out);
-    let prefix = dir.path().join("img");
-    let common = [
-        lxs.to_str().unwrap(),
-        "-o",
-        prefix.to_str().unwrap(),
-        "--spp",
-        "1",
-        "--resolution",
-        "64x48",
-        "--seed",
-        "3",
-    ];
-    trace_and_features(&common);
-    let read = |kind: &str| {
-        luxest_io::exr_io::read_rgb(&dir.path().join(format!("img_000001spp.{kind}.exr"))).unwrap()
-    };
+    let read = trace_and_features(&dir, &lxs, 1, 3);
     let (hdr, alb, emi) = (read("hdr"), read("alb"), read("emi"));
     let near = |a: f32, b: f32| (a - b).abs() < 1e-6;
     let in_mirror = alb.pixels.iter().filter(|a| near(a[0], 0.3)).count();
@@ -564,8 +534,28 @@ fn features_follow_mirrors_and_glass() {
     );
 }
 
-/// `trace` and then `aov-write` with the same arguments (scene, prefix, samples, seed, ...).
-fn trace_and_features(args: &[&str]) {
+/// `trace` and then `aov-write` of `lxs` with the same arguments (`spp` samples, `seed`, 64×48,
+/// prefix `img` in `dir`); returns a reader of the images of that sample count by kind (`hdr`,
+/// `alb`, `emi`, ...).
+fn trace_and_features(
+    dir: &TempDir,
+    lxs: &std::path::Path,
+    spp: u32,
+    seed: u64,
+) -> impl Fn(&str) -> luxest_io::exr_io::RgbImage {
+    let prefix = dir.path().join("img");
+    let (spp_arg, seed_arg) = (spp.to_string(), seed.to_string());
+    let args = [
+        lxs.to_str().unwrap(),
+        "-o",
+        prefix.to_str().unwrap(),
+        "--spp",
+        &spp_arg,
+        "--resolution",
+        "64x48",
+        "--seed",
+        &seed_arg,
+    ];
     let argv = std::iter::once("trace").chain(args.iter().copied());
     trace::run(luxest_io::cli::parse::<trace::Args>(argv).unwrap().unwrap()).unwrap();
     let argv = std::iter::once("aov-write").chain(args.iter().copied());
@@ -575,4 +565,10 @@ fn trace_and_features(args: &[&str]) {
             .unwrap(),
     )
     .unwrap();
+    move |kind: &str| {
+        use luxest_io::naming::{image_path, Kind, Level};
+        let kind = Kind::from_tag(kind).unwrap();
+        let path = image_path(&prefix, Level::Spp(spp.into()), kind);
+        luxest_io::exr_io::read_rgb(&path).unwrap()
+    }
 }

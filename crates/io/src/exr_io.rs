@@ -92,11 +92,9 @@ pub fn encode_rgb(path: &Path, image: &RgbImage) -> Result<Vec<u8>> {
             ),
         ));
     }
-    let (w, pixels) = (image.width, &image.pixels);
-    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
-        let [r, g, b] = pixels[p.y() * w + p.x()];
-        (r, g, b)
-    });
+    let w = image.width;
+    // The header's channel list (R, G, B as f32) only: the pixel blocks are zip_block's.
+    let channels = SpecificChannels::rgb(|_: Vec2<usize>| (0f32, 0f32, 0f32));
     let mut attributes = LayerAttributes::default();
     for (k, v) in &image.attributes {
         attributes.other.insert(
