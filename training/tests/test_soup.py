@@ -1,0 +1,90 @@
+"""Tests of soup.py: the weighted mean of the ingredients' weights, from runs and exported models
+alike; other networks and overwriting an ingredient refused in one line."""
+import json
+import sys
+from pathlib import Path
+
+import pytest
+import torch
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+import config  # noqa: E402
+import export  # noqa: E402
+import model  # noqa: E402
+import soup  # noqa: E402
+import transfer  # noqa: E402
+
+
+def run_dir(path, seed, width=8):
+    """A run directory holding a randomly initialised network (config.json, checkpoint.pt)."""
+    torch.manual_seed(seed)
+    cfg = config.Config(base_width=width, detail_gate=True)
+    net = model.denoiser(cfg)
+    path.mkdir(parents=True)
+    cfg.save(path / "config.json")
+    torch.save({"model": net.state_dict(), "step": 0}, path / "checkpoint.pt")
+    return net.state_dict()
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """Two runs of one network, the second also exported (an export takes seconds)."""
+    tmp = tmp_path_factory.mktemp("runs")
+    a, b = run_dir(tmp / "a", 1), run_dir(tmp / "b", 2)
+    export.export(tmp / "b", tmp / "b.onnx")
+    return tmp, a, b
+
+
+def test_soup_is_the_weighted_mean_of_the_ingredients(runs):
+    src, a, b = runs
+    # A run directory, a checkpoint and an exported model are the same kind of ingredient.
+    for ingredients in ([src / "a", src / "b"], [src / "a" / "checkpoint.pt", src / "b.onnx"]):
+        _, mean, _, _ = soup.soup(ingredients)
+        assert mean.keys() == a.keys()
+        for k in a:
+            want = (a[k].double() + b[k].double()) / 2
+            assert torch.allclose(mean[k].double(), want, rtol=0, atol=1e-7), k
+        assert any(not torch.equal(mean[k], a[k]) for k in a)
+    _, mean, _, weights = soup.soup([src / "a", src / "b"], [3, 1])
+    assert weights == [0.75, 0.25]
+    k = "heads.0.weight"
+    assert torch.allclose(mean[k].double(), 0.75 * a[k].double() + 0.25 * b[k].double(), rtol=0, atol=1e-7)
+
+
+def test_a_soup_of_one_model_is_that_model_and_exports(runs, tmp_path):
+    ort = pytest.importorskip("onnxruntime")
+    src, _, a = runs
+    soup.main([str(src / "b.onnx"), str(src / "b"), "--run-dir", str(tmp_path / "s"), "--out", str(tmp_path / "s.onnx")])
+    _, state = export.load_onnx(tmp_path / "s.onnx")
+    assert all(torch.equal(state[k], a[k]) for k in a)
+    assert config.Config.load(tmp_path / "s" / "config.json").run_dir == str(tmp_path / "s")
+    record = json.loads((tmp_path / "s" / "soup.json").read_text())
+    assert [i["weight"] for i in record["ingredients"]] == [0.5, 0.5]
+    assert record["ingredients"][0]["sha256"] == soup.sha256(src / "b.onnx")
+    x = torch.rand(1, 15, 24, 40)
+    x[:, 9:] = 0.0
+    e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
+    outs = [ort.InferenceSession(str(p), providers=["CPUExecutionProvider"]).run(None, {"input": x.numpy(), "exposure": e})[0]
+            for p in (src / "b.onnx", tmp_path / "s.onnx")]
+    assert (outs[0] == outs[1]).all()
+
+
+def test_soup_refuses_other_networks_and_overwriting_an_ingredient(tmp_path):
+    run_dir(tmp_path / "a", 1)
+    run_dir(tmp_path / "w", 2, width=16)
+    with pytest.raises(SystemExit, match=r"w/checkpoint.pt: another network \(base_width 16.*than .*base_width 8"):
+        soup.soup([tmp_path / "a", tmp_path / "w"])
+    with pytest.raises(SystemExit, match="no such file"):
+        soup.soup([tmp_path / "a", tmp_path / "missing.onnx"])
+    (tmp_path / "junk.onnx").write_bytes(b"not a model")
+    with pytest.raises(SystemExit, match="junk.onnx: not a model exported by export.py"):
+        soup.soup([tmp_path / "junk.onnx"])
+    with pytest.raises(SystemExit, match="2 weights for 1 ingredients"):
+        soup.soup([tmp_path / "a"], [1, 2])
+    with pytest.raises(SystemExit, match="is an ingredient's run"):
+        soup.main([str(tmp_path / "a"), "--run-dir", str(tmp_path / "a")])
+    before = (tmp_path / "a" / "checkpoint.pt").read_bytes()
+    with pytest.raises(SystemExit, match="is an ingredient's run"):
+        soup.main([str(tmp_path / "a" / "checkpoint.pt"), "--run-dir", str(tmp_path / "a")])
+    assert (tmp_path / "a" / "checkpoint.pt").read_bytes() == before
