@@ -1,5 +1,6 @@
 """Tests of soup.py: the weighted mean of the ingredients' weights, from runs and exported models
 alike; other networks and overwriting an ingredient refused in one line."""
+import hashlib
 import json
 import sys
 from pathlib import Path
@@ -61,7 +62,7 @@ def test_a_soup_of_one_model_is_that_model_and_exports(runs, tmp_path):
     assert config.Config.load(tmp_path / "s" / "config.json").run_dir == str(tmp_path / "s")
     record = json.loads((tmp_path / "s" / "soup.json").read_text())
     assert [i["weight"] for i in record["ingredients"]] == [0.5, 0.5]
-    assert record["ingredients"][0]["sha256"] == soup.sha256(src / "b.onnx")
+    assert record["ingredients"][0]["sha256"] == hashlib.sha256((src / "b.onnx").read_bytes()).hexdigest()
     x = torch.rand(1, 15, 24, 40)
     x[:, 9:] = 0.0
     e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
@@ -80,11 +81,26 @@ def test_soup_refuses_other_networks_and_overwriting_an_ingredient(tmp_path):
     (tmp_path / "junk.onnx").write_bytes(b"not a model")
     with pytest.raises(SystemExit, match="junk.onnx: not a model exported by export.py"):
         soup.soup([tmp_path / "junk.onnx"])
+    (tmp_path / "odd").mkdir()
+    (tmp_path / "odd" / "config.json").write_text("{")
+    torch.save({"model": {}}, tmp_path / "odd" / "checkpoint.pt")
+    with pytest.raises(SystemExit, match="odd/config.json: not a run configuration"):
+        soup.soup([tmp_path / "odd"])
     with pytest.raises(SystemExit, match="2 weights for 1 ingredients"):
         soup.soup([tmp_path / "a"], [1, 2])
-    with pytest.raises(SystemExit, match="is an ingredient's run"):
-        soup.main([str(tmp_path / "a"), "--run-dir", str(tmp_path / "a")])
-    before = (tmp_path / "a" / "checkpoint.pt").read_bytes()
-    with pytest.raises(SystemExit, match="is an ingredient's run"):
-        soup.main([str(tmp_path / "a" / "checkpoint.pt"), "--run-dir", str(tmp_path / "a")])
-    assert (tmp_path / "a" / "checkpoint.pt").read_bytes() == before
+    with pytest.raises(SystemExit, match="must be finite, non-negative"):
+        soup.soup([tmp_path / "a", tmp_path / "a"], [float("nan"), 1])
+    # Nothing is written when an output would overwrite an ingredient's file, a file of the soup's
+    # own run, or a run that is not a soup.
+    before = {p: p.read_bytes() for p in (tmp_path / "a").iterdir()}
+    for args, message in [
+        (["--run-dir", str(tmp_path / "a")], "--run-dir .*a/config.json: is an ingredient's file"),
+        (["--run-dir", str(tmp_path / "s"), "--out", str(tmp_path / "a" / "checkpoint.pt")], "--out .*: is an ingredient's file"),
+        (["--run-dir", str(tmp_path / "s"), "--out", str(tmp_path / "s" / "soup.json")], "is one of --run-dir's files"),
+        (["--run-dir", str(tmp_path / "s"), "--out", str(tmp_path / "nowhere" / "s.onnx")], "not a file in an existing directory"),
+        (["--run-dir", str(tmp_path / "w")], "--run-dir .*w: holds something other than a soup"),
+    ]:
+        with pytest.raises(SystemExit, match=message):
+            soup.main([str(tmp_path / "a" / "checkpoint.pt"), str(tmp_path / "a")] + args)
+    assert {p: p.read_bytes() for p in (tmp_path / "a").iterdir()} == before
+    assert not (tmp_path / "s").exists() and not (tmp_path / "w" / "soup.json").exists()
