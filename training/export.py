@@ -63,14 +63,28 @@ def load_onnx(model_path):
     return cfg, {k: torch.from_numpy(weights[k].copy()) for k in state}
 
 
+def write_run(run_dir, cfg, state, extra=None):
+    """A run directory of weights without a training behind them (config.json of `cfg`,
+    checkpoint.pt of `state` with no step or optimiser state) and the `extra` text files {name:
+    text}: each written beside its name first, then all renamed, so an earlier such run there is
+    replaced whole."""
+    run = Path(run_dir)
+    run.mkdir(parents=True, exist_ok=True)
+    tmp = {name: run / f"{name}.tmp" for name in ("config.json", "checkpoint.pt", *(extra or {}))}
+    cfg.save(tmp["config.json"])
+    torch.save({"model": state, "step": None}, tmp["checkpoint.pt"])
+    for name, text in (extra or {}).items():
+        tmp[name].write_text(text)
+    for name, t in tmp.items():
+        t.replace(run / name)
+
+
 def run_from_onnx(model_path, run_dir):
     """Writes a run directory (config.json, checkpoint.pt) holding the configuration and weights
     of an exported model (load_onnx), so that a committed model can be exported again (e.g. with
     --antialiased-emission) without its run."""
     cfg, state = load_onnx(model_path)
-    Path(run_dir).mkdir(parents=True, exist_ok=True)
-    cfg.save(Path(run_dir) / "config.json")
-    torch.save({"model": state, "step": None}, Path(run_dir) / "checkpoint.pt")
+    write_run(run_dir, cfg, state)
 
 
 def export(run_dir, out_path, metrics=None, antialiased_emission=False):

@@ -70,8 +70,8 @@ def network(cfg):
 
 def soup(ingredients, weights=None):
     """(Config of the first ingredient, the weighted mean of the ingredients' weights, the files
-    read, the normalised weights). Weights default to equal; they are normalised to sum to one. The mean is taken in
-    float64 and stored in each tensor's own type."""
+    read, the normalised weights). Weights default to equal; they are normalised to sum to one.
+    The mean is taken in float64 and stored in each tensor's own type."""
     if not ingredients:
         raise SystemExit("soup: no ingredients")
     weights = [1.0] * len(ingredients) if weights is None else [float(w) for w in weights]
@@ -109,16 +109,9 @@ def sha256(path):
 def write(run_dir, cfg, state, files, weights):
     """The soup's run directory: the first ingredient's configuration (the network; its training
     fields are that ingredient's) with run_dir this directory, the weights, soup.json."""
-    run = Path(run_dir)
-    run.mkdir(parents=True, exist_ok=True)
     cfg.run_dir = str(run_dir)
-    tmp = {name: run / f"{name}.tmp" for name in ("config.json", "checkpoint.pt", "soup.json")}
-    cfg.save(tmp["config.json"])
-    torch.save({"model": state, "step": None}, tmp["checkpoint.pt"])
     record = {"ingredients": [{"path": str(p), "sha256": sha256(p), "weight": w} for p, w in zip(files, weights)]}
-    tmp["soup.json"].write_text(json.dumps(record, indent=2) + "\n")
-    for name, t in tmp.items():  # all three written before any replaces an earlier soup's
-        t.replace(run / name)
+    export.write_run(run_dir, cfg, state, {"soup.json": json.dumps(record, indent=2) + "\n"})
 
 
 def plan(ingredients, run_dir, out):
