@@ -29,22 +29,21 @@ def score(evaluate, reference, tests, out_csv):
     return contract.read_image_report(out_csv)
 
 
-def oidn_split(done, split_dir, work_dir):
+def oidn_split(done, scan, work_dir):
     """OIDN's output for each denoised input of `done` (infer.denoise_split's list), with the
-    features next to the input, into work_dir/oidn (computed once: an existing output newer than
-    its input is kept). Returns {noisy path: OIDN output path}."""
-    sys.path.insert(0, str(PIPELINES))
+    features next to the input (`scan`: contract.scan of the split), into work_dir/oidn. Returns
+    {noisy path: OIDN output path}."""
+    if str(PIPELINES) not in sys.path:
+        sys.path.insert(0, str(PIPELINES))
     import oidn_denoise
 
     out_dir = Path(work_dir) / "oidn"
     out_dir.mkdir(parents=True, exist_ok=True)
-    scan = contract.scan(split_dir)
     outs = {}
     for name, spp, noisy, _ in done:
         feats = next(f for k, f in scan[name].items() if k is not None and Path(f["hdr"]) == Path(noisy))
         out = out_dir / contract.image_name(name, "dn", spp)
-        if not out.exists() or out.stat().st_mtime < Path(noisy).stat().st_mtime:
-            oidn_denoise.main([str(noisy), "--alb", str(feats["alb"]), "--nrm", str(feats["nrm"]), "-o", str(out)])
+        oidn_denoise.main([str(noisy), "--alb", str(feats["alb"]), "--nrm", str(feats["nrm"]), "-o", str(out)])
         outs[str(noisy)] = out
     return outs
 
@@ -62,7 +61,7 @@ def compare(model, split_dir, work_dir, evaluate, spp_levels, oidn=False):
     if missing:
         raise contract.ContractError(f"{split_dir}: {', '.join(missing)} without a reference image (<scene>_ref.hdr.exr)")
     done = infer.denoise_split(model, split_dir, work, spp_levels)
-    peer = oidn_split(done, split_dir, work) if oidn else {}
+    peer = oidn_split(done, scan, work) if oidn else {}
     keys = KEYS if oidn else KEYS[:4]
     per_level, per_scene = {}, {}
     for name in sorted({d[0] for d in done}):

@@ -63,6 +63,11 @@ def load_onnx(model_path):
     return cfg, {k: torch.from_numpy(weights[k].copy()) for k in state}
 
 
+def temp_of(path):
+    """Where a file is written before it is renamed to `path` (write_run, export)."""
+    return Path(str(path) + ".tmp")
+
+
 def write_run(run_dir, cfg, state, extra=None):
     """A run directory of weights without a training behind them (config.json of `cfg`,
     checkpoint.pt of `state` with no step or optimiser state) and the `extra` text files {name:
@@ -70,7 +75,7 @@ def write_run(run_dir, cfg, state, extra=None):
     replaced whole."""
     run = Path(run_dir)
     run.mkdir(parents=True, exist_ok=True)
-    tmp = {name: run / f"{name}.tmp" for name in ("config.json", "checkpoint.pt", *(extra or {}))}
+    tmp = {name: temp_of(run / name) for name in ("config.json", "checkpoint.pt", *(extra or {}))}
     cfg.save(tmp["config.json"])
     torch.save({"model": state, "step": None}, tmp["checkpoint.pt"])
     for name, text in (extra or {}).items():
@@ -103,7 +108,7 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
     x = torch.rand(1, net.in_channels, 48, 64)
     e = torch.tensor([0.5])
     h, w = torch.export.Dim("h", min=1, max=16384), torch.export.Dim("w", min=1, max=16384)
-    tmp = Path(str(out_path) + ".tmp")
+    tmp = temp_of(out_path)
     torch.onnx.export(net, (x, e), str(tmp), input_names=["input", "exposure"],
                       output_names=["output"], dynamic_shapes={"x": {2: h, 3: w}, "exposure": None},
                       external_data=False)

@@ -124,7 +124,7 @@ def plan(ingredients, run_dir, out):
         out = Path(out)
         if out.resolve() in {p.resolve() for p in outputs}:
             raise SystemExit(f"soup: --out {out}: is one of --run-dir's files")
-        outputs.update({out: "--out", Path(str(out) + ".tmp"): "--out"})
+        outputs.update({out: "--out", export.temp_of(out): "--out"})
         if out.is_dir() or not out.resolve().parent.is_dir():
             raise SystemExit(f"soup: --out {out}: not a file in an existing directory")
     read = {f.resolve() for p in ingredients for f in files_read(p)}
