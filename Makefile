@@ -125,7 +125,7 @@ $(VENV)/$(VENV_STAMP): scripts/setup-python.sh training/requirements.txt
 pytest: $(VENV)/$(VENV_STAMP)
 	$(PYTHON) -m pytest training/tests -q
 
-# The denoiser: preprocess the dataset, train (TRAIN_STEPS / TRAIN_MINUTES / TRAIN_SCHEDULE), export ONNX, and
+# The denoiser: preprocess the dataset, train (TRAIN_STEPS / TRAIN_MINUTES / TRAIN_SCHEDULE / TRAIN_LOSS), export ONNX, and
 # score it on the held-out test scenes with the evaluate stage (MODEL: defined before eval.mk).
 
 train: $(MODEL)
@@ -140,7 +140,7 @@ $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract
 		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE)
 	cd training && ../$(PYTHON) train.py --prep-dir ../build/train/$(DATASET) --run-dir ../runs/$(DATASET) \
 		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) --steps $(TRAIN_STEPS) --minutes $(TRAIN_MINUTES) \
-		--schedule $(TRAIN_SCHEDULE)
+		--schedule $(TRAIN_SCHEDULE) --loss $(TRAIN_LOSS)
 	cd training && ../$(PYTHON) export.py --run-dir ../runs/$(DATASET) --out ../$@
 	cd training && ../$(PYTHON) compare_image.py --model ../$@ --split-dir ../$(DATA_DIR)/test \
 		--work-dir ../build/train/$(DATASET)/compare --evaluate $(if $(findstring /,$(EVALUATE)),$(abspath $(EVALUATE)),$(EVALUATE)) \

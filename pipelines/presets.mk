@@ -46,6 +46,9 @@ $(eval $(call lx_preset,TRAIN_MINUTES,17,600))
 # machine's speed. With `steps` the cycle spans TRAIN_STEPS alone, and a run the time budget cuts
 # short ends with its rate still high (the clean-clone run above: 4 % of the peak).
 TRAIN_SCHEDULE ?= time
+# TRAIN_LOSS: l1 (L1 + MS-SSIM of the log-transferred radiance) or psnr (minus the evaluation's
+# PSNR per crop; training/loss.py). The committed default model was fine-tuned with psnr.
+TRAIN_LOSS ?= l1
 
 # Evaluation (pipelines/eval.mk): the Cornell-box reference spp and progressive run's last spp,
 # double-local-estimate light paths on the Cornell box, light-tracing paths on the Cornell box

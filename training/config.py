@@ -30,6 +30,7 @@ class Config:
     steps: int = 3000                    # schedule length (stops earlier if out of time)
     schedule: str = "steps"              # the one cycle spans `steps` (steps) or `minutes` (time; steps a cap)
     ms_ssim_weight: float = 0.2          # loss = (1 - w) L1 + w (1 - MS-SSIM)
+    loss: str = "l1"                     # l1: the line above; psnr: minus the evaluation's PSNR per crop (loss.py)
     seed: int = 1
     threads: int = 2
     workers: int = -1                    # DataLoader worker processes (-1: none on CPU, 8 on a GPU)
@@ -60,6 +61,7 @@ class Config:
         values.setdefault("schedule", "steps")
         values.setdefault("cropper", "auto")
         values.setdefault("detail_gate", False)
+        values.setdefault("loss", "l1")
         return Config(**values)
 
 

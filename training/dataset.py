@@ -54,18 +54,21 @@ def pairs(prep_split_dir, noisy_spp=None, dle_paths=None):
 
 
 class Crops(torch.utils.data.Dataset):
-    """Random training crops: (input 9 or 12 x H x W, reference 3xHxW, exposure) with flips,
-    transposes and a random permutation of the RGB channels applied alike to hdr, albedo,
-    emission and reference;
-    the exposure is the stored whole-image exposure of the input under that permutation."""
+    """Random training crops: (input 9 or 12 x H x W, reference 3xHxW, exposure, reference
+    exposure) with flips, transposes and a random permutation of the RGB channels applied alike
+    to hdr, albedo, emission and reference; the exposure is the stored whole-image exposure of
+    the input under that permutation (the network's transfer), the reference exposure that of
+    the whole reference (the evaluation's tonemap, loss.display)."""
 
     def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None):
         refs = {}  # a scene's inputs share its reference array (DeviceCrops holds it once)
         self.pairs = []
         for i, r, m in pairs(prep_split_dir, noisy_spp, dle_paths):
             if r not in refs:
-                refs[r] = np.load(r, mmap_mode="r")
-            self.pairs.append((np.load(i, mmap_mode="r"), refs[r], m["exposures"]))
+                arr = np.load(r, mmap_mode="r")
+                refs[r] = (arr, whole_image_exposures(np.asarray(arr, dtype=np.float32)))
+            ref, ref_exposures = refs[r]
+            self.pairs.append((np.load(i, mmap_mode="r"), ref, m["exposures"], ref_exposures))
         if not self.pairs:
             raise FileNotFoundError(f"{prep_split_dir}: no preprocessed pairs (run preprocess.py)")
         self.crop, self.seed, self.length = crop, seed, length
@@ -86,7 +89,7 @@ class Crops(torch.utils.data.Dataset):
 
     def __getitem__(self, i):
         p, y, x, flip_x, flip_y, swap, k = self.draw(i)
-        inp, ref, exposures = self.pairs[p]
+        inp, ref, exposures, ref_exposures = self.pairs[p]
         c = self.crop
         a = np.array(inp[y:y + c, x:x + c], dtype=np.float32)
         b = np.array(ref[y:y + c, x:x + c], dtype=np.float32)
@@ -99,7 +102,8 @@ class Crops(torch.utils.data.Dataset):
         order = channel_order(k, a.shape[-1])
         a, b = a[..., order], b[..., order[:3]]
         to = lambda t: torch.from_numpy(np.ascontiguousarray(t.transpose(2, 0, 1)))
-        return to(a), to(b), torch.tensor(exposures[k], dtype=torch.float32)
+        return (to(a), to(b), torch.tensor(exposures[k], dtype=torch.float32),
+                torch.tensor(ref_exposures[k], dtype=torch.float32))
 
 
 def channel_order(k, channels):
@@ -118,13 +122,13 @@ class DeviceCrops:
 
     def __init__(self, crops, device):
         self.crops, self.device = crops, torch.device(device)
-        channels = {inp.shape[-1] for inp, _, _ in crops.pairs}
+        channels = {pair[0].shape[-1] for pair in crops.pairs}
         if len(channels) != 1:
             raise ValueError(f"inputs of {sorted(channels)} channels in one split")
         flat = lambda arr: torch.from_numpy(np.array(arr, dtype=np.float32)).reshape(-1, arr.shape[-1])  # a copy
         inputs, refs, ref_at, starts, ref_starts, widths = [], [], {}, [], [], []
         n = m = 0
-        for inp, ref, _ in crops.pairs:
+        for inp, ref, *_ in crops.pairs:
             if id(ref) not in ref_at:
                 ref_at[id(ref)] = m
                 refs.append(flat(ref))
@@ -139,12 +143,14 @@ class DeviceCrops:
         long = lambda v: to(torch.tensor(v, dtype=torch.int64))
         self.starts, self.ref_starts, self.widths = long(starts), long(ref_starts), long(widths)
         self.orders = long([channel_order(k, self.inputs.shape[1]) for k in range(len(PERMUTATIONS))])
-        self.exposures = to(torch.tensor([e for _, _, e in crops.pairs], dtype=torch.float32))
+        self.exposures = to(torch.tensor([e for _, _, e, _ in crops.pairs], dtype=torch.float32))
+        self.ref_exposures = to(torch.tensor([e for *_, e in crops.pairs], dtype=torch.float32))
         grid = torch.arange(crops.crop, device=self.device)
         self.rows, self.cols = grid.view(1, -1, 1), grid.view(1, 1, -1)
 
     def batch(self, indices):
-        """(inputs, references, exposures) of crops `indices`, as a DataLoader batches them."""
+        """(inputs, references, exposures, reference exposures) of crops `indices`, as a
+        DataLoader batches them."""
         draws = torch.tensor([self.crops.draw(i) for i in indices], dtype=torch.int64)
         if self.device.type == "cuda":  # one asynchronous copy (a pageable one waits for the GPU)
             draws = draws.pin_memory().to(self.device, non_blocking=True)
@@ -163,4 +169,5 @@ class DeviceCrops:
         order = self.orders[k.view(-1)][:, None, None, :]
         a = torch.gather(a, 3, order.expand_as(a))
         b = torch.gather(b, 3, order[..., :3].expand_as(b))
-        return a.permute(0, 3, 1, 2), b.permute(0, 3, 1, 2), self.exposures[p.view(-1), k.view(-1)]
+        at = (p.view(-1), k.view(-1))
+        return a.permute(0, 3, 1, 2), b.permute(0, 3, 1, 2), self.exposures[at], self.ref_exposures[at]

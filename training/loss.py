@@ -1,6 +1,16 @@
-"""L1 + MS-SSIM on transferred images (Zhao et al., "Loss Functions for Image Restoration with
+"""The training losses (train.py --loss).
+
+l1: L1 + MS-SSIM on transferred images (Zhao et al., "Loss Functions for Image Restoration with
 Neural Networks", 2017). MS-SSIM with a Gaussian window (sigma 1.5, 11 taps), 3 scales with
-weights renormalised from Wang et al. 2003, on images in [0, ~1] (log1p of exposed radiance)."""
+weights renormalised from Wang et al. 2003, on images in [0, ~1] (log1p of exposed radiance).
+
+psnr: minus the PSNR that `evaluate images` scores, per crop, averaged over the batch: the mean
+squared error of the evaluation's tonemap (`display`, with the reference's whole-image exposure)
+in decibels. L1 is minimised by a median of what the input leaves uncertain (an edge under 1 spp,
+a firefly), the squared error by its mean; the log of each crop's error weighs each crop's
+relative improvement alike, as the per-image PSNR averaged over images and noise levels does."""
+import math
+
 import torch
 import torch.nn.functional as F
 
@@ -45,3 +55,25 @@ def ms_ssim(a, b):
 def loss(pred, target, ms_ssim_weight):
     l1 = (pred - target).abs().mean()
     return (1 - ms_ssim_weight) * l1 + ms_ssim_weight * (1 - ms_ssim(pred, target))
+
+
+SRGB_KNEE = 0.0031308
+PSNR_FLOOR = 1e-6
+"""Added to each crop's mean squared error before its log (60 dB): a flat crop matched exactly
+does not weigh without bound."""
+
+
+def display(x, k):
+    """`evaluate images`' tonemap (crates/evaluate/src/images.rs, luxest_contract) of linear
+    (N, 3, H, W) radiance with exposures k (N,): max(x, 0) k, Reinhard x / (1 + x), sRGB OETF,
+    clamped to [0, 1]."""
+    v = x.clamp(min=0) * k.view(-1, 1, 1, 1)
+    t = v / (1 + v)
+    return torch.where(t <= SRGB_KNEE, 12.92 * t, 1.055 * t.clamp(min=SRGB_KNEE) ** (1 / 2.4) - 0.055).clamp(0, 1)
+
+
+def psnr_loss(pred, ref, k):
+    """Minus the mean over the batch of each crop's PSNR (dB) of `display(pred, k)` against
+    `display(ref, k)`: linear radiance, k the reference's whole-image exposure."""
+    mse = ((display(pred, k) - display(ref, k)) ** 2).mean(dim=(1, 2, 3))
+    return (10.0 / math.log(10.0)) * torch.log(mse + PSNR_FLOOR).mean()

@@ -294,6 +294,10 @@ class Denoiser(nn.Module):
                 out = out + x[:, a:a + 3].float().clamp(min=0)
         return out, exp
 
+    def linear(self, out, exp):
+        """The output of `transferred` as linear radiance (what the exported model returns)."""
+        return transfer.inverse(out, exp.float()) if self.head == "direct" else out
+
     def loss_domain(self, out, exp):
         """The output of `transferred` in the transferred domain (where the loss is taken)."""
         return out if self.head == "direct" else transfer.forward(out, exp.float())

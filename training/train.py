@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Trains the denoiser: Adam with a one-cycle schedule on random crops, L1 + MS-SSIM in the
-transferred domain (each crop with its whole image's exposure, stored by preprocess.py),
+transferred domain (each crop with its whole image's exposure, stored by preprocess.py) or
+minus the evaluation's PSNR (--loss psnr, loss.py),
 checkpoints and the run's config in <run_dir>, resumable (--resume), channels_last, bf16
 autocast where it pays (--precision). Stops at the step count or the time budget; with
 `--schedule time` the one cycle spans the time budget (all resumed runs together), so that a
@@ -15,6 +16,7 @@ import torch
 
 import config
 import dataset
+import luxest_contract as contract
 import loss as losses
 import model
 import transfer
@@ -118,6 +120,19 @@ def batches(data, cfg, device):
                                             pin_memory=device.type == "cuda"))
 
 
+LOSSES = ("l1", "psnr")
+
+
+def objective(net, out, exp, ref, ref_exp, cfg):
+    """The training loss of the network's output `out` (net.transferred, exposures `exp`)
+    against linear reference radiance `ref` whose whole images have exposures `ref_exp`:
+    `l1`, L1 + MS-SSIM in the transferred domain, or `psnr`, minus the evaluation's PSNR per crop
+    (loss.py)."""
+    if cfg.loss == "psnr":
+        return losses.psnr_loss(net.linear(out.float(), exp), ref.float(), ref_exp.float())
+    return losses.loss(net.loss_domain(out.float(), exp), transfer.forward(ref, exp.float()), cfg.ms_ssim_weight)
+
+
 def validation_loss(net, prep_dir, cfg):
     """Mean loss on centre crops of the valid split (all noisy levels), each transferred with
     its whole image's stored exposure."""
@@ -134,8 +149,7 @@ def validation_loss(net, prep_dir, cfg):
             a = to(np.load(inp_path)[y0:y0 + c, x0:x0 + c])
             b = to(ref[y0:y0 + c, x0:x0 + c])
             pred, exp = net.transferred(a, torch.tensor([meta["exposures"][0]]))
-            pred = net.loss_domain(pred, exp)
-            total += float(losses.loss(pred, transfer.forward(b, exp), cfg.ms_ssim_weight))
+            total += float(objective(net, pred, exp, b, torch.tensor([contract.exposure(ref)]), cfg))
             n += 1
     return total / max(n, 1)
 
@@ -155,6 +169,8 @@ def main(argv=None):
     except ValueError as e:
         raise SystemExit(f"train: {e}")
     opt = torch.optim.Adam(net.parameters(), lr=cfg.lr)
+    if cfg.loss not in LOSSES:
+        raise SystemExit(f"train: --loss {cfg.loss!r}: expected " + " or ".join(LOSSES))
     if cfg.schedule not in ("steps", "time"):
         raise SystemExit(f"train: --schedule {cfg.schedule!r}: expected steps or time")
     by_time = cfg.schedule == "time"
@@ -194,7 +210,7 @@ def main(argv=None):
     start = time.time()
     log = open(run / "log.jsonl", "a")
     net.train()
-    for a, b, e in loader:
+    for a, b, e, e_ref in loader:
         if by_time:  # the budget of all runs together: the cycle ends with it
             elapsed = earlier_seconds + time.time() - start
             if sched.done(step, elapsed):
@@ -203,11 +219,10 @@ def main(argv=None):
         elif step >= cfg.steps or time.time() - start > cfg.minutes * 60:
             break
         a = a.to(device=device, memory_format=torch.channels_last)
-        b, e = b.to(device), e.to(device)
+        b, e, e_ref = b.to(device), e.to(device), e_ref.to(device)
         with torch.autocast(device.type, dtype=dtype or torch.bfloat16, enabled=dtype is not None):
             pred, exp = net.transferred(a, e)
-        target = transfer.forward(b, exp.float())
-        value = losses.loss(net.loss_domain(pred.float(), exp), target, cfg.ms_ssim_weight)
+        value = objective(net, pred, exp, b, e_ref, cfg)
         opt.zero_grad()
         value.backward()
         opt.step()

@@ -87,6 +87,12 @@ def test_local_estimate_family_renders_train_and_valid_scenes_with_the_noisy_see
     lines = r.stdout.replace("\\\n", " ").splitlines()
     runs = [shlex.split(line.split("&&", 1)[1]) for line in lines if "preprocess.py" in line or "train.py" in line]
     assert len(runs) == 2 and all(c[c.index("--dle-paths") + 1:c.index("--dle-paths") + 3] == ["100", "1000"] for c in runs)
+    # And which loss (TRAIN_LOSS, l1 unless set).
+    assert [c[c.index("--loss") + 1] for c in runs if "train.py" in c] == ["l1"]
+    r = make("-n", "-W", "training/train.py", "models/pytest-dry-run.onnx", TRAIN_LOSS="psnr")
+    lines = r.stdout.replace("\\\n", " ").splitlines()
+    train = [shlex.split(line.split("&&", 1)[1]) for line in lines if "train.py" in line]
+    assert len(train) == 1 and train[0][train[0].index("--loss") + 1] == "psnr"
 
 
 def test_references_follow_ref_spp():

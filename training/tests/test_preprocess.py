@@ -86,15 +86,18 @@ def test_stores_the_whole_image_exposure_for_every_crop(tmp_path):
     assert (meta["samples"], meta["seed"], meta["reference_seed"]) == (4, 1, 1000001)
     assert math.isclose(meta["exposures"][0], contract.exposure(hdr), rel_tol=1e-15)
     crops = dataset.Crops(tmp_path / "prep", crop=16, seed=5, length=40)
+    reference = contract.read(src / contract.image_name("g", "hdr")).pixels[..., :3]
     seen, differs = set(), 0
     for i in range(len(crops)):
-        a, b, e = crops[i]
+        a, b, e, e_ref = crops[i]
         assert a.shape[0] == 15 and torch.allclose(a[9:12], 0.5 * a[0:3], rtol=1e-6)
         assert torch.allclose(a[12:15], 0.25 * a[0:3], rtol=1e-6)
         perm = tuple(int(r) for r in np.argsort(np.argsort([float(a[j].mean()) for j in range(3)])))
         seen.add(perm)
         whole = contract.exposure(hdr[..., list(perm)])
         assert math.isclose(float(e), whole, rel_tol=1e-6)
+        # The reference's whole-image exposure under the same permutation (loss.display's).
+        assert math.isclose(float(e_ref), contract.exposure(reference[..., list(perm)]), rel_tol=1e-6)
         own = contract.exposure(a[0:3].permute(1, 2, 0).numpy())
         differs += not math.isclose(float(e), own, rel_tol=0.5)
     assert len(seen) > 1 and differs > len(crops) // 2  # a per-crop exposure would be wrong

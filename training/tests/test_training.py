@@ -248,6 +248,67 @@ def test_one_training_step_lowers_the_loss(head, device):
     assert float(after) < float(before.detach())
 
 
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_display_is_the_evaluations_tonemap():
+    # loss.display against the evaluation tonemap Rust computes (tests/contract.rs writes it,
+    # evaluate::metrics::tonemap of a row of values at a fixed image's exposure).
+    fixture = ROOT / "tests" / "fixtures" / "contract" / "exposure.json"
+    expected = json.loads(fixture.read_text())["tonemap"]
+    x = torch.tensor(expected["input"], dtype=torch.float64).view(1, 1, 1, -1).expand(1, 3, 1, -1)
+    got = losses.display(x, torch.tensor([expected["exposure"]], dtype=torch.float64))
+    for c in range(3):
+        assert np.allclose(got[0, c, 0].numpy(), expected["output"], rtol=1e-12, atol=1e-15)
+
+
+def test_psnr_loss_is_minus_the_evaluations_psnr():
+    # The metrics fixture (tests/fixtures/metrics: numpy and scikit-image transcriptions that
+    # Rust's evaluate is checked against): a linear pair, the reference's autoexposure, and the
+    # PSNR of the pair after the tonemap. One crop of the whole image: the loss is minus that
+    # PSNR, up to the floor added to the squared error.
+    import luxest_contract as contract
+
+    d = ROOT / "tests" / "fixtures" / "metrics"
+    values = dict(line.split(" ", 1) for line in (d / "expected.txt").read_text().splitlines() if line and not line.startswith("#"))
+    to = lambda a: torch.from_numpy(np.asarray(a, dtype=np.float64)).permute(2, 0, 1)[None]
+    ref = contract.read(d / "hdr_ref.exr").pixels[..., :3]
+    test = contract.read(d / "hdr_test.exr").pixels[..., :3]
+    k = contract.exposure(ref)
+    assert k == pytest.approx(float(values["hdr.autoexposure"]), rel=1e-9)
+    psnr = float(values["hdr.tm.psnr"])
+    got = float(losses.psnr_loss(to(test), to(ref), torch.tensor([k], dtype=torch.float64)))
+    assert got == pytest.approx(10 * np.log10(10 ** (-psnr / 10) + losses.PSNR_FLOOR), abs=1e-9)
+    # Per crop, then averaged: a batch of the pair and of the pair halved in error.
+    half = to(ref) + 0.5 * (to(test) - to(ref))
+    mse_half = float(((losses.display(half, torch.tensor([k], dtype=torch.float64)) - losses.display(to(ref), torch.tensor([k], dtype=torch.float64))) ** 2).mean())
+    both = float(losses.psnr_loss(torch.cat([to(test), half]), torch.cat([to(ref), to(ref)]), torch.tensor([k, k], dtype=torch.float64)))
+    assert both == pytest.approx((got + 10 * np.log10(mse_half + losses.PSNR_FLOOR)) / 2, abs=1e-9)
+
+
+@pytest.mark.parametrize("head", model.HEADS)
+def test_one_psnr_step_raises_the_psnr(head):
+    torch.manual_seed(2)
+    net = Denoiser(width=8, head=head)
+    ref = torch.rand(4, 3, 32, 32)
+    noisy = ref * (1 + 0.5 * torch.randn_like(ref)).clamp(min=0)
+    inp = torch.cat([noisy, torch.rand(4, 3, 32, 32), torch.rand(4, 3, 32, 32)], 1)
+    opt = torch.optim.Adam(net.parameters(), lr=1e-3)
+    cfg = config.parse(["--loss", "psnr"])
+    import train
+
+    def current():
+        pred, exp = net.transferred(inp, transfer.exposure_of(noisy))
+        return train.objective(net, pred, exp, ref, transfer.exposure_of(ref), cfg)
+
+    before = current()
+    opt.zero_grad()
+    before.backward()
+    opt.step()
+    with torch.no_grad():
+        assert float(current()) < float(before.detach())
+
+
 def test_ms_ssim_is_one_for_identical_images_and_less_otherwise():
     a = torch.rand(2, 3, 64, 64)
     assert abs(float(losses.ms_ssim(a, a)) - 1.0) < 1e-5
@@ -400,6 +461,12 @@ def test_training_runs_its_steps_and_resumes(tmp_path):
     assert record["run"]["seconds"] >= first["seconds"] and record["head"] == "kpn"
     expected = "bf16" if train.autocast_dtype(torch.device("cpu"), "auto") is not None else "fp32"
     assert record["precision"] == "auto" and record["run"]["autocast"] == expected
+    # The other loss trains and is recorded; an unknown one is refused in one line.
+    train.main(args + ["--steps", "2", "--loss", "psnr", "--run-dir", str(tmp_path / "psnr")])
+    record = json.loads((tmp_path / "psnr" / "run.json").read_text())
+    assert record["loss"] == "psnr" and record["run"]["steps"] == 2 and record["run"]["valid_loss"] < 0
+    with pytest.raises(SystemExit, match="--loss 'l2'"):
+        train.main(args + ["--steps", "2", "--loss", "l2", "--run-dir", str(tmp_path / "l2")])
 
 
 def test_autocast_follows_the_precision_and_the_cpu():
@@ -459,7 +526,7 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path):
                 contract.write(d / contract.image_name(name, kind, spp), rng.random((h, w, 3)), {contract.SAMPLES: spp, contract.SEED: 1})
     preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4, 16])
     data = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=96)
-    assert len(data.pairs) == 4 and len({id(r) for _, r, _ in data.pairs}) == 2
+    assert len(data.pairs) == 4 and len({id(r) for _, r, *_ in data.pairs}) == 2
     draws = [data.draw(i) for i in range(96)]
     assert {d[3:6] for d in draws} == {(a, b, c) for a in (False, True) for b in (False, True) for c in (False, True)}
     assert {d[6] for d in draws} == set(range(len(dataset.PERMUTATIONS)))
