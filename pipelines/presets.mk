@@ -47,7 +47,8 @@ $(eval $(call lx_preset,TRAIN_MINUTES,17,600))
 # short ends with its rate still high (the clean-clone run above: 4 % of the peak).
 TRAIN_SCHEDULE ?= time
 # TRAIN_LOSS: l1 (L1 + MS-SSIM of the log-transferred radiance) or psnr (minus the evaluation's
-# PSNR per crop; training/loss.py). The committed default model was fine-tuned with psnr.
+# PSNR per crop; training/loss.py). The committed default model was fine-tuned with psnr from a
+# model trained with l1; psnr from scratch is unmeasured.
 TRAIN_LOSS ?= l1
 
 # Evaluation (pipelines/eval.mk): the Cornell-box reference spp and progressive run's last spp,

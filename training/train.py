@@ -140,16 +140,19 @@ def validation_loss(net, prep_dir, cfg):
 
     total, n = 0.0, 0
     to = lambda arr: torch.from_numpy(arr.transpose(2, 0, 1).copy())[None]
+    ref_exposures = {}  # of each whole reference, once
     with torch.no_grad():
         for inp_path, ref_path, meta in dataset.pairs(Path(prep_dir) / "valid", cfg.noisy_spp, cfg.dle_paths):
             ref = np.load(ref_path)
+            if ref_path not in ref_exposures:
+                ref_exposures[ref_path] = contract.exposure(ref)
             h, w = ref.shape[:2]
             c = min(h, w) // 16 * 16
             y0, x0 = (h - c) // 2, (w - c) // 2
             a = to(np.load(inp_path)[y0:y0 + c, x0:x0 + c])
             b = to(ref[y0:y0 + c, x0:x0 + c])
             pred, exp = net.transferred(a, torch.tensor([meta["exposures"][0]]))
-            total += float(objective(net, pred, exp, b, torch.tensor([contract.exposure(ref)]), cfg))
+            total += float(objective(net, pred, exp, b, torch.tensor([ref_exposures[ref_path]]), cfg))
             n += 1
     return total / max(n, 1)
 
@@ -190,6 +193,8 @@ def main(argv=None):
         saved = config.Config.load(run / "config.json") if (run / "config.json").exists() else cfg
         if saved.schedule != cfg.schedule:  # the other kind's state would silently restart the cycle
             raise SystemExit(f"train: --resume {run}: the run's schedule is {saved.schedule!r}, not {cfg.schedule!r}")
+        if saved.loss != cfg.loss:  # Adam's moments and the record would belong to the other objective
+            raise SystemExit(f"train: --resume {run}: the run's loss is {saved.loss!r}, not {cfg.loss!r}")
         if any(getattr(saved, k) != getattr(cfg, k) for k in config.NETWORK):  # its weights would not load
             raise SystemExit(f"train: --resume {run}: the run trains " + ", ".join(f"{k} {getattr(saved, k)}" for k in config.NETWORK)
                              + "; this one " + ", ".join(f"{k} {getattr(cfg, k)}" for k in config.NETWORK))

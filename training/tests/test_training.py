@@ -279,11 +279,19 @@ def test_psnr_loss_is_minus_the_evaluations_psnr():
     psnr = float(values["hdr.tm.psnr"])
     got = float(losses.psnr_loss(to(test), to(ref), torch.tensor([k], dtype=torch.float64)))
     assert got == pytest.approx(10 * np.log10(10 ** (-psnr / 10) + losses.PSNR_FLOOR), abs=1e-9)
-    # Per crop, then averaged: a batch of the pair and of the pair halved in error.
-    half = to(ref) + 0.5 * (to(test) - to(ref))
-    mse_half = float(((losses.display(half, torch.tensor([k], dtype=torch.float64)) - losses.display(to(ref), torch.tensor([k], dtype=torch.float64))) ** 2).mean())
-    both = float(losses.psnr_loss(torch.cat([to(test), half]), torch.cat([to(ref), to(ref)]), torch.tensor([k, k], dtype=torch.float64)))
+    # Per crop with its own exposure, then averaged: a batch of the pair and of the pair halved
+    # in error at another exposure, against a numpy transcription of the tonemap's definition.
+    def tonemap(v, e):
+        x = np.maximum(np.asarray(v, dtype=np.float64), 0) * e
+        t = x / (1 + x)
+        return np.clip(np.where(t <= 0.0031308, 12.92 * t, 1.055 * np.power(np.maximum(t, 0.0031308), 1 / 2.4) - 0.055), 0, 1)
+
+    half = ref + 0.5 * (test - ref)
+    mse_half = float(((tonemap(half, 3 * k) - tonemap(ref, 3 * k)) ** 2).mean())
+    both = float(losses.psnr_loss(torch.cat([to(test), to(half)]), torch.cat([to(ref), to(ref)]), torch.tensor([k, 3 * k], dtype=torch.float64)))
     assert both == pytest.approx((got + 10 * np.log10(mse_half + losses.PSNR_FLOOR)) / 2, abs=1e-9)
+    # Overflowing radiance tonemaps to white, not NaN.
+    assert float(losses.display(torch.full((1, 3, 1, 1), float("inf")), torch.tensor([1.0]))[0, 0, 0, 0]) == pytest.approx(1.0, abs=1e-6)
 
 
 @pytest.mark.parametrize("head", model.HEADS)
@@ -307,6 +315,12 @@ def test_one_psnr_step_raises_the_psnr(head):
     opt.step()
     with torch.no_grad():
         assert float(current()) < float(before.detach())
+        # An output equal to the reference (as each head expresses it) scores the floor: the
+        # objective reads a direct head's output through the inverse transfer.
+        _, exp = net.transferred(inp, transfer.exposure_of(noisy))  # as the network shapes it
+        perfect = ref if head == "kpn" else transfer.forward(ref, exp)
+        floor = 10 * np.log10(losses.PSNR_FLOOR)
+        assert float(train.objective(net, perfect, exp, ref, transfer.exposure_of(ref), cfg)) == pytest.approx(floor, abs=1e-3)
 
 
 def test_ms_ssim_is_one_for_identical_images_and_less_otherwise():
@@ -467,6 +481,9 @@ def test_training_runs_its_steps_and_resumes(tmp_path):
     assert record["loss"] == "psnr" and record["run"]["steps"] == 2 and record["run"]["valid_loss"] < 0
     with pytest.raises(SystemExit, match="--loss 'l2'"):
         train.main(args + ["--steps", "2", "--loss", "l2", "--run-dir", str(tmp_path / "l2")])
+    # A run is resumed with its own loss only.
+    with pytest.raises(SystemExit, match="the run's loss is 'psnr', not 'l1'"):
+        train.main(args + ["--steps", "4", "--run-dir", str(tmp_path / "psnr"), "--resume"])
 
 
 def test_autocast_follows_the_precision_and_the_cpu():
@@ -536,6 +553,7 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path):
     theirs = list(torch.utils.data.DataLoader(data, batch_size=8))
     assert len(ours) == len(theirs) == 12
     for one, two in zip(ours, theirs):
+        assert len(one) == len(two) == 4  # inputs, references, their exposures
         for x, y in zip(one, two):
             assert x.shape == y.shape and torch.equal(x, y)
         assert one[0].is_contiguous(memory_format=torch.channels_last)
