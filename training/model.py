@@ -265,7 +265,7 @@ class Denoiser(nn.Module):
         x = F.pad(x, (0, pw, 0, ph), mode="replicate")
         out, exp = self.transferred(x, exposure)
         out = out[:, :, :h, :w]
-        return transfer.inverse(out, exp) if self.head == "direct" else out
+        return self.linear(out, exp)
 
     def transferred(self, x, exposure):
         """(output, exposure as (N, 1, 1, 1)) for x of H, W multiples of 16. `exposure` (N,):
@@ -296,7 +296,7 @@ class Denoiser(nn.Module):
 
     def linear(self, out, exp):
         """The output of `transferred` as linear radiance (what the exported model returns)."""
-        return transfer.inverse(out, exp.float()) if self.head == "direct" else out
+        return transfer.inverse(out, exp) if self.head == "direct" else out
 
     def loss_domain(self, out, exp):
         """The output of `transferred` in the transferred domain (where the loss is taken)."""

@@ -129,7 +129,7 @@ def objective(net, out, exp, ref, ref_exp, cfg):
     `l1`, L1 + MS-SSIM in the transferred domain, or `psnr`, minus the evaluation's PSNR per crop
     (loss.py)."""
     if cfg.loss == "psnr":
-        return losses.psnr_loss(net.linear(out.float(), exp), ref.float(), ref_exp.float())
+        return losses.psnr_loss(net.linear(out.float(), exp.float()), ref.float(), ref_exp.float())
     return losses.loss(net.loss_domain(out.float(), exp), transfer.forward(ref, exp.float()), cfg.ms_ssim_weight)
 
 
