@@ -60,7 +60,7 @@ def compare(model, split_dir, work_dir, evaluate, spp_levels, oidn=False):
     missing = sorted(set(scan) - set(refs))
     if missing:
         raise contract.ContractError(f"{split_dir}: {', '.join(missing)} without a reference image (<scene>_ref.hdr.exr)")
-    done = infer.denoise_split(model, split_dir, work, spp_levels)
+    done = infer.denoise_split(model, split_dir, work, spp_levels, scan)
     peer = oidn_split(done, scan, work) if oidn else {}
     keys = KEYS if oidn else KEYS[:4]
     per_level, per_scene = {}, {}

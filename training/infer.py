@@ -25,15 +25,16 @@ def denoise(session, hdr, *features):
     return session.run(None, feed)[0][0].transpose(1, 2, 0)
 
 
-def denoise_split(model, split_dir, out_dir, spp_levels=None):
-    """Denoises every noisy level (or those in spp_levels) of a split; returns
+def denoise_split(model, split_dir, out_dir, spp_levels=None, scan=None):
+    """Denoises every noisy level (or those in spp_levels) of a split (`scan`: its
+    contract.scan, when the caller has listed it already); returns
     [(name, spp, noisy hdr path, denoised path)]."""
     session = ort.InferenceSession(str(model), providers=["CPUExecutionProvider"])
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     wanted = channels(session)
     done = []
-    for name, levels in contract.scan(split_dir).items():
+    for name, levels in (contract.scan(split_dir) if scan is None else scan).items():
         for feats in (v for k, v in sorted(levels.items(), key=lambda kv: kv[0] or 0) if k is not None):
             noisy = contract.read(feats["hdr"])
             spp = noisy.value(contract.SAMPLES, required=True)
