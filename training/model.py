@@ -218,6 +218,60 @@ def add_detail_gates(state):
     return state
 
 
+def widen(state, cfg, to_width, seed=0):
+    """A `kpn` state dict of the network of `cfg` (config.Config) as one of U-Net width
+    `to_width` computing the same function (Net2Net-style, Chen et al. 2016, with zero fan-out
+    instead of splitting): every level's old channels keep their weights and come first; each
+    new channel gets the default initialisation of a fresh convolution (seeded) for its inputs
+    and bias, and weight zero wherever it feeds an old channel or a head, so the output is
+    unchanged until training moves those zeros (their gradients are not zero: the new channels
+    are active). For a fine-tuning with more capacity, at the wider network's inference cost."""
+    if cfg.head != "kpn":
+        raise ValueError(f"widen: a {cfg.head} model (only kpn)")
+    if to_width < cfg.base_width:
+        raise ValueError(f"widen: cannot narrow a width-{cfg.base_width} network to {to_width}")
+    src_net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate)
+    old = src_net.unet.channels + (cfg.base_width * 3,)
+    torch.manual_seed(seed)
+    net = Denoiser(width=to_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate)
+    new = net.unet.channels + (to_width * 3,)
+    fresh = net.state_dict()
+    c1, c2, c3, c4, c5 = range(5)
+    # The input channel groups of each convolution (levels; None: the network's input), in the
+    # order they are concatenated (UNet.join: the upsampled coarse level first, then the skip).
+    inputs = {"enc0.0": [None], "enc0.1": [c1], "enc1": [c1], "enc2": [c2], "enc3": [c3],
+              "bottleneck": [c4], "dec3.0": [c5, c4], "dec3.1": [c4], "dec2.0": [c4, c3],
+              "dec2.1": [c3], "dec1.0": [c3, c2], "dec1.1": [c2], "dec0.0": [c2, c1], "dec0.1": [c1]}
+    inputs.update({f"heads.{s}": [s] for s in range(SCALES)})
+    out = {}
+    for key, w in fresh.items():
+        if key not in state:
+            raise ValueError(f"widen: the weights lack {key}")
+        src = state[key]
+        if key.startswith("heads."):
+            name = key.rsplit(".", 1)[0]
+        else:
+            name = key.removeprefix("unet.").rsplit(".", 1)[0].removesuffix(".0")
+        w = w.clone()
+        n_out = src.shape[0]
+        if key.endswith("bias"):
+            w[:n_out] = src
+        else:
+            w[:n_out] = 0  # an old output: its old weights, zero from every new input
+            o_new = o_old = 0
+            for level in inputs[name]:
+                n_old = src_net.in_channels if level is None else old[level]
+                n_new = net.in_channels if level is None else new[level]
+                if level is None:  # the network's input: network channels, not widened
+                    n_old = n_new = src.shape[1]
+                w[:n_out, o_new:o_new + n_old] = src[:, o_old:o_old + n_old]
+                o_new, o_old = o_new + n_new, o_old + n_old
+            if o_old != src.shape[1] or o_new != w.shape[1]:
+                raise ValueError(f"widen: {key}: {src.shape[1]} inputs, expected {o_old}")
+        out[key] = w
+    return out
+
+
 def denoiser(cfg):
     """The Denoiser of a configuration (config.Config): width, head, features, detail gate."""
     return Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate)

@@ -256,7 +256,8 @@ def main(argv=None):
 def initial_weights(path, cfg):
     """The state dict of `path` (a model exported by export.py, or a run's checkpoint.pt) for a
     run of `cfg`: a fine-tuning starts from it with its own schedule; a network of another shape
-    is refused in one line. A `kpn` model without detail gates gets them (model.add_detail_gates)
+    is refused in one line, except a narrower `kpn` model on the same features, which is widened
+    to the run's width (model.widen). A `kpn` model without detail gates gets them (model.add_detail_gates)
     when the run has them; the reverse is refused."""
     import export
 
@@ -268,6 +269,16 @@ def initial_weights(path, cfg):
     else:
         src = None
         state = torch.load(path, weights_only=False, map_location="cpu")["model"]
+    widen = (src is not None and src.head == cfg.head == "kpn" and list(src.features) == list(cfg.features)
+             and src.base_width < cfg.base_width)
+    if widen:
+        if src.detail_gate != cfg.detail_gate:
+            raise SystemExit(f"train: --init-from {path}: widening keeps the detail gates as they are "
+                             f"(the model has {'them' if src.detail_gate else 'none'}; --detail-gate must match)")
+        state = model.widen(state, src, cfg.base_width, seed=0)  # one init for all runs: soupable
+        print(f"widened the width-{src.base_width} weights of {path} to width {cfg.base_width} "
+              "(same function: new channels feed nothing until trained; model.widen)")
+        return state
     if src is not None and (src.base_width, src.head, list(src.features)) != (cfg.base_width, cfg.head, list(cfg.features)):
         raise SystemExit(f"train: --init-from {path}: a width-{src.base_width} {src.head} model on {','.join(src.features)}, "
                          f"this run trains width {cfg.base_width} {cfg.head} on {','.join(cfg.features)}")

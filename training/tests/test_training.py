@@ -590,8 +590,8 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     train.main(args + ["--run-dir", str(tmp_path / "fresh"), "--base-width", "8", "--minutes", "0", "--seed", "9"])
     fresh = torch.load(tmp_path / "fresh" / "checkpoint.pt", weights_only=False)["model"]
     assert not all(torch.equal(first[k], fresh[k]) for k in first)
-    with pytest.raises(SystemExit, match="a width-8 kpn model .* this run trains width 16"):
-        train.main(args + ["--base-width", "16", "--minutes", "0", "--run-dir", str(tmp_path / "third"),
+    with pytest.raises(SystemExit, match="a width-8 kpn model .* this run trains width 4"):
+        train.main(args + ["--base-width", "4", "--minutes", "0", "--run-dir", str(tmp_path / "third"),
                            "--init-from", str(tmp_path / "first.onnx")])
     with pytest.raises(SystemExit, match="weights of another network"):
         train.main(args + ["--base-width", "16", "--minutes", "0", "--run-dir", str(tmp_path / "fourth"),
@@ -642,6 +642,54 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     with pytest.raises(SystemExit, match="the detail gate needs the kpn head"):
         train.main(args + ["--run-dir", str(tmp_path / "sixth"), "--base-width", "8", "--head", "direct", "--detail-gate",
                            "--features", "hdr", "alb", "nrm"])
+
+
+def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_path):
+    # --init-from a narrower kpn model widens it (model.widen): the same outputs, old weights in
+    # place, new channels feeding nothing, the same new channels whatever the run's seed (so
+    # that fine-tunings of one widened model can be souped), and a step moves the zeros.
+    import export
+    import preprocess
+    import train
+
+    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(5))
+    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
+    args = ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
+            "--threads", "1", "--detail-gate"]
+    train.main(args + ["--run-dir", str(tmp_path / "narrow"), "--base-width", "8", "--steps", "3"])
+    export.export(tmp_path / "narrow", tmp_path / "narrow.onnx")
+    runs = {}
+    for name, extra in (("a", ["--seed", "1", "--minutes", "0"]), ("b", ["--seed", "7", "--minutes", "0"]),
+                        ("stepped", ["--seed", "1", "--steps", "2", "--lr", "1e-2"])):
+        train.main(args + extra + ["--run-dir", str(tmp_path / name), "--base-width", "16",
+                                   "--init-from", str(tmp_path / "narrow.onnx")])
+        runs[name] = torch.load(tmp_path / name / "checkpoint.pt", weights_only=False)["model"]
+    narrow = torch.load(tmp_path / "narrow" / "checkpoint.pt", weights_only=False)["model"]
+    wide = runs["a"]
+    assert all(torch.equal(wide[k], runs["b"][k]) for k in wide)
+    assert wide["unet.enc1.0.weight"].shape == (24, 16, 3, 3) and narrow["unet.enc1.0.weight"].shape == (12, 8, 3, 3)
+    assert torch.equal(wide["unet.enc1.0.weight"][:12, :8], narrow["unet.enc1.0.weight"])
+    assert not wide["unet.enc1.0.weight"][:12, 8:].any() and wide["unet.enc1.0.weight"][12:].abs().sum() > 0
+    # dec0's first convolution takes [upsampled dec1 (12 -> 24), enc0 (8 -> 16)]: the skip's
+    # old weights move to after the coarse level's new channels.
+    w, v = wide["unet.dec0.0.0.weight"], narrow["unet.dec0.0.0.weight"]
+    assert torch.equal(w[:8, :12], v[:, :12]) and torch.equal(w[:8, 24:32], v[:, 12:20])
+    assert not w[:8, 12:24].any() and not w[:8, 32:].any()
+    for s in range(model.SCALES):
+        assert not wide[f"heads.{s}.weight"][:, narrow[f"heads.{s}.weight"].shape[1]:].any()
+    cfg8, cfg16 = (config.Config(base_width=b, detail_gate=True) for b in (8, 16))
+    a, b = model.denoiser(cfg8).eval(), model.denoiser(cfg16).eval()
+    a.load_state_dict(narrow)
+    b.load_state_dict(wide)
+    x = torch.rand(2, a.in_channels, 48, 32) * 3
+    x[:, 3:6] = x[:, 3:6].clamp(0.05, 1)
+    with torch.no_grad():
+        ya, yb = a(x), b(x)
+    assert torch.allclose(ya, yb, rtol=1e-5, atol=1e-5), float((ya - yb).abs().max())
+    moved = runs["stepped"]["unet.enc1.0.weight"][:12, 8:]
+    assert moved.abs().sum() > 0  # the new channels' fan-out learns
+    with pytest.raises(ValueError, match="cannot narrow"):
+        model.widen(wide, cfg16, 8)
 
 
 def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
