@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass, field
 import luxest_contract as contract
 
 
-NETWORK = ("base_width", "head", "features", "detail_gate")
+NETWORK = ("base_width", "head", "features", "detail_gate", "scales")
 """The options that fix the network's shape (model.denoiser): a run resumes, and a committed
 model's record matches its metadata, only when these agree."""
 
@@ -24,6 +24,7 @@ class Config:
     batch: int = 16
     base_width: int = 24                 # U-Net channels of the first level
     head: str = "kpn"                    # output: kpn (kernel-predicting) or direct (model.py)
+    scales: int = 4                      # kpn: filtering scales, 4 (1 to 1/8: the decoder levels) or 5 (and 1/16: the bottleneck)
     detail_gate: bool = True             # kpn: each finer scale predicts how much of its detail to keep (model.py; --no-detail-gate)
     lr: float = 2e-3                     # peak learning rate of the one-cycle schedule
     minutes: float = 18.0                # training time budget
@@ -62,6 +63,7 @@ class Config:
         values.setdefault("cropper", "auto")
         values.setdefault("detail_gate", False)
         values.setdefault("loss", "l1")
+        values.setdefault("scales", 4)
         return Config(**values)
 
 

@@ -19,14 +19,16 @@ import luxest_contract as contract
 import model
 
 
-OUTPUTS = {
-    "direct": "output: the network's transferred radiance, inverted in graph (expm1(out) / exposure)",
-    "kpn": f"output: predicted {model.KERNEL}x{model.KERNEL} kernels applied in graph to the linear "
-           f"irradiance max(hdr, 0) / max(alb, {model.ALBEDO_FLOOR}) at {model.SCALES} scales (1 to "
-           f"1/{2 ** (model.SCALES - 1)}), combined by predicted blend weights, times max(alb, "
-           f"{model.ALBEDO_FLOOR})",
-}
-"""What the graph's output is, per head (model.py), in the metadata's transfer description."""
+def outputs(head, scales=model.SCALES):
+    """What the graph's output is for `head` (model.py), in the metadata's transfer description."""
+    if head == "direct":
+        return "output: the network's transferred radiance, inverted in graph (expm1(out) / exposure)"
+    return (f"output: predicted {model.KERNEL}x{model.KERNEL} kernels applied in graph to the linear "
+            f"irradiance max(hdr, 0) / max(alb, {model.ALBEDO_FLOOR}) at {scales} scales (1 to "
+            f"1/{2 ** (scales - 1)}), combined by predicted blend weights, times max(alb, "
+            f"{model.ALBEDO_FLOOR})")
+
+
 DETAIL_GATE = ("; with the detail gate: each finer scale keeps a predicted fraction sigmoid(logit) "
                "of its filtered detail f - U(D(f)) (U(D(f)): f's 2x2 means, bilinearly upsampled) "
                "before the blend")
@@ -117,7 +119,7 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
         contract.CHANNELS: ",".join(net.features),
         contract.MODEL_TRANSFER: "log1p(max(hdr, 0) * exposure) in graph; input exposure (N,) = 0.18 / "
         "exp(mean over the whole image of log(max(Y, 0) + 1e-4)), Y = Rec. 709 luminance of hdr; "
-        + OUTPUTS[cfg.head] + (DETAIL_GATE if net.detail_gate else "") + (EMISSION if net.emission else "") + (EMISSION_AA if "ema" in net.features else ""),
+        + outputs(cfg.head, net.scales) + (DETAIL_GATE if net.detail_gate else "") + (EMISSION if net.emission else "") + (EMISSION_AA if "ema" in net.features else ""),
         contract.MODEL_PADDING: "replicate to multiples of 16; in graph",
         contract.MODEL_CONFIG: json.dumps(asdict(cfg)),
     }

@@ -6,7 +6,8 @@ with one of two outputs (`Config.head`):
   Predicting Convolutional Networks for Denoising Monte Carlo Renderings"; Vogels et al. 2018,
   "Denoising with Kernel Prediction and Asymmetric Loss Functions"). The noisy radiance is
   demodulated by the albedo (irradiance = hdr / max(albedo, ALBEDO_FLOOR)), averaged down to
-  1/2, 1/4 and 1/8 of the image side, and at every scale each pixel is replaced by a weighted
+  1/2, 1/4 and 1/8 of the image side (and 1/16 with `Config.scales` 5, its kernels predicted
+  from the bottleneck), and at every scale each pixel is replaced by a weighted
   mean of its KERNEL x KERNEL neighbours, the weights a softmax of what the decoder level of that
   scale predicts (so they are positive and sum to one). From the coarsest scale up, a predicted
   per-pixel blend alpha replaces the finer scale's low frequencies by the coarser result:
@@ -57,7 +58,8 @@ HEADS = ("kpn", "direct")
 KERNEL = 5
 """Side of the per-pixel filter kernels of the `kpn` head, at every scale."""
 SCALES = 4
-"""Scales of the `kpn` head: 1, 1/2, 1/4, 1/8 (the U-Net's decoder levels)."""
+"""Scales of the `kpn` head by default: 1, 1/2, 1/4, 1/8 (the U-Net's decoder levels); a network
+of `scales` 5 (Config.scales) filters at 1/16 too (the bottleneck's level)."""
 DETAIL_GATE_INIT = 5.0
 """The bias of a detail gate's logit added to a model trained without gates (`add_detail_gates`):
 beta = sigmoid(5) = 0.993, so the fine-tuning starts within 0.7 % of the detail band of the
@@ -74,12 +76,12 @@ def conv(cin, cout):
 
 class UNet(nn.Module):
     """`forward` returns the output channels at full resolution (`direct`), `decoder` the
-    decoder's feature maps at 1, 1/2, 1/4, 1/8 of the side (`kpn`)."""
+    decoder's feature maps at 1, 1/2, 1/4, 1/8 of the side and the bottleneck's at 1/16 (`kpn`)."""
 
     def __init__(self, in_channels=9, out_channels=3, width=24):
         super().__init__()
         c1, c2, c3, c4, c5 = width, width * 3 // 2, width * 2, width * 5 // 2, width * 3
-        self.channels = (c1, c2, c3, c4)
+        self.channels = (c1, c2, c3, c4, c5)
         self.enc0 = nn.Sequential(conv(in_channels, c1), conv(c1, c1))
         self.enc1 = conv(c1, c2)
         self.enc2 = conv(c2, c3)
@@ -102,7 +104,7 @@ class UNet(nn.Module):
         d2 = self.join("dec2", d3, e2)   # H/4
         d1 = self.join("dec1", d2, e1)   # H/2
         d0 = self.join("dec0", d1, e0)   # H
-        return [d0, d1, d2, d3]
+        return [d0, d1, d2, d3, b]
 
     def join(self, name, coarse, skip):
         """Decoder block `name` over the concatenation of `coarse` upsampled (nearest) and
@@ -125,7 +127,7 @@ class UNet(nn.Module):
         before and after. Export only: the halves are copies, so a split network is not trained
         or loaded into afterwards."""
         joins = {}
-        for name, skip in zip(("dec3", "dec2", "dec1", "dec0"), reversed(self.channels)):
+        for name, skip in zip(("dec3", "dec2", "dec1", "dec0"), reversed(self.channels[:4])):
             w = getattr(self, name)[0][0].weight.detach()
             c = w.shape[1] - skip
             joins[name + "_up"] = nn.Parameter(w[:, :c].clone(), requires_grad=False)
@@ -192,10 +194,16 @@ antialiased, aov-write --min-samples) is only added back, in place of `emi`; the
 see it, so a model with it has the weights of one without it."""
 
 
-def head_outputs(scale, detail_gate):
-    """Outputs of the `kpn` head's 1x1 convolution at `scale` (0 the finest): the KERNEL² kernel
-    logits, and at every finer scale the blend logit and, with detail gates, the gate's."""
-    return KERNEL * KERNEL + ((2 if detail_gate else 1) if scale < SCALES - 1 else 0)
+def head_outputs(scale, detail_gate, scales=SCALES):
+    """Outputs of the `kpn` head's 1x1 convolution at `scale` (0 the finest) of `scales`: the
+    KERNEL² kernel logits, and at every finer scale the blend logit and, with detail gates, the
+    gate's."""
+    return KERNEL * KERNEL + ((2 if detail_gate else 1) if scale < scales - 1 else 0)
+
+
+def scales_of(state):
+    """The `kpn` scales of a state dict (its heads)."""
+    return sum(1 for k in state if k.startswith("heads.") and k.endswith(".weight"))
 
 
 def has_detail_gates(state):
@@ -209,10 +217,11 @@ def add_detail_gates(state):
     scale's 1x1 head, weights 0 and bias DETAIL_GATE_INIT (beta = 0.993 everywhere), the rest
     unchanged, for a fine-tuning with `detail_gate` that starts from a model without it."""
     state = dict(state)
-    for s in range(SCALES - 1):
+    scales = scales_of(state)
+    for s in range(scales - 1):
         w, b = state[f"heads.{s}.weight"], state[f"heads.{s}.bias"]
-        if w.shape[0] != head_outputs(s, False):
-            raise ValueError(f"heads.{s}: {w.shape[0]} outputs, expected {head_outputs(s, False)} (no detail gate)")
+        if w.shape[0] != head_outputs(s, False, scales):
+            raise ValueError(f"heads.{s}: {w.shape[0]} outputs, expected {head_outputs(s, False, scales)} (no detail gate)")
         state[f"heads.{s}.weight"] = torch.cat([w, torch.zeros_like(w[:1])])
         state[f"heads.{s}.bias"] = torch.cat([b, torch.full_like(b[:1], DETAIL_GATE_INIT)])
     return state
@@ -230,11 +239,11 @@ def widen(state, cfg, to_width, seed=0):
         raise ValueError(f"widen: a {cfg.head} model (only kpn)")
     if to_width < cfg.base_width:
         raise ValueError(f"widen: cannot narrow a width-{cfg.base_width} network to {to_width}")
-    src_net = Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate)
-    old = src_net.unet.channels + (cfg.base_width * 3,)
+    src_net = denoiser(cfg)
+    old = src_net.unet.channels
     torch.manual_seed(seed)
-    net = Denoiser(width=to_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate)
-    new = net.unet.channels + (to_width * 3,)
+    net = Denoiser(width=to_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate, scales=cfg.scales)
+    new = net.unet.channels
     fresh = net.state_dict()
     c1, c2, c3, c4, c5 = range(5)
     # The input channel groups of each convolution (levels; None: the network's input), in the
@@ -242,7 +251,7 @@ def widen(state, cfg, to_width, seed=0):
     inputs = {"enc0.0": [None], "enc0.1": [c1], "enc1": [c1], "enc2": [c2], "enc3": [c3],
               "bottleneck": [c4], "dec3.0": [c5, c4], "dec3.1": [c4], "dec2.0": [c4, c3],
               "dec2.1": [c3], "dec1.0": [c3, c2], "dec1.1": [c2], "dec0.0": [c2, c1], "dec0.1": [c1]}
-    inputs.update({f"heads.{s}": [s] for s in range(SCALES)})
+    inputs.update({f"heads.{s}": [s] for s in range(cfg.scales)})
     out = {}
     for key, w in fresh.items():
         if key not in state:
@@ -272,17 +281,45 @@ def widen(state, cfg, to_width, seed=0):
     return out
 
 
+def add_coarsest_scale(state, detail_gate):
+    """A 4-scale `kpn` state dict as a 5-scale one (Config.scales): the 1/8 head gains a blend
+    logit (weights 0, bias -DETAIL_GATE_INIT: alpha = 0.007 everywhere) and, with detail gates, a
+    gate logit (weights 0, bias DETAIL_GATE_INIT: beta = 0.993), and a new 1/16 head on the
+    bottleneck predicts zero logits (a uniform 5x5 mean). The output starts within 0.7 % of the
+    1/8 scale's detail and coarse bands of the 4-scale model's, and the new logits learn from the
+    first step (the sigmoids' slopes there are 0.007, not zero)."""
+    if scales_of(state) != 4:
+        raise ValueError(f"add_coarsest_scale: a model of {scales_of(state)} scales (expected 4)")
+    state = dict(state)
+    w, b = state["heads.3.weight"], state["heads.3.bias"]
+    if w.shape[0] != head_outputs(3, detail_gate, 4):
+        raise ValueError(f"heads.3: {w.shape[0]} outputs, expected {head_outputs(3, detail_gate, 4)}")
+    extra = [-DETAIL_GATE_INIT] + ([DETAIL_GATE_INIT] if detail_gate else [])
+    state["heads.3.weight"] = torch.cat([w, torch.zeros_like(w[:1]).repeat(len(extra), 1, 1, 1)])
+    state["heads.3.bias"] = torch.cat([b, torch.tensor(extra, dtype=b.dtype)])
+    c5 = state["unet.bottleneck.0.weight"].shape[0]
+    state["heads.4.weight"] = torch.zeros(head_outputs(4, detail_gate, 5), c5, 1, 1, dtype=w.dtype)
+    state["heads.4.bias"] = torch.zeros(head_outputs(4, detail_gate, 5), dtype=b.dtype)
+    return state
+
+
 def denoiser(cfg):
     """The Denoiser of a configuration (config.Config): width, head, features, detail gate."""
-    return Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate)
+    return Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate,
+                    scales=cfg.scales)
 
 
 class Denoiser(nn.Module):
     """Raw linear (N, 3 x len(features), H, W) hdr+alb+nrm[+emi] -> linear (N, 3, H, W)
     radiance."""
 
-    def __init__(self, width=24, head="kpn", features=FEATURE_SETS[0], detail_gate=False):
+    def __init__(self, width=24, head="kpn", features=FEATURE_SETS[0], detail_gate=False, scales=SCALES):
         super().__init__()
+        if scales not in (4, 5):
+            raise ValueError(f"scales {scales}: expected 4 or 5")
+        if scales != SCALES and head != "kpn":
+            raise ValueError(f"{scales} scales need the kpn head")
+        self.scales = scales
         if head not in HEADS:
             raise ValueError(f"head {head!r}: expected one of {', '.join(HEADS)}")
         features = tuple(features)
@@ -306,8 +343,8 @@ class Denoiser(nn.Module):
             self.unet = UNet(in_channels=network_channels, width=width)
         else:
             self.unet = UNet(in_channels=network_channels, width=width, out_channels=0)
-            self.heads = nn.ModuleList(nn.Conv2d(c, head_outputs(s, self.detail_gate), 1)
-                                       for s, c in enumerate(self.unet.channels[:SCALES]))
+            self.heads = nn.ModuleList(nn.Conv2d(c, head_outputs(s, self.detail_gate, scales), 1)
+                                       for s, c in enumerate(self.unet.channels[:scales]))
 
     def forward(self, x, exposure=None):
         """`exposure` (N,) float: the exposure of each whole image; if None, x must hold whole

@@ -255,10 +255,10 @@ def main(argv=None):
 
 def initial_weights(path, cfg):
     """The state dict of `path` (a model exported by export.py, or a run's checkpoint.pt) for a
-    run of `cfg`: a fine-tuning starts from it with its own schedule; a network of another shape
-    is refused in one line, except a narrower `kpn` model on the same features, which is widened
-    to the run's width (model.widen). A `kpn` model without detail gates gets them (model.add_detail_gates)
-    when the run has them; the reverse is refused."""
+    run of `cfg`: a fine-tuning starts from it with its own schedule. A `kpn` model may grow into
+    the run's network: without detail gates it gets them (model.add_detail_gates), with 4 scales a
+    fifth (model.add_coarsest_scale), and an exported one of smaller width is widened (model.widen,
+    the same function). Any other difference of network is refused in one line."""
     import export
 
     path = Path(path)
@@ -269,19 +269,13 @@ def initial_weights(path, cfg):
     else:
         src = None
         state = torch.load(path, weights_only=False, map_location="cpu")["model"]
-    widen = (src is not None and src.head == cfg.head == "kpn" and list(src.features) == list(cfg.features)
-             and src.base_width < cfg.base_width)
-    if widen:
-        if src.detail_gate != cfg.detail_gate:
-            raise SystemExit(f"train: --init-from {path}: widening keeps the detail gates as they are "
-                             f"(the model has {'them' if src.detail_gate else 'none'}; --detail-gate must match)")
-        state = model.widen(state, src, cfg.base_width, seed=0)  # one init for all runs: soupable
-        print(f"widened the width-{src.base_width} weights of {path} to width {cfg.base_width} "
-              "(same function: new channels feed nothing until trained; model.widen)")
-        return state
-    if src is not None and (src.base_width, src.head, list(src.features)) != (cfg.base_width, cfg.head, list(cfg.features)):
-        raise SystemExit(f"train: --init-from {path}: a width-{src.base_width} {src.head} model on {','.join(src.features)}, "
-                         f"this run trains width {cfg.base_width} {cfg.head} on {','.join(cfg.features)}")
+    if src is not None:
+        grows = src.head == cfg.head == "kpn" and src.base_width <= cfg.base_width and src.scales <= cfg.scales
+        if (src.head, list(src.features)) != (cfg.head, list(cfg.features)) or (
+                (src.base_width, src.scales) != (cfg.base_width, cfg.scales) and not grows):
+            raise SystemExit(f"train: --init-from {path}: a width-{src.base_width} {src.head} model of {src.scales} scales "
+                             f"on {','.join(src.features)}, this run trains width {cfg.base_width} {cfg.head} of "
+                             f"{cfg.scales} scales on {','.join(cfg.features)}")
     if cfg.head == "kpn" and "heads.0.weight" in state:
         gated = model.has_detail_gates(state)
         if gated and not cfg.detail_gate:
@@ -292,6 +286,14 @@ def initial_weights(path, cfg):
             except ValueError as e:
                 raise SystemExit(f"train: --init-from {path}: weights of another network ({e})")
             print(f"detail gates added to the weights of {path} (bias {model.DETAIL_GATE_INIT})")
+        if model.scales_of(state) < cfg.scales:
+            state = model.add_coarsest_scale(state, cfg.detail_gate)
+            print(f"a fifth scale (1/16) added to the weights of {path} (blend bias -{model.DETAIL_GATE_INIT})")
+        if src is not None and src.base_width < cfg.base_width:
+            grown = config.Config.from_values({**asdict(src), "detail_gate": cfg.detail_gate, "scales": cfg.scales})
+            state = model.widen(state, grown, cfg.base_width, seed=0)  # one init for all runs: soupable
+            print(f"widened the width-{src.base_width} weights of {path} to width {cfg.base_width} "
+                  "(same function: new channels feed nothing until trained; model.widen)")
     return state
 
 

@@ -347,15 +347,17 @@ def test_split_joins_compute_the_same_decoder():
 
 @pytest.mark.parametrize("head,features,gate", [(h, model.FEATURE_SETS[0], False) for h in model.HEADS]
                          + [("kpn", model.FEATURE_SETS[1], False), ("kpn", model.FEATURE_SETS[2], False),
-                            ("kpn", model.FEATURE_SETS[2], True)])
+                            ("kpn", model.FEATURE_SETS[2], True), ("kpn", model.FEATURE_SETS[2], "5 scales")])
 def test_export_matches_onnxruntime(tmp_path, head, features, gate):
     ort = pytest.importorskip("onnxruntime")
     import export
 
     torch.manual_seed(2)
-    cfg = config.Config(base_width=8, head=head, features=list(features), detail_gate=gate)
+    scales = 5 if gate == "5 scales" else 4
+    gate = bool(gate)
+    cfg = config.Config(base_width=8, head=head, features=list(features), detail_gate=gate, scales=scales)
     cfg.save(tmp_path / "config.json")
-    net = Denoiser(width=8, head=head, features=features, detail_gate=gate)
+    net = Denoiser(width=8, head=head, features=features, detail_gate=gate, scales=scales)
     c = 3 * len(features)
     torch.save({"model": net.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
     onnx_path = tmp_path / "m.onnx"
@@ -385,10 +387,11 @@ def test_export_matches_onnxruntime(tmp_path, head, features, gate):
     assert (export.EMISSION_AA in meta["luxest.transfer"]) == ("ema" in features)
     assert json.loads(meta["luxest.config"])["base_width"] == 8
     assert json.loads(meta["luxest.config"])["head"] == head
-    assert export.OUTPUTS[head] in meta["luxest.transfer"]
+    assert export.outputs(head, scales) in meta["luxest.transfer"]
     assert (export.DETAIL_GATE in meta["luxest.transfer"]) == gate
     back, state = export.load_onnx(onnx_path)
-    assert back.detail_gate == gate and all(torch.equal(state[k], v) for k, v in net.state_dict().items())
+    assert back.detail_gate == gate and back.scales == scales
+    assert all(torch.equal(state[k], v) for k, v in net.state_dict().items())
 
 
 def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(tmp_path):
@@ -637,7 +640,7 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
             train.main(args + ["--base-width", "8", "--minutes", "0", "--run-dir", str(tmp_path / "fifth"),
                                "--init-from", str(src)])
     # Resuming a run with another network (here: without its gates) is refused in one line.
-    with pytest.raises(SystemExit, match="the run trains .*detail_gate True; this one .*detail_gate False"):
+    with pytest.raises(SystemExit, match="the run trains .*detail_gate True, scales 4; this one .*detail_gate False"):
         train.main(args + ["--run-dir", str(gated_dir), "--base-width", "8", "--steps", "3", "--resume"])
     with pytest.raises(SystemExit, match="the detail gate needs the kpn head"):
         train.main(args + ["--run-dir", str(tmp_path / "sixth"), "--base-width", "8", "--head", "direct", "--detail-gate",
@@ -690,6 +693,57 @@ def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_pat
     assert moved.abs().sum() > 0  # the new channels' fan-out learns
     with pytest.raises(ValueError, match="cannot narrow"):
         model.widen(wide, cfg16, 8)
+
+
+def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(tmp_path):
+    # --scales 5 --init-from a 4-scale model (model.add_coarsest_scale): the weights in place, a
+    # blend logit of bias -5 at 1/8 (alpha 0.0067) and a zero 1/16 head, so the output moves
+    # from the 4-scale model's by 0.0067 of the 1/8 scale's coarse band at most; hand-computed.
+    import export
+    import preprocess
+    import train
+
+    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(6))
+    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
+    args = ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
+            "--threads", "1", "--detail-gate", "--base-width", "8"]
+    train.main(args + ["--run-dir", str(tmp_path / "four"), "--steps", "3"])
+    export.export(tmp_path / "four", tmp_path / "four.onnx")
+    train.main(args + ["--run-dir", str(tmp_path / "five"), "--scales", "5", "--minutes", "0",
+                       "--init-from", str(tmp_path / "four.onnx")])
+    four = torch.load(tmp_path / "four" / "checkpoint.pt", weights_only=False)["model"]
+    five = torch.load(tmp_path / "five" / "checkpoint.pt", weights_only=False)["model"]
+    k2 = model.KERNEL ** 2
+    assert all(torch.equal(four[k], five[k]) for k in four if k not in ("heads.3.weight", "heads.3.bias"))
+    assert torch.equal(five["heads.3.weight"][:k2], four["heads.3.weight"])
+    assert not five["heads.3.weight"][k2:].any() and five["heads.3.bias"][k2:].tolist() == [-5.0, 5.0]
+    assert not five["heads.4.weight"].any() and not five["heads.4.bias"].any()
+    a = model.denoiser(config.Config(base_width=8, detail_gate=True)).eval()
+    b = model.denoiser(config.Config(base_width=8, detail_gate=True, scales=5)).eval()
+    a.load_state_dict(four)
+    b.load_state_dict(five)
+    x = torch.rand(1, a.in_channels, 64, 48) * 2
+    x[:, 3:6] = x[:, 3:6].clamp(0.05, 1)
+    x[:, 9:] = 0.0
+    with torch.no_grad():
+        ya, yb = a(x), b(x)
+        # By hand: the 4-scale result at 1/8 is f3; the 5-scale one is
+        # beta f3 + (1 - beta) low3 + alpha (up(out4) - low3), out4 a uniform 5x5 mean at 1/16.
+        exp = transfer.exposure_of(x[:, 0:3]).view(-1, 1, 1, 1)
+        inp = torch.cat([transfer.forward(x[:, 0:3], exp), x[:, 3:9], transfer.forward(x[:, 9:12], exp)], 1)
+        heads = [h(f) for h, f in zip(b.heads, b.unet.decoder(inp))]
+        assert torch.allclose(heads[4], torch.zeros_like(heads[4]))
+        want = model.reconstruct(x[:, 0:3], x[:, 3:6], heads, detail_gate=True)
+    assert torch.allclose(yb, want, rtol=1e-4, atol=1e-5)
+    rel = float((ya - yb).abs().mean() / ya.abs().mean())
+    assert 0 < rel < 0.01, rel
+    train.main(args + ["--run-dir", str(tmp_path / "stepped"), "--scales", "5", "--steps", "2", "--lr", "1e-2",
+                       "--init-from", str(tmp_path / "four.onnx")])
+    stepped = torch.load(tmp_path / "stepped" / "checkpoint.pt", weights_only=False)["model"]
+    assert stepped["heads.4.weight"].abs().sum() > 0 and stepped["heads.3.weight"][k2:].abs().sum() > 0
+    with pytest.raises(SystemExit, match="of 5 scales .* this run trains width 8 kpn of 4 scales"):
+        train.main(args + ["--run-dir", str(tmp_path / "back"), "--minutes", "0", "--init-from", str(tmp_path / "f.onnx")]
+                   if export.export(tmp_path / "five", tmp_path / "f.onnx") is None else [])
 
 
 def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
