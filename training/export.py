@@ -59,6 +59,9 @@ def load_onnx(model_path):
         up, skip = (f"unet.joins.{block}_{part}" for part in ("up", "skip"))
         if k not in weights and up in weights and skip in weights:
             weights[k] = np.concatenate([weights[up], weights[skip]], axis=1)
+    for k in state:  # a bias of zeros the exporter's optimiser dropped from its Conv (a grown model's new head)
+        if k.endswith(".bias") and k not in weights and k.removesuffix(".bias") + ".weight" in weights:
+            weights[k] = np.zeros(tuple(state[k].shape), dtype=np.float32)
     missing = [k for k in state if k not in weights or tuple(weights[k].shape) != tuple(state[k].shape)]
     if missing:
         raise ValueError(f"{model_path}: lacks the weights {', '.join(missing[:3])}")
