@@ -239,8 +239,7 @@ def widen(state, cfg, to_width, seed=0):
         raise ValueError(f"widen: a {cfg.head} model (only kpn)")
     if to_width < cfg.base_width:
         raise ValueError(f"widen: cannot narrow a width-{cfg.base_width} network to {to_width}")
-    src_net = denoiser(cfg)
-    old = src_net.unet.channels
+    old = denoiser(cfg).unet.channels
     torch.manual_seed(seed)
     net = Denoiser(width=to_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate, scales=cfg.scales)
     new = net.unet.channels
@@ -269,10 +268,8 @@ def widen(state, cfg, to_width, seed=0):
             w[:n_out] = 0  # an old output: its old weights, zero from every new input
             o_new = o_old = 0
             for level in inputs[name]:
-                n_old = src_net.in_channels if level is None else old[level]
-                n_new = net.in_channels if level is None else new[level]
-                if level is None:  # the network's input: network channels, not widened
-                    n_old = n_new = src.shape[1]
+                # The network's input (its channels, not widened) or a level's channels.
+                n_old, n_new = (src.shape[1],) * 2 if level is None else (old[level], new[level])
                 w[:n_out, o_new:o_new + n_old] = src[:, o_old:o_old + n_old]
                 o_new, o_old = o_new + n_new, o_old + n_old
             if o_old != src.shape[1] or o_new != w.shape[1]:
