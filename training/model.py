@@ -162,7 +162,7 @@ def apply_kernels(img, logits, gather="unfold"):
 
 def reconstruct(hdr, albedo, heads, gather="unfold", detail_gate=False):
     """The `kpn` output (linear radiance) from the linear hdr and albedo (N, 3, H, W; H and W
-    multiples of 2^(SCALES-1)) and the heads' predictions per scale, finest first: (N, KERNEL²
+    multiples of 2^(len(heads) - 1)) and the heads' predictions per scale, finest first: (N, KERNEL²
     [+ 1 blend logit (+ 1 detail-gate logit with `detail_gate`) except at the coarsest], H_s,
     W_s). In float32 whatever the autocast."""
     with torch.autocast(hdr.device.type, enabled=False):

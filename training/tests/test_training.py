@@ -456,6 +456,17 @@ def tiny_split(d, side, rng):
     return d
 
 
+def tiny_prep(tmp_path, seed):
+    """tiny_split's scene (pixels from `seed`) preprocessed at 4 spp without local-estimate images
+    into tmp_path/prep, and train.py's arguments for it: 32² crops, batches of 2, one thread."""
+    import preprocess
+
+    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(seed))
+    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
+    return ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
+            "--threads", "1"]
+
+
 def test_training_runs_its_steps_and_resumes(tmp_path):
     # A tiny preprocessed split; a run stopped by its time budget, then resumed to its 5 steps:
     # the run record counts them and where it was resumed.
@@ -576,13 +587,9 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     # --init-from: a fine-tuning starts from the weights of an exported model (or a checkpoint)
     # with its own schedule; a network of another width is refused in one line.
     import export
-    import preprocess
     import train
 
-    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(4))
-    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
-    args = ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
-            "--threads", "1", "--steps", "2", "--no-detail-gate"]
+    args = tiny_prep(tmp_path, 4) + ["--steps", "2", "--no-detail-gate"]
     train.main(args + ["--run-dir", str(tmp_path / "first"), "--base-width", "8"])
     export.export(tmp_path / "first", tmp_path / "first.onnx")
     train.main(args + ["--run-dir", str(tmp_path / "second"), "--base-width", "8", "--minutes", "0", "--init-from", str(tmp_path / "first.onnx")])
@@ -652,13 +659,9 @@ def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_pat
     # place, new channels feeding nothing, the same new channels whatever the run's seed (so
     # that fine-tunings of one widened model can be souped), and a step moves the zeros.
     import export
-    import preprocess
     import train
 
-    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(5))
-    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
-    args = ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
-            "--threads", "1", "--detail-gate"]
+    args = tiny_prep(tmp_path, 5) + ["--detail-gate"]
     train.main(args + ["--run-dir", str(tmp_path / "narrow"), "--base-width", "8", "--steps", "3"])
     export.export(tmp_path / "narrow", tmp_path / "narrow.onnx")
     runs = {}
@@ -700,13 +703,9 @@ def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(tmp_path):
     # blend logit of bias -5 at 1/8 (alpha 0.0067) and a zero 1/16 head, so the output moves
     # from the 4-scale model's by 0.0067 of the 1/8 scale's coarse band at most; hand-computed.
     import export
-    import preprocess
     import train
 
-    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(6))
-    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
-    args = ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
-            "--threads", "1", "--detail-gate", "--base-width", "8"]
+    args = tiny_prep(tmp_path, 6) + ["--detail-gate", "--base-width", "8"]
     train.main(args + ["--run-dir", str(tmp_path / "four"), "--steps", "3"])
     export.export(tmp_path / "four", tmp_path / "four.onnx")
     train.main(args + ["--run-dir", str(tmp_path / "five"), "--scales", "5", "--minutes", "0",
@@ -754,7 +753,6 @@ def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
     # --schedule time: the rates of torch's OneCycleLR at the same fraction of the cycle,
     # the fraction being the larger of steps / cap and seconds / budget; a run ends its cycle
     # at the cap (or the budget) and a resumed one goes on from its step.
-    import preprocess
     import train
 
     n = 100001
@@ -777,10 +775,7 @@ def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
         assert abs(opt.param_groups[0]["lr"] - lr) < 1e-6
     assert sched.done(0, 600.0) and sched.done(n - 1, 0.0) and not sched.done(10, 10.0)
 
-    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(6))
-    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
-    args = ["--prep-dir", str(tmp_path / "prep"), "--run-dir", str(tmp_path / "run"), "--noisy-spp", "4", "--dle-paths",
-            "--crop", "32", "--batch", "2", "--base-width", "8", "--threads", "1", "--schedule", "time"]
+    args = tiny_prep(tmp_path, 6) + ["--run-dir", str(tmp_path / "run"), "--base-width", "8", "--schedule", "time"]
     train.main(args + ["--steps", "3", "--minutes", "5"])
     assert json.loads((tmp_path / "run" / "summary.json").read_text())["steps"] == 3
     train.main(args + ["--steps", "5", "--minutes", "5", "--resume"])
