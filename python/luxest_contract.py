@@ -31,6 +31,10 @@ FEATURES = ("hdr", "alb", "nrm", "emi", "ema")
 first three, four or all five (its `luxest.channels` metadata says which; luxest-io's denoise
 reads the same)."""
 
+RADIANCE_FEATURES = ("hdr", "emi", "ema")
+"""The features that are radiance (scaled with hdr by `dim_exponent`; crates/denoise
+`Feature::is_radiance`); the others are properties of the surface."""
+
 KINDS = ("hdr", "alb", "nrm", "z", "emi", "ema", "se", "dn")
 """Every image kind (luxest-io `naming::Kind`)."""
 
@@ -239,15 +243,50 @@ def luminance(rgb):
         + a[..., 2].astype(np.float64) * LUMA[2]
 
 
-def exposure(hdr):
+def exposure(hdr, scale=1.0):
     """The autoexposure of a whole image (..., 3): 0.18 / exp(mean ln(max(Y, 0) + 1e-4)), Y the
     Rec. 709 luminance, accumulated in float64 — exactly `RgbImage::autoexposure` in luxest-io.
-    Used by the denoiser's input transfer and by the evaluation tonemap; 1.0 for an empty image."""
+    Used by the denoiser's input transfer and by the evaluation tonemap; 1.0 for an empty image.
+    With `scale`, that of the image times `scale` (each Y times it, `autoexposure_scaled`)."""
     a = np.asarray(hdr)
     if a.size == 0:
         return 1.0
-    y = luminance(a)
+    y = luminance(a) * scale
     return EXPOSURE_KEY_VALUE / math.exp(float(np.log(np.maximum(y, 0.0) + EXPOSURE_EPS).mean()))
+
+
+DIM_LUMINANCE = 1.0 / 32.0
+"""The mean luminance below which a denoiser brightens its input (luxest-io `DIM_LUMINANCE`)."""
+
+
+def dim_exponent(hdr, emi=None):
+    """The power of two e by which a denoiser multiplies the radiance features it gives a model
+    (with the exposure of the brightened hdr, `exposure(hdr, 2**e)`; the output is divided by
+    2**e): the least e >= 0 with 2**e L >= DIM_LUMINANCE, L the mean luminance of max(hdr - emi,
+    0) (per channel, float64; max(hdr, 0) without `emi`); 0 for a black or not dim image. Exactly
+    luxest-io's `dim_exponent` (the autoexposure's 1e-4 would otherwise make a model's input
+    depend on the radiance's unit; docs/architecture.md, *Exposure and tonemap*)."""
+    a = np.asarray(hdr, dtype=np.float64)
+    if a.size == 0:
+        return 0
+    a = np.maximum(a - np.asarray(emi, dtype=np.float64), 0.0) if emi is not None else np.maximum(a, 0.0)
+    mean = float(luminance(a).mean())
+    if not mean > 0.0 or mean >= DIM_LUMINANCE:
+        return 0
+    e = max(0, math.ceil(math.log2(DIM_LUMINANCE / mean)))
+    while mean * 2.0 ** e < DIM_LUMINANCE:
+        e += 1
+    while e > 0 and mean * 2.0 ** (e - 1) >= DIM_LUMINANCE:
+        e -= 1
+    return e
+
+
+def evaluation_exposure(ref):
+    """The exposure of the evaluation tonemap for reference `ref` (evaluate's
+    `metrics::autoexposure`): `exposure(ref)`, or for a dim reference 2**e exposure(ref, 2**e)
+    with e = dim_exponent(ref), so that metrics do not depend on the radiance's unit."""
+    s = 2.0 ** dim_exponent(ref)
+    return s * exposure(ref, s)
 
 
 # --- Sensor results ----------------------------------------------------------------------------

@@ -10,8 +10,10 @@
 //! - `denoiser.json`: how `luxest.denoiser` names Intel Open Image Denoise, and the estimator
 //!   labels `evaluate` gives denoised images ([`evaluate::images::estimator_label`]);
 //! - `exposure_input.exr` + `exposure.json`: a fixed image and its
-//!   [`RgbImage::autoexposure`], with the evaluation tonemap of a few values
-//!   (`evaluate::metrics::tonemap`) at that exposure.
+//!   [`RgbImage::autoexposure`], the denoiser's brightening of it scaled dim
+//!   ([`luxest_io::exr_io::dim_exponent`], with and without emission, the exposure the model then
+//!   gets, and the evaluation's, `evaluate::metrics::autoexposure`), and
+//!   the evaluation tonemap of a few values (`evaluate::metrics::tonemap`) at its exposure.
 //!
 //! The test regenerates every file in a temporary directory and asserts that the committed copy
 //! is byte-for-byte the same, so a change to either side's contract shows up as a failing test
@@ -20,7 +22,7 @@
 //! compressed bytes).
 
 use crate::util::{repo_root, TempDir};
-use luxest_io::exr_io::{write_rgb, RgbImage};
+use luxest_io::exr_io::{dim_exponent, write_rgb, RgbImage, DIM_LUMINANCE};
 use luxest_io::header;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{ImageName, Kind, Level};
@@ -189,14 +191,41 @@ fn write_exposure_fixture(dir: &Path) -> String {
         / (w * h) as f64;
     assert!((exposure - 0.18 / mean_log.exp()).abs() <= 1e-15 * exposure);
 
+    // The denoiser's brightening of dim images: the image times a factor (f32 products), alone
+    // or with half of it as emission, its dim_exponent and the exposure the model then gets.
+    let mut dim = Vec::new();
+    for factor in [1.0f32, 1e-3, 3e-7, 1e-30] {
+        let mut scaled = image.clone();
+        for p in &mut scaled.pixels {
+            *p = p.map(|c| c * factor);
+        }
+        let mut half = scaled.clone();
+        for p in &mut half.pixels {
+            *p = p.map(|c| 0.5 * c);
+        }
+        for (label, emission) in [("none", None), ("half", Some(&half))] {
+            let e = dim_exponent(&scaled, emission);
+            let k = scaled.autoexposure_scaled(2f64.powi(e));
+            dim.push(format!(
+                "    {{\"factor\": {}, \"emission\": {}, \"exponent\": {e}, \"exposure\": {}, \"evaluation_exposure\": {}}}",
+                json_f64(factor as f64),
+                json_str(label),
+                json_f64(k),
+                json_f64(evaluate::metrics::autoexposure(&scaled))
+            ));
+        }
+    }
+
     let inputs = [0.0f32, 1e-3, 0.05, 0.18, 1.0, 4.0, 100.0, -0.5];
     let mut row = RgbImage::new(inputs.len(), 1);
     row.pixels = inputs.iter().map(|&v| [v; 3]).collect();
     let display = evaluate::metrics::tonemap(&row, exposure);
     let list = |v: Vec<String>| format!("[{}]", v.join(", "));
     format!(
-        "{{\n  \"exposure\": {},\n  \"tonemap\": {{\n    \"definition\": {},\n    \"exposure\": {},\n    \"input\": {},\n    \"output\": {}\n  }}\n}}\n",
+        "{{\n  \"exposure\": {},\n  \"dim_luminance\": {},\n  \"dim\": [\n{}\n  ],\n  \"tonemap\": {{\n    \"definition\": {},\n    \"exposure\": {},\n    \"input\": {},\n    \"output\": {}\n  }}\n}}\n",
         json_f64(exposure),
+        json_f64(DIM_LUMINANCE),
+        dim.join(",\n"),
         json_str(evaluate::images::TONEMAP),
         json_f64(exposure),
         list(inputs.iter().map(|&v| json_f64(v as f64)).collect()),

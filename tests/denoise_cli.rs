@@ -1,4 +1,4 @@
-//! The denoise stage: inference parity with Python onnxruntime (fixtures from
+//! The denoise stage: inference parity with Python onnxruntime, a dim image included (fixtures from
 //! tests/fixtures/denoise/generate.py), tiling, and its errors on bad input.
 
 use crate::util::{denoise, repo_root, StageResult, TempDir};
@@ -66,7 +66,7 @@ fn output_equals_python_onnxruntime_to_1e_5() {
     for (model_name, suffix, features) in MODELS {
         let dir = TempDir::new("dn-parity");
         let model = fixture(model_name);
-        for img in ["odd_000004spp", "tiles_000001spp"] {
+        for img in ["odd_000004spp", "tiles_000001spp", "dim_000004spp"] {
             let hdr = copy_features(&dir, img, features);
             run(&[s(&hdr), "--model", s(&model), "--threads", "2"]).unwrap();
             let out = read_rgb(&dir.path().join(format!("{img}.dn.exr"))).unwrap();

@@ -433,6 +433,59 @@ fn denoise_handles_radiance_near_the_f32_limit() {
     assert!(!dir.path().join("m_000001spp.dn.exr").exists());
 }
 
+/// The other extreme: an image whose radiance is in a tiny unit. The autoexposure's 1e-4 floor
+/// made the model see a dim image as black (the fixture's denoised mean came out 2.7 times
+/// that of the same image at its own scale); now `denoise` brightens it by a power of two
+/// (luxest_io::exr_io::dim_exponent), so images differing by a power of two are denoised alike
+/// to the bit, and like the bright image to within the model's own scale dependence (0.5 %
+/// measured on this image; 0.05 dB on the Cornell box, docs/measurements.md, *Dim images*).
+#[test]
+fn denoise_brightens_dim_images() {
+    let dir = TempDir::new("rel-dn-dim");
+    let model = crate::util::repo_root().join("models/default.onnx");
+    let fixture = crate::util::repo_root().join("tests/fixtures/denoise");
+    let mut results = Vec::new();
+    for (name, e) in [
+        ("b_000004spp", 0),
+        ("d_000004spp", -20),
+        ("e_000004spp", -60),
+    ] {
+        let scale = 2f32.powi(e);
+        for f in ["hdr", "alb", "nrm", "emi", "ema"] {
+            let mut img =
+                luxest_io::exr_io::read_rgb(&fixture.join(format!("odd_000004spp.{f}.exr")))
+                    .unwrap();
+            if matches!(f, "hdr" | "emi" | "ema") {
+                for p in &mut img.pixels {
+                    *p = p.map(|c| c * scale);
+                }
+            }
+            luxest_io::exr_io::write_rgb(&dir.path().join(format!("{name}.{f}.exr")), &img)
+                .unwrap();
+        }
+        let hdr = dir.path().join(format!("{name}.hdr.exr"));
+        crate::util::denoise(&[hdr.to_str().unwrap(), "--model", model.to_str().unwrap()]).unwrap();
+        let out = luxest_io::exr_io::read_rgb(&dir.path().join(format!("{name}.dn.exr"))).unwrap();
+        let unscaled: Vec<f64> = out
+            .pixels
+            .iter()
+            .flatten()
+            .map(|&c| c as f64 / scale as f64)
+            .collect();
+        results.push(unscaled);
+    }
+    assert_eq!(
+        results[1], results[2],
+        "2^-20 and 2^-60 denoised differently"
+    );
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (bright, dim) = (mean(&results[0]), mean(&results[1]));
+    assert!(
+        (dim / bright - 1.0).abs() < 0.02,
+        "dim mean {dim} vs bright {bright}"
+    );
+}
+
 /// Snapshot of files' bytes, to prove that a refused run changed none of them.
 fn snapshot(paths: &[&std::path::Path]) -> Vec<Option<Vec<u8>>> {
     paths.iter().map(|p| std::fs::read(p).ok()).collect()

@@ -27,9 +27,12 @@ def prep_name(name, spp, unit="spp"):
     return f"{name}_{'ref' if spp is None else contract.count_tag(spp, unit)}.npy"
 
 
-def whole_image_exposures(hdr):
-    """contract.exposure of an (H, W, 3) image under each channel order of PERMUTATIONS."""
-    return [contract.exposure(hdr[..., list(p)]) for p in PERMUTATIONS]
+def whole_image_exposures(hdr, evaluation=False):
+    """contract.exposure of an (H, W, 3) image under each channel order of PERMUTATIONS (the
+    model's input transfer), or with `evaluation` contract.evaluation_exposure (a reference's, for
+    the evaluation tonemap of --loss psnr)."""
+    f = contract.evaluation_exposure if evaluation else contract.exposure
+    return [f(hdr[..., list(p)]) for p in PERMUTATIONS]
 
 
 def wanted(unit, count, noisy_spp, dle_paths):
@@ -66,7 +69,7 @@ class Crops(torch.utils.data.Dataset):
         for i, r, m in pairs(prep_split_dir, noisy_spp, dle_paths):
             if r not in refs:
                 arr = np.load(r, mmap_mode="r")
-                refs[r] = (arr, whole_image_exposures(np.asarray(arr, dtype=np.float32)))
+                refs[r] = (arr, whole_image_exposures(np.asarray(arr, dtype=np.float32), evaluation=True))
             ref, ref_exposures = refs[r]
             self.pairs.append((np.load(i, mmap_mode="r"), ref, m["exposures"], ref_exposures))
         if not self.pairs:

@@ -19,10 +19,19 @@ def channels(session):
 
 
 def denoise(session, hdr, *features):
-    """`features`: the images of channels(session)[1:], in that order."""
-    x = np.concatenate([hdr, *features], axis=-1).transpose(2, 0, 1)[None].astype(np.float32)
-    feed = {"input": x, "exposure": transfer.exposure_np(hdr)}
-    return session.run(None, feed)[0][0].transpose(1, 2, 0)
+    """`features`: the images of channels(session)[1:], in that order. A dim image is brightened
+    by 2**e first (luxest_contract.dim_exponent, as crates/denoise does) and the result dimmed."""
+    names = channels(session)
+    images = [hdr, *features]
+    e = contract.dim_exponent(hdr, images[names.index("emi")] if "emi" in names else None)
+    s = 2.0 ** e
+    if e:
+        images = [(np.asarray(im, dtype=np.float64) * s).astype(np.float32) if n in contract.RADIANCE_FEATURES else im
+                  for n, im in zip(names, images)]
+    x = np.concatenate(images, axis=-1).transpose(2, 0, 1)[None].astype(np.float32)
+    feed = {"input": x, "exposure": transfer.exposure_np(hdr, s)}
+    out = session.run(None, feed)[0][0].transpose(1, 2, 0)
+    return (out.astype(np.float64) / s).astype(np.float32) if e else out
 
 
 def denoise_split(model, split_dir, out_dir, spp_levels=None, scan=None):

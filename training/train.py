@@ -145,7 +145,7 @@ def validation_loss(net, prep_dir, cfg):
         for inp_path, ref_path, meta in dataset.pairs(Path(prep_dir) / "valid", cfg.noisy_spp, cfg.dle_paths):
             ref = np.load(ref_path)
             if ref_path not in ref_exposures:
-                ref_exposures[ref_path] = contract.exposure(ref)
+                ref_exposures[ref_path] = contract.evaluation_exposure(ref)
             h, w = ref.shape[:2]
             c = min(h, w) // 16 * 16
             y0, x0 = (h - c) // 2, (w - c) // 2

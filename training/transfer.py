@@ -30,6 +30,7 @@ def inverse(x, exp):
     return torch.expm1(x) / exp
 
 
-def exposure_np(hdr):
-    """The exposure of one whole (H, W, 3) image as the model's `exposure` input, (1,) float32."""
-    return np.array([contract.exposure(hdr)], dtype=np.float32)
+def exposure_np(hdr, scale=1.0):
+    """The exposure of one whole (H, W, 3) image (times `scale`: contract.exposure) as the model's
+    `exposure` input, (1,) float32."""
+    return np.array([contract.exposure(hdr, scale)], dtype=np.float32)

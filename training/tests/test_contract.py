@@ -187,6 +187,42 @@ def test_python_exposure_equals_rusts():
     assert math.isclose(contract.exposure(hdr), expected["exposure"], rel_tol=1e-6)
 
 
+def test_python_dim_exponent_equals_rusts():
+    # The brightening of dim images (the same power of two and exposure as crates/denoise).
+    expected = json.loads(fixture("exposure.json").read_text())
+    assert contract.DIM_LUMINANCE == expected["dim_luminance"]
+    hdr = contract.read_rgb(fixture("exposure_input.exr"))
+    exponents = set()
+    for case in expected["dim"]:
+        scaled = hdr * np.float32(case["factor"])
+        emi = scaled * np.float32(0.5) if case["emission"] == "half" else None
+        e = contract.dim_exponent(scaled, emi)
+        assert e == case["exponent"], case
+        assert math.isclose(contract.exposure(scaled, 2.0 ** e), case["exposure"], rel_tol=1e-12), case
+        assert math.isclose(contract.evaluation_exposure(scaled), case["evaluation_exposure"], rel_tol=1e-12), case
+        exponents.add(e)
+    assert 0 in exponents and max(exponents) > 60  # the fixture covers the bright and the very dim
+
+
+def test_dim_exponent_against_closed_forms():
+    # A uniform image of luminance Y < 1/32 is brightened by the least 2^e with 2^e Y >= 1/32.
+    grey = np.full((4, 5, 3), 1e-3)
+    assert contract.dim_exponent(grey) == 5          # 1e-3 * 32 = 0.032 >= 0.03125 > 1e-3 * 16
+    assert contract.dim_exponent(np.full((2, 2, 3), 1 / 32)) == 0
+    assert contract.dim_exponent(np.full((2, 2, 3), 1 / 64)) == 1
+    assert contract.dim_exponent(np.zeros((3, 3, 3))) == 0      # black: nothing to brighten
+    assert contract.dim_exponent(-grey) == 0                     # negative radiance counts as 0
+    # Emission is not what a model denoises: an emitter beside a dim wall does not hide the wall.
+    hdr = np.full((2, 2, 3), 1e-6)
+    hdr[0, 0] = 100.0
+    emi = np.zeros_like(hdr)
+    emi[0, 0] = 100.0
+    assert contract.dim_exponent(hdr) == 0
+    assert contract.dim_exponent(hdr, emi) == math.ceil(math.log2((1 / 32) / (0.75e-6)))
+    # The exposure of the brightened image is that of the image times 2^e.
+    assert math.isclose(contract.exposure(grey, 32.0), contract.exposure(grey * 32.0), rel_tol=1e-15)
+
+
 def test_oidn_denoiser_name_and_labels_match_rust():
     # How `luxest.denoiser` names OIDN (written by pipelines/oidn_denoise.py) is the prefix Rust's
     # evaluate reads to label an image `<estimator>+oidn`.

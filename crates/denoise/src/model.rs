@@ -1,7 +1,7 @@
 //! The ONNX model through ONNX Runtime: loading it (once per process, the library found at run
 //! time), checking it against the model contract, and running it over an image in tiles.
 
-use luxest_io::exr_io::RgbImage;
+use luxest_io::exr_io::{dim_exponent, RgbImage};
 use luxest_io::header;
 
 use luxest_io::{Error, Result};
@@ -213,8 +213,23 @@ impl Denoiser {
         } else {
             0
         };
-        let hdr_scale = 2f64.powi(-k);
-        let exposure = (inputs[0].autoexposure() / hdr_scale) as f32;
+        // A dim image (mean luminance below DIM_LUMINANCE) is brightened by a power of two
+        // instead, with the exposure of the brightened image: the autoexposure's 1e-4 would
+        // otherwise make the model's input depend on the radiance's unit (luxest_io::exr_io::
+        // dim_exponent). Exclusive with the above: a dim image's peak is far from the limit.
+        let (hdr_scale, exposure) = if k > 0 {
+            let s = 2f64.powi(-k);
+            (s, inputs[0].autoexposure() / s)
+        } else {
+            let emission = self
+                .features
+                .iter()
+                .position(|f| *f == Feature::Emi)
+                .map(|i| inputs[i]);
+            let s = 2f64.powi(dim_exponent(inputs[0], emission));
+            (s, inputs[0].autoexposure_scaled(s))
+        };
+        let exposure = exposure as f32;
         let mut out = RgbImage::new(width, height);
         for (y0, y1) in spans(height, tiling.tile) {
             for (x0, x1) in spans(width, tiling.tile) {
@@ -225,7 +240,7 @@ impl Denoiser {
                 );
                 let cx1 = (x1 + tiling.overlap).min(width);
                 let cy1 = (y1 + tiling.overlap).min(height);
-                let tile = self.run(inputs, hdr_scale as f32, exposure, (cx0, cy0, cx1, cy1))?;
+                let tile = self.run(inputs, hdr_scale, exposure, (cx0, cy0, cx1, cy1))?;
                 let tw = cx1 - cx0;
                 for y in y0..y1 {
                     for x in x0..x1 {
@@ -240,7 +255,7 @@ impl Denoiser {
                 format!("model produced a non-finite value at pixel ({x}, {y})"),
             ));
         }
-        if k > 0 {
+        if hdr_scale != 1.0 {
             for (i, p) in out.pixels.iter_mut().enumerate() {
                 for c in p.iter_mut() {
                     let v = *c as f64 / hdr_scale;
@@ -265,7 +280,7 @@ impl Denoiser {
     fn run(
         &mut self,
         inputs: &[&RgbImage],
-        hdr_scale: f32,
+        hdr_scale: f64,
         exposure: f32,
         (x0, y0, x1, y1): (usize, usize, usize, usize),
     ) -> Result<Vec<[f32; 3]>> {
@@ -275,15 +290,20 @@ impl Denoiser {
         for (f, (image, feature)) in inputs.iter().zip(&self.features).enumerate() {
             for y in 0..h {
                 let row = &image.pixels[(y0 + y) * image.width + x0..][..w];
-                // Only radiance is scaled (by a power of two: exact); surface features are not.
-                let scale = if feature.is_radiance() {
-                    hdr_scale
+                // Only radiance is scaled (by a power of two: exact, in f64 since a dim image's
+                // 2^e may exceed f32's range); surface features are not.
+                if feature.is_radiance() && hdr_scale != 1.0 {
+                    for (x, p) in row.iter().enumerate() {
+                        for c in 0..3 {
+                            data[(3 * f + c) * plane + y * w + x] =
+                                (p[c] as f64 * hdr_scale) as f32;
+                        }
+                    }
                 } else {
-                    1.0
-                };
-                for (x, p) in row.iter().enumerate() {
-                    for c in 0..3 {
-                        data[(3 * f + c) * plane + y * w + x] = p[c] * scale;
+                    for (x, p) in row.iter().enumerate() {
+                        for c in 0..3 {
+                            data[(3 * f + c) * plane + y * w + x] = p[c];
+                        }
                     }
                 }
             }

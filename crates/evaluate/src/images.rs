@@ -13,7 +13,8 @@ use std::path::Path;
 /// The tonemap every display-referred metric (PSNR, SSIM, MS-SSIM, FLIP) sees, as recorded in
 /// reports.
 pub const TONEMAP: &str = "x = max(v, 0) * k per channel, k = the reference's autoexposure \
-    0.18 / exp(mean ln(Y + 1e-4)); t = x / (1 + x); sRGB OETF; clamp [0, 1]";
+    0.18 / exp(mean ln(Y + 1e-4)) (a reference of mean Y below 1/32 brightened by 2^e first: \
+    k = 2^e times that of 2^e Y); t = x / (1 + x); sRGB OETF; clamp [0, 1]";
 
 /// Errors of one test image against the reference.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -67,7 +68,7 @@ pub fn score_images(
     mut flip_map: impl FnMut(&Path, &RgbImage) -> Result<()>,
 ) -> Result<ImageReport> {
     let reference = read_rgb_finite(reference_path)?;
-    let exposure = reference.autoexposure();
+    let exposure = metrics::autoexposure(&reference);
     let reference_display = metrics::tonemap(&reference, exposure);
     let mut rows = Vec::new();
     for test_path in tests {

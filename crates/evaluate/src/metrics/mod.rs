@@ -44,7 +44,7 @@ pub use ms_ssim::{ms_ssim, ms_ssim_levels, ms_ssim_weights, MS_SSIM_WEIGHTS};
 pub use psnr::psnr;
 pub use ssim::ssim;
 
-use luxest_io::exr_io::{srgb_encode, RgbImage};
+use luxest_io::exr_io::{dim_exponent, srgb_encode, RgbImage};
 
 /// A display-referred image, values in [0, 1], row-major, f64.
 #[derive(Clone, Debug, PartialEq)]
@@ -109,9 +109,15 @@ fn check_sizes(reference: &impl Dims, test: &impl Dims) {
 
 /// `0.18 / exp(mean over pixels of ln(max(Y, 0) + 1e-4))`, `Y = 0.2126 R + 0.7152 G + 0.0722 B`,
 /// accumulated in f64; 1 for an empty image. The same exposure the denoiser uses
-/// ([`RgbImage::autoexposure`], shared with training/transfer.py).
+/// ([`RgbImage::autoexposure`], shared with training/transfer.py). A dim reference (mean
+/// luminance below [`luxest_io::exr_io::DIM_LUMINANCE`]) is exposed as the denoiser brightens it: `2^e` times the
+/// autoexposure of the reference times `2^e` (`e` its [`dim_exponent`]), so that the tonemap and
+/// every metric on it are the same in any unit of radiance (the `1e-4` floor would otherwise
+/// make a dim reference and its test images all nearly black); `e` is 0 for every image `make
+/// eval` scores.
 pub fn autoexposure(reference: &RgbImage) -> f64 {
-    reference.autoexposure()
+    let s = 2f64.powi(dim_exponent(reference, None));
+    s * reference.autoexposure_scaled(s)
 }
 
 /// Per channel `x = max(v, 0) * exposure`, `t = x / (1 + x)`, the sRGB OETF, clamped to [0, 1].
@@ -126,6 +132,7 @@ pub fn tonemap(image: &RgbImage, exposure: f64) -> Display {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use luxest_io::exr_io::DIM_LUMINANCE;
 
     /// A deterministic structured image with values in [0, 1].
     fn pattern(w: usize, h: usize, seed: u64) -> Display {
@@ -252,5 +259,53 @@ mod tests {
         let mut grey = RgbImage::new(3, 2);
         grey.pixels = vec![[0.5; 3]; 6];
         assert!((autoexposure(&grey) - 0.18 / (0.5f64 + 1e-4)).abs() < 1e-12);
+        // A dim uniform image (Y = 1e-3 < 1/32) is exposed as 32 times it: 32 · 0.18 / (0.032 + 1e-4).
+        grey.pixels = vec![[1e-3; 3]; 6];
+        let y = 1e-3f32 as f64;
+        let k = 32.0 * 0.18 / (32.0 * y + 1e-4);
+        assert!((autoexposure(&grey) - k).abs() < 1e-12 * k);
+    }
+
+    #[test]
+    fn metrics_of_dim_images_do_not_depend_on_the_unit() {
+        // A reference of mean luminance 0.01 (dim) and a noisy test image, then both 2^-40 and
+        // 2^-90 times as bright: the same exposed values to the bit, so the same metrics.
+        let (w, h) = (24, 16);
+        let mut reference = RgbImage::new(w, h);
+        let mut test = RgbImage::new(w, h);
+        for (i, (r, t)) in reference
+            .pixels
+            .iter_mut()
+            .zip(test.pixels.iter_mut())
+            .enumerate()
+        {
+            let v = 0.02 * (1.0 + (i % 7) as f32) / 4.0;
+            *r = [v, 0.5 * v, 0.25 * v];
+            *t = r.map(|c| c * (1.0 + 0.3 * ((i * 37 % 11) as f32 / 11.0 - 0.5)));
+        }
+        let mean = reference
+            .pixels
+            .iter()
+            .map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
+            .sum::<f32>()
+            / (w * h) as f32;
+        assert!(mean < DIM_LUMINANCE as f32);
+        let scores = |s: f32| {
+            let (r, t) = (reference.clone(), test.clone());
+            let scale = |mut im: RgbImage| {
+                im.pixels.iter_mut().for_each(|p| *p = p.map(|c| c * s));
+                im
+            };
+            let (r, t) = (scale(r), scale(t));
+            let k = autoexposure(&r);
+            (psnr(&tonemap(&r, k), &tonemap(&t, k)), k * s as f64)
+        };
+        let (p0, k0) = scores(1.0);
+        for e in [-40, -90] {
+            let (p, k) = scores(2f32.powi(e));
+            assert_eq!(p, p0, "2^{e}");
+            assert!((k / k0 - 1.0).abs() < 1e-12, "2^{e}: {k} vs {k0}");
+        }
+        assert!(p0.is_finite() && p0 < 40.0, "{p0}");
     }
 }
