@@ -41,7 +41,8 @@ of the emitter's radiance in hdr and emi, and the fraction it covers in ema.
 
 Both heads are scale-equivariant through the exposure input: hdr times s with the exposure over
 s gives the network the same input and the result times s (denoise's rescaling near the f32
-limit relies on it). `Denoiser` wraps either with the transfer of transfer.py and the padding to
+limit relies on it). The autoexposure is not, near its 1e-4 floor: callers brighten a dim image
+first (luxest_contract.dim_exponent). `Denoiser` wraps either with the transfer of transfer.py and the padding to
 multiples of 16, so
 the exported graph takes raw linear features of any H, W, plus the exposure of the whole image
 (computed by the caller over the whole image, so that tiles of one image share it:
