@@ -273,11 +273,9 @@ def dim_exponent(hdr, emi=None):
     mean = float(luminance(a).mean())
     if not mean > 0.0 or mean >= DIM_LUMINANCE:
         return 0
-    e = max(0, math.ceil(math.log2(DIM_LUMINANCE / mean)))
+    e = 0  # the least e with mean 2**e >= DIM_LUMINANCE
     while mean * 2.0 ** e < DIM_LUMINANCE:
         e += 1
-    while e > 0 and mean * 2.0 ** (e - 1) >= DIM_LUMINANCE:
-        e -= 1
     return e
 
 

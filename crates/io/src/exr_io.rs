@@ -3,6 +3,7 @@
 //!
 //! Half floats are never written: photometric values (1e5 cd/m² and more) overflow f16.
 
+use crate::color::Rgb;
 use crate::error::{Error, Result};
 use crate::outputs::OutputPlan;
 use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
@@ -56,7 +57,7 @@ impl RgbImage {
         let sum: f64 = self
             .pixels
             .iter()
-            .map(|p| (luminance(p) * scale).max(0.0) + EPS)
+            .map(|p| (Rgb(p.map(f64::from)).luminance() * scale).max(0.0) + EPS)
             .map(f64::ln)
             .sum();
         KEY / (sum / self.pixels.len() as f64).exp()
@@ -68,11 +69,6 @@ impl RgbImage {
             .position(|p| p.iter().any(|c| !c.is_finite()))
             .map(|i| (i % self.width, i / self.width))
     }
-}
-
-/// Rec. 709 luminance of linear RGB, in f64.
-fn luminance(p: &[f32; 3]) -> f64 {
-    0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64
 }
 
 /// The mean luminance below which the denoiser brightens its input: 1/32, below the darkest
@@ -94,8 +90,10 @@ pub fn dim_exponent(hdr: &RgbImage, emission: Option<&RgbImage>) -> i32 {
         return 0;
     }
     let dimmed = |h: &[f32; 3], e: &[f32; 3]| {
-        let d = |c: usize| (h[c] as f64 - e[c] as f64).max(0.0);
-        0.2126 * d(0) + 0.7152 * d(1) + 0.0722 * d(2)
+        Rgb(std::array::from_fn(|c| {
+            (h[c] as f64 - e[c] as f64).max(0.0)
+        }))
+        .luminance()
     };
     let sum: f64 = match emission {
         Some(emi) => hdr
@@ -110,13 +108,11 @@ pub fn dim_exponent(hdr: &RgbImage, emission: Option<&RgbImage>) -> i32 {
     if mean.is_nan() || mean <= 0.0 || mean >= DIM_LUMINANCE {
         return 0;
     }
-    // The least e with mean · 2^e ≥ DIM_LUMINANCE (log2 may be off by one at a boundary).
-    let mut e = (DIM_LUMINANCE / mean).log2().ceil().max(0.0) as i32;
+    // The least e with mean · 2^e ≥ DIM_LUMINANCE (below 200: a positive mean of f32 values is at
+    // least 2^-149 over the pixel count).
+    let mut e = 0;
     while mean * 2f64.powi(e) < DIM_LUMINANCE {
         e += 1;
-    }
-    while e > 0 && mean * 2f64.powi(e - 1) >= DIM_LUMINANCE {
-        e -= 1;
     }
     e
 }
