@@ -66,6 +66,27 @@ $(call lx_image,$(DATA_DIR)/%,$(NOISY_MAX),hdr): build/dataset/$(DATASET)/%.lxs 
 $(call lx_image,$(DATA_DIR)/%,$(NOISY_MAX),nrm): build/dataset/$(DATASET)/%.lxs $(AOV_WRITE) $(FEATURE_SPP_STAMP)
 	$(AOV_WRITE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) --min-samples $(FEATURE_SPP) -o $(DATA_DIR)/$*
 
+# Extra noise realizations of the training scenes (NOISY_EXTRA_SEEDS, pipelines/presets.mk): the
+# levels NOISY_EXTRA_LEVELS that are noisy levels rendered again with each of these seeds into
+# $(DATA_DIR)/train/seed<k>/ under the same names, radiance and features in one rule (the normal
+# image, written last, marks the set); preprocess.py pairs them with the scene's reference, and
+# training draws a scene's level first, then one of its realizations.
+NOISY_EXTRA := $(filter $(NOISY_LEVELS),$(NOISY_EXTRA_LEVELS))
+NOISY_EXTRA_MAX := $(lastword $(NOISY_EXTRA))
+NOISY_EXTRA_SNAPSHOTS := $(subst $(space),$(comma),$(strip $(NOISY_EXTRA)))
+ifneq ($(filter $(NOISY_SEED) $(REF_SEED),$(NOISY_EXTRA_SEEDS)),)
+$(error NOISY_EXTRA_SEEDS=$(NOISY_EXTRA_SEEDS): must not contain NOISY_SEED ($(NOISY_SEED)) or REF_SEED ($(REF_SEED)))
+endif
+DATASET_TRAIN_SCENES := $(patsubst train/%,%,$(filter train/%,$(DATASET_SCENES)))
+define dataset_realization
+$(call lx_image,$(call lx_realization,$(DATA_DIR)/train,$(2))/$(1),$(NOISY_EXTRA_MAX),nrm): build/dataset/$(DATASET)/train/$(1).lxs $(TRACE) $(AOV_WRITE) $(FEATURE_SPP_STAMP)
+	@mkdir -p $(call lx_realization,$(DATA_DIR)/train,$(2))
+	$$(TRACE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) -o $(call lx_realization,$(DATA_DIR)/train,$(2))/$(1)
+	$$(AOV_WRITE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) --min-samples $(FEATURE_SPP) -o $(call lx_realization,$(DATA_DIR)/train,$(2))/$(1)
+endef
+$(if $(NOISY_EXTRA),$(foreach s,$(DATASET_TRAIN_SCENES),$(foreach k,$(NOISY_EXTRA_SEEDS),$(eval $(call dataset_realization,$(s),$(k))))))
+DATASET_REALIZATIONS := $(if $(NOISY_EXTRA),$(foreach s,$(DATASET_TRAIN_SCENES),$(foreach k,$(NOISY_EXTRA_SEEDS),$(call lx_image,$(call lx_realization,$(DATA_DIR)/train,$(k))/$(s),$(NOISY_EXTRA_MAX),nrm))))
+
 # The local-estimate family (not for the test scenes: make eval renders theirs).
 DATASET_LE_SCENES := $(filter-out test/%,$(DATASET_SCENES))
 define dataset_le
@@ -77,4 +98,5 @@ $(foreach s,$(DATASET_LE_SCENES),$(foreach n,$(DATASET_DLE),$(eval $(call datase
 dataset-scenes: $(patsubst %,build/dataset/$(DATASET)/%.lxs,$(DATASET_SCENES))
 reference: $(foreach s,$(DATASET_SCENES),$(foreach k,hdr nrm,$(call lx_ref,$(DATA_DIR)/$(s),$(k))))
 noisy: $(foreach s,$(DATASET_SCENES),$(foreach k,hdr nrm,$(call lx_image,$(DATA_DIR)/$(s),$(NOISY_MAX),$(k)))) \
-	$(foreach s,$(DATASET_LE_SCENES),$(foreach n,$(DATASET_DLE),$(call lx_le,$(DATA_DIR)/$(s),$(n),hdr)))
+	$(foreach s,$(DATASET_LE_SCENES),$(foreach n,$(DATASET_DLE),$(call lx_le,$(DATA_DIR)/$(s),$(n),hdr))) \
+	$(DATASET_REALIZATIONS)

@@ -11,6 +11,9 @@ lx_count = $(shell printf '%06d' $(1))
 lx_image = $(1)_$(call lx_count,$(2))spp.$(3).exr
 lx_le = $(1)_$(call lx_count,$(2))le.$(3).exr
 lx_ref = $(1)_ref.$(2).exr
+#   $(call lx_realization,DIR,7)           DIR/seed7   an extra noise realization's directory
+#                                                      (luxest_contract.REALIZATION_DIR)
+lx_realization = $(1)/seed$(2)
 
 # Pattern forms for rules, the level standing for %: $(call lx_image_pattern,PREFIX,dn) gives
 # PREFIX_%spp.dn.exr (% = 000064), $(call lx_le_pattern,PREFIX,hdr) gives PREFIX_%le.hdr.exr.

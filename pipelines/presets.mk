@@ -33,6 +33,13 @@ $(eval $(call lx_preset,FEATURE_SPP,16,16))
 # The second input family: double-local-estimate images (estimate image, seed NOISY_SEED) of the
 # train and valid scenes at these light-path counts, denoised with the NOISY_MAX features.
 $(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))
+# Extra noise realizations of the training scenes (make noisy; pipelines/dataset.mk): the levels
+# NOISY_EXTRA_LEVELS (those among NOISY_LEVELS) rendered again with each seed of NOISY_EXTRA_SEEDS (none: no extra
+# realizations), 0.5 s a scene and seed at 112². With one realization per level a long fine-tuning
+# learns the training rooms' noise by heart: 8 more gave +0.07 dB on the 12 validation rooms at
+# every level (docs/measurements.md, *More noise per room*). Quick: none, as its results record.
+$(eval $(call lx_preset,NOISY_EXTRA_SEEDS,,2 3 4 5 6 7 8 9))
+$(eval $(call lx_preset,NOISY_EXTRA_LEVELS,1 2 4 8 16 32,1 2 4 8 16 32))
 
 # Training (make train): steps of the one-cycle schedule, and the time budget in minutes (quick:
 # the kernel-predicting model took about 0.29 s per step on 2 cores, so 3400 steps ended within 17

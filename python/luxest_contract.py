@@ -57,6 +57,12 @@ class ImageName:
         return image_name(self.name, self.kind, None if self.reference else self.spp, unit=self.unit)
 
 
+REALIZATION_DIR = "seed{seed}"
+"""The directory, inside a split's, of an extra noise realization of its scenes' noisy levels:
+`<split>/seed<k>/<name>_<count>spp.<kind>.exr`, rendered with seed k (make noisy's
+NOISY_EXTRA_SEEDS; pipelines/naming.mk lx_realization), paired with `<split>/<name>_ref`."""
+
+
 def count_tag(count, unit="spp"):
     """`000064spp` (or `001000le`): a sample or path count zero-padded to 6 digits."""
     if unit not in ("spp", "le"):

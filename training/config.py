@@ -20,6 +20,7 @@ class Config:
     features: list = field(default_factory=lambda: list(contract.FEATURES))  # model.FEATURE_SETS
     noisy_spp: list = field(default_factory=lambda: [1, 2, 4, 8, 16, 32, 64, 256, 1024])
     dle_paths: list = field(default_factory=lambda: [100, 300, 1000])  # local-estimate inputs
+    extra_seeds: list = field(default_factory=list)  # seeds of the extra noise realizations (<split>/seed<k>/) to use
     crop: int = 64                       # training crop side (multiple of 16)
     batch: int = 16
     base_width: int = 24                 # U-Net channels of the first level
@@ -58,6 +59,7 @@ class Config:
         # Runs from before the `head` option predicted the radiance directly.
         values.setdefault("head", "direct")
         values.setdefault("dle_paths", [])
+        values.setdefault("extra_seeds", [])
         values.setdefault("precision", "auto")
         values.setdefault("schedule", "steps")
         values.setdefault("cropper", "auto")
@@ -76,7 +78,7 @@ def parse(argv=None, description=""):
         if isinstance(v, bool):
             ap.add_argument(flag, action=argparse.BooleanOptionalAction, default=v)
         elif isinstance(v, list):
-            ap.add_argument(flag, type=type(v[0]), nargs="*", default=v)
+            ap.add_argument(flag, type=type(v[0]) if v else int, nargs="*", default=v)
         else:
             ap.add_argument(flag, type=type(v), default=v)
     return Config(**vars(ap.parse_args(argv)))

@@ -7,7 +7,9 @@ the features of the largest noisy level), references (H, W, 3) hdr (`tag` = `ref
 `<name>_<tag>.json` with what the headers and the whole image say: samples, seed (of the input
 and of its reference) and the whole-image exposure under each of the six RGB channel orders
 (`exposures`, in the order of `PERMUTATIONS`), so that a crop, even channel-shuffled, is
-transferred with the exposure its whole image has at inference."""
+transferred with the exposure its whole image has at inference. Extra noise realizations of a
+split's noisy levels (`<split>/seed<k>/`, make noisy's NOISY_EXTRA_SEEDS) are preprocessed into
+`<prep_dir>/<split>/seed<k>/` beside them and share their scene's reference."""
 import itertools
 import json
 from pathlib import Path
@@ -42,18 +44,32 @@ def wanted(unit, count, noisy_spp, dle_paths):
     return levels is None or count in levels
 
 
-def pairs(prep_split_dir, noisy_spp=None, dle_paths=None):
+def pairs(prep_split_dir, noisy_spp=None, dle_paths=None, extra_seeds=()):
     """[(input path, reference path, metadata dict)] of one preprocessed split: the noisy levels
     in `noisy_spp` and the local-estimate images in `dle_paths` (None: all of that family), so
-    that arrays left by an earlier configuration are not trained on."""
+    that arrays left by an earlier configuration are not trained on, then the noisy levels of
+    the extra noise realizations of seeds `extra_seeds` (`seed<k>/`, paired with the split's
+    references)."""
     out = []
     d = Path(prep_split_dir)
-    for meta_path in sorted(list(d.glob("*spp.json")) + list(d.glob("*le.json"))):
+    realizations = [d / contract.REALIZATION_DIR.format(seed=k) for k in sorted(set(extra_seeds))]
+    for meta_path in (sorted(list(d.glob("*spp.json")) + list(d.glob("*le.json")))
+                      + [m for r in realizations for m in sorted(r.glob("*spp.json"))]):
         meta = json.loads(meta_path.read_text())
         if not wanted(meta.get("unit", "spp"), meta["samples"], noisy_spp, dle_paths):
             continue
         out.append((meta_path.with_suffix(".npy"), d / prep_name(meta["name"], None), meta))
     return out
+
+
+def groups(metas):
+    """The pair indices grouped by what they are an image of — (scene, unit, count) — in the
+    order of first appearance: a scene's noisy level and its extra noise realizations
+    (`seed<k>/`, preprocess.py) form one group."""
+    out = {}
+    for i, m in enumerate(metas):
+        out.setdefault((m["name"], m.get("unit", "spp"), m["samples"]), []).append(i)
+    return list(out.values())
 
 
 class Crops(torch.utils.data.Dataset):
@@ -63,10 +79,12 @@ class Crops(torch.utils.data.Dataset):
     the input under that permutation (the network's transfer), the reference exposure that of
     the whole reference (the evaluation's tonemap, loss.display)."""
 
-    def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None):
+    def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None, extra_seeds=()):
         refs = {}  # a scene's inputs share its reference array (DeviceCrops holds it once)
         self.pairs = []
-        for i, r, m in pairs(prep_split_dir, noisy_spp, dle_paths):
+        found = pairs(prep_split_dir, noisy_spp, dle_paths, extra_seeds)
+        self.groups = groups([m for *_, m in found])
+        for i, r, m in found:
             if r not in refs:
                 arr = np.load(r, mmap_mode="r")
                 refs[r] = (arr, whole_image_exposures(np.asarray(arr, dtype=np.float32), evaluation=True))
@@ -81,9 +99,12 @@ class Crops(torch.utils.data.Dataset):
 
     def draw(self, i):
         """The random choices of crop i, from (seed, i) alone: (pair index, top, left, flip the
-        columns, flip the rows, transpose, index into PERMUTATIONS)."""
+        columns, flip the rows, transpose, index into PERMUTATIONS). The pair is drawn as a group
+        (a scene's image at one count, `groups`), then one of its noise realizations, so that
+        extra realizations add variety to their levels without weighting them more."""
         rng = np.random.default_rng((self.seed, i))
-        p = int(rng.integers(len(self.pairs)))
+        g = self.groups[int(rng.integers(len(self.groups)))]
+        p = g[0] if len(g) == 1 else g[int(rng.integers(len(g)))]
         h, w = self.pairs[p][1].shape[:2]
         c = self.crop
         y, x = int(rng.integers(0, h - c + 1)), int(rng.integers(0, w - c + 1))

@@ -36,10 +36,11 @@ def samples_of(image, expected):
     return spp
 
 
-def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATURES):
+def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATURES, extra_seeds=()):
     """Writes the arrays of one split directory; returns the number written. Inputs: the noisy
     levels in `noisy_spp`, and the double-local-estimate images at `dle_paths` light paths
-    (with the features of the scene's largest noisy level, as make eval denoises them)."""
+    (with the features of the scene's largest noisy level, as make eval denoises them), and the
+    extra noise realizations of seeds `extra_seeds` (`<src>/seed<k>/`)."""
     n = 0
     dst.mkdir(parents=True, exist_ok=True)
     local_estimates = contract.scan(src, unit="le")
@@ -63,46 +64,88 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATUR
                 raise contract.ContractError(f"{kinds['hdr']}: {name} has no noisy level whose features it could use")
             inputs.append((kinds["hdr"], inputs[-1][1], paths, "le"))
         for hdr_path, feats, count_in_name, unit in inputs:
-            if not dataset.wanted(unit, count_in_name, noisy_spp, dle_paths):
-                continue
-            out = dst / dataset.prep_name(name, count_in_name, unit)
-            meta_out = out.with_suffix(".json")
-            paths = [hdr_path] + [feats[f] for f in features[1:]]
-            newest = max(p.stat().st_mtime for p in paths + [levels[None]["hdr"]])
-            if (meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists()
-                    and json.loads(meta_out.read_text()).get("channels") == list(features)):
-                continue
-            noisy = contract.read(hdr_path)
-            count = samples_of(noisy, count_in_name)
-            check_pair(ref, noisy)
-            if unit == "spp" and count > ref.value(contract.SAMPLES, required=True):
-                raise contract.ContractError(
-                    f"{ref.path}: {ref.value(contract.SAMPLES)} samples per pixel, fewer than its input {hdr_path} "
-                    f"({count}); re-render the references (make reference)")
-            planes = [noisy.pixels] + [contract.read_rgb(p) for p in paths[1:]]
-            for path, plane in zip(paths, planes):
-                if plane.shape != ref.pixels.shape:
-                    raise contract.ContractError(
-                        f"{path}: {plane.shape[1]}x{plane.shape[0]} pixels, its reference {Path(ref.path).name} "
-                        f"{ref.pixels.shape[1]}x{ref.pixels.shape[0]}")
-            arr = np.concatenate(planes, axis=-1)
-            if not np.isfinite(arr).all():
-                raise contract.ContractError(f"{hdr_path}: non-finite values")
-            meta = {"name": name, "samples": count, "unit": unit, "estimator": noisy.value(contract.ESTIMATOR),
-                    "seed": noisy.value(contract.SEED), "features": feats["alb"].name, "channels": list(features),
-                    "reference_seed": ref.value(contract.SEED), "reference_samples": ref.value(contract.SAMPLES),
-                    "exposures": dataset.whole_image_exposures(noisy.pixels)}
-            _save(out, arr)
-            tmp = meta_out.with_name(meta_out.name + ".tmp")
-            tmp.write_text(json.dumps(meta, indent=1))
-            tmp.replace(meta_out)
-            n += 1
+            n += _write_input(dst, name, ref, levels[None]["hdr"], hdr_path, feats, count_in_name, unit,
+                              noisy_spp, dle_paths, features)
         if not ref_out.exists() or ref_out.stat().st_mtime < levels[None]["hdr"].stat().st_mtime:
             if not np.isfinite(ref.pixels).all():
                 raise contract.ContractError(f"{ref.path}: non-finite values")
             _save(ref_out, ref.pixels)
             n += 1
+    return n + _preprocess_realizations(src, dst, noisy_spp, features, extra_seeds)
+
+
+def _preprocess_realizations(src, dst, noisy_spp, features, extra_seeds):
+    """The extra noise realizations of a split (`<split>/seed<k>/`, make noisy's
+    NOISY_EXTRA_SEEDS; each must exist): noisy levels of the split's scenes rendered with seed k,
+    each paired with its scene's reference in the split and written to `<prep split>/seed<k>/`.
+    Refused: a realization whose header seed is not k, or equals its reference's or the split's
+    own level's (the same samples twice)."""
+    n = 0
+    main = contract.scan(src)
+    for k in sorted(set(extra_seeds)):
+        sub = src / contract.REALIZATION_DIR.format(seed=k)
+        if not sub.is_dir():
+            raise contract.ContractError(f"{sub}: no such directory (the extra noise realization of seed {k}: make noisy renders it)")
+        for name, levels in contract.scan(sub).items():
+            own = main.get(name, {})
+            if None not in own or "hdr" not in own[None]:
+                raise contract.ContractError(f"{sub}: {name} has no reference image in {src}")
+            ref = contract.read(own[None]["hdr"])
+            for count, feats in sorted((c, v) for c, v in levels.items() if c is not None):
+                missing = [f for f in features if f not in feats]
+                if missing:
+                    raise contract.ContractError(
+                        f"{sub}: {name} at {count} spp lacks {', '.join(missing)} (aov-write writes the "
+                        "features; re-render the dataset with make noisy)")
+                seed = contract.read(feats["hdr"]).value(contract.SEED, required=True)
+                if seed != k:
+                    raise contract.ContractError(f"{feats['hdr']}: {contract.SEED} = {seed} in a directory of seed {k}")
+                if count in own and "hdr" in own[count] and contract.read(own[count]["hdr"]).value(contract.SEED) == k:
+                    raise contract.ContractError(
+                        f"{feats['hdr']} and {own[count]['hdr']}: the same {contract.SEED} = {k} (a realization "
+                        "must have a seed of its own)")
+                n += _write_input(dst / sub.name, name, ref, own[None]["hdr"], feats["hdr"], feats, count, "spp",
+                                  noisy_spp, (), features)
     return n
+
+
+def _write_input(dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit, noisy_spp, dle_paths, features):
+    """Writes one input array and its JSON unless unwanted or up to date; returns 1 if written."""
+    if not dataset.wanted(unit, count_in_name, noisy_spp, dle_paths):
+        return 0
+    dst.mkdir(parents=True, exist_ok=True)
+    out = dst / dataset.prep_name(name, count_in_name, unit)
+    meta_out = out.with_suffix(".json")
+    paths = [hdr_path] + [feats[f] for f in features[1:]]
+    newest = max(p.stat().st_mtime for p in paths + [ref_path])
+    if (meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists()
+            and json.loads(meta_out.read_text()).get("channels") == list(features)):
+        return 0
+    noisy = contract.read(hdr_path)
+    count = samples_of(noisy, count_in_name)
+    check_pair(ref, noisy)
+    if unit == "spp" and count > ref.value(contract.SAMPLES, required=True):
+        raise contract.ContractError(
+            f"{ref.path}: {ref.value(contract.SAMPLES)} samples per pixel, fewer than its input {hdr_path} "
+            f"({count}); re-render the references (make reference)")
+    planes = [noisy.pixels] + [contract.read_rgb(p) for p in paths[1:]]
+    for path, plane in zip(paths, planes):
+        if plane.shape != ref.pixels.shape:
+            raise contract.ContractError(
+                f"{path}: {plane.shape[1]}x{plane.shape[0]} pixels, its reference {Path(ref.path).name} "
+                f"{ref.pixels.shape[1]}x{ref.pixels.shape[0]}")
+    arr = np.concatenate(planes, axis=-1)
+    if not np.isfinite(arr).all():
+        raise contract.ContractError(f"{hdr_path}: non-finite values")
+    meta = {"name": name, "samples": count, "unit": unit, "estimator": noisy.value(contract.ESTIMATOR),
+            "seed": noisy.value(contract.SEED), "features": feats["alb"].name, "channels": list(features),
+            "reference_seed": ref.value(contract.SEED), "reference_samples": ref.value(contract.SAMPLES),
+            "exposures": dataset.whole_image_exposures(noisy.pixels)}
+    _save(out, arr)
+    tmp = meta_out.with_name(meta_out.name + ".tmp")
+    tmp.write_text(json.dumps(meta, indent=1))
+    tmp.replace(meta_out)
+    return 1
 
 
 def _save(out, arr):
@@ -116,8 +159,9 @@ def main(argv=None):
     n = 0
     try:
         for split in ["train", "valid", "test"]:
+            # Extra noise realizations are training data (make noisy renders them for train only).
             n += preprocess_split(Path(cfg.data_dir) / split, Path(cfg.prep_dir) / split, cfg.noisy_spp,
-                                  cfg.dle_paths, cfg.features)
+                                  cfg.dle_paths, cfg.features, cfg.extra_seeds if split == "train" else ())
     except contract.ContractError as e:
         print(f"preprocess: error: {e}", file=sys.stderr)
         sys.exit(1)

@@ -286,3 +286,37 @@ def test_changing_feature_spp_re_renders_the_features_and_not_the_radiance(tmp_p
     assert question("nrm", 16) == 0 and question("hdr", 16) == 0
     assert question("nrm", 32) == 1 and question("hdr", 32) == 0
     assert sorted(p.name for p in ev.glob("feature-spp-*")) == ["feature-spp-32"]
+
+
+def test_extra_noise_realizations_render_the_training_scenes_with_their_own_seeds():
+    # NOISY_EXTRA_SEEDS: the training scenes' NOISY_EXTRA_LEVELS again with each seed, into
+    # train/<luxest_contract.REALIZATION_DIR>/ under the scene's own name; features alike.
+    cmds = dry_run("noisy", NOISY_EXTRA_SEEDS="2 3", NOISY_EXTRA_LEVELS="1 2 4")
+    main = [c for c in cmds if c[0] == STAGES["TRACE"] and flag(c, "--seed") == "1"]
+    extra = [c for c in cmds if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"]
+    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and flag(c, "--seed") != "1"]
+    train = {flag(c, "-o").rsplit("/", 1)[1] for c in main if "/train/" in flag(c, "-o")}
+    assert len(train) == 16 and len(extra) == len(aovs) == 2 * 16  # quick: 16 training scenes
+    for k in ("2", "3"):
+        outs = {flag(c, "-o") for c in extra if flag(c, "--seed") == k}
+        d = f"data/pytest-dry-run/train/{contract.REALIZATION_DIR.format(seed=int(k))}"
+        assert outs == {f"{d}/{name}" for name in train}
+    assert all(flag(c, "--spp") == "4" and flag(c, "--snapshots") == "1,2,4" for c in extra)
+    assert sorted(c[1:] for c in extra) == sorted([a for a in c[1:] if a not in ("--min-samples", "16")] for c in aovs)
+    # None in the quick preset, seeds 2-9 of levels 1-32 in the full one.
+    assert not [c for c in dry_run("noisy") if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"]
+    full = [c for c in dry_run("noisy", PRESET="full") if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"]
+    assert {flag(c, "--seed") for c in full} == {str(k) for k in range(2, 10)}
+    assert {flag(c, "--snapshots") for c in full} == {"1,2,4,8,16,32"}
+    # Only levels that are noisy levels.
+    few = [c for c in dry_run("noisy", PRESET="full", NOISY_LEVELS="1 4 64") if c[0] == STAGES["TRACE"] and flag(c, "--seed") == "2"]
+    assert few and {(flag(c, "--spp"), flag(c, "--snapshots")) for c in few} == {("4", "1,4")}
+    # A seed of the noisy levels or of the references is refused.
+    for bad in ("2 1", "1000001"):
+        r = make("-n", "noisy", NOISY_EXTRA_SEEDS=bad)
+        assert r.returncode != 0 and "NOISY_EXTRA_SEEDS" in r.stderr and len(r.stderr.strip().splitlines()) == 1, bad
+    # Preprocessing and training are told the seeds.
+    r = make("-n", "-W", "training/train.py", "models/pytest-dry-run.onnx", NOISY_EXTRA_SEEDS="2 3")
+    lines = r.stdout.replace("\\\n", " ").splitlines()
+    runs = [shlex.split(line.split("&&", 1)[1]) for line in lines if "preprocess.py" in line or "train.py" in line]
+    assert len(runs) == 2 and all(c[c.index("--extra-seeds") + 1:c.index("--extra-seeds") + 3] == ["2", "3"] for c in runs)

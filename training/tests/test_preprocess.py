@@ -188,3 +188,99 @@ def test_features_follow_the_configuration(tmp_path):
     assert preprocess.preprocess_split(src, tmp_path / "prep", [4]) == 1
     [(inp, _, meta)] = dataset.pairs(tmp_path / "prep")
     assert np.load(inp).shape[-1] == 15 and meta["channels"] == list(contract.FEATURES)
+
+
+def write_realization(split_dir, name, spp, seed, rng):
+    d = split_dir / contract.REALIZATION_DIR.format(seed=seed)
+    d.mkdir(exist_ok=True)
+    return write_set(d, name, spp, seed, rng)
+
+
+def test_extra_noise_realizations_pair_with_their_scenes_reference(tmp_path):
+    rng = np.random.default_rng(11)
+    src, prep = tmp_path / "train", tmp_path / "prep"
+    src.mkdir()
+    for name in ("a", "b"):
+        write_ref(src, name, 1000001, rng)
+        for spp in (1, 4):
+            write_set(src, name, spp, 1, rng)
+    hdr = {k: write_realization(src, "a", 1, k, rng) for k in (2, 3)}
+    write_realization(src, "a", 4, 2, rng)
+    # Only the seeds asked for, and only the configured levels.
+    assert preprocess.preprocess_split(src, prep, [1, 4], extra_seeds=[3]) == 4 + 2 + 1
+    assert preprocess.preprocess_split(src, prep, [1], extra_seeds=[2, 3]) == 1
+    found = dataset.pairs(prep, [1, 4], extra_seeds=[2, 3])
+    rel = lambda p: str(p.relative_to(prep))
+    assert [rel(i) for i, _, _ in found] == ["a_000001spp.npy", "a_000004spp.npy", "b_000001spp.npy", "b_000004spp.npy",
+                                             "seed2/a_000001spp.npy", "seed3/a_000001spp.npy"]
+    assert all(rel(r) == f"{m['name']}_ref.npy" for _, r, m in found)
+    for i, _, m in found[4:]:
+        k = int(i.parent.name[4:])
+        assert (m["seed"], m["reference_seed"]) == (k, 1000001)
+        assert np.array_equal(np.load(i)[..., :3], hdr[k])
+        assert math.isclose(m["exposures"][0], contract.exposure(hdr[k]), rel_tol=1e-15)
+    # Without seeds, no realization; a scene's level and its realizations form one group.
+    assert len(dataset.pairs(prep, [1, 4])) == 4
+    assert dataset.groups([m for *_, m in found]) == [[0, 4, 5], [1], [2], [3]]
+
+
+def test_refuses_a_realization_without_a_seed_of_its_own(tmp_path):
+    rng = np.random.default_rng(12)
+    src = tmp_path / "train"
+    src.mkdir()
+    write_ref(src, "a", 1000001, rng)
+    write_set(src, "a", 1, 1, rng)
+    with pytest.raises(contract.ContractError, match=r"seed2: no such directory .*make noisy"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[2])
+    # A header seed that is not the directory's, the split's own seed, the reference's seed.
+    d = src / contract.REALIZATION_DIR.format(seed=2)
+    d.mkdir()
+    write_set(d, "a", 1, 5, rng)
+    with pytest.raises(contract.ContractError, match=r"a_000001spp.hdr.exr: luxest.seed = 5 in a directory of seed 2"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[2])
+    d = src / contract.REALIZATION_DIR.format(seed=1)
+    d.mkdir()
+    write_set(d, "a", 1, 1, rng)
+    with pytest.raises(contract.ContractError, match=r"the same luxest.seed = 1 \(a realization must have a seed of its own\)"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[1])
+    d = src / contract.REALIZATION_DIR.format(seed=1000001)
+    d.mkdir()
+    write_set(d, "a", 1, 1000001, rng)
+    with pytest.raises(contract.ContractError, match=r"reference and noisy image share luxest.seed = 1000001"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[1000001])
+    # A realization of a scene the split has no reference for.
+    d = src / contract.REALIZATION_DIR.format(seed=3)
+    d.mkdir()
+    write_set(d, "z", 1, 3, rng)
+    with pytest.raises(contract.ContractError, match=r"seed3: z has no reference image in"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[3])
+
+
+def test_crops_draw_a_scenes_level_then_one_of_its_realizations(tmp_path):
+    rng = np.random.default_rng(13)
+    src, prep = tmp_path / "train", tmp_path / "prep"
+    src.mkdir()
+    for name in ("a", "b"):
+        write_ref(src, name, 1000001, rng)
+        write_set(src, name, 1, 1, rng)
+    for k in (2, 3, 4):
+        write_realization(src, "a", 1, k, rng)
+    preprocess.preprocess_split(src, prep, [1], extra_seeds=[2, 3, 4])
+    # Without realizations, crop i is drawn exactly as before they existed: pair, top, left,
+    # three flips and a permutation from default_rng((seed, i)).
+    plain = dataset.Crops(prep, crop=16, seed=5, length=50)
+    for i in range(50):
+        r = np.random.default_rng((5, i))
+        p = int(r.integers(2))
+        y, x = int(r.integers(0, 32 - 16 + 1)), int(r.integers(0, 48 - 16 + 1))
+        flips = tuple(bool(r.random() < 0.5) for _ in range(3))
+        assert plain.draw(i) == (p, y, x, *flips, int(r.integers(6)))
+    # With three realizations of a: a and b equally often (a binomial mean, 4 standard errors),
+    # and a's four images each a quarter of a's draws.
+    crops = dataset.Crops(prep, crop=16, seed=5, length=8000, extra_seeds=[2, 3, 4])
+    assert len(crops.pairs) == 5 and crops.groups == [[0, 2, 3, 4], [1]]
+    counts = np.bincount([crops.draw(i)[0] for i in range(8000)], minlength=5)
+    n_a = counts[[0, 2, 3, 4]].sum()
+    assert abs(n_a / 8000 - 0.5) < 4 * math.sqrt(0.25 / 8000)
+    for p in (0, 2, 3, 4):
+        assert abs(counts[p] / n_a - 0.25) < 4 * math.sqrt(0.25 * 0.75 / n_a)

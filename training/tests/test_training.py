@@ -422,8 +422,9 @@ def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(tmp_pat
 
 
 def test_config_round_trip(tmp_path):
-    cfg = config.parse(["--minutes", "3", "--noisy-spp", "1", "4"])
-    assert cfg.minutes == 3.0 and cfg.noisy_spp == [1, 4]
+    cfg = config.parse(["--minutes", "3", "--noisy-spp", "1", "4", "--extra-seeds", "2", "3"])
+    assert cfg.minutes == 3.0 and cfg.noisy_spp == [1, 4] and cfg.extra_seeds == [2, 3]
+    assert config.parse([]).extra_seeds == [] and config.parse(["--extra-seeds"]).extra_seeds == []
     cfg.save(tmp_path / "c.json")
     assert asdict(config.Config.load(tmp_path / "c.json")) == asdict(cfg)
     # A run saved before the head option was a direct one.
@@ -431,6 +432,10 @@ def test_config_round_trip(tmp_path):
     del old["head"]
     (tmp_path / "old.json").write_text(json.dumps(old))
     assert config.Config.load(tmp_path / "old.json").head == "direct"
+    # ... and one saved before extra noise realizations had none.
+    del old["extra_seeds"]
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    assert config.Config.load(tmp_path / "old.json").extra_seeds == []
     # ... and one saved before the detail gate (on by default since) had none; a key of no
     # current option (a model's metadata written by a later version) is dropped; a flag turns
     # the detail gate on and off.
@@ -541,7 +546,8 @@ def test_loader_workers_cut_the_same_crops(tmp_path):
 def test_crops_cut_on_the_device_are_the_loaders(tmp_path):
     # dataset.DeviceCrops (the split in the training device's memory, automatic on a GPU) cuts
     # bit for bit the batches the DataLoader cuts: two scenes of different shapes, two levels
-    # each sharing their scene's reference, every flip, transpose and channel order.
+    # each and an extra noise realization of one, sharing their scene's reference, every flip,
+    # transpose and channel order.
     import luxest_contract as contract
     import preprocess
     import train
@@ -555,9 +561,13 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path):
         for spp in (4, 16):
             for kind in contract.FEATURES:
                 contract.write(d / contract.image_name(name, kind, spp), rng.random((h, w, 3)), {contract.SAMPLES: spp, contract.SEED: 1})
-    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4, 16])
-    data = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=96)
-    assert len(data.pairs) == 4 and len({id(r) for _, r, *_ in data.pairs}) == 2
+    (d / contract.REALIZATION_DIR.format(seed=5)).mkdir()
+    for kind in contract.FEATURES:
+        contract.write(d / contract.REALIZATION_DIR.format(seed=5) / contract.image_name("k", kind, 4), rng.random((48, 36, 3)),
+                       {contract.SAMPLES: 4, contract.SEED: 5})
+    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4, 16], extra_seeds=[5])
+    data = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=96, extra_seeds=[5])
+    assert len(data.pairs) == 5 and len({id(r) for _, r, *_ in data.pairs}) == 2 and len(data.groups) == 4
     draws = [data.draw(i) for i in range(96)]
     assert {d[3:6] for d in draws} == {(a, b, c) for a in (False, True) for b in (False, True) for c in (False, True)}
     assert {d[6] for d in draws} == set(range(len(dataset.PERMUTATIONS)))
