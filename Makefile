@@ -137,9 +137,11 @@ train: $(MODEL)
 ifeq ($(if $(filter command line,$(origin EVAL_MODEL)),$(if $(filter train,$(MAKECMDGOALS)),,$(filter $(MODEL),$(EVAL_MODEL)))),)
 $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract.py $(EVALUATE) | reference noisy
 	cd training && ../$(PYTHON) preprocess.py --data-dir ../$(DATA_DIR) --prep-dir ../build/train/$(DATASET) \
-		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) --extra-seeds $(NOISY_EXTRA_SEEDS)
+		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) \
+		--extra-seeds $(if $(NOISY_EXTRA),$(NOISY_EXTRA_SEEDS)) --extra-spp $(NOISY_EXTRA)
 	cd training && ../$(PYTHON) train.py --prep-dir ../build/train/$(DATASET) --run-dir ../runs/$(DATASET) \
-		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) --extra-seeds $(NOISY_EXTRA_SEEDS) --steps $(TRAIN_STEPS) --minutes $(TRAIN_MINUTES) \
+		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) --extra-seeds $(if $(NOISY_EXTRA),$(NOISY_EXTRA_SEEDS)) \
+		--extra-spp $(NOISY_EXTRA) --steps $(TRAIN_STEPS) --minutes $(TRAIN_MINUTES) \
 		--schedule $(TRAIN_SCHEDULE) --loss $(TRAIN_LOSS)
 	cd training && ../$(PYTHON) export.py --run-dir ../runs/$(DATASET) --out ../$@
 	cd training && ../$(PYTHON) compare_image.py --model ../$@ --split-dir ../$(DATA_DIR)/test \

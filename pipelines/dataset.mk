@@ -71,7 +71,7 @@ $(call lx_image,$(DATA_DIR)/%,$(NOISY_MAX),nrm): build/dataset/$(DATASET)/%.lxs 
 # $(DATA_DIR)/train/seed<k>/ under the same names, radiance and features in one rule (the normal
 # image, written last, marks the set); preprocess.py pairs them with the scene's reference, and
 # training draws a scene's level first, then one of its realizations.
-NOISY_EXTRA := $(filter $(NOISY_LEVELS),$(NOISY_EXTRA_LEVELS))
+NOISY_EXTRA := $(filter $(NOISY_EXTRA_LEVELS),$(NOISY_LEVELS))
 NOISY_EXTRA_MAX := $(lastword $(NOISY_EXTRA))
 NOISY_EXTRA_SNAPSHOTS := $(subst $(space),$(comma),$(strip $(NOISY_EXTRA)))
 ifneq ($(filter $(NOISY_SEED) $(REF_SEED),$(NOISY_EXTRA_SEEDS)),)

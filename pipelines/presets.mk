@@ -34,11 +34,13 @@ $(eval $(call lx_preset,FEATURE_SPP,16,16))
 # train and valid scenes at these light-path counts, denoised with the NOISY_MAX features.
 $(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))
 # Extra noise realizations of the training scenes (make noisy; pipelines/dataset.mk): the levels
-# NOISY_EXTRA_LEVELS (those among NOISY_LEVELS) rendered again with each seed of NOISY_EXTRA_SEEDS (none: no extra
-# realizations), 0.5 s a scene and seed at 112². With one realization per level a long fine-tuning
-# learns the training rooms' noise by heart: 8 more gave +0.07 dB on the 12 validation rooms at
-# every level (docs/measurements.md, *More noise per room*). Quick: none, as its results record.
-$(eval $(call lx_preset,NOISY_EXTRA_SEEDS,,2 3 4 5 6 7 8 9))
+# NOISY_EXTRA_LEVELS (those among NOISY_LEVELS) rendered again with each seed of NOISY_EXTRA_SEEDS,
+# about 0.4 s a 112² scene and seed. Eight (`NOISY_EXTRA_SEEDS="2 3 4 5 6 7 8 9"`) gave a 6000-step
+# fine-tuning +0.07 dB on the 12 validation rooms at every level (docs/measurements.md, *More
+# noise per room*). None by default: each seed adds half of a scene's inputs (6 of 12) to the
+# training arrays (a 384² full-preset dataset: ~8.5 GB a seed, held in GPU memory by DeviceCrops),
+# and the presets' documented results were trained without them.
+$(eval $(call lx_preset,NOISY_EXTRA_SEEDS,,))
 $(eval $(call lx_preset,NOISY_EXTRA_LEVELS,1 2 4 8 16 32,1 2 4 8 16 32))
 
 # Training (make train): steps of the one-cycle schedule, and the time budget in minutes (quick:

@@ -21,6 +21,7 @@ class Config:
     noisy_spp: list = field(default_factory=lambda: [1, 2, 4, 8, 16, 32, 64, 256, 1024])
     dle_paths: list = field(default_factory=lambda: [100, 300, 1000])  # local-estimate inputs
     extra_seeds: list = field(default_factory=list)  # seeds of the extra noise realizations (<split>/seed<k>/) to use
+    extra_spp: list = field(default_factory=lambda: [1, 2, 4, 8, 16, 32])  # their levels (make's NOISY_EXTRA_LEVELS)
     crop: int = 64                       # training crop side (multiple of 16)
     batch: int = 16
     base_width: int = 24                 # U-Net channels of the first level
@@ -60,6 +61,7 @@ class Config:
         values.setdefault("head", "direct")
         values.setdefault("dle_paths", [])
         values.setdefault("extra_seeds", [])
+        values.setdefault("extra_spp", [1, 2, 4, 8, 16, 32])
         values.setdefault("precision", "auto")
         values.setdefault("schedule", "steps")
         values.setdefault("cropper", "auto")

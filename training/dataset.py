@@ -44,12 +44,12 @@ def wanted(unit, count, noisy_spp, dle_paths):
     return levels is None or count in levels
 
 
-def pairs(prep_split_dir, noisy_spp=None, dle_paths=None, extra_seeds=()):
+def pairs(prep_split_dir, noisy_spp=None, dle_paths=None, extra_seeds=(), extra_spp=None):
     """[(input path, reference path, metadata dict)] of one preprocessed split: the noisy levels
     in `noisy_spp` and the local-estimate images in `dle_paths` (None: all of that family), so
     that arrays left by an earlier configuration are not trained on, then the noisy levels of
     the extra noise realizations of seeds `extra_seeds` (`seed<k>/`, paired with the split's
-    references)."""
+    references) at the levels in `extra_spp` (None: all)."""
     out = []
     d = Path(prep_split_dir)
     realizations = [d / contract.REALIZATION_DIR.format(seed=k) for k in sorted(set(extra_seeds))]
@@ -57,6 +57,8 @@ def pairs(prep_split_dir, noisy_spp=None, dle_paths=None, extra_seeds=()):
                       + [m for r in realizations for m in sorted(r.glob("*spp.json"))]):
         meta = json.loads(meta_path.read_text())
         if not wanted(meta.get("unit", "spp"), meta["samples"], noisy_spp, dle_paths):
+            continue
+        if meta_path.parent != d and extra_spp is not None and meta["samples"] not in extra_spp:
             continue
         out.append((meta_path.with_suffix(".npy"), d / prep_name(meta["name"], None), meta))
     return out
@@ -79,10 +81,11 @@ class Crops(torch.utils.data.Dataset):
     the input under that permutation (the network's transfer), the reference exposure that of
     the whole reference (the evaluation's tonemap, loss.display)."""
 
-    def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None, extra_seeds=()):
+    def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None, extra_seeds=(),
+                 extra_spp=None):
         refs = {}  # a scene's inputs share its reference array (DeviceCrops holds it once)
         self.pairs = []
-        found = pairs(prep_split_dir, noisy_spp, dle_paths, extra_seeds)
+        found = pairs(prep_split_dir, noisy_spp, dle_paths, extra_seeds, extra_spp)
         self.groups = groups([m for *_, m in found])
         for i, r, m in found:
             if r not in refs:

@@ -36,11 +36,12 @@ def samples_of(image, expected):
     return spp
 
 
-def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATURES, extra_seeds=()):
+def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATURES, extra_seeds=(), extra_spp=None):
     """Writes the arrays of one split directory; returns the number written. Inputs: the noisy
     levels in `noisy_spp`, and the double-local-estimate images at `dle_paths` light paths
     (with the features of the scene's largest noisy level, as make eval denoises them), and the
-    extra noise realizations of seeds `extra_seeds` (`<src>/seed<k>/`)."""
+    extra noise realizations of seeds `extra_seeds` (`<src>/seed<k>/`) at the noisy levels in
+    `extra_spp` (None: all)."""
     n = 0
     dst.mkdir(parents=True, exist_ok=True)
     local_estimates = contract.scan(src, unit="le")
@@ -71,15 +72,16 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATUR
                 raise contract.ContractError(f"{ref.path}: non-finite values")
             _save(ref_out, ref.pixels)
             n += 1
-    return n + _preprocess_realizations(src, dst, noisy_spp, features, extra_seeds)
+    return n + _preprocess_realizations(src, dst, noisy_spp, features, extra_seeds, extra_spp)
 
 
-def _preprocess_realizations(src, dst, noisy_spp, features, extra_seeds):
+def _preprocess_realizations(src, dst, noisy_spp, features, extra_seeds, extra_spp):
     """The extra noise realizations of a split (`<split>/seed<k>/`, make noisy's
     NOISY_EXTRA_SEEDS; each must exist): noisy levels of the split's scenes rendered with seed k,
-    each paired with its scene's reference in the split and written to `<prep split>/seed<k>/`.
-    Refused: a realization whose header seed is not k, or equals its reference's or the split's
-    own level's (the same samples twice)."""
+    each paired with its scene's reference in the split and written to `<prep split>/seed<k>/`:
+    the levels in `noisy_spp` and `extra_spp` (None: every one). Refused: a realization whose
+    header seed is not k, or equals its reference's or the split's own level's (the same samples
+    twice)."""
     n = 0
     main = contract.scan(src)
     for k in sorted(set(extra_seeds)):
@@ -90,27 +92,47 @@ def _preprocess_realizations(src, dst, noisy_spp, features, extra_seeds):
             own = main.get(name, {})
             if None not in own or "hdr" not in own[None]:
                 raise contract.ContractError(f"{sub}: {name} has no reference image in {src}")
-            ref = contract.read(own[None]["hdr"])
+            ref = _Lazy(own[None]["hdr"])  # read only if an array is (re)written
             for count, feats in sorted((c, v) for c, v in levels.items() if c is not None):
+                if not (dataset.wanted("spp", count, noisy_spp, None) and (extra_spp is None or count in extra_spp)):
+                    continue
                 missing = [f for f in features if f not in feats]
                 if missing:
                     raise contract.ContractError(
                         f"{sub}: {name} at {count} spp lacks {', '.join(missing)} (aov-write writes the "
                         "features; re-render the dataset with make noisy)")
-                seed = contract.read(feats["hdr"]).value(contract.SEED, required=True)
-                if seed != k:
-                    raise contract.ContractError(f"{feats['hdr']}: {contract.SEED} = {seed} in a directory of seed {k}")
-                if count in own and "hdr" in own[count] and contract.read(own[count]["hdr"]).value(contract.SEED) == k:
-                    raise contract.ContractError(
-                        f"{feats['hdr']} and {own[count]['hdr']}: the same {contract.SEED} = {k} (a realization "
-                        "must have a seed of its own)")
+
+                def check(noisy, k=k, own=own.get(count, {})):
+                    seed = noisy.value(contract.SEED, required=True)
+                    if seed != k:
+                        raise contract.ContractError(f"{noisy.path}: {contract.SEED} = {seed} in a directory of seed {k}")
+                    if "hdr" in own and contract.read(own["hdr"]).value(contract.SEED) == k:
+                        raise contract.ContractError(
+                            f"{noisy.path} and {own['hdr']}: the same {contract.SEED} = {k} (a realization "
+                            "must have a seed of its own)")
+
                 n += _write_input(dst / sub.name, name, ref, own[None]["hdr"], feats["hdr"], feats, count, "spp",
-                                  noisy_spp, (), features)
+                                  noisy_spp, (), features, check)
     return n
 
 
-def _write_input(dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit, noisy_spp, dle_paths, features):
-    """Writes one input array and its JSON unless unwanted or up to date; returns 1 if written."""
+class _Lazy:
+    """An image read on first use (`get`)."""
+
+    def __init__(self, path):
+        self.path, self.image = path, None
+
+    def get(self):
+        if self.image is None:
+            self.image = contract.read(self.path)
+        return self.image
+
+
+def _write_input(dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit, noisy_spp, dle_paths, features,
+                 check=None):
+    """Writes one input array and its JSON unless unwanted or up to date; returns 1 if written.
+    `ref`: the reference Image, or a _Lazy one; `check(noisy)` runs on the input before it is
+    written."""
     if not dataset.wanted(unit, count_in_name, noisy_spp, dle_paths):
         return 0
     dst.mkdir(parents=True, exist_ok=True)
@@ -121,7 +143,10 @@ def _write_input(dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit,
     if (meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists()
             and json.loads(meta_out.read_text()).get("channels") == list(features)):
         return 0
+    ref = ref.get() if isinstance(ref, _Lazy) else ref
     noisy = contract.read(hdr_path)
+    if check:
+        check(noisy)
     count = samples_of(noisy, count_in_name)
     check_pair(ref, noisy)
     if unit == "spp" and count > ref.value(contract.SAMPLES, required=True):
@@ -161,7 +186,7 @@ def main(argv=None):
         for split in ["train", "valid", "test"]:
             # Extra noise realizations are training data (make noisy renders them for train only).
             n += preprocess_split(Path(cfg.data_dir) / split, Path(cfg.prep_dir) / split, cfg.noisy_spp,
-                                  cfg.dle_paths, cfg.features, cfg.extra_seeds if split == "train" else ())
+                                  cfg.dle_paths, cfg.features, cfg.extra_seeds if split == "train" else (), cfg.extra_spp)
     except contract.ContractError as e:
         print(f"preprocess: error: {e}", file=sys.stderr)
         sys.exit(1)

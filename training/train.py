@@ -210,7 +210,8 @@ def main(argv=None):
     # 100 000 / batch steps early, before the schedule had annealed).
     data = dataset.Crops(Path(cfg.prep_dir) / "train", cfg.crop, cfg.seed + step,
                          length=max(cfg.steps - step, 0) * cfg.batch,
-                         noisy_spp=cfg.noisy_spp, dle_paths=cfg.dle_paths, extra_seeds=cfg.extra_seeds)
+                         noisy_spp=cfg.noisy_spp, dle_paths=cfg.dle_paths, extra_seeds=cfg.extra_seeds,
+                         extra_spp=cfg.extra_spp)
     loader = batches(data, cfg, device)
     start = time.time()
     log = open(run / "log.jsonl", "a")

@@ -303,20 +303,26 @@ def test_extra_noise_realizations_render_the_training_scenes_with_their_own_seed
         assert outs == {f"{d}/{name}" for name in train}
     assert all(flag(c, "--spp") == "4" and flag(c, "--snapshots") == "1,2,4" for c in extra)
     assert sorted(c[1:] for c in extra) == sorted([a for a in c[1:] if a not in ("--min-samples", "16")] for c in aovs)
-    # None in the quick preset, seeds 2-9 of levels 1-32 in the full one.
-    assert not [c for c in dry_run("noisy") if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"]
-    full = [c for c in dry_run("noisy", PRESET="full") if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"]
-    assert {flag(c, "--seed") for c in full} == {str(k) for k in range(2, 10)}
-    assert {flag(c, "--snapshots") for c in full} == {"1,2,4,8,16,32"}
-    # Only levels that are noisy levels.
-    few = [c for c in dry_run("noisy", PRESET="full", NOISY_LEVELS="1 4 64") if c[0] == STAGES["TRACE"] and flag(c, "--seed") == "2"]
+    # None by default, in either preset; levels 1-32 when seeds are given.
+    for preset in ("quick", "full"):
+        assert not [c for c in dry_run("noisy", PRESET=preset) if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"]
+    full = [c for c in dry_run("noisy", PRESET="full", NOISY_EXTRA_SEEDS="2 9") if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"]
+    assert {flag(c, "--seed") for c in full} == {"2", "9"} and {flag(c, "--snapshots") for c in full} == {"1,2,4,8,16,32"}
+    # Only levels that are noisy levels, in their order.
+    few = [c for c in dry_run("noisy", NOISY_EXTRA_SEEDS="2", NOISY_LEVELS="1 4 64", NOISY_EXTRA_LEVELS="4 2 1")
+           if c[0] == STAGES["TRACE"] and flag(c, "--seed") == "2"]
     assert few and {(flag(c, "--spp"), flag(c, "--snapshots")) for c in few} == {("4", "1,4")}
     # A seed of the noisy levels or of the references is refused.
     for bad in ("2 1", "1000001"):
         r = make("-n", "noisy", NOISY_EXTRA_SEEDS=bad)
         assert r.returncode != 0 and "NOISY_EXTRA_SEEDS" in r.stderr and len(r.stderr.strip().splitlines()) == 1, bad
-    # Preprocessing and training are told the seeds.
-    r = make("-n", "-W", "training/train.py", "models/pytest-dry-run.onnx", NOISY_EXTRA_SEEDS="2 3")
-    lines = r.stdout.replace("\\\n", " ").splitlines()
-    runs = [shlex.split(line.split("&&", 1)[1]) for line in lines if "preprocess.py" in line or "train.py" in line]
-    assert len(runs) == 2 and all(c[c.index("--extra-seeds") + 1:c.index("--extra-seeds") + 3] == ["2", "3"] for c in runs)
+    # Preprocessing and training are told the seeds and levels; no seeds when no level is rendered.
+    def told(**variables):
+        r = make("-n", "-W", "training/train.py", "models/pytest-dry-run.onnx", **variables)
+        lines = r.stdout.replace("\\\n", " ").splitlines()
+        runs = [shlex.split(line.split("&&", 1)[1]) for line in lines if "preprocess.py" in line or "train.py" in line]
+        assert len(runs) == 2
+        after = lambda c, f: c[c.index(f) + 1:next((i for i in range(c.index(f) + 1, len(c)) if c[i].startswith("--")), len(c))]
+        return [(after(c, "--extra-seeds"), after(c, "--extra-spp")) for c in runs]
+    assert told(NOISY_EXTRA_SEEDS="2 3") == [(["2", "3"], ["1", "2", "4", "8", "16", "32"])] * 2
+    assert told(NOISY_EXTRA_SEEDS="2 3", NOISY_LEVELS="64 256 1024") == [([], [])] * 2

@@ -208,7 +208,7 @@ def test_extra_noise_realizations_pair_with_their_scenes_reference(tmp_path):
     write_realization(src, "a", 4, 2, rng)
     # Only the seeds asked for, and only the configured levels.
     assert preprocess.preprocess_split(src, prep, [1, 4], extra_seeds=[3]) == 4 + 2 + 1
-    assert preprocess.preprocess_split(src, prep, [1], extra_seeds=[2, 3]) == 1
+    assert preprocess.preprocess_split(src, prep, [1, 4], extra_seeds=[2, 3], extra_spp=[1]) == 1
     found = dataset.pairs(prep, [1, 4], extra_seeds=[2, 3])
     rel = lambda p: str(p.relative_to(prep))
     assert [rel(i) for i, _, _ in found] == ["a_000001spp.npy", "a_000004spp.npy", "b_000001spp.npy", "b_000004spp.npy",
@@ -219,8 +219,13 @@ def test_extra_noise_realizations_pair_with_their_scenes_reference(tmp_path):
         assert (m["seed"], m["reference_seed"]) == (k, 1000001)
         assert np.array_equal(np.load(i)[..., :3], hdr[k])
         assert math.isclose(m["exposures"][0], contract.exposure(hdr[k]), rel_tol=1e-15)
-    # Without seeds, no realization; a scene's level and its realizations form one group.
+    # Without seeds, no realization; only the realizations' levels (arrays of a level no longer
+    # among them are left alone); a scene's level and its realizations form one group.
     assert len(dataset.pairs(prep, [1, 4])) == 4
+    assert len(dataset.pairs(prep, [1, 4], extra_seeds=[2, 3], extra_spp=[4])) == 4
+    assert preprocess.preprocess_split(src, prep, [1, 4], extra_seeds=[2], extra_spp=[4]) == 1
+    assert [str(i.relative_to(prep)) for i, _, _ in dataset.pairs(prep, [1, 4], extra_seeds=[2, 3], extra_spp=[4])][4:] == [
+        "seed2/a_000004spp.npy"]
     assert dataset.groups([m for *_, m in found]) == [[0, 4, 5], [1], [2], [3]]
 
 

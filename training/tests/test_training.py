@@ -433,9 +433,10 @@ def test_config_round_trip(tmp_path):
     (tmp_path / "old.json").write_text(json.dumps(old))
     assert config.Config.load(tmp_path / "old.json").head == "direct"
     # ... and one saved before extra noise realizations had none.
-    del old["extra_seeds"]
+    del old["extra_seeds"], old["extra_spp"]
     (tmp_path / "old.json").write_text(json.dumps(old))
-    assert config.Config.load(tmp_path / "old.json").extra_seeds == []
+    assert (config.Config.load(tmp_path / "old.json").extra_seeds, config.Config.load(tmp_path / "old.json").extra_spp) == (
+        [], [1, 2, 4, 8, 16, 32])
     # ... and one saved before the detail gate (on by default since) had none; a key of no
     # current option (a model's metadata written by a later version) is dropped; a flag turns
     # the detail gate on and off.
