@@ -78,14 +78,20 @@ ifneq ($(filter $(NOISY_SEED) $(REF_SEED),$(NOISY_EXTRA_SEEDS)),)
 $(error NOISY_EXTRA_SEEDS=$(NOISY_EXTRA_SEEDS): must not contain NOISY_SEED ($(NOISY_SEED)) or REF_SEED ($(REF_SEED)))
 endif
 DATASET_TRAIN_SCENES := $(patsubst train/%,%,$(filter train/%,$(DATASET_SCENES)))
+# $(call extra_prefix,SCENE,SEED): the realization's output prefix; extra_set: its last normal image.
+extra_prefix = $(call lx_realization,$(DATA_DIR)/train,$(2))/$(1)
+extra_set = $(call lx_image,$(call extra_prefix,$(1),$(2)),$(NOISY_EXTRA_MAX),nrm)
 define dataset_realization
-$(call lx_image,$(call lx_realization,$(DATA_DIR)/train,$(2))/$(1),$(NOISY_EXTRA_MAX),nrm): build/dataset/$(DATASET)/train/$(1).lxs $(TRACE) $(AOV_WRITE) $(FEATURE_SPP_STAMP)
+$(call extra_set,$(1),$(2)): build/dataset/$(DATASET)/train/$(1).lxs $(TRACE) $(AOV_WRITE) $(FEATURE_SPP_STAMP)
 	@mkdir -p $(call lx_realization,$(DATA_DIR)/train,$(2))
-	$$(TRACE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) -o $(call lx_realization,$(DATA_DIR)/train,$(2))/$(1)
-	$$(AOV_WRITE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) --min-samples $(FEATURE_SPP) -o $(call lx_realization,$(DATA_DIR)/train,$(2))/$(1)
+	$$(TRACE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) -o $(call extra_prefix,$(1),$(2))
+	$$(AOV_WRITE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) --min-samples $(FEATURE_SPP) -o $(call extra_prefix,$(1),$(2))
 endef
-$(if $(NOISY_EXTRA),$(foreach s,$(DATASET_TRAIN_SCENES),$(foreach k,$(NOISY_EXTRA_SEEDS),$(eval $(call dataset_realization,$(s),$(k))))))
-DATASET_REALIZATIONS := $(if $(NOISY_EXTRA),$(foreach s,$(DATASET_TRAIN_SCENES),$(foreach k,$(NOISY_EXTRA_SEEDS),$(call lx_image,$(call lx_realization,$(DATA_DIR)/train,$(k))/$(s),$(NOISY_EXTRA_MAX),nrm))))
+DATASET_REALIZATIONS :=
+ifneq ($(NOISY_EXTRA),)
+$(foreach s,$(DATASET_TRAIN_SCENES),$(foreach k,$(NOISY_EXTRA_SEEDS),$(eval $(call dataset_realization,$(s),$(k)))))
+DATASET_REALIZATIONS := $(foreach s,$(DATASET_TRAIN_SCENES),$(foreach k,$(NOISY_EXTRA_SEEDS),$(call extra_set,$(s),$(k))))
+endif
 
 # The local-estimate family (not for the test scenes: make eval renders theirs).
 DATASET_LE_SCENES := $(filter-out test/%,$(DATASET_SCENES))

@@ -60,8 +60,6 @@ class Config:
         # Runs from before the `head` option predicted the radiance directly.
         values.setdefault("head", "direct")
         values.setdefault("dle_paths", [])
-        values.setdefault("extra_seeds", [])
-        values.setdefault("extra_spp", [1, 2, 4, 8, 16, 32])
         values.setdefault("precision", "auto")
         values.setdefault("schedule", "steps")
         values.setdefault("cropper", "auto")

@@ -8,6 +8,7 @@ Samples and seeds come from the EXR headers (luxest_contract), not from file nam
 reference has the noisy image's seed is refused: a sample depends only on (seed, pixel, sample
 index), so such a reference would contain the input's samples and the target would be
 correlated with its input."""
+import functools
 import json
 import sys
 from pathlib import Path
@@ -44,19 +45,17 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATUR
     `extra_spp` (None: all)."""
     n = 0
     dst.mkdir(parents=True, exist_ok=True)
+    scenes = contract.scan(src)
     local_estimates = contract.scan(src, unit="le")
-    for name, levels in contract.scan(src).items():
+    realized = _realizations(src, scenes, extra_seeds)
+    for name, levels in scenes.items():
         if None not in levels or "hdr" not in levels[None]:
             raise contract.ContractError(f"{src}: {name} has no reference image")
         ref = contract.read(levels[None]["hdr"])
         ref_out = dst / dataset.prep_name(name, None)
         inputs = []  # (noisy hdr path, feature paths, count, unit)
         for spp_in_name, feats in sorted((k, v) for k, v in levels.items() if k is not None):
-            missing = [f for f in features if f not in feats]
-            if missing:
-                raise contract.ContractError(
-                    f"{src}: {name} at {spp_in_name} spp lacks {', '.join(missing)} (aov-write writes the "
-                    "features; re-render the dataset with make noisy reference)")
+            _require_features(src, name, spp_in_name, feats, features)
             inputs.append((feats["hdr"], feats, spp_in_name, "spp"))
         for paths, kinds in sorted(local_estimates.get(name, {}).items()):
             if "hdr" not in kinds:
@@ -67,72 +66,64 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATUR
         for hdr_path, feats, count_in_name, unit in inputs:
             n += _write_input(dst, name, ref, levels[None]["hdr"], hdr_path, feats, count_in_name, unit,
                               noisy_spp, dle_paths, features)
+        # The scene's extra noise realizations: its own reference, into <dst>/seed<k>/.
+        for k, (sub, found) in realized.items():
+            for count, feats in sorted((c, v) for c, v in found.get(name, {}).items() if c is not None):
+                if not (dataset.wanted("spp", count, noisy_spp, None) and (extra_spp is None or count in extra_spp)):
+                    continue
+                _require_features(sub, name, count, feats, features)
+                check = functools.partial(_check_realization, seed=k, twin=levels.get(count, {}).get("hdr"))
+                n += _write_input(dst / sub.name, name, ref, levels[None]["hdr"], feats["hdr"], feats, count, "spp",
+                                  noisy_spp, (), features, check)
         if not ref_out.exists() or ref_out.stat().st_mtime < levels[None]["hdr"].stat().st_mtime:
             if not np.isfinite(ref.pixels).all():
                 raise contract.ContractError(f"{ref.path}: non-finite values")
             _save(ref_out, ref.pixels)
             n += 1
-    return n + _preprocess_realizations(src, dst, noisy_spp, features, extra_seeds, extra_spp)
+    return n
 
 
-def _preprocess_realizations(src, dst, noisy_spp, features, extra_seeds, extra_spp):
-    """The extra noise realizations of a split (`<split>/seed<k>/`, make noisy's
-    NOISY_EXTRA_SEEDS; each must exist): noisy levels of the split's scenes rendered with seed k,
-    each paired with its scene's reference in the split and written to `<prep split>/seed<k>/`:
-    the levels in `noisy_spp` and `extra_spp` (None: every one). Refused: a realization whose
-    header seed is not k, or equals its reference's or the split's own level's (the same samples
-    twice)."""
-    n = 0
-    main = contract.scan(src)
+def _require_features(where, name, count, feats, features):
+    """ContractError unless an input set `feats` ({kind: path}) has every one of `features`."""
+    missing = [f for f in features if f not in feats]
+    if missing:
+        raise contract.ContractError(
+            f"{where}: {name} at {count} spp lacks {', '.join(missing)} (aov-write writes the "
+            "features; re-render the dataset with make noisy reference)")
+
+
+def _realizations(src, scenes, extra_seeds):
+    """{k: (`<src>/seed<k>`, its contract.scan)} of the extra noise realizations of seeds
+    `extra_seeds` (make noisy's NOISY_EXTRA_SEEDS), each paired with its scene's reference among
+    `scenes` (the split's scan); an error, before anything is written, for a missing directory or
+    a realization of a scene the split has no reference for."""
+    out = {}
     for k in sorted(set(extra_seeds)):
         sub = src / contract.REALIZATION_DIR.format(seed=k)
         if not sub.is_dir():
             raise contract.ContractError(f"{sub}: no such directory (the extra noise realization of seed {k}: make noisy renders it)")
-        for name, levels in contract.scan(sub).items():
-            own = main.get(name, {})
-            if None not in own or "hdr" not in own[None]:
+        out[k] = (sub, contract.scan(sub))
+        for name in out[k][1]:
+            if "hdr" not in scenes.get(name, {}).get(None, {}):
                 raise contract.ContractError(f"{sub}: {name} has no reference image in {src}")
-            ref = _Lazy(own[None]["hdr"])  # read only if an array is (re)written
-            for count, feats in sorted((c, v) for c, v in levels.items() if c is not None):
-                if not (dataset.wanted("spp", count, noisy_spp, None) and (extra_spp is None or count in extra_spp)):
-                    continue
-                missing = [f for f in features if f not in feats]
-                if missing:
-                    raise contract.ContractError(
-                        f"{sub}: {name} at {count} spp lacks {', '.join(missing)} (aov-write writes the "
-                        "features; re-render the dataset with make noisy)")
-
-                def check(noisy, k=k, own=own.get(count, {})):
-                    seed = noisy.value(contract.SEED, required=True)
-                    if seed != k:
-                        raise contract.ContractError(f"{noisy.path}: {contract.SEED} = {seed} in a directory of seed {k}")
-                    if "hdr" in own and contract.read(own["hdr"]).value(contract.SEED) == k:
-                        raise contract.ContractError(
-                            f"{noisy.path} and {own['hdr']}: the same {contract.SEED} = {k} (a realization "
-                            "must have a seed of its own)")
-
-                n += _write_input(dst / sub.name, name, ref, own[None]["hdr"], feats["hdr"], feats, count, "spp",
-                                  noisy_spp, (), features, check)
-    return n
+    return out
 
 
-class _Lazy:
-    """An image read on first use (`get`)."""
-
-    def __init__(self, path):
-        self.path, self.image = path, None
-
-    def get(self):
-        if self.image is None:
-            self.image = contract.read(self.path)
-        return self.image
+def _check_realization(noisy, seed, twin):
+    """ContractError unless a realization's header seed is its directory's `seed` and differs from
+    that of `twin` (the split's own image of the level, or None): the same samples twice."""
+    found = noisy.value(contract.SEED, required=True)
+    if found != seed:
+        raise contract.ContractError(f"{noisy.path}: {contract.SEED} = {found} in a directory of seed {seed}")
+    if twin is not None and contract.read(twin).value(contract.SEED) == seed:
+        raise contract.ContractError(
+            f"{noisy.path} and {twin}: the same {contract.SEED} = {seed} (a realization must have a seed of its own)")
 
 
 def _write_input(dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit, noisy_spp, dle_paths, features,
                  check=None):
     """Writes one input array and its JSON unless unwanted or up to date; returns 1 if written.
-    `ref`: the reference Image, or a _Lazy one; `check(noisy)` runs on the input before it is
-    written."""
+    `check(noisy)` runs on the input before it is written."""
     if not dataset.wanted(unit, count_in_name, noisy_spp, dle_paths):
         return 0
     dst.mkdir(parents=True, exist_ok=True)
@@ -143,7 +134,6 @@ def _write_input(dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit,
     if (meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists()
             and json.loads(meta_out.read_text()).get("channels") == list(features)):
         return 0
-    ref = ref.get() if isinstance(ref, _Lazy) else ref
     noisy = contract.read(hdr_path)
     if check:
         check(noisy)

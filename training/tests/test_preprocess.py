@@ -190,10 +190,12 @@ def test_features_follow_the_configuration(tmp_path):
     assert np.load(inp).shape[-1] == 15 and meta["channels"] == list(contract.FEATURES)
 
 
-def write_realization(split_dir, name, spp, seed, rng):
+def write_realization(split_dir, name, spp, seed, rng, header_seed=None):
+    """write_set into the realization directory of `seed`, with that seed in the headers unless
+    `header_seed` says otherwise."""
     d = split_dir / contract.REALIZATION_DIR.format(seed=seed)
     d.mkdir(exist_ok=True)
-    return write_set(d, name, spp, seed, rng)
+    return write_set(d, name, spp, seed if header_seed is None else header_seed, rng)
 
 
 def test_extra_noise_realizations_pair_with_their_scenes_reference(tmp_path):
@@ -238,25 +240,17 @@ def test_refuses_a_realization_without_a_seed_of_its_own(tmp_path):
     with pytest.raises(contract.ContractError, match=r"seed2: no such directory .*make noisy"):
         preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[2])
     # A header seed that is not the directory's, the split's own seed, the reference's seed.
-    d = src / contract.REALIZATION_DIR.format(seed=2)
-    d.mkdir()
-    write_set(d, "a", 1, 5, rng)
+    write_realization(src, "a", 1, 2, rng, header_seed=5)
     with pytest.raises(contract.ContractError, match=r"a_000001spp.hdr.exr: luxest.seed = 5 in a directory of seed 2"):
         preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[2])
-    d = src / contract.REALIZATION_DIR.format(seed=1)
-    d.mkdir()
-    write_set(d, "a", 1, 1, rng)
+    write_realization(src, "a", 1, 1, rng)
     with pytest.raises(contract.ContractError, match=r"the same luxest.seed = 1 \(a realization must have a seed of its own\)"):
         preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[1])
-    d = src / contract.REALIZATION_DIR.format(seed=1000001)
-    d.mkdir()
-    write_set(d, "a", 1, 1000001, rng)
+    write_realization(src, "a", 1, 1000001, rng)
     with pytest.raises(contract.ContractError, match=r"reference and noisy image share luxest.seed = 1000001"):
         preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[1000001])
     # A realization of a scene the split has no reference for.
-    d = src / contract.REALIZATION_DIR.format(seed=3)
-    d.mkdir()
-    write_set(d, "z", 1, 3, rng)
+    write_realization(src, "z", 1, 3, rng)
     with pytest.raises(contract.ContractError, match=r"seed3: z has no reference image in"):
         preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[3])
 
