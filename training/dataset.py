@@ -95,7 +95,7 @@ class Crops(torch.utils.data.Dataset):
             self.pairs.append((np.load(i, mmap_mode="r"), ref, m["exposures"], ref_exposures))
         if not self.pairs:
             raise FileNotFoundError(f"{prep_split_dir}: no preprocessed pairs (run preprocess.py)")
-        self.crop, self.seed, self.length = crop, seed, length
+        self.split_dir, self.crop, self.seed, self.length = Path(prep_split_dir), crop, seed, length
 
     def __len__(self):
         return self.length
@@ -146,6 +146,13 @@ class DeviceCrops:
     a batch in one gather: crop i is exactly `crops[i]`, without worker processes, which on a GPU
     cut crops more slowly than it trains on them. A batch's (N, C, H, W) tensors are views of
     (N, H, W, C) ones: channels_last already."""
+
+    @staticmethod
+    def bytes_held(crops):
+        """The bytes of device memory the arrays of `crops` (a `Crops`) take in a DeviceCrops:
+        every input and each scene's reference once, float32."""
+        refs = {id(ref): ref.size for _, ref, *_ in crops.pairs}
+        return 4 * (sum(inp.size for inp, *_ in crops.pairs) + sum(refs.values()))
 
     def __init__(self, crops, device):
         self.crops, self.device = crops, torch.device(device)

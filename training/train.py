@@ -8,6 +8,7 @@ autocast where it pays (--precision). Stops at the step count or the time budget
 run on a machine of unknown speed anneals when its time is up."""
 import json
 import math
+import sys
 import time
 from dataclasses import asdict
 from pathlib import Path
@@ -99,21 +100,51 @@ def loader_workers(workers, device):
     return workers if workers >= 0 else (0 if device.type == "cpu" else 8)
 
 
-def cropper(choice, device):
+# Of the device memory free when training starts, the share the split's arrays may take in
+# DeviceCrops; the rest is the network's, its optimizer's and a batch's activations.
+DEVICE_SHARE = 0.75
+
+
+def free_memory(device):
+    """Bytes of memory free on `device` now: a GPU's free memory, the host's MemAvailable for
+    the CPU; None where unknown."""
+    if device.type == "cuda":
+        return torch.cuda.mem_get_info(device)[0]
+    if device.type == "cpu":
+        try:
+            with open("/proc/meminfo") as f:
+                return next((int(line.split()[1]) * 1024 for line in f if line.startswith("MemAvailable:")), None)
+        except OSError:
+            return None
+    return None
+
+
+def cropper(choice, device, need=0, free=None, split="the split"):
     """Where crops are cut: `device` (the whole split in the training device's memory, a batch in
     one gather: dataset.DeviceCrops) or `loader` (a DataLoader, worker processes per
     loader_workers); `auto` takes device on a GPU, where worker processes cut crops more slowly
-    than it trains, and loader on a CPU. Both cut the same crops."""
+    than it trains, and loader on a CPU. Both cut the same crops. The split's arrays (`need`
+    bytes) must fit in DEVICE_SHARE of the device's `free` bytes (None: not checked): where they
+    do not, `auto` takes loader (saying so on stderr) and `device` refuses."""
     if choice not in ("auto", "device", "loader"):
         raise SystemExit(f"train: --cropper {choice!r}: expected auto, device or loader")
-    if choice == "auto":
-        return "loader" if device.type == "cpu" else "device"
-    return choice
+    where = ("loader" if device.type == "cpu" else "device") if choice == "auto" else choice
+    if where == "device" and free is not None and need > DEVICE_SHARE * free:
+        why = (f"{split}: its arrays take {need / 2**30:.2f} GiB, more than {DEVICE_SHARE:.0%} of the "
+               f"{free / 2**30:.2f} GiB free on {device}")
+        if choice == "device":
+            raise SystemExit(f"train: --cropper device: {why} (--cropper loader cuts crops from the files)")
+        print(f"train: {why}: crops are cut by a DataLoader instead", file=sys.stderr)
+        return "loader"
+    return where
 
 
 def batches(data, cfg, device):
     """The training batches of `data` (dataset.Crops), cut where `cropper` says."""
-    if cropper(cfg.cropper, device) == "device":
+    where = cropper(cfg.cropper, device)
+    if where == "device":  # then the split's arrays must fit the device's memory
+        where = cropper(cfg.cropper, device, dataset.DeviceCrops.bytes_held(data), free_memory(device), data.split_dir)
+    if where == "device":
         cut = dataset.DeviceCrops(data, device)
         return (cut.batch(range(j, min(j + cfg.batch, len(data)))) for j in range(0, len(data), cfg.batch))
     return iter(torch.utils.data.DataLoader(data, batch_size=cfg.batch, num_workers=loader_workers(cfg.workers, device),

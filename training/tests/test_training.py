@@ -544,7 +544,7 @@ def test_loader_workers_cut_the_same_crops(tmp_path):
         train.loader_workers(-2, cpu)
 
 
-def test_crops_cut_on_the_device_are_the_loaders(tmp_path):
+def test_crops_cut_on_the_device_are_the_loaders(tmp_path, capsys, monkeypatch):
     # dataset.DeviceCrops (the split in the training device's memory, automatic on a GPU) cuts
     # bit for bit the batches the DataLoader cuts: two scenes of different shapes, two levels
     # each and an extra noise realization of one, sharing their scene's reference, every flip,
@@ -592,6 +592,20 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path):
     assert train.cropper("loader", torch.device("cuda")) == "loader"
     with pytest.raises(SystemExit, match="--cropper 'gpu'"):
         train.cropper("gpu", cpu)
+    # What the split takes on the device: the bytes of DeviceCrops' own tensors of arrays.
+    cut = dataset.DeviceCrops(data, cpu)
+    assert dataset.DeviceCrops.bytes_held(data) == cut.inputs.nbytes + cut.refs.nbytes
+    # A split that does not fit 3/4 of the free memory: device refuses in one line, auto cuts
+    # with the loader and says so, loader never asks; a split that fits stays on the device.
+    need, gpu = cut.inputs.nbytes + cut.refs.nbytes, torch.device("cuda")
+    assert train.cropper("auto", gpu, need, need / 0.75) == "device"
+    assert train.cropper("auto", gpu, need + 1, need / 0.75, "prep/train") == "loader"
+    assert "prep/train: its arrays take" in capsys.readouterr().err
+    assert train.cropper("loader", gpu, need + 1, 0) == "loader" and train.cropper("auto", cpu, need, 0) == "loader"
+    with pytest.raises(SystemExit, match=r"^train: --cropper device: .*prep[/\\]train: its arrays take .* GiB free on cpu"):
+        monkeypatch.setattr(train, "free_memory", lambda device: need)
+        next(train.batches(data, cfg, cpu))
+    assert train.free_memory(cpu) is None or train.free_memory(cpu) > 0
 
 
 def test_a_run_starts_from_an_exported_models_weights(tmp_path):
