@@ -268,6 +268,54 @@ def peer_table(rows, what):
     return out
 
 
+def paired_gaps(rows, base, key="psnr_db"):
+    """Scene by scene, luxest's denoised `key` minus OIDN's on the same input (`<base>+denoise`
+    against `<base>+oidn` rows with a `scene`), per level: [(level, {scene: difference})] for
+    the levels where both scored every scene that either scored."""
+    by = {}
+    for r in rows:
+        if r["estimator"] in (base + "+denoise", base + "+oidn"):
+            by.setdefault(int(r["samples"]), {}).setdefault(r["scene"], {})[r["estimator"]] = r[key]
+    out = []
+    for n, scenes in sorted(by.items()):
+        if all(len(v) == 2 for v in scenes.values()):
+            out.append((n, {s: v[base + "+denoise"] - v[base + "+oidn"] for s, v in sorted(scenes.items())}))
+    return out
+
+
+def gap_stats(diffs):
+    """(mean, standard error of the mean, min, max, count > 0) of per-scene differences; the
+    standard error (sample standard deviation / sqrt(n)) is None for one scene."""
+    v = list(diffs)
+    mean = sum(v) / len(v)
+    se = math.sqrt(sum((x - mean) ** 2 for x in v) / (len(v) - 1) / len(v)) if len(v) > 1 else None
+    return mean, se, min(v), max(v), sum(x > 0 for x in v)
+
+
+def gap_table(rows, names):
+    """Issue 11's held-out bar (luxest ≥ OIDN + 1 dB in mean PSNR at every level), scene by
+    scene: the mean difference with its standard error over the scenes, its range, the scenes
+    where luxest is ahead, and each scene's difference when there are few."""
+    out = []
+    for base, unit in (("path-tracing", "spp"), ("double-local-estimate", "paths")):
+        gaps = paired_gaps(rows, base)
+        if not gaps:
+            continue
+        few = len(names) <= 6
+        trs = []
+        for n, d in gaps:
+            mean, se, lo, hi, ahead = gap_stats(d.values())
+            trs.append([n, f"{mean:+.2f}" + ("" if se is None else f" ± {se:.2f}"), f"{lo:+.2f} … {hi:+.2f}", f"{ahead} of {len(d)}",
+                        "yes" if mean >= 1.0 else "no"]
+                       + ([" / ".join(f"{d[s]:+.2f}" if s in d else "—" for s in names)] if few else []))
+        out += [f"#### {base}: luxest − OIDN in PSNR dB, scene by scene", "",
+                "The mean difference ± its standard error over the scenes (sample standard deviation / √n): how far the "
+                "held-out bar's mean would move with other scenes of the same kind.", "",
+                table([unit, "mean ± s.e.", "range", "luxest ahead", "mean ≥ +1 dB"]
+                      + ([" / ".join(names)] if few else []), trs), ""]
+    return out
+
+
 def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, model):
     plot_trade(cb_rows, "Cornell box 256² — error vs time", plots / "cornell-box-time.png")
     plot_trade(cb_rows, "Cornell box 256² — error vs samples (spp or light paths)", plots / "cornell-box-samples.png",
@@ -363,7 +411,7 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
         lines += ["", "![dataset error vs time](plots/dataset-time.png)", "", "![dataset error vs samples](plots/dataset-samples.png)", ""]
 
     if ds_mean:
-        lines += peer_table(ds_mean, f"held-out scenes, mean over {len(ds_names)}")
+        lines += peer_table(ds_mean, f"held-out scenes, mean over {len(ds_names)}") + gap_table(ds_rows, ds_names)
 
     # Sensors.
     lines += ["## Local estimate at sensors vs exact solutions", "",

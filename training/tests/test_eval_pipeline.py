@@ -46,3 +46,29 @@ def test_colour_shift_is_the_largest_relative_channel_mean_error(tmp_path):
     assert math.isclose(ev.colour_shift(tmp_path / "i.hdr.exr", tmp_path / "r.hdr.exr"), 0.03, rel_tol=1e-5)
     assert ev.colour_shift(tmp_path / "r.hdr.exr", tmp_path / "r.hdr.exr") == 0.0
     assert ev.colour_shift(tmp_path / "missing.exr", tmp_path / "r.hdr.exr") is None
+
+
+def test_the_held_out_gap_is_paired_scene_by_scene():
+    import numpy as np
+
+    rng = np.random.default_rng(7)
+    scenes, levels = ["a", "b", "c", "d", "e"], [1, 4]
+    ours, theirs = rng.normal(33, 2, (2, 5)), rng.normal(32, 2, (2, 5))
+    rows = [{"estimator": "path-tracing+denoise", "samples": n, "scene": s, "psnr_db": ours[i, j]}
+            for i, n in enumerate(levels) for j, s in enumerate(scenes)]
+    rows += [{"estimator": "path-tracing+oidn", "samples": n, "scene": s, "psnr_db": theirs[i, j]}
+             for i, n in enumerate(levels) for j, s in enumerate(scenes)]
+    rows.append({"estimator": "path-tracing+oidn", "samples": 16, "scene": "a", "psnr_db": 1.0})  # no luxest row: skipped
+    gaps = ev.paired_gaps(rows, "path-tracing")
+    assert [n for n, _ in gaps] == levels
+    for i, (n, d) in enumerate(gaps):
+        diff = ours[i] - theirs[i]
+        assert list(d) == scenes and np.allclose(list(d.values()), diff, rtol=0, atol=1e-12)
+        mean, se, lo, hi, ahead = ev.gap_stats(d.values())
+        assert math.isclose(mean, diff.mean(), abs_tol=1e-12)
+        assert math.isclose(se, diff.std(ddof=1) / math.sqrt(5), rel_tol=1e-12)
+        assert (lo, hi, ahead) == (diff.min(), diff.max(), int((diff > 0).sum()))
+    assert ev.gap_stats([0.5])[1] is None
+    text = "\n".join(ev.gap_table(rows, scenes))
+    assert "luxest − OIDN in PSNR dB" in text and f"{(ours[0] - theirs[0]).mean():+.2f} ± " in text
+    assert "double-local-estimate" not in text  # no such rows
