@@ -270,16 +270,21 @@ def peer_table(rows, what):
 
 def paired_gaps(rows, base, key="psnr_db"):
     """Scene by scene, luxest's denoised `key` minus OIDN's on the same input (`<base>+denoise`
-    against `<base>+oidn` rows with a `scene`), per level: [(level, {scene: difference})] for
-    the levels where both scored every scene that either scored."""
+    against `<base>+oidn` rows with a `scene`), per level in increasing order: [(level, {scene:
+    difference}, [scenes scored by one of the two only, or with a non-finite difference])]."""
     by = {}
     for r in rows:
         if r["estimator"] in (base + "+denoise", base + "+oidn"):
-            by.setdefault(int(r["samples"]), {}).setdefault(r["scene"], {})[r["estimator"]] = r[key]
+            one = by.setdefault(int(r["samples"]), {}).setdefault(r["scene"], {})
+            if r["estimator"] in one:
+                raise SystemExit(f"eval: scene {r['scene']}: two {r['estimator']} rows at {int(r['samples'])}")
+            one[r["estimator"]] = r[key]
     out = []
     for n, scenes in sorted(by.items()):
-        if all(len(v) == 2 for v in scenes.values()):
-            out.append((n, {s: v[base + "+denoise"] - v[base + "+oidn"] for s, v in sorted(scenes.items())}))
+        diffs = {s: v[base + "+denoise"] - v[base + "+oidn"] for s, v in sorted(scenes.items()) if len(v) == 2}
+        diffs = {s: d for s, d in diffs.items() if math.isfinite(d)}
+        if diffs:
+            out.append((n, diffs, sorted(set(scenes) - set(diffs))))
     return out
 
 
@@ -295,24 +300,26 @@ def gap_stats(diffs):
 def gap_table(rows, names):
     """Issue 11's held-out bar (luxest ≥ OIDN + 1 dB in mean PSNR at every level), scene by
     scene: the mean difference with its standard error over the scenes, its range, the scenes
-    where luxest is ahead, and each scene's difference when there are few."""
-    out = []
+    where luxest is ahead, and each scene's difference when there are few; a level where a scene
+    lacks one of the two is scored over the others and says which."""
+    out, few = [], len(names) <= 6
     for base, unit in (("path-tracing", "spp"), ("double-local-estimate", "paths")):
         gaps = paired_gaps(rows, base)
         if not gaps:
             continue
-        few = len(names) <= 6
-        trs = []
-        for n, d in gaps:
+        trs, notes = [], []
+        for n, d, missing in gaps:
             mean, se, lo, hi, ahead = gap_stats(d.values())
             trs.append([n, f"{mean:+.2f}" + ("" if se is None else f" ± {se:.2f}"), f"{lo:+.2f} … {hi:+.2f}", f"{ahead} of {len(d)}",
                         "yes" if mean >= 1.0 else "no"]
                        + ([" / ".join(f"{d[s]:+.2f}" if s in d else "—" for s in names)] if few else []))
-        out += [f"#### {base}: luxest − OIDN in PSNR dB, scene by scene", "",
+            if missing:
+                notes.append(f"- {n} {unit}: without {', '.join(missing)} (scored by one denoiser only, or not finite)")
+        out += [f"### {base}: luxest − OIDN in PSNR dB, scene by scene (held-out scenes)", "",
                 "The mean difference ± its standard error over the scenes (sample standard deviation / √n): how far the "
                 "held-out bar's mean would move with other scenes of the same kind.", "",
                 table([unit, "mean ± s.e.", "range", "luxest ahead", "mean ≥ +1 dB"]
-                      + ([" / ".join(names)] if few else []), trs), ""]
+                      + ([" / ".join(names)] if few else []), trs), ""] + (notes + [""] if notes else [])
     return out
 
 

@@ -150,7 +150,8 @@ class DeviceCrops:
     @staticmethod
     def bytes_held(crops):
         """The bytes of device memory the arrays of `crops` (a `Crops`) take in a DeviceCrops:
-        every input and each scene's reference once, float32."""
+        every input and each scene's reference once, float32 (the host holds one array at a time
+        while they are copied)."""
         refs = {id(ref): ref.size for _, ref, *_ in crops.pairs}
         return 4 * (sum(inp.size for inp, *_ in crops.pairs) + sum(refs.values()))
 
@@ -159,21 +160,25 @@ class DeviceCrops:
         channels = {pair[0].shape[-1] for pair in crops.pairs}
         if len(channels) != 1:
             raise ValueError(f"inputs of {sorted(channels)} channels in one split")
-        flat = lambda arr: torch.from_numpy(np.array(arr, dtype=np.float32)).reshape(-1, arr.shape[-1])  # a copy
-        inputs, refs, ref_at, starts, ref_starts, widths = [], [], {}, [], [], []
-        n = m = 0
-        for inp, ref, *_ in crops.pairs:
-            if id(ref) not in ref_at:
-                ref_at[id(ref)] = m
-                refs.append(flat(ref))
+        starts, ref_starts, widths, refs, n, m = [], [], [], {}, 0, 0
+        for inp, ref, *_ in crops.pairs:  # where each array goes in the two flat tensors
+            if id(ref) not in refs:
+                refs[id(ref)] = (m, ref)
                 m += ref.shape[0] * ref.shape[1]
             starts.append(n)
-            ref_starts.append(ref_at[id(ref)])
+            ref_starts.append(refs[id(ref)][0])
             widths.append(inp.shape[1])
-            inputs.append(flat(inp))
             n += inp.shape[0] * inp.shape[1]
+        # Allocated once on the device and filled array by array: the host holds one copy at a time.
+        self.inputs = torch.empty((n, channels.pop()), dtype=torch.float32, device=self.device)
+        self.refs = torch.empty((m, 3), dtype=torch.float32, device=self.device)
+        fill = lambda dst, at, arr: dst[at:at + arr.shape[0] * arr.shape[1]].copy_(
+            torch.from_numpy(np.array(arr, dtype=np.float32)).reshape(-1, arr.shape[-1]))
+        for (inp, *_), at in zip(crops.pairs, starts):
+            fill(self.inputs, at, inp)
+        for at, ref in refs.values():
+            fill(self.refs, at, ref)
         to = lambda t: t.to(self.device)
-        self.inputs, self.refs = to(torch.cat(inputs)), to(torch.cat(refs))
         long = lambda v: to(torch.tensor(v, dtype=torch.int64))
         self.starts, self.ref_starts, self.widths = long(starts), long(ref_starts), long(widths)
         self.orders = long([channel_order(k, self.inputs.shape[1]) for k in range(len(PERMUTATIONS))])

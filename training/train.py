@@ -100,8 +100,9 @@ def loader_workers(workers, device):
     return workers if workers >= 0 else (0 if device.type == "cpu" else 8)
 
 
-# Of the device memory free when training starts, the share the split's arrays may take in
-# DeviceCrops; the rest is the network's, its optimizer's and a batch's activations.
+# Of the device memory free when the crops are set up (the network already there), the share
+# the split's arrays may take in DeviceCrops; the rest is for Adam's moments, a batch's
+# activations and the convolutions' workspace.
 DEVICE_SHARE = 0.75
 
 
@@ -109,6 +110,7 @@ def free_memory(device):
     """Bytes of memory free on `device` now: a GPU's free memory, the host's MemAvailable for
     the CPU; None where unknown."""
     if device.type == "cuda":
+        torch.cuda.empty_cache()  # memory PyTorch keeps cached but unused counts as free
         return torch.cuda.mem_get_info(device)[0]
     if device.type == "cpu":
         try:

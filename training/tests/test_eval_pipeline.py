@@ -50,25 +50,40 @@ def test_colour_shift_is_the_largest_relative_channel_mean_error(tmp_path):
 
 def test_the_held_out_gap_is_paired_scene_by_scene():
     import numpy as np
+    import pytest
 
     rng = np.random.default_rng(7)
-    scenes, levels = ["a", "b", "c", "d", "e"], [1, 4]
-    ours, theirs = rng.normal(33, 2, (2, 5)), rng.normal(32, 2, (2, 5))
-    rows = [{"estimator": "path-tracing+denoise", "samples": n, "scene": s, "psnr_db": ours[i, j]}
-            for i, n in enumerate(levels) for j, s in enumerate(scenes)]
-    rows += [{"estimator": "path-tracing+oidn", "samples": n, "scene": s, "psnr_db": theirs[i, j]}
-             for i, n in enumerate(levels) for j, s in enumerate(scenes)]
-    rows.append({"estimator": "path-tracing+oidn", "samples": 16, "scene": "a", "psnr_db": 1.0})  # no luxest row: skipped
+    scenes, levels = ["a", "b", "c", "d", "e"], [4, 1, 16]
+    ours, theirs = rng.normal(33, 2, (3, 5)), rng.normal(32, 2, (3, 5))
+    rows = [{"estimator": e, "samples": n, "scene": s, "psnr_db": v[i, j]}
+            for e, v in (("path-tracing+denoise", ours), ("path-tracing+oidn", theirs))
+            for i, n in enumerate(levels) for j, s in enumerate(scenes) if not (n == 16 and s == "c" and e.endswith("oidn"))]
+    rows.append({"estimator": "path-tracing+oidn", "samples": 64, "scene": "a", "psnr_db": 1.0})  # no luxest row
+    rows.append({"estimator": "path-tracing", "samples": 1, "scene": "a", "psnr_db": 9.0})  # the noisy input: not a denoiser
+    rows = [rows[k] for k in rng.permutation(len(rows))]
     gaps = ev.paired_gaps(rows, "path-tracing")
-    assert [n for n, _ in gaps] == levels
-    for i, (n, d) in enumerate(gaps):
-        diff = ours[i] - theirs[i]
-        assert list(d) == scenes and np.allclose(list(d.values()), diff, rtol=0, atol=1e-12)
+    assert [n for n, *_ in gaps] == [1, 4, 16]  # increasing; 64 has no pair
+    for n, d, missing in gaps:
+        i = levels.index(n)
+        keep = [j for j, s in enumerate(scenes) if not (n == 16 and s == "c")]
+        diff = (ours[i] - theirs[i])[keep]
+        assert list(d) == [scenes[j] for j in keep] and missing == (["c"] if n == 16 else [])
+        assert np.allclose(list(d.values()), diff, rtol=0, atol=1e-12)
         mean, se, lo, hi, ahead = ev.gap_stats(d.values())
         assert math.isclose(mean, diff.mean(), abs_tol=1e-12)
-        assert math.isclose(se, diff.std(ddof=1) / math.sqrt(5), rel_tol=1e-12)
+        assert math.isclose(se, diff.std(ddof=1) / math.sqrt(len(diff)), rel_tol=1e-12)
         assert (lo, hi, ahead) == (diff.min(), diff.max(), int((diff > 0).sum()))
     assert ev.gap_stats([0.5])[1] is None
-    text = "\n".join(ev.gap_table(rows, scenes))
-    assert "luxest − OIDN in PSNR dB" in text and f"{(ours[0] - theirs[0]).mean():+.2f} ± " in text
-    assert "double-local-estimate" not in text  # no such rows
+    lines = "\n".join(ev.gap_table(rows, scenes)).splitlines()
+    d1 = ours[1] - theirs[1]  # level 1
+    row = next(line for line in lines if line.startswith("| 1 |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells == ["1", f"{d1.mean():+.2f} ± {d1.std(ddof=1) / math.sqrt(5):.2f}", f"{d1.min():+.2f} … {d1.max():+.2f}",
+                     f"{int((d1 > 0).sum())} of 5", "yes" if d1.mean() >= 1 else "no", " / ".join(f"{x:+.2f}" for x in d1)]
+    assert "- 16 spp: without c (scored by one denoiser only, or not finite)" in lines
+    assert not any("double-local-estimate" in line for line in lines)  # no such rows
+    # A non-finite difference (both images identical to the reference) leaves the scene out.
+    inf = [dict(r, psnr_db=math.inf) if r["scene"] == "e" and r["samples"] == 4 else r for r in rows]
+    assert next(m for n, _, m in ev.paired_gaps(inf, "path-tracing") if n == 4) == ["e"]
+    with pytest.raises(SystemExit, match=r"^eval: scene a: two path-tracing\+oidn rows at 64$"):
+        ev.paired_gaps(rows + [rows[[r["samples"] for r in rows].index(64)]], "path-tracing")

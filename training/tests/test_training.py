@@ -605,7 +605,6 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path, capsys, monkeypatch):
     with pytest.raises(SystemExit, match=r"^train: --cropper device: .*prep[/\\]train: its arrays take .* GiB free on cpu"):
         monkeypatch.setattr(train, "free_memory", lambda device: need)
         next(train.batches(data, cfg, cpu))
-    assert train.free_memory(cpu) is None or train.free_memory(cpu) > 0
 
 
 def test_a_run_starts_from_an_exported_models_weights(tmp_path):
