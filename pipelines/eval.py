@@ -237,14 +237,39 @@ def row_colour_shift(r):
     return colour_shift(r["image"], r["reference"]) if "image" in r else None
 
 
+@functools.lru_cache(maxsize=None)
+def denoise_costs(image):
+    """(wall-clock, CPU) inference seconds per megapixel a denoised image records
+    (`luxest.denoiseSeconds`, `luxest.denoiseCpuSeconds` over its pixel count); None for what is
+    missing (a deleted file; a denoiser swapped in through DENOISE may record no CPU seconds)."""
+    if not Path(image).exists():
+        return None, None
+    img = contract.read(image)
+    mp = img.pixels.shape[0] * img.pixels.shape[1] / 1e6
+    return tuple(None if v is None else v / mp for v in (img.value(contract.DENOISE_SECONDS),
+                                                         img.value(contract.DENOISE_CPU_SECONDS)))
+
+
+def row_denoise_costs(r):
+    """A report row's denoise_costs: stored (a mean over scenes), else from its image file."""
+    if "denoise_costs" in r:
+        return r["denoise_costs"]
+    return denoise_costs(r["image"]) if "image" in r else (None, None)
+
+
+def mean_or_none(values):
+    values = list(values)
+    return None if not values or None in values else sum(values) / len(values)
+
+
 def _pct(v):
     return "—" if v is None else f"{100 * v:.2f} %"
 
 
 def peer_table(rows, what):
     """luxest's denoiser against Intel Open Image Denoise (the `+oidn` rows) on the same inputs:
-    PSNR / SSIM / FLIP per input level, and the inference time per megapixel of each (wall-clock,
-    excluding I/O, the run's threads)."""
+    PSNR / SSIM / FLIP per input level, and the inference time per megapixel of each, wall-clock
+    and CPU seconds (excluding I/O, the run's threads)."""
     by = {(r["estimator"], int(r["samples"])): r for r in rows}
     out = []
     for base in ("path-tracing", "double-local-estimate"):
@@ -255,14 +280,15 @@ def peer_table(rows, what):
         for n in levels:
             a, d, o = by[(base, n)], by[(base + "+denoise", n)], by[(base + "+oidn", n)]
             trs.append([n] + [f"{a[k]:{f}} / {d[k]:{f}} / {o[k]:{f}}" for k, f in (("psnr_db", ".2f"), ("ssim", ".4f"), ("flip", ".4f"))]
-                       + [f"{1e3 * d['denoise_seconds'] / 0.065536:.0f} / {1e3 * o['denoise_seconds'] / 0.065536:.0f}"
-                          if what.startswith("Cornell") else "—"]
+                       + [" / ".join("—" if v is None else f"{scale * v:{f}}" for v in (row_denoise_costs(d)[j], row_denoise_costs(o)[j]))
+                          for j, scale, f in ((0, 1e3, ".0f"), (1, 1.0, ".2f"))]
                        + [" / ".join(_pct(row_colour_shift(r)) for r in (a, d, o))])
         unit = "spp" if base == "path-tracing" else "paths"
         out += [f"### {base}: luxest's denoiser against Intel Open Image Denoise 1.4.3 ({what})", "",
                 "Each cell: noisy / luxest (`denoise`) / OIDN (hdr + albedo + normal, pipelines/oidn_denoise.py), "
                 "the same inputs and features.", "",
                 table([unit, "PSNR dB", "SSIM", "FLIP", "inference ms per megapixel (luxest / OIDN)",
+                       "inference CPU-s per megapixel (luxest / OIDN)",
                        "colour shift: max over R, G, B of abs(mean / reference mean − 1)"
                        + (" (mean over scenes)" if "colour_shift" in rows[0] else "")], trs), ""]
     return out
@@ -336,8 +362,9 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
         m = {"estimator": est, "samples": n, "scenes": len(rs)}
         for k in ("total_seconds", "psnr_db", "ssim", "flip", "rel_mse", "smape", "one_minus_ssim"):
             m[k] = sum(r[k] for r in rs) / len(rs)
-        shifts = [row_colour_shift(r) for r in rs]
-        m["colour_shift"] = None if None in shifts else sum(shifts) / len(shifts)
+        m["colour_shift"] = mean_or_none(row_colour_shift(r) for r in rs)
+        costs = [row_denoise_costs(r) for r in rs]
+        m["denoise_costs"] = tuple(mean_or_none(c[j] for c in costs) for j in (0, 1))
         ds_mean.append(m)
     if ds_mean:
         plot_trade(ds_mean, f"Held-out test scenes ({len(ds_names)}), mean — error vs time", plots / "dataset-time.png")

@@ -6,9 +6,10 @@ user would call it through its C API.
 The output keeps the noisy image's header and adds what `denoise` adds
 (python/luxest_contract.py, docs/architecture.md): `luxest.denoiser` = `oidn-<version>` (so
 `evaluate images` labels it `<estimator>+oidn`), `luxest.denoiseSeconds` (wall-clock seconds of
-the filter's execution, excluding I/O, as `denoise` records its inference) and
-`luxest.featureSeconds` (the features' render seconds). The CPU seconds of the execution are
-printed with the wall-clock ones, per megapixel. Bad input: one line naming the file, exit 1;
+the filter's execution, excluding I/O, as `denoise` records its inference),
+`luxest.denoiseCpuSeconds` (the process's CPU seconds over that execution, all threads) and
+`luxest.featureSeconds` (the features' render seconds); both times are also printed, per
+megapixel. Bad input: one line naming the file, exit 1;
 the output may not be one of the inputs and is written atomically."""
 import argparse
 import ctypes
@@ -85,6 +86,7 @@ def main(argv=None):
     header = dict(noisy.header)
     header[contract.DENOISER] = f"{contract.OIDN_DENOISER_PREFIX}{oidn.oidn_version}"
     header[contract.DENOISE_SECONDS] = repr(wall)
+    header[contract.DENOISE_CPU_SECONDS] = repr(cpu)
     header[contract.FEATURE_SECONDS] = repr(feature_seconds)
     contract.write(a.out, out, header)
     mp = noisy.pixels.shape[0] * noisy.pixels.shape[1] / 1e6

@@ -116,6 +116,7 @@ PIXEL_SAMPLES = "luxest.pixelSamples"     # camera samples per pixel of the doub
 DENOISER = "luxest.denoiser"              # what denoised the image: a luxest model's file name, or
 OIDN_DENOISER_PREFIX = "oidn-"            # ... this prefix and the version for Intel Open Image Denoise
 DENOISE_SECONDS = "luxest.denoiseSeconds"  # wall-clock seconds of denoising inference
+DENOISE_CPU_SECONDS = "luxest.denoiseCpuSeconds"  # its CPU seconds: the process's user + system, all threads
 FEATURE_SECONDS = "luxest.featureSeconds"  # render seconds of the feature images a denoising used
 CHANNELS = "luxest.channels"              # ONNX metadata: input features in order (hdr,alb,nrm)
 MODEL_TRANSFER = "luxest.transfer"        # ONNX metadata: the transfer function and exposure input
@@ -125,11 +126,11 @@ MODEL_METRICS = "luxest.metrics"          # ONNX metadata: scores on the held-ou
 EXPOSURE = "luxest.exposure"              # preprocessed data: the whole image's autoexposure
 
 KEYS = (SAMPLES, SEED, SECONDS, ESTIMATOR, SCENE_HASH, VERSION, PIXEL_FILTER, SINGULARITY,
-        PIXEL_SAMPLES, DENOISER, DENOISE_SECONDS, FEATURE_SECONDS, CHANNELS)
+        PIXEL_SAMPLES, DENOISER, DENOISE_SECONDS, DENOISE_CPU_SECONDS, FEATURE_SECONDS, CHANNELS)
 """The keys of Rust's header module, in its order. (EXPOSURE is Python's: preprocessing only.)"""
 
 TYPES = {SAMPLES: int, SEED: int, SECONDS: float, PIXEL_SAMPLES: int, DENOISE_SECONDS: float,
-         FEATURE_SECONDS: float}
+         DENOISE_CPU_SECONDS: float, FEATURE_SECONDS: float}
 """Keys whose values are numbers; every other key is text."""
 
 

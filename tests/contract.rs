@@ -131,6 +131,7 @@ fn write_header_fixture(dir: &Path) -> String {
     image.set_attribute(header::PIXEL_SAMPLES, 4);
     image.set_attribute(header::DENOISER, "default.onnx");
     image.set_attribute(header::DENOISE_SECONDS, 0.5);
+    image.set_attribute(header::DENOISE_CPU_SECONDS, 0.875);
     image.set_attribute(header::FEATURE_SECONDS, 0.375);
     write_rgb(&dir.join("header.exr"), &image).unwrap();
 
@@ -140,6 +141,7 @@ fn write_header_fixture(dir: &Path) -> String {
         (header::SECONDS, json_f64(run.seconds)),
         (header::PIXEL_SAMPLES, "4".to_string()),
         (header::DENOISE_SECONDS, json_f64(0.5)),
+        (header::DENOISE_CPU_SECONDS, json_f64(0.875)),
         (header::FEATURE_SECONDS, json_f64(0.375)),
     ];
     let mut rows = Vec::new();

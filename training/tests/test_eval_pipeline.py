@@ -87,3 +87,29 @@ def test_the_held_out_gap_is_paired_scene_by_scene():
     assert next(m for n, _, m in ev.paired_gaps(inf, "path-tracing") if n == 4) == ["e"]
     with pytest.raises(SystemExit, match=r"^eval: scene a: two path-tracing\+oidn rows at 64$"):
         ev.paired_gaps(rows + [rows[[r["samples"] for r in rows].index(64)]], "path-tracing")
+
+
+def test_peer_table_shows_both_denoisers_inference_seconds_per_megapixel(tmp_path):
+    import numpy as np
+    import luxest_contract as contract
+
+    paths = {}
+    for name, wall, cpu in (("noisy", None, None), ("ours", 0.004, 0.006), ("oidn", 0.005, 0.009), ("swapped", 0.002, None)):
+        head = {k: v for k, v in ((contract.DENOISE_SECONDS, wall), (contract.DENOISE_CPU_SECONDS, cpu)) if v is not None}
+        paths[name] = tmp_path / f"{name}.exr"
+        contract.write(paths[name], np.full((50, 40, 3), 0.5, np.float32), head)  # 2000 pixels
+    assert ev.denoise_costs(str(paths["ours"])) == (0.004 / 0.002, 0.006 / 0.002)
+    assert ev.denoise_costs(str(paths["swapped"])) == (1.0, None)
+    assert ev.denoise_costs(str(tmp_path / "gone.exr")) == (None, None)
+    row = lambda est, image: {"estimator": est, "samples": 4, "image": str(paths[image]), "psnr_db": 30.0, "ssim": 0.9,
+                              "flip": 0.1, "reference": str(paths["noisy"])}
+    rows = [row("path-tracing", "noisy"), row("path-tracing+denoise", "ours"), row("path-tracing+oidn", "oidn")]
+    line = next(x for x in "\n".join(ev.peer_table(rows, "Cornell box 256²")).splitlines() if x.startswith("| 4 |"))
+    cells = [c.strip() for c in line.strip("|").split("|")]
+    assert cells[4:6] == ["2000 / 2500", "3.00 / 4.50"]  # ms and CPU-s per megapixel, luxest / OIDN
+    rows[1] = row("path-tracing+denoise", "swapped")
+    line = next(x for x in "\n".join(ev.peer_table(rows, "Cornell box 256²")).splitlines() if x.startswith("| 4 |"))
+    assert [c.strip() for c in line.strip("|").split("|")][4:6] == ["1000 / 2500", "— / 4.50"]
+    # Means over scenes: stored, None when a scene lacks the value.
+    assert ev.row_denoise_costs({"denoise_costs": (1.0, None)}) == (1.0, None)
+    assert ev.mean_or_none([1.0, 3.0]) == 2.0 and ev.mean_or_none([1.0, None]) is None and ev.mean_or_none([]) is None

@@ -1,5 +1,6 @@
 """pipelines/oidn_denoise.py, the peer denoiser of `make eval`: Intel Open Image Denoise through
 PyPI `oidn`, writing luxest's header contract."""
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -35,6 +36,8 @@ def test_oidn_keeps_a_noiseless_image_and_records_the_contract(tmp_path):
     assert np.abs(rel[8:-8, 8:-8]).max() < 0.02, np.abs(rel[8:-8, 8:-8]).max()
     assert img.value(contract.DENOISER).startswith(contract.OIDN_DENOISER_PREFIX)
     assert img.value(contract.DENOISE_SECONDS) > 0
+    wall, cpu = img.value(contract.DENOISE_SECONDS), img.value(contract.DENOISE_CPU_SECONDS)
+    assert 0 < cpu <= (os.cpu_count() or 1) * wall * 1.1 + 0.01, (cpu, wall)  # CPU seconds, all threads
     assert img.value(contract.FEATURE_SECONDS) == 0.25
     assert img.value(contract.SAMPLES) == 4 and img.value(contract.ESTIMATOR) == "path-tracing"
 

@@ -19,9 +19,10 @@ use std::time::Instant;
 /// (`<img>.alb.exr`, `<img>.nrm.exr`, and `<img>.emi.exr` / `<img>.ema.exr` for models that
 /// take the emission, as aov-write names them) unless --alb/--nrm/--emi/--ema name them;
 /// the result is `<img>.dn.exr` with the input's header attributes plus luxest.denoiser,
-/// luxest.denoiseSeconds (wall-clock seconds of inference, excluding I/O) and
-/// luxest.featureSeconds (the render seconds recorded in the feature images, i.e. what the
-/// albedo and normal cost), so that the image's whole cost can be added up.
+/// luxest.denoiseSeconds (wall-clock seconds of inference, excluding I/O),
+/// luxest.denoiseCpuSeconds (its CPU seconds, all threads) and luxest.featureSeconds (the render
+/// seconds recorded in the feature images, i.e. what the albedo and normal cost), so that the
+/// image's whole cost can be added up.
 #[derive(Parser, Debug)]
 #[command(name = "denoise", version)]
 pub struct Args {
@@ -138,13 +139,14 @@ pub fn run(args: Args) -> Result<()> {
                 ));
             }
         }
-        let start = Instant::now();
+        let (start, cpu_start) = (Instant::now(), process_cpu_seconds());
         let refs: Vec<&RgbImage> = images.iter().collect();
         let mut result = denoiser.denoise(&refs, tiling).map_err(|e| match e {
             Error::Usage(m) => Error::input(&job.noisy, m),
             e => e,
         })?;
         let seconds = start.elapsed().as_secs_f64();
+        let cpu_seconds = cpu_start.zip(process_cpu_seconds()).map(|(a, b)| b - a);
         result.attributes = images[0].attributes.clone();
         // The features' cost (aov-write's seconds) is part of the denoised image's cost.
         let mut feature_seconds = 0.0f64;
@@ -155,6 +157,9 @@ pub fn run(args: Args) -> Result<()> {
         result.set_attribute(header::FEATURE_SECONDS, feature_seconds);
         result.set_attribute(header::DENOISER, &model_name);
         result.set_attribute(header::DENOISE_SECONDS, seconds);
+        if let Some(cpu) = cpu_seconds {
+            result.set_attribute(header::DENOISE_CPU_SECONDS, cpu);
+        }
         write_rgb_to(&mut plan, &job.out, &result)?;
         if let Some(p) = &job.preview {
             write_preview_png_auto_to(&mut plan, p, &result)?;
@@ -167,6 +172,35 @@ pub fn run(args: Args) -> Result<()> {
     }
     // All outputs of the run appear together, or none (a later failure leaves nothing).
     plan.commit()
+}
+
+/// The CPU seconds (user + system, all threads) this process has used so far, from the clock
+/// Python's `time.process_time` reads too (`CLOCK_PROCESS_CPUTIME_ID`); None outside 64-bit Linux.
+fn process_cpu_seconds() -> Option<f64> {
+    #[cfg(all(target_os = "linux", target_pointer_width = "64"))]
+    {
+        use std::os::raw::{c_int, c_long};
+        #[repr(C)]
+        struct Timespec {
+            tv_sec: c_long,
+            tv_nsec: c_long,
+        }
+        extern "C" {
+            fn clock_gettime(clock: c_int, time: *mut Timespec) -> c_int;
+        }
+        // Linux's time.h: CLOCK_PROCESS_CPUTIME_ID 2.
+        const CLOCK_PROCESS_CPUTIME_ID: c_int = 2;
+        let mut t = Timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: clock_gettime writes one timespec (two longs on 64-bit Linux) through the
+        // pointer, which points at one.
+        let ok = unsafe { clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &mut t) } == 0;
+        ok.then(|| t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64)
+    }
+    #[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
+    None
 }
 
 /// Lets the C allocator keep and reuse the memory that is freed, instead of returning every large

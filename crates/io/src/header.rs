@@ -39,13 +39,15 @@ pub const DENOISER: &str = "luxest.denoiser";
 pub const OIDN_DENOISER_PREFIX: &str = "oidn-";
 /// Wall-clock seconds of denoising inference (excluding I/O).
 pub const DENOISE_SECONDS: &str = "luxest.denoiseSeconds";
+/// CPU seconds of denoising inference: the process's user + system time over it, all threads.
+pub const DENOISE_CPU_SECONDS: &str = "luxest.denoiseCpuSeconds";
 /// Render seconds of the albedo/normal feature images a denoised image used.
 pub const FEATURE_SECONDS: &str = "luxest.featureSeconds";
 /// ONNX model metadata: the input features in order, comma-separated (`hdr,alb,nrm`).
 pub const CHANNELS: &str = "luxest.channels";
 
 /// Every key above, in the order of this file.
-pub const ALL: [&str; 13] = [
+pub const ALL: [&str; 14] = [
     SAMPLES,
     SEED,
     SECONDS,
@@ -57,6 +59,7 @@ pub const ALL: [&str; 13] = [
     PIXEL_SAMPLES,
     DENOISER,
     DENOISE_SECONDS,
+    DENOISE_CPU_SECONDS,
     FEATURE_SECONDS,
     CHANNELS,
 ];
