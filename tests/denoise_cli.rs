@@ -84,14 +84,14 @@ fn output_equals_python_onnxruntime_to_1e_5() {
                 .parse()
                 .unwrap();
             assert!(t > 0.0);
-            // Its CPU seconds: some, and at most what every core could spend in that wall time.
+            // Its CPU seconds (the process's: the other tests of this binary count too, so only
+            // that some were spent; the clock itself is tested in denoise's cli module).
             let cpu: f64 = out
                 .attribute(header::DENOISE_CPU_SECONDS)
                 .unwrap()
                 .parse()
                 .unwrap();
-            let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
-            assert!(cpu > 0.0 && cpu <= cores * t * 1.1 + 0.01, "{cpu} CPU-s in {t} s");
+            assert!(cpu > 0.0 && cpu.is_finite(), "{cpu} CPU-s");
         }
     }
 }

@@ -110,6 +110,10 @@ def test_peer_table_shows_both_denoisers_inference_seconds_per_megapixel(tmp_pat
     rows[1] = row("path-tracing+denoise", "swapped")
     line = next(x for x in "\n".join(ev.peer_table(rows, "Cornell box 256²")).splitlines() if x.startswith("| 4 |"))
     assert [c.strip() for c in line.strip("|").split("|")][4:6] == ["1000 / 2500", "— / 4.50"]
-    # Means over scenes: stored, None when a scene lacks the value.
-    assert ev.row_denoise_costs({"denoise_costs": (1.0, None)}) == (1.0, None)
+    # Held-out rows are means over scenes with the costs stored (a scene without them: None).
+    mean = lambda est, costs: {"estimator": est, "samples": 4, "psnr_db": 30.0, "ssim": 0.9, "flip": 0.1,
+                               "colour_shift": 0.01, "denoise_costs": costs}
+    rows = [mean("path-tracing", (None, None)), mean("path-tracing+denoise", (0.25, 0.5)), mean("path-tracing+oidn", (None, 0.75))]
+    line = next(x for x in "\n".join(ev.peer_table(rows, "held-out scenes, mean over 2")).splitlines() if x.startswith("| 4 |"))
+    assert [c.strip() for c in line.strip("|").split("|")][4:6] == ["250 / —", "0.50 / 0.75"]
     assert ev.mean_or_none([1.0, 3.0]) == 2.0 and ev.mean_or_none([1.0, None]) is None and ev.mean_or_none([]) is None

@@ -197,7 +197,7 @@ fn process_cpu_seconds() -> Option<f64> {
         // SAFETY: clock_gettime writes one timespec (two longs on 64-bit Linux) through the
         // pointer, which points at one.
         let ok = unsafe { clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &mut t) } == 0;
-        ok.then(|| t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64)
+        ok.then_some(t.tv_sec as f64 + 1e-9 * t.tv_nsec as f64)
     }
     #[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
     None
@@ -301,4 +301,27 @@ fn read_checked(path: &Path) -> Result<RgbImage> {
         return Err(Error::input(path, "image is empty"));
     }
     Ok(image)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[cfg(all(target_os = "linux", target_pointer_width = "64"))]
+    #[test]
+    fn process_cpu_seconds_counts_seconds_of_work() {
+        // A busy loop of 0.3 s wall-clock gets at least a tenth of a core even on a loaded
+        // machine; a clock in the wrong unit (ms, ns) would be off by orders of magnitude.
+        let before = process_cpu_seconds().unwrap();
+        let start = Instant::now();
+        let mut x = 0u64;
+        while start.elapsed().as_secs_f64() < 0.3 {
+            x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+        }
+        let busy = process_cpu_seconds().unwrap() - before;
+        assert!(
+            (0.03..100.0).contains(&busy),
+            "{busy} CPU-s in a 0.3 s busy loop"
+        );
+    }
 }
