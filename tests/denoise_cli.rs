@@ -160,6 +160,20 @@ fn bad_input_gives_one_line_errors_and_no_output() {
 
     // A missing feature image.
     let hdr = copy_features(&dir, "odd_000004spp", &["hdr", "alb"]);
+    // -o and --out-dir are alternatives: giving both is a usage error, not -o silently winning.
+    let both = dir.path().join("both.dn.exr");
+    let (c, msg) = run(&[
+        s(&hdr),
+        "--model",
+        s(&model),
+        "-o",
+        s(&both),
+        "--out-dir",
+        s(dir.path()),
+    ])
+    .expect_err("-o with --out-dir");
+    assert!(c == 2 && msg.contains("--out-dir"), "{c}: {msg}");
+    assert!(!both.exists());
     check(
         &[s(&hdr), "--model", s(&model)],
         1,

@@ -95,6 +95,11 @@ def main(argv=None):
     ap.add_argument("--oidn", action="store_true", help="also denoise with OIDN 1.4.3 (PyPI oidn) and show the margin")
     ap.add_argument("--json")
     args = ap.parse_args(argv)
+    for what, f in (("--model", args.model), ("--evaluate", args.evaluate)):
+        if not Path(f).is_file():
+            sys.exit(f"compare_image: error: {what} {f}: not found")
+    if not Path(args.split_dir).is_dir():
+        sys.exit(f"compare_image: error: --split-dir {args.split_dir}: not a directory")
     try:
         summary, per_scene = compare(args.model, args.split_dir, args.work_dir, args.evaluate, args.spp, args.oidn)
     except contract.ContractError as e:

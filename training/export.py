@@ -145,12 +145,19 @@ def main(argv=None):
     ap.add_argument("--antialiased-emission", action="store_true",
                     help="export a run trained with the emi feature as a model that adds back ema (same weights)")
     args = ap.parse_args(argv)
-    if args.from_onnx:
-        with tempfile.TemporaryDirectory() as tmp:
-            run_from_onnx(args.from_onnx, tmp)
-            export(tmp, args.out, antialiased_emission=args.antialiased_emission)
-    else:
-        export(args.run_dir, args.out, antialiased_emission=args.antialiased_emission)
+    needed = [Path(args.from_onnx)] if args.from_onnx else [Path(args.run_dir) / f for f in ("config.json", "checkpoint.pt")]
+    for f in needed:
+        if not f.is_file():
+            raise SystemExit(f"export: {f}: not found" + ("" if args.from_onnx else " (train.py writes it)"))
+    try:
+        if args.from_onnx:
+            with tempfile.TemporaryDirectory() as tmp:
+                run_from_onnx(args.from_onnx, tmp)
+                export(tmp, args.out, antialiased_emission=args.antialiased_emission)
+        else:
+            export(args.run_dir, args.out, antialiased_emission=args.antialiased_emission)
+    except ValueError as e:
+        raise SystemExit(f"export: {e}")
 
 
 if __name__ == "__main__":

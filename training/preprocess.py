@@ -171,6 +171,9 @@ def _save(out, arr):
 
 def main(argv=None):
     cfg = config.parse(argv, __doc__.splitlines()[0])
+    data = Path(cfg.data_dir)
+    if not any(any((data / split).glob("*.exr")) for split in ("train", "valid", "test") if (data / split).is_dir()):
+        sys.exit(f"preprocess: error: {data}: no images in train/, valid/ or test/ (make reference noisy renders a dataset)")
     n = 0
     try:
         for split in ["train", "valid", "test"]:

@@ -198,7 +198,6 @@ def main(argv=None):
     device = torch.device("cuda" if torch.cuda.is_available() else "cpu")
     torch.backends.cudnn.benchmark = device.type == "cuda"  # the crops' shape never changes
     run = Path(cfg.run_dir)
-    run.mkdir(parents=True, exist_ok=True)
     ckpt = run / "checkpoint.pt"
     try:
         net = model.denoiser(cfg).to(device=device, memory_format=torch.channels_last)
@@ -238,13 +237,17 @@ def main(argv=None):
         step = state["step"]
         earlier_seconds, resumed_at = state.get("seconds", 0.0), state.get("resumed_at", []) + [step]
         print(f"resumed at step {step}")
-    cfg.save(run / "config.json")
     # As many crops as the remaining steps take (a fixed length once ended runs of more than
     # 100 000 / batch steps early, before the schedule had annealed).
-    data = dataset.Crops(Path(cfg.prep_dir) / "train", cfg.crop, cfg.seed + step,
-                         length=max(cfg.steps - step, 0) * cfg.batch,
-                         noisy_spp=cfg.noisy_spp, dle_paths=cfg.dle_paths, extra_seeds=cfg.extra_seeds,
-                         extra_spp=cfg.extra_spp)
+    try:
+        data = dataset.Crops(Path(cfg.prep_dir) / "train", cfg.crop, cfg.seed + step,
+                             length=max(cfg.steps - step, 0) * cfg.batch,
+                             noisy_spp=cfg.noisy_spp, dle_paths=cfg.dle_paths, extra_seeds=cfg.extra_seeds,
+                             extra_spp=cfg.extra_spp)
+    except FileNotFoundError as e:  # before the run directory is written
+        raise SystemExit(f"train: {e}")
+    run.mkdir(parents=True, exist_ok=True)
+    cfg.save(run / "config.json")
     loader = batches(data, cfg, device)
     start = time.time()
     log = open(run / "log.jsonl", "a")

@@ -33,7 +33,7 @@ pub struct Args {
     #[arg(long, default_value = "models/default.onnx")]
     pub model: PathBuf,
     /// Output file (only with one input) [default: <img>.dn.exr next to the input].
-    #[arg(short, long)]
+    #[arg(short, long, conflicts_with = "out_dir")]
     pub out: Option<PathBuf>,
     /// Write outputs into this directory instead of next to the inputs.
     #[arg(long)]

@@ -14,6 +14,7 @@ fn usage(case: &str) -> impl Fn(String) -> Error + '_ {
 /// Prints the exact solution of `case` to stdout, after checking its parameters' domain (no
 /// NaN, negative or infinite result is printed as if it were one).
 pub fn print(case: ExactCase) -> Result<()> {
+    let mut lines = Vec::new();
     match case {
         ExactCase::Sobolev {
             intensity,
@@ -36,26 +37,26 @@ pub fn print(case: ExactCase) -> Result<()> {
                     .check_named("r", r)
                     .map_err(usage("sobolev"))?;
             }
-            println!("Sobolev problem: I = {intensity} cd, h1 = {h1} m, h2 = {h2} m, rho1 = {rho1}, rho2 = {rho2}");
-            println!(
+            lines.push(format!("Sobolev problem: I = {intensity} cd, h1 = {h1} m, h2 = {h2} m, rho1 = {rho1}, rho2 = {rho2}"));
+            lines.push(format!(
                 "flux onto plane 1: {:.9e} lm, onto plane 2: {:.9e} lm",
                 s.flux1(),
                 s.swapped().flux1()
-            );
-            println!(
+            ));
+            lines.push(format!(
                 "{:>10} {:>18} {:>18} {:>18} {:>10}",
                 "r (m)", "E1 (lx)", "E1 direct", "E2 (lx)", "err.bound"
-            );
+            ));
             for r in r {
                 let (e1, e2) = (s.illuminance1(r), s.illuminance2(r));
-                println!(
+                lines.push(format!(
                     "{:>10} {:>18.10e} {:>18.10e} {:>18.10e} {:>10.1e}",
                     r,
                     e1.value,
                     s.direct1(r),
                     e2.value,
                     e1.error_bound.max(e2.error_bound)
-                );
+                ));
             }
         }
         ExactCase::Sphere {
@@ -66,14 +67,14 @@ pub fn print(case: ExactCase) -> Result<()> {
             solutions::check_integrating_sphere(intensity, radius, rho).map_err(usage("sphere"))?;
             let ind = luxest_exact::solutions::integrating_sphere_indirect(intensity, radius, rho);
             let direct = intensity / (radius * radius);
-            println!("Integrating sphere, central source: I = {intensity} cd, R = {radius} m, rho = {rho}");
-            println!("direct {direct:.10e} lx + indirect {ind:.10e} lx = {:.10e} lx everywhere on the wall", direct + ind);
+            lines.push(format!("Integrating sphere, central source: I = {intensity} cd, R = {radius} m, rho = {rho}"));
+            lines.push(format!("direct {direct:.10e} lx + indirect {ind:.10e} lx = {:.10e} lx everywhere on the wall", direct + ind));
         }
         ExactCase::Cie171 { flux, area, rho } => {
             solutions::check_cie171(flux, area, rho).map_err(usage("cie171"))?;
             let e = luxest_exact::solutions::cie171_mean_indirect_illuminance(flux, area, rho);
-            println!("CIE 171:2006 5.8: flux {flux} lm, S_T = {area} m², rho = {rho}: mean indirect illuminance {e:.10e} lx");
+            lines.push(format!("CIE 171:2006 5.8: flux {flux} lm, S_T = {area} m², rho = {rho}: mean indirect illuminance {e:.10e} lx"));
         }
     }
-    Ok(())
+    luxest_io::cli::print(&(lines.join("\n") + "\n"))
 }

@@ -140,8 +140,9 @@ pub fn run(args: Args) -> Result<()> {
             if let Some(r) = &ron {
                 report.write_ron_to(&mut plan, r)?;
             }
+            // The table first: a failed write to stdout leaves no report files behind.
+            luxest_io::cli::print(&report.table(max_z))?;
             plan.commit()?;
-            print!("{}", report.table(max_z));
             eprintln!(
                 "evaluate: {}: {} points, max |z| {:.2}, RMS relative error {:.3e}",
                 results.display(),

@@ -42,6 +42,21 @@ pub fn main<A: Parser>(run: impl FnOnce(A) -> Result<(), Error>) -> ExitCode {
     }
 }
 
+/// Writes `text` to standard output, the way the stages print tables: a reader that has closed
+/// the pipe (`| head`) ends the output quietly, any other failure (a full device) is one
+/// `error: <stdout>: …` line; `print!` would panic on both.
+pub fn print(text: &str) -> Result<(), Error> {
+    print_to(&mut std::io::stdout().lock(), text)
+}
+
+/// [`print`] to any writer.
+pub fn print_to(out: &mut impl std::io::Write, text: &str) -> Result<(), Error> {
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Error::io("<stdout>", e)),
+        _ => Ok(()),
+    }
+}
+
 /// Arguments shared by the Monte Carlo stages.
 #[derive(clap::Args, Clone, Debug)]
 pub struct CommonArgs {
@@ -67,4 +82,62 @@ pub fn thread_count(requested: Option<usize>) -> usize {
             .map(|n| n.get())
             .unwrap_or(1)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::{self, ErrorKind, Write};
+
+    /// A writer that takes `room` bytes, then fails with `kind`.
+    struct Failing {
+        room: usize,
+        kind: ErrorKind,
+        got: Vec<u8>,
+    }
+
+    impl Write for Failing {
+        fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+            if self.room == 0 {
+                return Err(io::Error::from(self.kind));
+            }
+            let n = buf.len().min(self.room);
+            self.room -= n;
+            self.got.extend_from_slice(&buf[..n]);
+            Ok(n)
+        }
+        fn flush(&mut self) -> io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn printing_ends_quietly_on_a_closed_pipe_and_fails_in_one_line_on_a_full_device() {
+        let mut ok = Failing {
+            room: 100,
+            kind: ErrorKind::BrokenPipe,
+            got: vec![],
+        };
+        print_to(&mut ok, "a table\n").unwrap();
+        assert_eq!(ok.got, b"a table\n");
+        let mut closed = Failing {
+            room: 3,
+            kind: ErrorKind::BrokenPipe,
+            got: vec![],
+        };
+        print_to(&mut closed, "a table\n").unwrap();
+        assert_eq!(closed.got, b"a t");
+        let mut full = Failing {
+            room: 3,
+            kind: ErrorKind::StorageFull,
+            got: vec![],
+        };
+        let e = print_to(&mut full, "a table\n").unwrap_err();
+        let line = e.to_string();
+        assert!(
+            line.starts_with("<stdout>: ") && !line.contains('\n'),
+            "{line}"
+        );
+        assert_eq!(e.exit_code(), 1);
+    }
 }

@@ -38,9 +38,11 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     if args.info {
         let scene = CompiledScene::load(&args.input)?;
-        println!("{}", to_ron_string(&scene.header));
-        println!("// content hash {}", scene.content_hash);
-        return Ok(());
+        return luxest_io::cli::print(&format!(
+            "{}\n// content hash {}\n",
+            to_ron_string(&scene.header),
+            scene.content_hash
+        ));
     }
     let authored: Scene = read_ron(&args.input)?;
     // The output, planned before the work: not the scene file, a mesh or a photometric file it
