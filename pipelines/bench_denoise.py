@@ -96,7 +96,7 @@ def marginal(small, large, mp_small, mp_large):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--input", required=True, help="a Cornell snapshot `<name>_<spp>spp.hdr.exr` of make eval")
     ap.add_argument("--features", default="alb,nrm,emi,ema", help="the feature kinds the model takes")
     ap.add_argument("--model", required=True)

@@ -48,7 +48,7 @@ def counts(text):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", required=True, help="compiled scene (.lxs)")
     ap.add_argument("--mitsuba-scene", help="the same scene exported for Mitsuba (scene.xml)")
     ap.add_argument("--peers-python", help="python of .venv-peers (Mitsuba)")

@@ -73,7 +73,7 @@ def meter_xml(i, position, normal, radius, spp):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", required=True, help="compiled scene (.lxs)")
     ap.add_argument("--mitsuba-scene", required=True, help="the same scene exported for Mitsuba (scene.xml)")
     ap.add_argument("--estimate", required=True)

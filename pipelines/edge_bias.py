@@ -52,7 +52,7 @@ def group_stats(test, se_test, ref, se_ref, mask):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--reference", required=True)
     ap.add_argument("--reference-se", required=True)
     ap.add_argument("--test", required=True, action="append", help="image (repeatable)")

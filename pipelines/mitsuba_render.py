@@ -39,7 +39,7 @@ def scene_xml(mi, path, resolution=None, integrator="path"):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scene", help="scene.xml written by scene-compile --export-mitsuba")
     ap.add_argument("--spp", type=int, default=256)
     ap.add_argument("--variant", default="llvm_ad_rgb")

@@ -58,7 +58,7 @@ def oidn_filter(color, albedo, normal, threads=0):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("noisy", help="noisy image (.hdr.exr)")
     ap.add_argument("--alb", required=True, help="albedo feature (.alb.exr)")
     ap.add_argument("--nrm", required=True, help="normal feature (.nrm.exr)")

@@ -174,6 +174,14 @@ fn bad_input_gives_one_line_errors_and_no_output() {
     .expect_err("-o with --out-dir");
     assert!(c == 2 && msg.contains("--out-dir"), "{c}: {msg}");
     assert!(!both.exists());
+    // An input not named <img>.hdr.exr has no features next to it: the message says why.
+    let odd = dir.path().join("odd.exr");
+    std::fs::copy(&hdr, &odd).unwrap();
+    check(
+        &[s(&odd), "--model", s(&model), "-o", s(&both)],
+        1,
+        &["odd.exr", "<img>.hdr.exr", "--alb"],
+    );
     check(
         &[s(&hdr), "--model", s(&model)],
         1,

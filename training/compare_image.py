@@ -86,7 +86,7 @@ def compare(model, split_dir, work_dir, evaluate, spp_levels, oidn=False):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--model", required=True)
     ap.add_argument("--split-dir", required=True)
     ap.add_argument("--work-dir", required=True, help="denoised images and evaluate's reports")

@@ -137,7 +137,7 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     src = ap.add_mutually_exclusive_group(required=True)
     src.add_argument("--run-dir", help="the training run (config.json, checkpoint.pt)")
     src.add_argument("--from-onnx", help="a model exported by this script: its configuration and weights")

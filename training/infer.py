@@ -59,7 +59,7 @@ def denoise_split(model, split_dir, out_dir, spp_levels=None, scan=None):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--model", required=True)
     ap.add_argument("--split-dir", required=True)
     ap.add_argument("--out-dir", required=True)

@@ -170,7 +170,7 @@ def _save(out, arr):
 
 
 def main(argv=None):
-    cfg = config.parse(argv, __doc__.splitlines()[0])
+    cfg = config.parse(argv, __doc__.split("\n\n")[0])
     data = Path(cfg.data_dir)
     if not any(any((data / split).glob("*.exr")) for split in ("train", "valid", "test") if (data / split).is_dir()):
         sys.exit(f"preprocess: error: {data}: no images in train/, valid/ or test/ (make reference noisy renders a dataset)")

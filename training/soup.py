@@ -140,7 +140,7 @@ def plan(ingredients, run_dir, out):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("ingredients", nargs="+", help="exported models (.onnx), run directories or checkpoint.pt files")
     ap.add_argument("--weights", type=float, nargs="+", help="one per ingredient (default: equal)")
     ap.add_argument("--run-dir", required=True, help="where the soup's config.json, checkpoint.pt and soup.json go")

@@ -191,7 +191,7 @@ def validation_loss(net, prep_dir, cfg):
 
 
 def main(argv=None):
-    cfg = config.parse(argv, __doc__.splitlines()[0])
+    cfg = config.parse(argv, __doc__.split("\n\n")[0])
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(cfg.threads)
     # A CUDA GPU is used when present (PRESET=full on a GPU machine); CPU otherwise.

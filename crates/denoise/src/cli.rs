@@ -261,7 +261,8 @@ fn job(args: &Args, denoiser: &Denoiser, model_name: &str, noisy: &Path) -> Resu
             Error::input(
                 noisy,
                 format!(
-                    "the model needs the {} feature; name it with --{}",
+                    "the model needs the {} feature, found next to a noisy image named \
+                     <img>.hdr.exr (this name is not); name it with --{}",
                     feature.name(),
                     feature.name()
                 ),
