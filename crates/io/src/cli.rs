@@ -31,14 +31,24 @@ pub fn main<A: Parser>(run: impl FnOnce(A) -> Result<(), Error>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Error::Usage(m)) => {
-            // clap's own rendering is multi-line on purpose (usage + hint); keep it.
-            eprintln!("{}", m.trim_end());
+            eprintln!("{}", usage_message(&m));
             ExitCode::from(2)
         }
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code())
         }
+    }
+}
+
+/// How a usage error is printed: clap's own rendering is multi-line on purpose (usage + hint)
+/// and starts with `error:`; a stage's own usage errors get the same prefix.
+fn usage_message(m: &str) -> String {
+    let m = m.trim_end();
+    if m.starts_with("error:") {
+        m.to_string()
+    } else {
+        format!("error: {m}")
     }
 }
 
@@ -109,6 +119,30 @@ mod tests {
         fn flush(&mut self) -> io::Result<()> {
             Ok(())
         }
+    }
+
+    #[derive(Parser, Debug)]
+    struct Demo {
+        #[arg(long)]
+        n: u32,
+    }
+
+    #[test]
+    fn usage_errors_all_start_with_error() {
+        // A stage's own usage error and clap's both read `error: …`, clap's once.
+        assert_eq!(
+            usage_message("give --spp N or --time SECONDS\n"),
+            "error: give --spp N or --time SECONDS"
+        );
+        let clap = match parse::<Demo>(["demo", "--n", "x"]) {
+            Err(Error::Usage(m)) => m,
+            other => panic!("{other:?}"),
+        };
+        let shown = usage_message(&clap);
+        assert!(
+            shown.starts_with("error: ") && !shown.starts_with("error: error:"),
+            "{shown}"
+        );
     }
 
     #[test]
