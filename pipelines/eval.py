@@ -213,10 +213,21 @@ def level_key(r):
 
 
 @functools.lru_cache(maxsize=None)
+def _image_facts(path):
+    """What the summary takes from one image file, read once (every row of a report shares its
+    reference, and a denoised image gives both its colour shift and its costs): the linear mean
+    of each channel and the (wall-clock, CPU) inference seconds per megapixel its header records
+    (`luxest.denoiseSeconds`, `luxest.denoiseCpuSeconds`; None where absent)."""
+    img = contract.read(path)
+    mp = img.pixels.shape[0] * img.pixels.shape[1] / 1e6
+    costs = tuple(None if v is None else v / mp for v in (img.value(contract.DENOISE_SECONDS),
+                                                          img.value(contract.DENOISE_CPU_SECONDS)))
+    return img.pixels.reshape(-1, 3).astype("float64").mean(0), costs
+
+
 def channel_means(path):
-    """The linear mean of each channel of an image (read once per path: every row of a report
-    shares its reference)."""
-    return contract.read_rgb(path).reshape(-1, 3).astype("float64").mean(0)
+    """The linear mean of each channel of an image."""
+    return _image_facts(str(path))[0]
 
 
 def colour_shift(image, reference):
@@ -237,17 +248,11 @@ def row_colour_shift(r):
     return colour_shift(r["image"], r["reference"]) if "image" in r else None
 
 
-@functools.lru_cache(maxsize=None)
 def denoise_costs(image):
-    """(wall-clock, CPU) inference seconds per megapixel a denoised image records
-    (`luxest.denoiseSeconds`, `luxest.denoiseCpuSeconds` over its pixel count); None for what is
-    missing (a deleted file; a denoiser swapped in through DENOISE may record no CPU seconds)."""
-    if not Path(image).exists():
-        return None, None
-    img = contract.read(image)
-    mp = img.pixels.shape[0] * img.pixels.shape[1] / 1e6
-    return tuple(None if v is None else v / mp for v in (img.value(contract.DENOISE_SECONDS),
-                                                         img.value(contract.DENOISE_CPU_SECONDS)))
+    """(wall-clock, CPU) inference seconds per megapixel a denoised image records; None for what
+    is missing (a deleted file; a denoiser swapped in through DENOISE may record no CPU
+    seconds)."""
+    return _image_facts(str(image))[1] if Path(image).exists() else (None, None)
 
 
 def row_denoise_costs(r):

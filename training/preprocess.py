@@ -169,16 +169,19 @@ def _save(out, arr):
     tmp.replace(out)
 
 
+SPLITS = ("train", "valid", "test")
+
+
 def main(argv=None):
     cfg = config.parse(argv, __doc__.split("\n\n")[0])
     data = Path(cfg.data_dir)
-    if not any(any((data / split).glob("*.exr")) for split in ("train", "valid", "test") if (data / split).is_dir()):
+    if not any(any((data / split).glob("*.exr")) for split in SPLITS if (data / split).is_dir()):
         sys.exit(f"preprocess: error: {data}: no images in train/, valid/ or test/ (make reference noisy renders a dataset)")
     n = 0
     try:
-        for split in ["train", "valid", "test"]:
+        for split in SPLITS:
             # Extra noise realizations are training data (make noisy renders them for train only).
-            n += preprocess_split(Path(cfg.data_dir) / split, Path(cfg.prep_dir) / split, cfg.noisy_spp,
+            n += preprocess_split(data / split, Path(cfg.prep_dir) / split, cfg.noisy_spp,
                                   cfg.dle_paths, cfg.features, cfg.extra_seeds if split == "train" else (), cfg.extra_spp)
     except contract.ContractError as e:
         print(f"preprocess: error: {e}", file=sys.stderr)

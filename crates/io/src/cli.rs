@@ -106,6 +106,14 @@ mod tests {
         got: Vec<u8>,
     }
 
+    fn failing(room: usize, kind: ErrorKind) -> Failing {
+        Failing {
+            room,
+            kind,
+            got: vec![],
+        }
+    }
+
     impl Write for Failing {
         fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
             if self.room == 0 {
@@ -147,25 +155,13 @@ mod tests {
 
     #[test]
     fn printing_ends_quietly_on_a_closed_pipe_and_fails_in_one_line_on_a_full_device() {
-        let mut ok = Failing {
-            room: 100,
-            kind: ErrorKind::BrokenPipe,
-            got: vec![],
-        };
+        let mut ok = failing(100, ErrorKind::BrokenPipe);
         print_to(&mut ok, "a table\n").unwrap();
         assert_eq!(ok.got, b"a table\n");
-        let mut closed = Failing {
-            room: 3,
-            kind: ErrorKind::BrokenPipe,
-            got: vec![],
-        };
+        let mut closed = failing(3, ErrorKind::BrokenPipe);
         print_to(&mut closed, "a table\n").unwrap();
         assert_eq!(closed.got, b"a t");
-        let mut full = Failing {
-            room: 3,
-            kind: ErrorKind::StorageFull,
-            got: vec![],
-        };
+        let mut full = failing(3, ErrorKind::StorageFull);
         let e = print_to(&mut full, "a table\n").unwrap_err();
         let line = e.to_string();
         assert!(
