@@ -288,6 +288,12 @@ fn bad_input_gives_one_line_errors_and_no_output() {
         2,
         &["exactly one input"],
     );
+    // A feature the model does not take would be ignored: refused, naming what it takes.
+    check(
+        &[s(&hdr), "--model", s(&model), "--emi", s(&hdr)],
+        2,
+        &["--emi: the model", "tiny.onnx", "(it takes hdr, alb, nrm)"],
+    );
 
     // Nothing but the inputs was written.
     let outputs: Vec<_> = dir

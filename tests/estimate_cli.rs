@@ -191,6 +191,100 @@ fn bad_input_is_reported() {
     estimate(&["exact", "sobolev", "--r", "0,1"]).unwrap();
 }
 
+/// An option that would change nothing in the combination given is a usage error (exit 2,
+/// one line naming it), not silently ignored; each is accepted where it does apply.
+#[test]
+fn options_without_effect_are_refused() {
+    let dir = TempDir::new("est-no-effect");
+    let scene = compile_text(&dir, "sob", SOBOLEV);
+    let scene = scene.to_str().unwrap();
+    let out = dir.path().join("o.sensors.ron");
+    let out = out.to_str().unwrap();
+    let image_out = format!("{out}.exr");
+    let sensors = [
+        "sensors",
+        scene,
+        "--paths",
+        "64",
+        "--batches",
+        "2",
+        "-o",
+        out,
+    ];
+    let direct = [
+        "direct",
+        scene,
+        "--paths",
+        "64",
+        "--batches",
+        "2",
+        "-o",
+        out,
+    ];
+    let image = [
+        "image",
+        scene,
+        "--paths",
+        "64",
+        "--resolution",
+        "6x5",
+        "-o",
+        &image_out,
+    ];
+    let with = |base: &[&str], extra: &[&str]| -> Vec<String> {
+        base.iter().chain(extra).map(|a| a.to_string()).collect()
+    };
+    let mut cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            with(&sensors, &["--singularity", "none", "--eps", "0.1"]),
+            "--eps has no effect with --singularity none",
+        ),
+        (
+            with(
+                &image,
+                &["--singularity", "none", "--eps", "0.1", "--mis-paths", "0"],
+            ),
+            "--eps has no effect with --singularity none",
+        ),
+        (
+            with(&sensors, &["--near-samples", "0", "--near-radius", "0.5"]),
+            "--near-radius has no effect with --near-samples 0",
+        ),
+        (
+            with(&direct, &["--bin-radius", "0.1", "--edge-offset", "0.01"]),
+            "--edge-offset has no effect on estimate direct",
+        ),
+    ];
+    for extra in [
+        ["--mis-paths", "3"],
+        ["--pixel-samples", "2"],
+        ["--singularity", "ball"],
+        ["--eps", "0.1"],
+    ] {
+        let mut args = with(&image, &["--light-tracing"]);
+        args.extend(extra.map(String::from));
+        cases.push((args, "cannot be used with"));
+    }
+    let run = |args: &[String]| estimate(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    for (args, want) in &cases {
+        let (code, msg) = run(args).expect_err(&format!("{args:?}"));
+        assert_eq!(code, 2, "{args:?}: {msg}");
+        assert!(msg.contains(want), "{args:?}: {msg}");
+        assert!(!msg.trim().contains('\n'), "one line: {msg}");
+        assert!(!std::path::Path::new(out).exists(), "{args:?} wrote {out}");
+        assert!(!std::path::Path::new(&image_out).exists(), "{args:?}");
+    }
+    // Where they apply, the same options are accepted.
+    run(&with(&sensors, &["--singularity", "clamp", "--eps", "0.1"])).unwrap();
+    run(&with(
+        &sensors,
+        &["--near-samples", "10", "--near-radius", "0.5"],
+    ))
+    .unwrap();
+    run(&with(&direct, &["--bin-radius", "0.1"])).unwrap();
+    run(&with(&image, &["--light-tracing"])).unwrap();
+}
+
 #[test]
 fn double_local_estimate_image_matches_the_exact_luminance() {
     // Camera at the source looking straight down at plane 1: each pixel sees a Lambertian

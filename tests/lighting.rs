@@ -397,6 +397,14 @@ fn malformed_peer_files_are_refused_in_one_line_naming_file_and_line_without_out
             ),
             "differs from luxest's",
         ),
+        // Well-formed, but of another scene's surface: nothing would be compared.
+        (
+            format!(
+                "{head}{}\n",
+                good.join("\n").replace("work-plane,", "desk,")
+            ),
+            "has no point of any surface of",
+        ),
     ];
     for (i, (text, want)) in cases.iter().enumerate() {
         let peer = dir.write(&format!("peer{i}.csv"), text);
@@ -417,6 +425,18 @@ fn malformed_peer_files_are_refused_in_one_line_naming_file_and_line_without_out
         let left = std::fs::read_dir(&out).map(|d| d.count()).unwrap_or(0);
         assert_eq!(left, 0, "case {i}: outputs left in {}", out.display());
     }
+    // Agreement with no peer to agree with is a usage error, not a pass.
+    let out = dir.path().join("out-nopeer");
+    let (code, msg) = report(&[
+        res.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--require-peer-agreement",
+    ])
+    .unwrap_err();
+    assert_eq!(code, 2, "{msg}");
+    assert!(msg.contains("--peer"), "{msg}");
+    assert!(!out.exists());
 }
 
 /// An IES file of I(γ) = 1000 cd cos³γ (0 above the horizontal) at 5° steps, rotationally

@@ -1422,3 +1422,106 @@ fn numeric_options_outside_their_range_are_usage_errors() {
     }
     assert!(dir.files().iter().all(|f| f == &lxs), "{:?}", dir.files());
 }
+
+/// Every output a user names with a fixed format must end like that format (an EXR named
+/// `.png`, or a PNG named `.exr`, would be misread by viewers and by the next stage), and an
+/// output prefix must not end like a file: a usage error (exit 2) naming the option and the
+/// ending, before any work and with nothing written. The same runs with the right endings
+/// succeed.
+#[test]
+fn outputs_end_like_the_format_written() {
+    let dir = TempDir::new("rel-endings");
+    let lxs = cornell(&dir);
+    let model_src = crate::util::repo_root().join("tests/fixtures/denoise/tiny.onnx");
+    let model = dir.path().join("model.onnx");
+    std::fs::copy(&model_src, &model).unwrap();
+    let hdr = uniform_with_features(&dir, "a_000001spp", 1.0);
+    let reference = uniform_with_features(&dir, "r_000001spp", 2.0);
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let d = |name: &str| s(&dir.path().join(name));
+    let (scene, hdr, reference, model) = (s(&lxs), s(&hdr), s(&reference), s(&model));
+    let src = d("src.ron");
+    std::fs::copy(crate::util::repo_root().join("scenes/sobolev.ron"), &src).unwrap();
+    type Stage = fn(&[&str]) -> StageResult;
+    let (est, trace, aov): (Stage, Stage, Stage) =
+        (crate::util::estimate, trace_stage, aov_write_stage);
+    let (dn, ev, sc): (Stage, Stage, Stage) = (
+        crate::util::denoise,
+        crate::util::evaluate,
+        crate::util::scene_compile,
+    );
+    let one = ["--threads", "1"];
+    let image = [
+        &["image", &scene, "--paths", "40", "--resolution", "8x8"][..],
+        &one,
+    ]
+    .concat();
+    let tr = ["--spp", "1", "--resolution", "8x8", "--threads", "1"];
+    let sensors = ["sensors", &scene, "--paths", "100", "--near-samples", "0"];
+    let sensors = [&sensors[..], &["--batches", "2"], &one].concat();
+    let images = ["images", "--reference", &reference, &hdr];
+    let csv = d("ok.csv");
+    let images_csv = [&images[..], &["-o", &csv]].concat();
+    // (stage, arguments, the option, the wrong path, its right ending)
+    let cases: Vec<(Stage, Vec<&str>, &str, String, &str)> = vec![
+        (est, image.clone(), "-o/--out", d("le.png"), ".exr"),
+        (est, image.clone(), "--stderr-out", d("se.ron"), ".exr"),
+        (est, image.clone(), "--preview", d("le.exr"), ".png"),
+        (est, image.clone(), "--preview", d("le"), ".png"),
+        (est, sensors.clone(), "-o/--out", d("s.csv"), ".ron"),
+        (est, sensors.clone(), "--csv", d("s.txt"), ".csv"),
+        (
+            trace,
+            [&[scene.as_str()][..], &tr].concat(),
+            "--preview",
+            d("p.exr"),
+            ".png",
+        ),
+        (
+            dn,
+            vec![&hdr, "--model", &model, "--threads", "1"],
+            "-o/--out",
+            d("dn.png"),
+            ".exr",
+        ),
+        (ev, images.to_vec(), "-o/--out", d("e.ron"), ".csv"),
+        (ev, images_csv, "--ron", d("e.csv"), ".ron"),
+        (sc, vec![&src, "-q"], "-o/--out", d("scene.ron2"), ".lxs"),
+    ];
+    for (stage, mut args, option, path, ending) in cases {
+        let flag = option.rsplit('/').next().unwrap();
+        args.extend([flag, &path]);
+        let files = dir.files();
+        let (code, msg) = stage(&args).expect_err(&format!("{args:?} must be refused"));
+        assert_eq!(code, 2, "{args:?}: {msg}");
+        assert!(!msg.contains('\n'), "one line: {msg}");
+        let want = format!("{option} {path}: this writes");
+        assert!(msg.contains(&want), "{args:?}: {msg}");
+        assert!(msg.ends_with(&format!("name the file *{ending}")), "{msg}");
+        assert_eq!(dir.files(), files, "{args:?} wrote something");
+        // The same run with the right ending succeeds and writes that file.
+        let right = d(&format!("right{ending}"));
+        *args.last_mut().unwrap() = &right;
+        let _ = std::fs::remove_file(&right);
+        stage(&args).unwrap_or_else(|(c, m)| panic!("{args:?}: exit {c}: {m}"));
+        assert!(
+            dir.path().join(format!("right{ending}")).is_file(),
+            "{args:?}"
+        );
+    }
+    // A prefix that ends like a file, or has no file-name part.
+    for (stage, prefix, example) in [
+        (trace, d("t.exr"), "t.exr_000001spp.hdr.exr"),
+        (aov, d("t.png"), "t.png_000001spp.alb.exr"),
+        (trace, "..".to_string(), "_000001spp.hdr.exr"),
+    ] {
+        let args = [&[scene.as_str()][..], &tr, &["-o", &prefix]].concat();
+        let files = dir.files();
+        let (code, msg) = stage(&args).expect_err(&format!("{args:?} must be refused"));
+        assert_eq!(code, 2, "{args:?}: {msg}");
+        assert!(msg.starts_with(&format!("-o/--out {prefix}: ")), "{msg}");
+        assert!(msg.contains("but it is a prefix"), "{msg}");
+        assert!(msg.contains(example), "{msg}");
+        assert_eq!(dir.files(), files, "{args:?} wrote something");
+    }
+}

@@ -66,6 +66,28 @@ fn compiled_file_is_written_atomically_and_reproducibly() {
         "no temporary files may remain"
     );
     scene_compile(&["--info", out.to_str().unwrap()]).unwrap();
+    // Options that --check or --info would ignore are usage errors; nothing is written.
+    let other = dir.path().join("b/scene.lxs");
+    let mitsuba = dir.path().join("m");
+    for args in [
+        vec![
+            scene.to_str().unwrap(),
+            "--check",
+            "-o",
+            other.to_str().unwrap(),
+        ],
+        vec![
+            "--info",
+            out.to_str().unwrap(),
+            "--export-mitsuba",
+            mitsuba.to_str().unwrap(),
+        ],
+    ] {
+        let (code, msg) = scene_compile(&args).expect_err(&format!("{args:?}"));
+        assert_eq!(code, 2, "{args:?}: {msg}");
+        assert!(msg.contains("cannot be used with"), "{msg}");
+        assert_eq!(dir.files(), vec![out.clone()], "{args:?} wrote something");
+    }
 }
 
 #[test]

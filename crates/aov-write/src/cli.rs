@@ -9,7 +9,7 @@ use luxest_io::header;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{image_path, Kind, Level};
 use luxest_io::num::Count;
-use luxest_io::outputs::OutputPlan;
+use luxest_io::outputs::{check_prefix, OutputPlan};
 use luxest_io::{Error, Result};
 use luxest_render::world::{load_with_camera, Traversal};
 use std::path::PathBuf;
@@ -66,6 +66,13 @@ pub fn run(args: Args) -> Result<()> {
              images",
             args.spp
         )));
+    }
+    if let Some(out) = &args.out {
+        let level = match args.reference {
+            true => Level::Reference,
+            false => Level::Spp(args.spp as u64),
+        };
+        check_prefix(out, "-o/--out", &image_path(out, level, Kind::Alb))?;
     }
     let (world, cam) = load_with_camera(&args.scene, args.resolution.as_deref(), Traversal::Fast)?;
     let prefix = args

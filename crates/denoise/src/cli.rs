@@ -8,7 +8,7 @@ use luxest_io::cli::CommonArgs;
 use luxest_io::exr_io::{read_rgb_finite, write_preview_png_auto_to, write_rgb_to, RgbImage};
 use luxest_io::header;
 use luxest_io::naming::preview_path;
-use luxest_io::outputs::OutputPlan;
+use luxest_io::outputs::{Format, OutputPlan};
 use luxest_io::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -29,9 +29,10 @@ pub struct Args {
     /// Noisy radiance images, `<img>.hdr.exr`.
     #[arg(required = true)]
     pub noisy: Vec<PathBuf>,
-    /// The ONNX model (training/export.py).
-    #[arg(long, default_value = "models/default.onnx")]
-    pub model: PathBuf,
+    /// The ONNX model (training/export.py) [default: models/default.onnx in the working
+    /// directory, else in the luxest checkout this program was built from].
+    #[arg(long)]
+    pub model: Option<PathBuf>,
     /// Output file (only with one input) [default: <img>.dn.exr next to the input].
     #[arg(short, long, conflicts_with = "out_dir")]
     pub out: Option<PathBuf>,
@@ -79,6 +80,31 @@ impl Args {
     }
 }
 
+/// The model file's path relative to a luxest checkout (and to the working directory).
+pub const DEFAULT_MODEL: &str = "models/default.onnx";
+
+/// The model used without --model: [`DEFAULT_MODEL`] in the working directory if it is there
+/// (the Makefile's and the README's commands run in the checkout), else in the checkout whose
+/// crate `crates/denoise` is at `crate_dir` (the one this program was built from, so that
+/// `target/release/denoise img.hdr.exr` works from any directory). A usage error naming both
+/// places when neither has it.
+pub fn default_model(crate_dir: &Path) -> Result<PathBuf> {
+    let here = PathBuf::from(DEFAULT_MODEL);
+    if here.is_file() {
+        return Ok(here);
+    }
+    let root = crate_dir.ancestors().nth(2).unwrap_or(Path::new("/"));
+    let checkout = root.join(DEFAULT_MODEL);
+    if checkout.is_file() {
+        return Ok(checkout);
+    }
+    Err(Error::Usage(format!(
+        "no --model given, and the default model {DEFAULT_MODEL} is neither in the working \
+         directory nor at {}; give --model PATH",
+        checkout.display()
+    )))
+}
+
 /// One input image's denoising: where its features are and where its result goes.
 struct Job {
     noisy: PathBuf,
@@ -100,12 +126,28 @@ pub fn run(args: Args) -> Result<()> {
             "-o/--out, --alb, --nrm, --emi and --ema need exactly one input image".into(),
         ));
     }
-    let mut denoiser = Denoiser::load(&args.model, args.common.thread_count())?;
-    let model_name = args
-        .model
+    let model = match &args.model {
+        Some(m) => m.clone(),
+        None => default_model(Path::new(env!("CARGO_MANIFEST_DIR")))?,
+    };
+    let mut denoiser = Denoiser::load(&model, args.common.thread_count())?;
+    let model_name = model
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
+    // A feature named for a model that does not take it would be ignored: refused instead.
+    if let Some(f) = Feature::ALL
+        .into_iter()
+        .find(|&f| args.feature(f).is_some() && !denoiser.features().contains(&f))
+    {
+        let takes: Vec<&str> = denoiser.features().iter().map(|f| f.name()).collect();
+        return Err(Error::Usage(format!(
+            "--{0}: the model {1} does not take the {0} feature (it takes {2})",
+            f.name(),
+            model.display(),
+            takes.join(", ")
+        )));
+    }
     let jobs = args
         .noisy
         .iter()
@@ -113,12 +155,15 @@ pub fn run(args: Args) -> Result<()> {
         .collect::<Result<Vec<Job>>>()?;
     // Every input (model, images, features) and every output of the run, checked before
     // anything is written: no output may replace an input or another output.
-    let inputs = std::iter::once(args.model.clone())
-        .chain(jobs.iter().flat_map(|j| j.features.iter().cloned()));
+    let inputs =
+        std::iter::once(model.clone()).chain(jobs.iter().flat_map(|j| j.features.iter().cloned()));
     let outputs = jobs
         .iter()
         .flat_map(|j| std::iter::once(j.out.clone()).chain(j.preview.clone()));
     let mut plan = OutputPlan::new(inputs, outputs)?;
+    if let Some(out) = &args.out {
+        Format::Exr.check(out, "-o/--out")?;
+    }
     for job in &jobs {
         let images = job
             .features
@@ -324,5 +369,34 @@ mod tests {
             (0.03..100.0).contains(&busy),
             "{busy} CPU-s in a 0.3 s busy loop"
         );
+    }
+
+    /// Without --model, the model is the working directory's models/default.onnx (not there in
+    /// a unit test, which runs in crates/denoise) or else the one of the checkout two levels
+    /// above the crate's directory; where neither exists, one usage error names both places.
+    #[test]
+    fn the_default_model_is_found_in_the_checkout_the_program_was_built_from() {
+        assert!(
+            !Path::new(DEFAULT_MODEL).exists(),
+            "the test runs in the crate's directory"
+        );
+        let root = std::env::temp_dir().join(format!("luxest-dn-default-{}", std::process::id()));
+        let crate_dir = root.join("crates/denoise");
+        std::fs::create_dir_all(&crate_dir).unwrap();
+        let e = default_model(&crate_dir).unwrap_err();
+        assert!(matches!(e, Error::Usage(_)));
+        let msg = e.to_string();
+        assert!(msg.contains(DEFAULT_MODEL), "{msg}");
+        assert!(
+            msg.contains(&root.join(DEFAULT_MODEL).display().to_string()),
+            "{msg}"
+        );
+        std::fs::create_dir_all(root.join("models")).unwrap();
+        std::fs::write(root.join(DEFAULT_MODEL), b"onnx").unwrap();
+        assert_eq!(default_model(&crate_dir).unwrap(), root.join(DEFAULT_MODEL));
+        std::fs::remove_dir_all(&root).unwrap();
+        // This build's own checkout has the committed model.
+        let built = default_model(Path::new(env!("CARGO_MANIFEST_DIR"))).unwrap();
+        assert!(built.ends_with(DEFAULT_MODEL) && built.is_file());
     }
 }

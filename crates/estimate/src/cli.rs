@@ -17,7 +17,7 @@ use luxest_io::header;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{self, image_path, Kind, Level};
 use luxest_io::num::{Count, Real};
-use luxest_io::outputs::OutputPlan;
+use luxest_io::outputs::{Format, OutputPlan};
 use luxest_io::sensors::SensorResults;
 use luxest_io::{Error, Result};
 use luxest_render::world::{load_with_camera, Traversal, World};
@@ -51,7 +51,8 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 100_000, value_parser = MAX_DEPTH)]
     pub max_depth: u32,
     /// Sensors on edges or in corners are evaluated this far off the adjacent surfaces, m
-    /// [default: 1e-3 of the room scale, the smallest non-flat side of the bounding box].
+    /// [default: 1e-3 of the room scale, the smallest non-flat side of the bounding box]
+    /// (sensors and gather; estimate direct counts at the authored points).
     #[arg(long, value_parser = Real::positive("m"))]
     pub edge_offset: Option<f64>,
 }
@@ -95,6 +96,12 @@ impl RunArgs {
             )
         });
         let plan = OutputPlan::new([&self.scene], std::iter::once(&out).chain(&self.csv))?;
+        if self.out.is_some() {
+            Format::Ron.check(&out, "-o/--out")?;
+        }
+        if let Some(csv) = &self.csv {
+            Format::Csv.check(csv, "--csv")?;
+        }
         Ok((out, plan))
     }
 
@@ -252,9 +259,9 @@ pub enum Command {
         mis_paths: u32,
         /// Light tracing instead (a baseline): every light-path vertex is connected to the
         /// camera itself, not to the points the pixels see (the local estimate at the camera);
-        /// --pixel-samples, --singularity and --eps do not apply. Scenes whose camera would see
-        /// mirrors or glass are refused.
-        #[arg(long)]
+        /// --mis-paths, --pixel-samples, --singularity and --eps do not apply (refused). Scenes
+        /// whose camera would see mirrors or glass are refused.
+        #[arg(long, conflicts_with_all = ["mis_paths", "pixel_samples", "singularity", "eps"])]
         light_tracing: bool,
     },
     /// Direct simulation baseline: photons counted in disks around the sensor points.
@@ -371,6 +378,7 @@ pub fn run(args: Args) -> Result<()> {
             mis_paths,
             light_tracing,
         } => {
+            check_eps(singularity, eps)?;
             let (world, cam) = load_with_camera(&scene, resolution.as_deref(), Traversal::Robust)?;
             luxest_io::limits::check_image(
                 "image film",
@@ -395,6 +403,15 @@ pub fn run(args: Args) -> Result<()> {
             // All outputs, checked against the scene and each other before the render.
             let outputs = std::iter::once(&out).chain(&stderr_out).chain(&preview);
             let mut plan = OutputPlan::new([&scene], outputs)?;
+            for (path, format, option) in [
+                (Some(&out), Format::Exr, "-o/--out"),
+                (stderr_out.as_ref(), Format::Exr, "--stderr-out"),
+                (preview.as_ref(), Format::Png, "--preview"),
+            ] {
+                if let Some(path) = path {
+                    format.check(path, option)?;
+                }
+            }
             let outputs = ImageOutputs {
                 out: &out,
                 stderr_out: stderr_out.as_deref(),
@@ -441,6 +458,24 @@ pub fn run(args: Args) -> Result<()> {
     }
 }
 
+/// The usage error for `option`, given where it has no effect (`context`): options that would
+/// change nothing are refused rather than ignored, so that a user never believes a setting
+/// was used.
+fn no_effect(option: &str, context: &str) -> Error {
+    Error::Usage(format!("{option} has no effect {context}; leave it out"))
+}
+
+/// `--eps` with `--singularity none`: the raw kernel has no radius to set.
+fn check_eps(singularity: SingularityMode, eps: Option<f64>) -> Result<()> {
+    match (singularity, eps) {
+        (SingularityMode::None, Some(_)) => Err(no_effect(
+            "--eps",
+            "with --singularity none (the raw kernel has no radius)",
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// `estimate sensors`: the local estimate at every sensor point.
 fn sensors(
     run: &RunArgs,
@@ -451,6 +486,13 @@ fn sensors(
     batch_values: bool,
 ) -> Result<()> {
     run.check("--paths", paths)?;
+    check_eps(singularity, eps)?;
+    if near_samples == 0 && near_radius.is_some() {
+        return Err(no_effect(
+            "--near-radius",
+            "with --near-samples 0 (the near-field split is off)",
+        ));
+    }
     let world = load_world(&run.scene)?;
     let (out, mut plan) = run.plan(&world)?;
     let sing = singularity.with_eps(eps.unwrap_or(DEFAULT_EPS_FRACTION * world.room_scale))?;
@@ -481,6 +523,12 @@ fn sensors(
 /// `estimate direct`: the direct-simulation baseline, photons counted in disks.
 fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
     run.check("--paths", paths)?;
+    if run.edge_offset.is_some() {
+        return Err(no_effect(
+            "--edge-offset",
+            "on estimate direct (it counts photons in disks around the authored sensor points)",
+        ));
+    }
     let world = load_world(&run.scene)?;
     crate::sensors::require_planar(&run.scene, &world, "estimate direct")?;
     let (out, mut plan) = run.plan(&world)?;

@@ -7,7 +7,7 @@ use luxest_io::cli::CommonArgs;
 use luxest_io::exr_io::{write_preview_png_to, write_rgb_to};
 use luxest_io::naming::{flip_map_path, preview_path};
 use luxest_io::num::Real;
-use luxest_io::outputs::OutputPlan;
+use luxest_io::outputs::{Format, OutputPlan};
 use luxest_io::{Error, Result};
 use std::path::PathBuf;
 
@@ -97,6 +97,7 @@ pub fn run(args: Args) -> Result<()> {
             let outputs = std::iter::once(out.clone()).chain(ron.clone()).chain(maps);
             let inputs = std::iter::once(&reference).chain(&tests);
             let mut plan = OutputPlan::new(inputs, outputs)?;
+            check_report_formats(Some(&out), ron.as_ref())?;
             let report = score_images(&reference, &tests, |test, map| match &flip_maps {
                 Some(dir) => {
                     let path = flip_map_path(dir, test);
@@ -133,6 +134,7 @@ pub fn run(args: Args) -> Result<()> {
             }
             let inputs = std::iter::once(&results).chain(&scene);
             let mut plan = OutputPlan::new(inputs, out.iter().chain(&ron))?;
+            check_report_formats(out.as_ref(), ron.as_ref())?;
             let report = score_sensors(&results, &case, &sets, scene.as_deref())?;
             if let Some(out) = &out {
                 report.write_csv_to(&mut plan, out)?;
@@ -156,4 +158,16 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
+}
+
+/// The report files' endings, checked after the output plan (which refuses an input or a
+/// non-regular file first): -o a CSV table, --ron a RON document.
+fn check_report_formats(csv: Option<&PathBuf>, ron: Option<&PathBuf>) -> Result<()> {
+    if let Some(c) = csv {
+        Format::Csv.check(c, "-o/--out")?;
+    }
+    if let Some(r) = ron {
+        Format::Ron.check(r, "--ron")?;
+    }
+    Ok(())
 }

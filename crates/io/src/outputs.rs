@@ -139,6 +139,98 @@ pub fn path_component<'a>(value: &'a str, source: &Path, field: &str) -> Result<
     }
 }
 
+/// The formats a stage writes to a file the user names, each with the one file-name ending that
+/// names it. A stage checks every such path with [`Format::check`] before it does any work, so
+/// that `-o x.png` on a stage that writes OpenEXR is refused instead of producing an EXR named
+/// `.png` (which viewers and the next stage would misread).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// An OpenEXR image (f32, ZIP scanlines).
+    Exr,
+    /// An 8-bit sRGB PNG image.
+    Png,
+    /// A RON document.
+    Ron,
+    /// A CSV table.
+    Csv,
+    /// A compiled scene.
+    Lxs,
+}
+
+impl Format {
+    /// Every format, for the prefix check.
+    pub const ALL: [Format; 5] = [
+        Format::Exr,
+        Format::Png,
+        Format::Ron,
+        Format::Csv,
+        Format::Lxs,
+    ];
+
+    /// The file-name ending, with its dot.
+    pub fn ending(self) -> &'static str {
+        match self {
+            Format::Exr => ".exr",
+            Format::Png => ".png",
+            Format::Ron => ".ron",
+            Format::Csv => ".csv",
+            Format::Lxs => ".lxs",
+        }
+    }
+
+    /// What a file of this format is, for messages.
+    pub fn description(self) -> &'static str {
+        match self {
+            Format::Exr => "an OpenEXR image",
+            Format::Png => "a PNG image",
+            Format::Ron => "a RON document",
+            Format::Csv => "a CSV table",
+            Format::Lxs => "a compiled scene",
+        }
+    }
+
+    /// The format whose ending `path`'s file name has (ASCII case ignored), if any.
+    pub fn of(path: &Path) -> Option<Format> {
+        let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
+        Format::ALL
+            .into_iter()
+            .find(|f| name.len() > f.ending().len() && name.ends_with(f.ending()))
+    }
+
+    /// Refuses `path`, given with the command-line `option`, unless its file name ends with this
+    /// format's ending (ASCII case ignored): a usage error naming the option, the path and the
+    /// format written.
+    pub fn check(self, path: &Path, option: &str) -> Result<()> {
+        if Format::of(path) == Some(self) {
+            return Ok(());
+        }
+        Err(Error::Usage(format!(
+            "{option} {}: this writes {}; name the file *{}",
+            path.display(),
+            self.description(),
+            self.ending()
+        )))
+    }
+}
+
+/// Refuses an output *prefix* (given with `option`; the stage appends `_<level>.<kind>.exr`, and
+/// `example` is such a file name) that has no file-name part (`..`, `/`) or
+/// whose file name already ends like a file of one of the [`Format`]s: `-o out/img.exr` would
+/// write `out/img.exr_000016spp.hdr.exr`, not what the user asked for.
+pub fn check_prefix(prefix: &Path, option: &str, example: &Path) -> Result<()> {
+    let problem = match (prefix.file_name(), Format::of(prefix)) {
+        (None, _) => "has no file-name part to prefix the file names with".to_string(),
+        (Some(_), Some(f)) => format!("ends in {}", f.ending()),
+        (Some(_), None) => return Ok(()),
+    };
+    Err(Error::Usage(format!(
+        "{option} {}: {problem}, but it is a prefix (of file names such as {}); give a prefix \
+         such as out/img",
+        prefix.display(),
+        example.display()
+    )))
+}
+
 /// A temporary written and waiting for [`OutputPlan::commit`].
 #[derive(Debug)]
 struct Staged {
@@ -422,6 +514,54 @@ mod tests {
         fn drop(&mut self) {
             let _ = std::fs::remove_dir_all(&self.0);
         }
+    }
+
+    #[test]
+    fn a_format_is_named_by_its_ending_alone() {
+        let of = |p: &str| Format::of(Path::new(p));
+        assert_eq!(of("out/img.exr"), Some(Format::Exr));
+        assert_eq!(of("IMG.EXR"), Some(Format::Exr), "ASCII case is ignored");
+        assert_eq!(of("a_000016spp.hdr.exr"), Some(Format::Exr));
+        assert_eq!(of("x.sensors.ron"), Some(Format::Ron));
+        assert_eq!(of("t.csv"), Some(Format::Csv));
+        assert_eq!(of("build/a/scene.lxs"), Some(Format::Lxs));
+        assert_eq!(of("p.png"), Some(Format::Png));
+        // The ending alone is a hidden file's name, not a format; nor are near misses.
+        for p in [".exr", "x.exr.bak", "xexr", "x.ex", "out/", "..", "/"] {
+            assert_eq!(of(p), None, "{p}");
+        }
+        assert!(Format::Exr.check(Path::new("a/b.Exr"), "-o").is_ok());
+        let e = Format::Png
+            .check(Path::new("p.exr"), "--preview")
+            .unwrap_err();
+        assert!(matches!(e, Error::Usage(_)));
+        assert_eq!(
+            e.to_string(),
+            "--preview p.exr: this writes a PNG image; name the file *.png"
+        );
+        let e = Format::Csv
+            .check(Path::new("report"), "-o/--out")
+            .unwrap_err();
+        assert!(
+            e.to_string().ends_with("a CSV table; name the file *.csv"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_prefix_must_not_end_like_a_file() {
+        let example = Path::new("x_000001spp.hdr.exr");
+        assert!(check_prefix(Path::new("out/img"), "-o", example).is_ok());
+        assert!(check_prefix(Path::new("out/img.v2"), "-o", example).is_ok());
+        let e = check_prefix(Path::new("out/img.EXR"), "-o", example).unwrap_err();
+        assert!(matches!(e, Error::Usage(_)));
+        assert_eq!(
+            e.to_string(),
+            "-o out/img.EXR: ends in .exr, but it is a prefix (of file names such as \
+             x_000001spp.hdr.exr); give a prefix such as out/img"
+        );
+        let e = check_prefix(Path::new("a/.."), "-o", example).unwrap_err();
+        assert!(e.to_string().contains("has no file-name part"), "{e}");
     }
 
     fn err(r: Result<OutputPlan>) -> String {

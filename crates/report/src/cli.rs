@@ -31,7 +31,7 @@ pub struct Args {
     #[arg(long)]
     pub peer: Option<PathBuf>,
     /// Fail (exit 1, after writing the report) if any point disagrees with the peer.
-    #[arg(long)]
+    #[arg(long, requires = "peer")]
     pub require_peer_agreement: bool,
 }
 
@@ -127,6 +127,20 @@ pub fn run(args: Args) -> Result<()> {
             None => None,
         };
         computed.push((stats, method, comparison));
+    }
+    if let Some((path, _)) = &peer {
+        // A peer file that matches no surface compares nothing: the wrong file, most likely.
+        if computed.iter().all(|(_, _, c)| c.is_none()) {
+            let sets: Vec<&str> = surfaces.iter().map(|s| s.name.as_str()).collect();
+            return Err(luxest_io::Error::input(
+                path,
+                format!(
+                    "has no point of any surface of {} (sets {}); is it another scene's?",
+                    args.results.display(),
+                    sets.join(", ")
+                ),
+            ));
+        }
     }
 
     let reports: Vec<SurfaceReport> = surfaces

@@ -4,7 +4,7 @@
 use crate::{compile, referenced_files, scene_name};
 use clap::Parser;
 use luxest_io::fsio::{read_ron, to_ron_string};
-use luxest_io::outputs::{path_component, OutputPlan};
+use luxest_io::outputs::{path_component, Format, OutputPlan};
 use luxest_io::Result;
 use luxest_render::compiled::CompiledScene;
 use luxest_render::scene::Scene;
@@ -16,14 +16,14 @@ use std::path::{Path, PathBuf};
 pub struct Args {
     /// The authored scene (.ron), or with --info a compiled scene.
     pub input: PathBuf,
-    /// Output file [default: build/<scene name>/scene.lxs].
-    #[arg(short, long)]
+    /// Output file, *.lxs [default: build/<scene name>/scene.lxs].
+    #[arg(short, long, conflicts_with = "check")]
     pub out: Option<PathBuf>,
     /// Validate and load everything, print the summary, write nothing.
     #[arg(long)]
     pub check: bool,
     /// Print the header (features manifest, emitters, sensors, stats) of a compiled scene.
-    #[arg(long, conflicts_with_all = ["out", "check"])]
+    #[arg(long, conflicts_with_all = ["out", "check", "export_mitsuba"])]
     pub info: bool,
     /// No warnings or summary on stderr.
     #[arg(short, long)]
@@ -60,6 +60,9 @@ pub fn run(args: Args) -> Result<()> {
         .collect();
     let outputs = if args.check { None } else { Some(&out) };
     let mut plan = OutputPlan::new(&inputs, outputs)?;
+    if let Some(o) = &args.out {
+        Format::Lxs.check(o, "-o/--out")?;
+    }
     let (mut scene, report) = compile(&authored, &args.input)?;
     if !args.quiet {
         for w in &report.warnings {

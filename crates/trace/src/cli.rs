@@ -9,7 +9,7 @@ use luxest_io::cli::CommonArgs;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{image_path, Kind, Level};
 use luxest_io::num::{Count, Real};
-use luxest_io::outputs::OutputPlan;
+use luxest_io::outputs::{check_prefix, Format, OutputPlan};
 use luxest_io::{Error, Result};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -82,6 +82,13 @@ pub fn run(args: Args) -> Result<()> {
             )));
         }
     }
+    if let Some(out) = &args.out {
+        let level = match (args.reference, args.spp) {
+            (true, _) => Level::Reference,
+            (false, spp) => Level::Spp(spp.unwrap_or(1) as u64),
+        };
+        check_prefix(out, "-o/--out", &image_path(out, level, Kind::Hdr))?;
+    }
     let (world, camera) = crate::load(&args.scene, args.resolution.as_deref())?;
     let prefix = args
         .out
@@ -114,6 +121,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     outputs.extend(args.preview.clone());
     let mut plan = OutputPlan::new([&args.scene], &outputs)?;
+    if let Some(preview) = &args.preview {
+        Format::Png.check(preview, "--preview")?;
+    }
     let renderer = Renderer::new(
         &world,
         camera,
