@@ -16,8 +16,8 @@
 # images at EVAL_DATA_DLE paths, denoised with the NOISY_MAX features. (3) The cases of `make validate` at EVAL_SENSOR_SCALE times
 # their paths, against exact values. Every image luxest's model denoises in (1) and (2) is also
 # denoised by Intel Open Image Denoise 1.4.3 (the peer; hdr + albedo + normal), scored beside it.
-# The denoising rules name the emission images (aov-write's emi and ema) too: a model trained
-# with them takes them (denoise reads only the features a model's metadata lists).
+# A local-estimate image is denoised with the features of a path-traced level (denoise
+# --features-of): denoise reads from there the features its model's metadata lists.
 
 EVAL_DIR := build/eval/$(PRESET)
 EVAL_MODEL ?= $(MODEL)
@@ -71,7 +71,7 @@ $(call lx_le_pattern,$(EVAL_CB_LT),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
 	$(ESTIMATE) image $< --light-tracing --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
 
 $(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_features,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP)) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
-	$(DENOISE) $< --model $(EVAL_MODEL) $(call lx_feature_flags,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP)) -o $@
+	$(DENOISE) $< --model $(EVAL_MODEL) --features-of $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),hdr) -o $@
 
 # Intel Open Image Denoise, the peer, on the same inputs (pipelines/oidn_denoise.py): in an oidn/
 # directory beside them, the scene's name suffixed `-oidn` (the FLIP maps share one directory).
@@ -126,7 +126,7 @@ $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr): build/dataset/$(DATASET)/test/$(1).lx
 	$$(ESTIMATE) image $$< --paths $$* --seed $(NOISY_SEED) -o $$@
 
 $(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_features,$(EVAL_DATA)/$(1),$(NOISY_MAX)) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
-	$$(DENOISE) $$< --model $(EVAL_MODEL) $(call lx_feature_flags,$(EVAL_DATA)/$(1),$(NOISY_MAX)) -o $$@
+	$$(DENOISE) $$< --model $(EVAL_MODEL) --features-of $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),hdr) -o $$@
 
 $(call lx_image_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) pipelines/oidn_denoise.py
 	@mkdir -p $$(@D)

@@ -24,7 +24,5 @@ lx_le_pattern = $(1)_%le.$(2).exr
 # that kind and a `denoise --<kind>` option (python/luxest_contract.py FEATURES without hdr;
 # training/tests/test_contract.py checks). aov-write writes its normal image last.
 LX_FEATURES := alb nrm emi ema
-# $(call lx_features,PREFIX,64): the feature images of a level, in that order;
-# $(call lx_feature_flags,PREFIX,64): `--alb PREFIX_000064spp.alb.exr --nrm ...` for denoise.
+# $(call lx_features,PREFIX,64): the feature images of a level, in that order.
 lx_features = $(foreach k,$(LX_FEATURES),$(call lx_image,$(1),$(2),$(k)))
-lx_feature_flags = $(foreach k,$(LX_FEATURES),--$(k) $(call lx_image,$(1),$(2),$(k)))

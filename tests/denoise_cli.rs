@@ -357,3 +357,82 @@ fn the_emission_model_returns_the_emitters_unfiltered() {
         assert!(max_relative_difference(&plain, &emi) > 1e-3);
     }
 }
+
+/// `--features-of IMG.hdr.exr` takes the features a model needs from beside another image
+/// name (how make eval denoises a local-estimate image with a path-traced level's features):
+/// the same result as naming each of them, for a model that takes three features as for one
+/// that takes five, with all five images there (a model does not read what it does not take).
+#[test]
+fn features_of_another_image_are_the_ones_the_model_takes() {
+    let dir = TempDir::new("dn-features-of");
+    let all = ["hdr", "alb", "nrm", "emi", "ema"];
+    let features_of = copy_features(&dir, "odd_000004spp", &all);
+    // The image to denoise, named as a local-estimate image, with no features beside it.
+    let le = dir.path().join("odd_000300le.hdr.exr");
+    std::fs::copy(&features_of, &le).unwrap();
+    for (model_name, _, features) in [MODELS[0], MODELS[4]] {
+        let model = fixture(model_name);
+        let via = dir.path().join(format!("{model_name}.via.exr"));
+        let named = dir.path().join(format!("{model_name}.named.exr"));
+        run(&[
+            s(&le),
+            "--model",
+            s(&model),
+            "--features-of",
+            s(&features_of),
+            "-o",
+            s(&via),
+        ])
+        .unwrap();
+        let mut args = vec![s(&le), "--model", s(&model), "-o", s(&named)];
+        let paths: Vec<String> = features[1..]
+            .iter()
+            .map(|f| format!("{}/odd_000004spp.{f}.exr", dir.path().display()))
+            .collect();
+        let flags: Vec<String> = features[1..].iter().map(|f| format!("--{f}")).collect();
+        for (flag, path) in flags.iter().zip(&paths) {
+            args.extend([flag.as_str(), path.as_str()]);
+        }
+        run(&args).unwrap();
+        let (via_image, named_image) = (read_rgb(&via).unwrap(), read_rgb(&named).unwrap());
+        assert_eq!(via_image.pixels, named_image.pixels, "{model_name}");
+        // Without them the local-estimate image has no features: the option is what finds them.
+        let (code, msg) = run(&[s(&le), "--model", s(&model), "-o", s(&named)]).unwrap_err();
+        assert_eq!(code, 1, "{msg}");
+        assert!(msg.contains("missing alb feature image"), "{msg}");
+    }
+    let model = fixture("tiny.onnx");
+    for (args, want) in [
+        (
+            vec![
+                s(&le),
+                "--model",
+                s(&model),
+                "--features-of",
+                s(&le),
+                "--alb",
+                s(&le),
+            ],
+            "cannot be used with",
+        ),
+        (
+            vec![
+                s(&le),
+                s(&le),
+                "--model",
+                s(&model),
+                "--features-of",
+                s(&features_of),
+            ],
+            "exactly one input image",
+        ),
+        (
+            vec![s(&le), "--model", s(&model), "--features-of", "x.exr"],
+            "--features-of x.exr: name an image <img>.hdr.exr",
+        ),
+    ] {
+        let (code, msg) = run(&args).unwrap_err();
+        assert_eq!(code, 2, "{args:?}: {msg}");
+        assert!(msg.contains(want), "{args:?}: {msg}");
+    }
+}

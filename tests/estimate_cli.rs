@@ -254,6 +254,16 @@ fn options_without_effect_are_refused() {
             with(&direct, &["--bin-radius", "0.1", "--edge-offset", "0.01"]),
             "--edge-offset has no effect on estimate direct",
         ),
+        // The scene has no mirrors or glass: with light tracing on (--mis-paths above 0, the
+        // default) the kernel's treatment is used nowhere.
+        (
+            with(&image, &["--singularity", "ball"]),
+            "--singularity/--eps has no effect with --mis-paths above 0 in",
+        ),
+        (
+            with(&image, &["--eps", "0.01", "--mis-paths", "5"]),
+            "it has no mirrors or glass",
+        ),
     ];
     for extra in [
         ["--mis-paths", "3"],
@@ -283,6 +293,11 @@ fn options_without_effect_are_refused() {
     .unwrap();
     run(&with(&direct, &["--bin-radius", "0.1"])).unwrap();
     run(&with(&image, &["--light-tracing"])).unwrap();
+    run(&with(
+        &image,
+        &["--singularity", "ball", "--eps", "0.01", "--mis-paths", "0"],
+    ))
+    .unwrap();
 }
 
 #[test]
@@ -290,6 +305,9 @@ fn double_local_estimate_image_matches_the_exact_luminance() {
     // Camera at the source looking straight down at plane 1: each pixel sees a Lambertian
     // point whose luminance is rho1/pi * E1(r) exactly. Per-pixel z-test with the image's own
     // standard error (direct light is exact, so the error is that of the reflected part).
+    // The plain estimate (--mis-paths 0) with the raw kernel: plane 2's collisions are at
+    // least h1 + h2 from plane 1's points and plane 1's own contribute nothing (cos = 0), so
+    // the kernel is bounded here.
     let dir = TempDir::new("dle");
     let scene = compile_text(&dir, "sob", SOBOLEV);
     let out = dir.path().join("sob_004000le.hdr.exr");
@@ -305,6 +323,8 @@ fn double_local_estimate_image_matches_the_exact_luminance() {
         "4000",
         "--singularity",
         "none",
+        "--mis-paths",
+        "0",
         "--pixel-samples",
         "16",
     ])

@@ -277,5 +277,16 @@ fn bad_input_gives_one_line_errors_and_no_report() {
         2,
         &["cube"],
     );
-    assert!(!out.exists());
+    // The report files must end like what is written there, checked before the results are
+    // read (these are malformed: the ending's usage error comes first).
+    let ron = dir.path().join("r.ron");
+    for (flag, path, want) in [("-o", &ron, "-o/--out"), ("--ron", &out, "--ron")] {
+        let args = ["sensors", s(&sensors), "--case", "cube", flag, s(path)];
+        check(
+            &args,
+            2,
+            &[&format!("{want} {}: this writes", path.display())],
+        );
+    }
+    assert!(!out.exists() && !ron.exists());
 }

@@ -153,14 +153,14 @@ def test_make_composes_the_same_names():
 
 
 def test_make_lists_the_same_features():
-    """pipelines/naming.mk's LX_FEATURES (what make eval passes to denoise) are the contract's
-    features beside hdr, in the same order; lx_feature_flags names each with its option."""
-    calls = "$(info $(LX_FEATURES))$(info $(call lx_feature_flags,p,4))"
+    """pipelines/naming.mk's LX_FEATURES (the feature images make's rules depend on) are the
+    contract's features beside hdr, in the same order; lx_features names each image."""
+    calls = "$(info $(LX_FEATURES))$(info $(call lx_features,p,4))"
     out = subprocess.run(["make", "--no-print-directory", "-f", str(ROOT / "pipelines/naming.mk"), "-f", "-",
                           "all"], input=f"{calls}\nall: ;@:\n", capture_output=True, text=True, check=True).stdout
     features, flags = out.splitlines()
     assert ["hdr"] + features.split() == list(contract.FEATURES)
-    assert flags.split() == [w for f in contract.FEATURES[1:] for w in (f"--{f}", contract.image_name("p", f, 4))]
+    assert flags.split() == [contract.image_name("p", f, 4) for f in contract.FEATURES[1:]]
 
 
 def test_rust_header_reads_to_the_recorded_values():

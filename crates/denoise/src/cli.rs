@@ -52,6 +52,12 @@ pub struct Args {
     /// <img>.ema.exr].
     #[arg(long)]
     pub ema: Option<PathBuf>,
+    /// Take whichever feature images the model needs from beside this name instead of the
+    /// input's (`<img>.alb.exr`, ... for `<img>.hdr.exr`, which need not exist): a
+    /// local-estimate image is denoised with a path-traced level's features this way (only
+    /// with one input; not with --alb, --nrm, --emi, --ema).
+    #[arg(long, value_name = "IMG.hdr.exr", conflicts_with_all = ["alb", "nrm", "emi", "ema"])]
+    pub features_of: Option<PathBuf>,
     /// Tile core size in pixels (a multiple of 16); larger images are denoised in tiles.
     #[arg(long, default_value_t = Tiling::default().tile)]
     pub tile: usize,
@@ -83,13 +89,13 @@ impl Args {
 /// The model file's path relative to a luxest checkout (and to the working directory).
 pub const DEFAULT_MODEL: &str = "models/default.onnx";
 
-/// The model used without --model: [`DEFAULT_MODEL`] in the working directory if it is there
-/// (the Makefile's and the README's commands run in the checkout), else in the checkout whose
-/// crate `crates/denoise` is at `crate_dir` (the one this program was built from, so that
-/// `target/release/denoise img.hdr.exr` works from any directory). A usage error naming both
-/// places when neither has it.
-pub fn default_model(crate_dir: &Path) -> Result<PathBuf> {
-    let here = PathBuf::from(DEFAULT_MODEL);
+/// The model used without --model: [`DEFAULT_MODEL`] in `working_dir` (the process's: `""`)
+/// if it is there (the Makefile's and the README's commands run in the checkout), else in the
+/// checkout whose crate `crates/denoise` is at `crate_dir` (the one this program was built
+/// from, so that `target/release/denoise img.hdr.exr` works from any directory). A usage error
+/// naming both places when neither has it.
+pub fn default_model(working_dir: &Path, crate_dir: &Path) -> Result<PathBuf> {
+    let here = working_dir.join(DEFAULT_MODEL);
     if here.is_file() {
         return Ok(here);
     }
@@ -121,14 +127,24 @@ pub fn run(args: Args) -> Result<()> {
     };
     tiling.validate()?;
     let single = args.noisy.len() == 1;
-    if !single && (args.out.is_some() || Feature::ALL.iter().any(|&f| args.feature(f).is_some())) {
+    let per_image = args.out.is_some() || args.features_of.is_some();
+    if !single && (per_image || Feature::ALL.iter().any(|&f| args.feature(f).is_some())) {
         return Err(Error::Usage(
-            "-o/--out, --alb, --nrm, --emi and --ema need exactly one input image".into(),
+            "-o/--out, --alb, --nrm, --emi, --ema and --features-of need exactly one input image"
+                .into(),
         ));
+    }
+    if let Some(of) = &args.features_of {
+        if feature_path(of, Feature::Alb).is_none() {
+            return Err(Error::Usage(format!(
+                "--features-of {}: name an image <img>.hdr.exr whose features sit beside it",
+                of.display()
+            )));
+        }
     }
     let model = match &args.model {
         Some(m) => m.clone(),
-        None => default_model(Path::new(env!("CARGO_MANIFEST_DIR")))?,
+        None => default_model(Path::new(""), Path::new(env!("CARGO_MANIFEST_DIR")))?,
     };
     let mut denoiser = Denoiser::load(&model, args.common.thread_count())?;
     let model_name = model
@@ -300,7 +316,7 @@ fn job(args: &Args, denoiser: &Denoiser, model_name: &str, noisy: &Path) -> Resu
             _ => args
                 .feature(feature)
                 .cloned()
-                .or_else(|| feature_path(noisy, feature)),
+                .or_else(|| feature_path(args.features_of.as_deref().unwrap_or(noisy), feature)),
         };
         let path = path.ok_or_else(|| {
             Error::input(
@@ -371,19 +387,24 @@ mod tests {
         );
     }
 
-    /// Without --model, the model is the working directory's models/default.onnx (not there in
-    /// a unit test, which runs in crates/denoise) or else the one of the checkout two levels
-    /// above the crate's directory; where neither exists, one usage error names both places.
+    /// Without --model, the model is the working directory's models/default.onnx or else the
+    /// one of the checkout two levels above the crate's directory, in that order; where
+    /// neither exists, one usage error names both places.
     #[test]
     fn the_default_model_is_found_in_the_checkout_the_program_was_built_from() {
-        assert!(
-            !Path::new(DEFAULT_MODEL).exists(),
-            "the test runs in the crate's directory"
-        );
-        let root = std::env::temp_dir().join(format!("luxest-dn-default-{}", std::process::id()));
+        struct Temp(PathBuf);
+        impl Drop for Temp {
+            fn drop(&mut self) {
+                let _ = std::fs::remove_dir_all(&self.0);
+            }
+        }
+        let tmp =
+            Temp(std::env::temp_dir().join(format!("luxest-dn-default-{}", std::process::id())));
+        let (cwd, root) = (tmp.0.join("cwd"), tmp.0.join("checkout"));
         let crate_dir = root.join("crates/denoise");
         std::fs::create_dir_all(&crate_dir).unwrap();
-        let e = default_model(&crate_dir).unwrap_err();
+        std::fs::create_dir_all(&cwd).unwrap();
+        let e = default_model(&cwd, &crate_dir).unwrap_err();
         assert!(matches!(e, Error::Usage(_)));
         let msg = e.to_string();
         assert!(msg.contains(DEFAULT_MODEL), "{msg}");
@@ -391,12 +412,23 @@ mod tests {
             msg.contains(&root.join(DEFAULT_MODEL).display().to_string()),
             "{msg}"
         );
-        std::fs::create_dir_all(root.join("models")).unwrap();
-        std::fs::write(root.join(DEFAULT_MODEL), b"onnx").unwrap();
-        assert_eq!(default_model(&crate_dir).unwrap(), root.join(DEFAULT_MODEL));
-        std::fs::remove_dir_all(&root).unwrap();
-        // This build's own checkout has the committed model.
-        let built = default_model(Path::new(env!("CARGO_MANIFEST_DIR"))).unwrap();
-        assert!(built.ends_with(DEFAULT_MODEL) && built.is_file());
+        for dir in [&root, &cwd] {
+            std::fs::create_dir_all(dir.join("models")).unwrap();
+            std::fs::write(dir.join(DEFAULT_MODEL), b"onnx").unwrap();
+        }
+        // Both have one: the working directory's wins; without it, the checkout's.
+        assert_eq!(
+            default_model(&cwd, &crate_dir).unwrap(),
+            cwd.join(DEFAULT_MODEL)
+        );
+        std::fs::remove_file(cwd.join(DEFAULT_MODEL)).unwrap();
+        assert_eq!(
+            default_model(&cwd, &crate_dir).unwrap(),
+            root.join(DEFAULT_MODEL)
+        );
+        // This build's own checkout has the committed model (the test runs in crates/denoise,
+        // which has none).
+        let built = default_model(Path::new(""), Path::new(env!("CARGO_MANIFEST_DIR"))).unwrap();
+        assert!(built.is_absolute() && built.ends_with(DEFAULT_MODEL) && built.is_file());
     }
 }

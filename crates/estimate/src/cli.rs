@@ -240,9 +240,11 @@ pub enum Command {
         #[arg(long)]
         resolution: Option<String>,
         /// The kernel singularity's treatment where light tracing cannot take over: at points
-        /// seen through mirrors or glass, and everywhere with --mis-paths 0.
-        #[arg(long, value_enum, default_value_t = SingularityMode::Clamp)]
-        singularity: SingularityMode,
+        /// seen through mirrors or glass, and everywhere with --mis-paths 0 [default: clamp]
+        /// (with --mis-paths above 0 in a scene without mirrors or glass it has no effect and
+        /// is refused, as is --eps).
+        #[arg(long, value_enum)]
+        singularity: Option<SingularityMode>,
         /// Regularisation radius in m [default: 1e-2 of the room scale].
         #[arg(long, value_parser = LENGTH)]
         eps: Option<f64>,
@@ -378,8 +380,21 @@ pub fn run(args: Args) -> Result<()> {
             mis_paths,
             light_tracing,
         } => {
+            let explicit = singularity.is_some() || eps.is_some();
+            let singularity = singularity.unwrap_or(SingularityMode::Clamp);
             check_eps(singularity, eps)?;
             let (world, cam) = load_with_camera(&scene, resolution.as_deref(), Traversal::Robust)?;
+            if explicit && mis_paths > 0 && !world.scene.header.features.specular_paths {
+                return Err(no_effect(
+                    "--singularity/--eps",
+                    &format!(
+                        "with --mis-paths above 0 in {}: it has no mirrors or glass, so light \
+                         tracing takes over at every point the camera sees (--mis-paths 0 gives \
+                         the plain estimate that uses them)",
+                        scene.display()
+                    ),
+                ));
+            }
             luxest_io::limits::check_image(
                 "image film",
                 cam.width.into(),

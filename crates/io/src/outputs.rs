@@ -214,14 +214,19 @@ impl Format {
 }
 
 /// Refuses an output *prefix* (given with `option`; the stage appends `_<level>.<kind>.exr`, and
-/// `example` is such a file name) that has no file-name part (`..`, `/`) or
-/// whose file name already ends like a file of one of the [`Format`]s: `-o out/img.exr` would
-/// write `out/img.exr_000016spp.hdr.exr`, not what the user asked for.
+/// `example` is such a file name) that has no file-name part (`..`, `/`), names a directory
+/// (`out/`, or an existing one: `-o out/` wrote `out_000016spp.hdr.exr` beside `out`, not in
+/// it) or whose file name already ends like a file of one of the [`Format`]s (`-o out/img.exr`
+/// would write `out/img.exr_000016spp.hdr.exr`): none is what the user asked for.
 pub fn check_prefix(prefix: &Path, option: &str, example: &Path) -> Result<()> {
-    let problem = match (prefix.file_name(), Format::of(prefix)) {
-        (None, _) => "has no file-name part to prefix the file names with".to_string(),
-        (Some(_), Some(f)) => format!("ends in {}", f.ending()),
-        (Some(_), None) => return Ok(()),
+    let problem = if prefix.file_name().is_none() {
+        "has no file-name part to prefix the file names with".to_string()
+    } else if prefix.to_string_lossy().ends_with('/') || prefix.is_dir() {
+        "names a directory".to_string()
+    } else if let Some(f) = Format::of(prefix) {
+        format!("ends in {}", f.ending())
+    } else {
+        return Ok(());
     };
     Err(Error::Usage(format!(
         "{option} {}: {problem}, but it is a prefix (of file names such as {}); give a prefix \
@@ -245,6 +250,9 @@ pub struct OutputPlan {
     inputs: Vec<(PathBuf, Identity)>,
     outputs: Vec<(PathBuf, Identity)>,
     staged: Vec<Staged>,
+    /// Directories this plan created for outputs not yet committed, outermost first: removed
+    /// again (when empty) if the run fails, so that a failed run leaves no empty folders.
+    made_dirs: Vec<PathBuf>,
 }
 
 /// Inode identity printed as "the same file as".
@@ -275,6 +283,7 @@ impl OutputPlan {
             inputs,
             outputs: Vec::new(),
             staged: Vec::new(),
+            made_dirs: Vec::new(),
         };
         for out in outputs {
             plan.add_output(out.as_ref())?;
@@ -364,7 +373,16 @@ impl OutputPlan {
             ));
         }
         if let Some(dir) = dest.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+            let mut missing: Vec<PathBuf> = dir
+                .ancestors()
+                .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
+                .map(Path::to_path_buf)
+                .collect();
+            missing.reverse();
+            let made = std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e));
+            // Recorded even on failure: whatever part of the chain was made is removed again.
+            self.made_dirs.extend(missing);
+            made?;
         }
         let temp = temporary_for(&dest);
         let result = (|| {
@@ -406,6 +424,8 @@ impl OutputPlan {
             }
         }
         let staged = std::mem::take(&mut self.staged);
+        // The directories now hold (or are about to hold) the committed outputs.
+        let made = std::mem::take(&mut self.made_dirs);
         let mut result = Ok(());
         for s in &staged {
             if result.is_ok() {
@@ -415,6 +435,11 @@ impl OutputPlan {
                 let _ = std::fs::remove_file(&s.temp);
             }
         }
+        if result.is_err() {
+            // Nothing of this commit may stay behind: its folders go too, where empty.
+            self.made_dirs = made;
+            self.discard();
+        }
         result
     }
 
@@ -422,6 +447,11 @@ impl OutputPlan {
     fn discard(&mut self) {
         for s in self.staged.drain(..) {
             let _ = std::fs::remove_file(&s.temp);
+        }
+        // Innermost first; a directory that holds anything (a committed output, a user's
+        // file written meanwhile) stays.
+        for dir in self.made_dirs.drain(..).rev() {
+            let _ = std::fs::remove_dir(&dir);
         }
     }
 }
@@ -562,6 +592,10 @@ mod tests {
         );
         let e = check_prefix(Path::new("a/.."), "-o", example).unwrap_err();
         assert!(e.to_string().contains("has no file-name part"), "{e}");
+        for dir in [PathBuf::from("out/"), std::env::temp_dir()] {
+            let e = check_prefix(&dir, "-o", example).unwrap_err();
+            assert!(e.to_string().contains(": names a directory, but"), "{e}");
+        }
     }
 
     fn err(r: Result<OutputPlan>) -> String {
@@ -687,6 +721,50 @@ mod tests {
         // An undeclared output is refused.
         let mut plan = OutputPlan::new(Vec::<PathBuf>::new(), [&a]).unwrap();
         assert!(plan.write_bytes(&d.0.join("c"), b"x").is_err());
+    }
+
+    #[test]
+    fn a_failed_run_leaves_no_folders_it_made() {
+        let d = Dir::new("folders");
+        let (a, b) = (d.0.join("new/deeper/a.ron"), d.0.join("kept/b.csv"));
+        std::fs::create_dir(d.0.join("kept")).unwrap();
+        {
+            let mut plan = OutputPlan::new(Vec::<PathBuf>::new(), [&a, &b]).unwrap();
+            plan.write_bytes(&a, b"first").unwrap();
+            assert!(d.0.join("new/deeper").is_dir());
+            let r = plan.write(&b, |_| Err(Error::input(&b, "simulated failure")));
+            assert!(r.is_err());
+        }
+        // The folders the plan made are gone; the one that was there stays.
+        assert_eq!(d.files(), vec!["kept"]);
+        assert_eq!(std::fs::read_dir(d.0.join("kept")).unwrap().count(), 0);
+        // A committed run keeps its folders, also when a later plan into them fails.
+        let mut plan = OutputPlan::new(Vec::<PathBuf>::new(), [&a]).unwrap();
+        plan.write_bytes(&a, b"first").unwrap();
+        plan.commit().unwrap();
+        let c = d.0.join("new/deeper/c.ron");
+        let mut plan = OutputPlan::new(Vec::<PathBuf>::new(), [&c]).unwrap();
+        assert!(plan
+            .write(&c, |_| Err(Error::input(&c, "simulated failure")))
+            .is_err());
+        drop(plan);
+        assert_eq!(std::fs::read(&a).unwrap(), b"first");
+        // A commit refused (a target became a FIFO meanwhile) removes the folders it made
+        // where they are empty; this one holds the FIFO, a file not the run's, and stays.
+        let e = d.0.join("other/e.ron");
+        let mut plan = OutputPlan::new(Vec::<PathBuf>::new(), [&e]).unwrap();
+        plan.write_bytes(&e, b"x").unwrap();
+        let f = d.0.join("other2/f.ron");
+        let mut plan2 = OutputPlan::new(Vec::<PathBuf>::new(), [&f]).unwrap();
+        plan2.write_bytes(&f, b"x").unwrap();
+        std::fs::create_dir(&f).unwrap();
+        assert!(plan2.commit().is_err());
+        assert!(d.0.join("other2/f.ron").is_dir(), "the user's entry stays");
+        drop(plan);
+        assert!(
+            !d.0.join("other").exists(),
+            "the uncommitted plan's folder is gone"
+        );
     }
 
     #[test]

@@ -59,7 +59,12 @@ pub fn run(args: Args) -> Result<()> {
     };
     let surfaces = input::surfaces(&args.results, &results)?;
     let peer = match &args.peer {
-        Some(p) => Some((p, peer::read(p)?)),
+        Some(p) => {
+            let read = peer::read(p)?;
+            let names: Vec<&str> = surfaces.iter().map(|s| s.name.as_str()).collect();
+            peer::check_sets(p, &read, &names, &args.results)?;
+            Some((p, read))
+        }
         None => None,
     };
 
@@ -127,20 +132,6 @@ pub fn run(args: Args) -> Result<()> {
             None => None,
         };
         computed.push((stats, method, comparison));
-    }
-    if let Some((path, _)) = &peer {
-        // A peer file that matches no surface compares nothing: the wrong file, most likely.
-        if computed.iter().all(|(_, _, c)| c.is_none()) {
-            let sets: Vec<&str> = surfaces.iter().map(|s| s.name.as_str()).collect();
-            return Err(luxest_io::Error::input(
-                path,
-                format!(
-                    "has no point of any surface of {} (sets {}); is it another scene's?",
-                    args.results.display(),
-                    sets.join(", ")
-                ),
-            ));
-        }
     }
 
     let reports: Vec<SurfaceReport> = surfaces

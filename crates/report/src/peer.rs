@@ -25,6 +25,8 @@ pub const SIGMAS: f64 = 3.0;
 #[derive(Clone, Debug, PartialEq)]
 pub struct PeerPoint {
     pub set: String,
+    /// The point's line in the file (1-based), for messages.
+    pub line: usize,
     pub index: usize,
     pub position: [f64; 3],
     pub value: f64,
@@ -94,6 +96,7 @@ pub fn read(path: &Path) -> Result<PeerResults> {
         };
         out.points.push(PeerPoint {
             set: f[0].to_string(),
+            line: n + 1,
             index: f[1]
                 .parse()
                 .map_err(|_| Error::at(path, place(), format!("not a point index: {:?}", f[1])))?,
@@ -143,6 +146,34 @@ impl SurfaceComparison {
     }
     pub fn mean_rel_diff(&self) -> f64 {
         self.points.iter().map(|p| p.rel_diff).sum::<f64>() / self.points.len().max(1) as f64
+    }
+}
+
+/// Refuses a peer file with a point of a set that is none of `surfaces` (a misspelt or another
+/// scene's set would be left out of the comparison without a word), naming its line and the
+/// surfaces of `results`; a file of points of these surfaces only passes.
+pub fn check_sets(
+    path: &Path,
+    peer: &PeerResults,
+    surfaces: &[&str],
+    results: &Path,
+) -> Result<()> {
+    match peer
+        .points
+        .iter()
+        .find(|p| !surfaces.contains(&p.set.as_str()))
+    {
+        None => Ok(()),
+        Some(p) => Err(Error::at(
+            path,
+            format!("line {}", p.line),
+            format!(
+                "set \"{}\" is no surface of {} (its surfaces: {})",
+                p.set,
+                results.display(),
+                surfaces.join(", ")
+            ),
+        )),
     }
 }
 
