@@ -290,3 +290,28 @@ fn bad_input_gives_one_line_errors_and_no_report() {
     }
     assert!(!out.exists() && !ron.exists());
 }
+
+/// evaluate and denoise accept --seed and --threads like every stage, and their --help says
+/// what the options do there (it said "Seed of all random numbers" and "Worker threads" where
+/// neither is used).
+#[test]
+fn help_says_what_seed_and_threads_do_where_they_do_nothing() {
+    use clap::CommandFactory;
+    let help = |cmd: &clap::Command, id: &str| {
+        let arg = cmd.get_arguments().find(|a| a.get_id() == id).unwrap();
+        arg.get_help().map(|h| h.to_string()).unwrap_or_default()
+    };
+    let evaluate = evaluate::cli::Args::command();
+    for sub in ["images", "sensors"] {
+        let cmd = evaluate.find_subcommand(sub).unwrap();
+        assert!(
+            help(cmd, "seed").contains("draws no random numbers"),
+            "{sub}"
+        );
+        assert!(help(cmd, "threads").contains("runs on one thread"), "{sub}");
+    }
+    let denoise = denoise::cli::Args::command();
+    assert!(help(&denoise, "seed").contains("draws no random numbers"));
+    // denoise does use its threads (the inference's), and says so.
+    assert!(help(&denoise, "threads").starts_with("Worker threads"));
+}

@@ -25,6 +25,7 @@ use std::time::Instant;
 /// image's whole cost can be added up.
 #[derive(Parser, Debug)]
 #[command(name = "denoise", version)]
+#[command(mut_arg("seed", |a| a.help("Accepted like every stage's; inference is deterministic and draws no random numbers")))]
 pub struct Args {
     /// Noisy radiance images, `<img>.hdr.exr`.
     #[arg(required = true)]
@@ -67,7 +68,6 @@ pub struct Args {
     /// Also write an sRGB PNG preview of each output next to it (`.dn.png`).
     #[arg(long)]
     pub preview: bool,
-    /// --seed is accepted like every stage's; inference is deterministic and uses no randomness.
     #[command(flatten)]
     pub common: CommonArgs,
 }

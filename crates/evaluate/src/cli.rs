@@ -23,6 +23,8 @@ pub struct Args {
 pub enum Command {
     /// PSNR, SSIM, MS-SSIM, FLIP (tonemapped; see --help of the report), relMSE and SMAPE
     /// (linear) of each TEST image against REFERENCE; writes a CSV and a RON report.
+    #[command(mut_arg("seed", |a| a.help("Accepted like every stage's; evaluation is deterministic and draws no random numbers")))]
+    #[command(mut_arg("threads", |a| a.help("Accepted like every stage's; evaluation runs on one thread")))]
     Images {
         /// Reference image (e.g. `<img>_ref.hdr.exr`).
         #[arg(long)]
@@ -40,12 +42,13 @@ pub enum Command {
         /// grey-scale `.flip.png`).
         #[arg(long)]
         flip_maps: Option<PathBuf>,
-        /// --seed/--threads are accepted like every stage's; evaluation is deterministic.
         #[command(flatten)]
         common: CommonArgs,
     },
     /// Per-point error, z-score and summary of sensor RESULTS against an exact case; prints the
     /// table, writes it as CSV (and RON), and with --max-z fails if any |z| exceeds it.
+    #[command(mut_arg("seed", |a| a.help("Accepted like every stage's; evaluation is deterministic and draws no random numbers")))]
+    #[command(mut_arg("threads", |a| a.help("Accepted like every stage's; evaluation runs on one thread")))]
     Sensors {
         /// Sensor results (.sensors.ron).
         results: PathBuf,
