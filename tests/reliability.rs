@@ -104,8 +104,25 @@ fn scene_compile_refuses_wrong_scenes_with_the_place() {
             ),
             &[
                 "objects[0].transform.translate[0]",
-                "1e308 m is outside the f32 range of world coordinates",
+                "1e308 m is outside the world coordinates luxest can trace (±1e15 m)",
             ],
+        ),
+        // Beyond 1.8e18 m Embree aborted the process (a sensor at 2e18 m, a camera at 1e20 m).
+        (
+            scene(
+                MATERIALS,
+                FLOOR,
+                r#"point_lights: [(position: (0.5, 1.0, -0.5), power: Intensity(10.0))], sensors: [Points(name: "far", points: [(position: (2e18, 0.5, 0.0), normal: (0.0, 1.0, 0.0))])],"#,
+            ),
+            &["sensors[0].points[0].position[0]", "2e18 m is outside the world coordinates"],
+        ),
+        (
+            scene(
+                MATERIALS,
+                FLOOR,
+                r#"point_lights: [(position: (0.5, 1.0, -1e20), power: Intensity(10.0))],"#,
+            ),
+            &["point_lights[0].position[2]", "-1e20 m is outside the world coordinates"],
         ),
         (
             scene(
@@ -113,12 +130,21 @@ fn scene_compile_refuses_wrong_scenes_with_the_place() {
                 r#"(name: "floor", shape: Quad(corner: (0.0, 0.0, 0.0), u: (1.0, 0.0, 0.0), v: (0.0, 0.0, -1.0)), material: "w", transform: (scale: (1e300, 1.0, 1.0))),"#,
                 LIGHT,
             ),
-            &["objects[0]", "vertex 1 is outside the f32 range of world coordinates"],
+            &["objects[0]", "vertex 1: inf m is outside the world coordinates"],
         ),
         // 15: flux that overflows the estimators' arithmetic, at compile time.
         (
             scene(MATERIALS, &format!("{FLOOR}\n{}", flux("1e308")), ""),
             &["objects[1].emission.lumens", "1e308 lm exceeds 1e25 lm"],
+        ),
+        // A flux within bounds on an emitter so small that its luminance is not (it gave inf
+        // pixels): 1e24 lm over 0.01 m² is 3.2e25 cd/m².
+        (
+            scene(MATERIALS, &format!("{FLOOR}\n{}", flux("1e24")), ""),
+            &[
+                "objects[1].emission",
+                "1e24 lm from 1.000e-2 m² is a luminance of 3.183e25, above the 1e25",
+            ],
         ),
         (
             scene(
@@ -171,7 +197,15 @@ fn scene_compile_refuses_wrong_scenes_with_the_place() {
             &polygon("(0,0,0), (1,0,0), (2,0,0), (2,0,2), (0,0,2)"),
             LIGHT,
         ),
-        scene(MATERIALS, &format!("{FLOOR}\n{}", flux("1e25")), ""),
+        // The largest flux on an emitter large enough (1 m², a luminance of 3.2e24).
+        scene(
+            MATERIALS,
+            &format!(
+                "{FLOOR}\n{}",
+                r#"(shape: Quad(corner: (0.0, 1.0, 0.0), u: (1.0, 0.0, 0.0), v: (0.0, 0.0, 1.0)), material: "w", emission: Flux(lumens: 1e25)),"#
+            ),
+            "",
+        ),
         scene(
             &format!(r#"name: "cornell-box", {MATERIALS}"#),
             FLOOR,
@@ -357,6 +391,16 @@ fn estimate_exact_refuses_parameters_outside_their_domain() {
             &["sphere", "--radius", "inf"],
             "radius: must be a finite number > 0 m",
         ),
+        // Far beyond the planes' gap the value is below the quadrature's error bound and the
+        // work grows (1e308 printed NaN after minutes).
+        (
+            &["sobolev", "--r", "1,1e308"],
+            "r 1e308 m is beyond 10000 (h1 + h2) = 20000 m",
+        ),
+        (&["sobolev", "--r", "20001"], "is beyond 10000 (h1 + h2)"),
+        // Solutions that overflow f64 (they printed inf).
+        (&["sobolev", "--h1", "1e-200"], "in f64 arithmetic"),
+        (&["sphere", "--radius", "1e-200"], "in f64 arithmetic"),
     ] {
         let argv: Vec<&str> = ["exact"].into_iter().chain(args.iter().copied()).collect();
         let start = std::time::Instant::now();
@@ -1332,10 +1376,12 @@ fn numeric_options_outside_their_range_are_usage_errors() {
     let scene = lxs.to_str().unwrap();
     let o = dir.path().join("o").to_str().unwrap().to_string();
     let positive_m = "must be a finite number > 0 m";
+    // Outputs named as their stage writes them, so that the option is what gets refused.
+    let (o_ron, o_exr) = (format!("{o}.ron"), format!("{o}.exr"));
     let est = |a: &[&str]| {
         let mut argv = a.to_vec();
         argv.insert(1, scene);
-        argv.extend(["-o", &o]);
+        argv.extend(["-o", if a[0] == "image" { &o_exr } else { &o_ron }]);
         crate::util::estimate(&argv)
     };
     let with_scene = |f: fn(&[&str]) -> StageResult, a: &[&str]| {
@@ -1349,6 +1395,15 @@ fn numeric_options_outside_their_range_are_usage_errors() {
         (est(&["sensors", "--near-radius", "NaN"]), positive_m),
         (est(&["sensors", "--eps=-0.1"]), positive_m),
         (est(&["sensors", "--edge-offset", "inf"]), positive_m),
+        // Sensors moved out of the room (1e300 aborted the process): at most a tenth of it.
+        (
+            est(&["sensors", "--edge-offset", "1e300"]),
+            "--edge-offset 1e300 m exceeds",
+        ),
+        (
+            est(&["gather", "--edge-offset", "1"]),
+            "m, a tenth of the scene's room scale",
+        ),
         (
             est(&["sensors", "--max-depth", "0"]),
             "must be a whole number in [1, 1048576] bounces",

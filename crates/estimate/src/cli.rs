@@ -4,7 +4,7 @@
 
 use crate::image::{self, ImageConfig, ImageResult};
 use crate::light_trace::{self, LightTraceConfig};
-use crate::local::{self, Detector, LocalConfig, NearField};
+use crate::local::{self, Detector, LocalConfig, LocalResult, NearField};
 use crate::sensors::{
     all_sensors, evaluation_points, load_world, record_evaluation_points, results, Estimate,
 };
@@ -51,8 +51,8 @@ pub struct RunArgs {
     #[arg(long, default_value_t = 100_000, value_parser = MAX_DEPTH)]
     pub max_depth: u32,
     /// Sensors on edges or in corners are evaluated this far off the adjacent surfaces, m
-    /// [default: 1e-3 of the room scale, the smallest non-flat side of the bounding box]
-    /// (sensors and gather; estimate direct counts at the authored points).
+    /// [default: 1e-3 of the room scale, the smallest non-flat side of the bounding box; at
+    /// most a tenth of it] (sensors and gather; estimate direct counts at the authored points).
     #[arg(long, value_parser = Real::positive("m"))]
     pub edge_offset: Option<f64>,
 }
@@ -120,13 +120,22 @@ impl RunArgs {
         let d = self
             .edge_offset
             .unwrap_or(DEFAULT_EDGE_OFFSET_FRACTION * world.room_scale);
-        if d > 0.0 && d.is_finite() {
-            Ok(d)
-        } else {
-            Err(Error::Usage(format!(
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(Error::Usage(format!(
                 "--edge-offset must be positive, got {d}"
-            )))
+            )));
         }
+        // Sensors move this far off their edges: beyond a tenth of the room they end up far
+        // from where they were authored, or outside the room (1e300 aborted the process).
+        let most = MAX_EDGE_OFFSET_FRACTION * world.room_scale;
+        if d > most {
+            return Err(Error::Usage(format!(
+                "--edge-offset {} m exceeds {} m, a tenth of the scene's room scale",
+                luxest_io::num::show(d),
+                luxest_io::num::show(most)
+            )));
+        }
+        Ok(d)
     }
 }
 
@@ -160,6 +169,9 @@ pub const DEFAULT_NEAR_FRACTION: f64 = 1e-1;
 /// Default distance of edge/corner sensors from the adjacent surfaces, as a fraction of the
 /// room scale.
 pub const DEFAULT_EDGE_OFFSET_FRACTION: f64 = 1e-3;
+
+/// Largest `--edge-offset`, as a fraction of the room scale.
+pub const MAX_EDGE_OFFSET_FRACTION: f64 = 0.1;
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
 pub enum SingularityMode {
@@ -491,6 +503,20 @@ fn check_eps(singularity: SingularityMode, eps: Option<f64>) -> Result<()> {
     }
 }
 
+/// A warning on stderr when light paths reached --max-depth still carrying light: the light
+/// they would have added is missing from the results (e.g. a closed scene of reflectance 1,
+/// where paths never end by themselves).
+fn warn_truncated(r: &LocalResult, paths: u64, max_depth: u32) {
+    if r.truncated > 0 {
+        eprintln!(
+            "warning: {} of {paths} light paths reached --max-depth {max_depth} still carrying \
+             light; what they would have added is missing (biased low): raise --max-depth, or \
+             look for reflectances near 1 in a closed scene",
+            r.truncated
+        );
+    }
+}
+
 /// `estimate sensors`: the local estimate at every sensor point.
 fn sensors(
     run: &RunArgs,
@@ -518,6 +544,7 @@ fn sensors(
     });
     let cfg = run.local_config(paths, Detector::LocalEstimate(sing), near_field);
     let r = local::estimate(&world, &placed.points, &placed.near_radius, &cfg);
+    warn_truncated(&r, paths, run.max_depth);
     let info = run.info(&world, estimator::LOCAL_ESTIMATE, paths, r.seconds);
     let batches = batch_values.then_some(r.batch_values.as_slice());
     let mut values = r.estimates();
@@ -550,6 +577,7 @@ fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
     let sensors = all_sensors(&world);
     let cfg = run.local_config(paths, Detector::Bins { radius: bin_radius }, None);
     let r = local::estimate(&world, &sensors, &vec![0.0; sensors.len()], &cfg);
+    warn_truncated(&r, paths, run.max_depth);
     let info = run.info(&world, estimator::DIRECT_SIMULATION, paths, r.seconds);
     let singularity = format!("bins(radius={bin_radius:e} m)");
     let values = r.estimates();

@@ -94,6 +94,9 @@ pub struct LocalResult {
     pub seconds: f64,
     pub collisions: u64,
     pub shadow_rays: u64,
+    /// Light paths that reached `max_depth` still carrying light: what they would have added
+    /// is missing (the estimate is biased low), e.g. in a closed scene of reflectance 1.
+    pub truncated: u64,
 }
 
 impl LocalResult {
@@ -132,6 +135,8 @@ struct BatchSums {
     direct: Vec<[f64; 3]>,
     collisions: u64,
     shadow_rays: u64,
+    /// Light paths still going when they reached the path-length bound.
+    truncated: u64,
 }
 
 impl BatchSums {
@@ -296,6 +301,7 @@ fn run_batch(
         direct: vec![[0.0; 3]; sensors.len()],
         collisions: 0,
         shadow_rays: 0,
+        truncated: 0,
     };
     let mut scratch = Scratch::default();
     for _ in 0..paths {
@@ -321,8 +327,10 @@ fn run_batch(
             origin = world.offset(e.position, n, e.direction);
         }
         let mut dir = e.direction;
+        let mut going = true;
         for _ in 0..cfg.max_depth {
             let Some(sp) = world.intersect(origin, dir) else {
+                going = false;
                 break;
             };
             out.collisions += 1;
@@ -355,10 +363,12 @@ fn run_batch(
                 }
             }
             let Some(s) = scatter(world, &sp, dir, q, Transport::Flux, &mut rng) else {
+                going = false;
                 break;
             };
             (q, origin, dir) = (s.beta, s.origin, s.dir);
         }
+        out.truncated += u64::from(going);
     }
     if let (Detector::LocalEstimate(_), Some(nf)) = (&cfg.detector, cfg.near_field) {
         let samples = (nf.samples / cfg.batches.max(2) as u64).max(1);
@@ -450,5 +460,6 @@ pub fn estimate(
         seconds: start.elapsed().as_secs_f64(),
         collisions: results.iter().map(|r| r.collisions).sum(),
         shadow_rays: results.iter().map(|r| r.shadow_rays).sum(),
+        truncated: results.iter().map(|r| r.truncated).sum(),
     }
 }

@@ -72,10 +72,17 @@ pub struct World {
     pub epsilon: f64,
     /// Length of the bounding-box diagonal, m.
     pub diagonal: f64,
-    /// The smallest side of the bounding box that is not flat (the "room size"), m; the
-    /// diagonal for a flat scene. Scale for defaults such as the kernel regularisation radius.
+    /// The smallest side of the bounding box that is not flat (at most [`FLAT_SIDE`] of the
+    /// diagonal), m (the "room size"); the diagonal for a flat scene. Scale for defaults such
+    /// as the kernel regularisation radius.
     pub room_scale: f64,
 }
+
+/// A side of the bounding box at most this fraction of its diagonal is flat (a scene in one
+/// plane, up to the rounding of rotated f32 vertices, about 1e-16 of their size). It was 1e-6:
+/// two 2e6 m planes 2 m apart (Sobolev's planes made wider) counted as flat, the room scale
+/// became 2e6 m and the default kernel radius 2 km, which cut the indirect light without a word.
+pub const FLAT_SIDE: f64 = 1e-9;
 
 /// Largest image side of a camera stage (as scene-compile allows for the scene's camera).
 pub const MAX_RESOLUTION: u32 = 1 << 15;
@@ -237,7 +244,7 @@ impl World {
         let size = hi - lo;
         let room_scale = [size.x, size.y, size.z]
             .into_iter()
-            .filter(|&s| s > 1e-6 * diagonal)
+            .filter(|&s| s > FLAT_SIDE * diagonal)
             .fold(diagonal, f64::min);
         let extent = lo
             .max_abs_component()

@@ -21,6 +21,7 @@ pub mod validate;
 pub use cli::{run, Args};
 
 use luxest_io::math::Vec3;
+use luxest_io::num::show;
 use luxest_io::{Error, Result};
 use luxest_render::compiled::{
     CompiledScene, Emitter, Features, GridLayout, NamedMaterial, ObjectRange, SceneHeader,
@@ -110,13 +111,18 @@ impl Builder {
         }
         for (i, p) in mesh.positions.iter().enumerate() {
             let w = transform.apply_point(*p).to_f32();
-            if !w.iter().all(|c| c.is_finite()) {
+            if let Some(c) = w
+                .iter()
+                .map(|&c| c as f64)
+                .find(|c| c.is_nan() || c.abs() > validate::MAX_COORDINATE)
+            {
                 return Err(Error::at(
                     path,
                     place,
                     format!(
-                        "vertex {i} is outside the f32 range of world coordinates (±3.4e38 m) \
-                         after the object's transform (scale, rotation, translation)"
+                        "vertex {i}: {} after the object's transform (scale, rotation, \
+                         translation)",
+                        validate::out_of_world(c)
                     ),
                 ));
             }
@@ -309,9 +315,27 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             let radiance_rgb = match e {
                 Emission::Radiance(l) => *l,
                 // L = flux / (pi A) for a Lambertian emitter radiating from one side.
-                Emission::Flux { lumens, color } => color
-                    .with_luminance(lumens / (PI * area))
-                    .expect("validated"),
+                Emission::Flux { lumens, color } => {
+                    let l = color
+                        .with_luminance(lumens / (PI * area))
+                        .expect("validated");
+                    // The flux was bounded, but a tiny emitter turns it into a luminance that
+                    // overflows f32 images (found with 100 lm on 2e-19 m: inf pixels).
+                    if l.max_component() > validate::MAX_EMISSION {
+                        return Err(Error::at(
+                            path,
+                            format!("{place}.emission"),
+                            format!(
+                                "{} lm from {area:.3e} m² is a luminance of {:.3e}, above the {} an \
+                                 emitter may have; give it a larger area or less flux",
+                                show(*lumens),
+                                l.max_component(),
+                                show(validate::MAX_EMISSION)
+                            ),
+                        ));
+                    }
+                    l
+                }
             };
             emitters.push(Emitter::Area {
                 name: name.clone(),

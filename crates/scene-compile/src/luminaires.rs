@@ -54,7 +54,7 @@ pub fn opening_points(
 /// Checks what does not need the file: finite placement, a usable aim, the multiplier, the
 /// tint and the file's extension.
 pub(crate) fn check(c: &Check, place: &str, l: &Luminaire) -> Result<()> {
-    c.vec(&format!("{place}.position"), l.position)?;
+    c.position(&format!("{place}.position"), l.position)?;
     c.nonzero_vec(&format!("{place}.aim"), l.aim)?;
     c.finite(&format!("{place}.tilt_deg"), l.tilt_deg)?;
     c.finite(&format!("{place}.rotation_deg"), l.rotation_deg)?;

@@ -75,7 +75,7 @@ fn spec(s: &CalculationSurface) -> GridSpec {
 /// area, a positive spacing, a usable sensor kind) and lays out its grid.
 pub(crate) fn check(c: &Check, place: &str, s: &CalculationSurface) -> Result<CalcGrid> {
     let (o, u, v) = rectangle(&s.area);
-    c.vec(&format!("{place}.area"), o)?;
+    c.position(&format!("{place}.area"), o)?;
     c.nonzero_vec(&format!("{place}.area.u"), u)?;
     c.nonzero_vec(&format!("{place}.area.v"), v)?;
     c.finite(&format!("{place}.offset"), s.offset)?;

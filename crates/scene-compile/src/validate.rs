@@ -21,6 +21,21 @@ pub const MAX_RESOLUTION: u32 = 1 << 15;
 /// f64; 1e25 keeps all of these finite with margins of ten orders of magnitude.
 pub const MAX_EMISSION: f64 = 1e25;
 
+/// Largest |coordinate| of any point of a scene, m (6700 astronomical units). Embree's ray
+/// queries require |origin| below 1.8e18 (beyond, the library aborts the process or drops the
+/// geometry), and f32 vertices are spaced 1e-7 of their magnitude apart: 1e15 leaves three
+/// orders of magnitude for offsets and room for a 1 m room to be resolved 1e8 m from the origin.
+pub const MAX_COORDINATE: f64 = 1e15;
+
+/// The message for a coordinate beyond ±[`MAX_COORDINATE`].
+pub(crate) fn out_of_world(v: f64) -> String {
+    format!(
+        "{} m is outside the world coordinates luxest can trace (±{} m)",
+        show(v),
+        show(MAX_COORDINATE)
+    )
+}
+
 pub(crate) struct Check<'a> {
     pub(crate) path: &'a Path,
 }
@@ -39,6 +54,17 @@ impl Check<'_> {
     pub(crate) fn vec(&self, place: &str, v: Vec3) -> Result<()> {
         for (i, c) in [v.x, v.y, v.z].into_iter().enumerate() {
             self.finite(&format!("{place}[{i}]"), c)?;
+        }
+        Ok(())
+    }
+    /// A point of the scene: finite and within ±[`MAX_COORDINATE`].
+    pub(crate) fn position(&self, place: &str, v: Vec3) -> Result<()> {
+        for (i, c) in [v.x, v.y, v.z].into_iter().enumerate() {
+            let place = format!("{place}[{i}]");
+            self.finite(&place, c)?;
+            if c.abs() > MAX_COORDINATE {
+                return Err(self.fail(&place, out_of_world(c)));
+            }
         }
         Ok(())
     }
@@ -79,8 +105,8 @@ impl Check<'_> {
 }
 
 fn check_camera(c: &Check, cam: &Camera) -> Result<()> {
-    c.vec("camera.position", cam.position)?;
-    c.vec("camera.look_at", cam.look_at)?;
+    c.position("camera.position", cam.position)?;
+    c.position("camera.look_at", cam.look_at)?;
     let dir = c
         .nonzero_vec("camera.look_at", cam.look_at - cam.position)
         .map_err(|_| c.fail("camera.look_at", "equals camera.position"))?;
@@ -162,7 +188,7 @@ fn check_material(c: &Check, place: &str, m: &Material) -> Result<()> {
 }
 
 fn check_point_light(c: &Check, place: &str, l: &PointLight) -> Result<()> {
-    c.vec(&format!("{place}.position"), l.position)?;
+    c.position(&format!("{place}.position"), l.position)?;
     let v = match l.power {
         PointPower::Intensity(v) | PointPower::Flux(v) => v,
     };
@@ -193,7 +219,7 @@ fn check_sensor(c: &Check, place: &str, s: &Sensor) -> Result<()> {
                 return Err(c.fail(place, "sensor list has no points"));
             }
             for (i, p) in points.iter().enumerate() {
-                c.vec(&format!("{place}.points[{i}].position"), p.position)?;
+                c.position(&format!("{place}.points[{i}].position"), p.position)?;
                 c.nonzero_vec(&format!("{place}.points[{i}].normal"), p.normal)?;
                 crate::surfaces::normalised_kind(c, &format!("{place}.points[{i}].kind"), &p.kind)?;
             }
@@ -206,7 +232,7 @@ fn check_sensor(c: &Check, place: &str, s: &Sensor) -> Result<()> {
             normal,
             ..
         } => {
-            c.vec(&format!("{place}.corner"), *corner)?;
+            c.position(&format!("{place}.corner"), *corner)?;
             c.nonzero_vec(&format!("{place}.u"), *u)?;
             c.nonzero_vec(&format!("{place}.v"), *v)?;
             if u.cross(*v).try_normalize().is_none() {
@@ -256,13 +282,10 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
             .into_iter()
             .enumerate()
         {
-            if v.abs() > f32::MAX as f64 {
+            if v.abs() > MAX_COORDINATE {
                 return Err(c.fail(
                     &format!("{place}.transform.translate[{i}]"),
-                    format!(
-                        "{} m is outside the f32 range of world coordinates (±3.4e38 m)",
-                        luxest_io::num::show(v)
-                    ),
+                    out_of_world(v),
                 ));
             }
         }
