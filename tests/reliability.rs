@@ -1580,3 +1580,58 @@ fn outputs_end_like_the_format_written() {
         assert_eq!(dir.files(), files, "{args:?} wrote something");
     }
 }
+
+/// The sensor estimators keep every batch's sums for every point: --batches 2^20 over 20 000
+/// points (1.3 TB) is refused before any work, stating both sizes, instead of aborting in the
+/// allocator.
+#[test]
+fn sensor_batches_are_sized_before_allocating() {
+    let dir = TempDir::new("rel-batches");
+    let points: Vec<String> = (0..20_000)
+        .map(|k| {
+            format!(
+                "(position: ({}, 0.0, {}), normal: (0.0, 1.0, 0.0))",
+                (k % 200) as f64 * 0.005,
+                -((k / 200) as f64) * 0.005
+            )
+        })
+        .collect();
+    let text = scene(
+        MATERIALS,
+        FLOOR,
+        &format!(
+            "{LIGHT} sensors: [Points(name: \"grid\", points: [{}])],",
+            points.join(", ")
+        ),
+    );
+    let lxs = crate::util::compile_text(&dir, "grid", &text);
+    let lxs = lxs.to_str().unwrap();
+    let needed = 20_000u128 * (1 << 20) * 64;
+    let available = luxest_io::limits::available_memory().unwrap_or(u64::MAX) as u128;
+    if needed <= available {
+        return; // This machine could hold them; running it is no test.
+    }
+    let out = dir.path().join("o.ron");
+    for sub in ["sensors", "gather", "direct"] {
+        let mut args = vec![
+            sub,
+            lxs,
+            "--batches",
+            "1048576",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(match sub {
+            "gather" => &["--samples", "1048576"][..],
+            "direct" => &["--paths", "1048576", "--bin-radius", "0.01"],
+            _ => &["--paths", "1048576"],
+        });
+        let (code, msg) = crate::util::estimate(&args).expect_err(sub);
+        assert_eq!(code, 2, "{sub}: {msg}");
+        assert!(
+            msg.contains("--batches 1048576 over 20000 sensor points needs 1.3 TB of memory"),
+            "{sub}: {msg}"
+        );
+        assert!(!out.exists());
+    }
+}

@@ -75,6 +75,25 @@ impl RunArgs {
             near_field,
         }
     }
+    /// Loads the scene and checks that every batch's sums for every sensor point fit in the
+    /// memory available (--batches 2^20 over a 1000-point grid would need 67 GB).
+    fn load(&self) -> Result<World> {
+        let world = load_world(&self.scene)?;
+        let points: usize = world
+            .scene
+            .header
+            .sensors
+            .iter()
+            .map(|s| s.points.len())
+            .sum();
+        luxest_io::limits::check_allocation(
+            &format!("--batches {} over {points} sensor points", self.batches),
+            self.batches as u128 * points as u128,
+            BYTES_PER_BATCH_POINT,
+        )
+        .map_err(Error::Usage)?;
+        Ok(world)
+    }
     /// `count` (`--paths` or `--samples`, named `what`) must fill every batch.
     fn check(&self, what: &str, count: u64) -> Result<()> {
         if count < self.batches as u64 {
@@ -138,6 +157,10 @@ impl RunArgs {
         Ok(d)
     }
 }
+
+/// Bytes the sensor estimators keep per batch and sensor point until the batches are combined
+/// (RGB sums and their direct part in f64, the batch's Y; measured 56).
+const BYTES_PER_BATCH_POINT: u128 = 64;
 
 /// Path-length bound of every estimator: 0 would give nothing but the direct light, or black.
 pub const MAX_DEPTH: Count<u32> = Count::range(1, 1 << 20, "bounces");
@@ -534,7 +557,7 @@ fn sensors(
             "with --near-samples 0 (the near-field split is off)",
         ));
     }
-    let world = load_world(&run.scene)?;
+    let world = run.load()?;
     let (out, mut plan) = run.plan(&world)?;
     let sing = singularity.with_eps(eps.unwrap_or(DEFAULT_EPS_FRACTION * world.room_scale))?;
     let near_radius = near_radius.unwrap_or(DEFAULT_NEAR_FRACTION * world.room_scale);
@@ -571,7 +594,7 @@ fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
             "on estimate direct (it counts photons in disks around the authored sensor points)",
         ));
     }
-    let world = load_world(&run.scene)?;
+    let world = run.load()?;
     crate::sensors::require_planar(&run.scene, &world, "estimate direct")?;
     let (out, mut plan) = run.plan(&world)?;
     let sensors = all_sensors(&world);
@@ -595,7 +618,7 @@ fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
 /// `estimate gather`: the backward reference estimator.
 fn gather(run: &RunArgs, samples: u64) -> Result<()> {
     run.check("--samples", samples)?;
-    let world = load_world(&run.scene)?;
+    let world = run.load()?;
     crate::sensors::require_planar(&run.scene, &world, "estimate gather")?;
     if world.scene.header.features.specular_paths {
         return Err(Error::input(
