@@ -754,8 +754,11 @@ fn sensors_near_small_and_large_emitters_match_the_exact_direct_light() {
                 se > 0.0 && se < 0.05 * exact,
                 "lamp {a} m, d {d}: {e} ± {se}"
             );
+            // Under the 1 mm lamp the cosine-sampled rays' share, p_cos / (p_cos + p_light)
+            // (1.3e-4 at 5 cm), arrives in a few rare hits that the batches' standard error
+            // does not see: hence 1e-3 of the value beside the 4 standard errors.
             assert!(
-                (e - exact).abs() <= 4.0 * se,
+                (e - exact).abs() <= 4.0 * se + 1e-3 * exact,
                 "lamp {a} m, d {d}: {e} ± {se} vs exact {exact}"
             );
         }
@@ -784,6 +787,19 @@ fn the_room_scale_is_the_gap_between_wide_planes_and_a_flat_scene_s_diagonal() {
         "room scale {}",
         w.room_scale
     );
+    // A sensor placed far off (1e8 m) does not make the planes' gap flat either (it made the
+    // kernel radius 2 m).
+    let stray = wide.replace(
+        "normal: (0.0, 1.0, 0.0))])",
+        "normal: (0.0, 1.0, 0.0)), (position: (1e8, -1.0, 0.0), normal: (0.0, 1.0, 0.0))])",
+    );
+    assert_ne!(stray, wide);
+    let w_stray = world_from(&stray);
+    assert!(
+        (w_stray.room_scale - 2.0).abs() < 1e-6,
+        "room scale {}",
+        w_stray.room_scale
+    );
     let (s, r) = run(&w, 20_000);
     let exact = Sobolev {
         intensity_cd: 100.0,
@@ -810,4 +826,71 @@ fn the_room_scale_is_the_gap_between_wide_planes_and_a_flat_scene_s_diagonal() {
         w.room_scale, 1.0,
         "the thin side is flat: the room is the 1 m square"
     );
+}
+
+#[test]
+fn near_field_emission_matches_the_backward_estimator_with_tilt_occluder_and_two_emitters() {
+    // Expectation: where the near field's two strategies meet a tilted lamp (cos_e ≠ cos_p), a
+    // point light taking most of the emitted power (the area lamp is chosen rarely), and a
+    // plate within the radius that hides part of the lamp from some sensors, the local
+    // estimate with the near field agrees with the backward (gathering) estimator, an
+    // independent next-event estimate, within 4 combined standard errors, at every sensor.
+    let text = r#"Scene(
+        camera: Camera(position: (0.0, 0.0, 3.0), look_at: (0.0, 0.0, 0.0), up: (0.0, 1.0, 0.0),
+                       vfov_deg: 60.0, resolution: (8, 8)),
+        materials: { "grey": Lambertian(reflectance: (0.4, 0.4, 0.4)), "black": Lambertian(reflectance: (0.0, 0.0, 0.0)) },
+        objects: [
+            (shape: Quad(corner: (-1.0, -0.5, 1.0), u: (2.0, 0.0, 0.0), v: (0.0, 0.0, -2.0)), material: "grey"),
+            (name: "lamp", shape: Quad(corner: (-0.02, 0.0, -0.02), u: (0.04, 0.0, 0.0), v: (0.0, 0.0, 0.04)),
+             material: "black", emission: Flux(lumens: 50.0),
+             transform: (rotate_deg: (0.0, 0.0, 35.0), translate: (0.0, 1.0, 0.0))),
+            (name: "plate", shape: Quad(corner: (0.005, 0.96, -0.05), u: (0.0, 0.0, 0.1), v: (0.1, 0.0, 0.0)), material: "grey"),
+        ],
+        point_lights: [(position: (0.3, 0.2, 0.1), power: Flux(5000.0))],
+        sensors: [Points(name: "near", points: [
+            (position: (0.0, 0.94, 0.0), normal: (0.0, 1.0, 0.0)),
+            (position: (-0.03, 0.95, 0.01), normal: (0.3, 1.0, 0.0)),
+            (position: (0.04, 0.9, -0.02), normal: (-0.5, 1.0, 0.2)),
+            (position: (0.06, 0.97, 0.0), normal: (0.0, 1.0, 0.0)),
+        ])],
+    )"#;
+    let world = world_from(text);
+    let placed = estimate::placement::place(
+        &world,
+        &sensors(&world),
+        1e-3 * world.room_scale,
+        estimate::cli::DEFAULT_NEAR_FRACTION * world.room_scale,
+    );
+    // Every sensor has the lamp within the radius (the placement's 17 probe rays missed it
+    // from two of them, which then had only the forward estimate's 1/d² spikes: 8 % error).
+    assert!(
+        placed.near_radius.iter().all(|&r| r > 0.05),
+        "every sensor uses the near field: {:?}",
+        placed.near_radius
+    );
+    let mut cfg = config(20_000, 7, 2, &world);
+    cfg.near_field = Some(NearField { samples: 20_000 });
+    let le = local::estimate(&world, &placed.points, &placed.near_radius, &cfg);
+    let reference = estimate::gather::estimate(
+        &world,
+        &placed.points,
+        &estimate::gather::GatherConfig {
+            samples: 40_000,
+            batches: 32,
+            seed: 8,
+            threads: 2,
+            max_depth: 100_000,
+        },
+    );
+    for (i, &(_, g, gse)) in reference.iter().enumerate() {
+        let (e, se) = (le.value[i], le.standard_error[i]);
+        assert!(
+            g > 0.0 && se > 0.0 && se < 0.05 * e,
+            "sensor {i}: {e} ± {se}"
+        );
+        assert!(
+            (e - g).abs() <= 4.0 * se.hypot(gse),
+            "sensor {i}: local {e} ± {se} vs gather {g} ± {gse}"
+        );
+    }
 }

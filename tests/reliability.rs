@@ -124,6 +124,15 @@ fn scene_compile_refuses_wrong_scenes_with_the_place() {
             ),
             &["point_lights[0].position[2]", "-1e20 m is outside the world coordinates"],
         ),
+        // Grid points are a corner plus finite edges, each of which may be huge.
+        (
+            scene(
+                MATERIALS,
+                FLOOR,
+                r#"point_lights: [(position: (0.5, 1.0, -0.5), power: Intensity(10.0))], sensors: [Grid(name: "g", corner: (0.0, 0.5, 0.0), u: (4e15, 0.0, 0.0), v: (0.0, 0.0, 1.0), counts: (2, 1))],"#,
+            ),
+            &["sensors \"g\", point 1", "3e15 m is outside the world coordinates"],
+        ),
         (
             scene(
                 MATERIALS,

@@ -16,8 +16,8 @@ fn usage(case: &str) -> impl Fn(String) -> Error + '_ {
 /// work grows with r (1e5: 25 s; 1e6 and beyond: minutes).
 pub const MAX_SOBOLEV_R: f64 = 1e4;
 
-/// Refuses parameters whose solution overflows or underflows f64 (`--h1 1e-200`: I/h² is
-/// infinite): a usage error rather than a table of inf or NaN.
+/// Refuses parameters whose solution overflows f64 (`--h1 1e-200`: I/h² is infinite): a usage
+/// error rather than a table of inf or NaN.
 fn finite(case: &str, values: &[f64]) -> Result<()> {
     match values.iter().find(|v| !v.is_finite()) {
         None => Ok(()),
@@ -76,7 +76,18 @@ pub fn print(case: ExactCase) -> Result<()> {
             ));
             for r in r {
                 let (e1, e2) = (s.illuminance1(r), s.illuminance2(r));
-                finite("sobolev", &[e1.value, e2.value, s.direct1(r), s.flux1()])?;
+                finite(
+                    "sobolev",
+                    &[
+                        e1.value,
+                        e2.value,
+                        s.direct1(r),
+                        s.flux1(),
+                        s.swapped().flux1(),
+                        e1.error_bound,
+                        e2.error_bound,
+                    ],
+                )?;
                 lines.push(format!(
                     "{:>10} {:>18.10e} {:>18.10e} {:>18.10e} {:>10.1e}",
                     r,

@@ -154,11 +154,12 @@ pub fn near_field_sample(
     max_depth: u32,
 ) -> (Rgb, Rgb) {
     let n = s.normal;
-    // Strategy 2: a point of an area emitter (point sources are exact elsewhere), counted when
-    // it lies within the radius and is seen.
-    let l = world.sample_light_point(rng, s.position);
+    // Strategy 2: a point of an area emitter, chosen among the area emitters alone (point
+    // sources are exact elsewhere), counted when it lies within the radius and is seen; scenes
+    // without area emitters draw nothing for it.
     let mut emitted = Rgb::BLACK;
-    if let Some(nl) = l.normal {
+    let l = world.sample_area_light_point(rng);
+    if let Some((l, nl)) = l.and_then(|l| l.normal.map(|nl| (l, nl))) {
         let v = l.position - s.position;
         let d2 = v.length_squared();
         if d2 > 0.0 && d2 < radius * radius {
@@ -172,7 +173,7 @@ pub fn near_field_sample(
                 // Solid-angle densities of the two strategies for this direction.
                 let p_light = l.pdf * d2 / cos_e;
                 let p_cos = cos_p / PI;
-                emitted = l.emitted * (cos_p / p_light) * (p_light / (p_light + p_cos));
+                emitted = l.emitted * (cos_p / (p_light + p_cos));
             }
         }
     }
@@ -188,7 +189,7 @@ pub fn near_field_sample(
     if let Some((e, radiance)) = world.emission(sp.triangle, sp.ng, -dir) {
         let cos_e = sp.ng.dot(-dir).abs();
         let p_cos = n.dot(dir).max(0.0) / PI;
-        let p_light = world.light_point_pdf(e) * d2 / cos_e;
+        let p_light = world.area_light_point_pdf(e) * d2 / cos_e;
         if p_cos > 0.0 {
             emitted = emitted + radiance * (PI * p_cos / (p_cos + p_light));
         }

@@ -60,16 +60,17 @@ pub fn place(world: &World, sensors: &[SensorPoint], delta: f64, near_radius: f6
         .iter()
         .map(|s| {
             let origin = s.position + s.normal * world.margin(s.position, s.position);
-            let near = probe_directions(s.normal).into_iter().any(|d| {
-                world
-                    .tracer
-                    .intersect(origin, d, 0.0, near_radius)
-                    .is_some_and(|h| {
-                        let sp = world.surface(&h);
-                        sp.ng.dot(s.normal).abs() < 0.999
-                            || (sp.position - s.position).dot(s.normal).abs() > delta * 1e-3
-                    })
-            });
+            let near = emitter_within(world, s, near_radius)
+                || probe_directions(s.normal).into_iter().any(|d| {
+                    world
+                        .tracer
+                        .intersect(origin, d, 0.0, near_radius)
+                        .is_some_and(|h| {
+                            let sp = world.surface(&h);
+                            sp.ng.dot(s.normal).abs() < 0.999
+                                || (sp.position - s.position).dot(s.normal).abs() > delta * 1e-3
+                        })
+                });
             if near {
                 near_radius
             } else {
@@ -82,6 +83,60 @@ pub fn place(world: &World, sensors: &[SensorPoint], delta: f64, near_radius: f6
         near_radius: radii,
         moved,
     }
+}
+
+/// Whether a triangle of an area emitter has a point closer than `radius` to the sensor, on the
+/// side its normal faces: the 17 probe rays miss an emitter small against its distance (a 4 cm
+/// lamp 5 cm away), whose light the near field's emitter sampling then never estimated.
+fn emitter_within(world: &World, s: &SensorPoint, radius: f64) -> bool {
+    use luxest_render::compiled::Emitter;
+    world.scene.header.emitters.iter().any(|e| match e {
+        Emitter::Area {
+            first_triangle,
+            triangle_count,
+            ..
+        } => (*first_triangle..first_triangle + triangle_count).any(|t| {
+            let tri = world.scene.triangle(t as usize);
+            tri.iter().any(|&v| (v - s.position).dot(s.normal) > 0.0)
+                && (closest_point_on_triangle(s.position, tri) - s.position).length_squared()
+                    < radius * radius
+        }),
+        _ => false,
+    })
+}
+
+/// The point of triangle `[a, b, c]` closest to `p` (Ericson, *Real-Time Collision Detection*,
+/// 5.1.5: by the Voronoi region of `p`).
+pub fn closest_point_on_triangle(p: Vec3, [a, b, c]: [Vec3; 3]) -> Vec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
 }
 
 /// Returns the evaluation points and how many sensors were moved.
@@ -158,4 +213,46 @@ pub fn separate_from_adjacent_surfaces(
         })
         .collect();
     (out, moved)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closest point equals the minimum over a fine grid of the triangle's points, for
+    /// points in every Voronoi region (vertices, edges, face, both sides).
+    #[test]
+    fn closest_point_matches_a_search_over_the_triangle() {
+        let tri = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.2, 0.0),
+            Vec3::new(0.3, 1.0, 0.4),
+        ];
+        let n = 400;
+        let mut grid = Vec::new();
+        for i in 0..=n {
+            for j in 0..=(n - i) {
+                let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+                grid.push(tri[0] + (tri[1] - tri[0]) * u + (tri[2] - tri[0]) * v);
+            }
+        }
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 1.5
+        };
+        for _ in 0..200 {
+            let p = Vec3::new(next(), next(), next());
+            let q = closest_point_on_triangle(p, tri);
+            let best = grid
+                .iter()
+                .map(|g| (*g - p).length())
+                .fold(f64::INFINITY, f64::min);
+            let d = (q - p).length();
+            assert!(d <= best + 1e-12, "{p:?}: {d} above the search's {best}");
+            assert!(best - d < 5e-3, "{p:?}: {d} far below the search's {best}");
+        }
+    }
 }

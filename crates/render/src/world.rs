@@ -72,17 +72,23 @@ pub struct World {
     pub epsilon: f64,
     /// Length of the bounding-box diagonal, m.
     pub diagonal: f64,
-    /// The smallest side of the bounding box that is not flat (at most [`FLAT_SIDE`] of the
-    /// diagonal), m (the "room size"); the diagonal for a flat scene. Scale for defaults such
-    /// as the kernel regularisation radius.
+    /// The smallest side of the bounding box that is not flat (within [`FLAT_ULPS`] f32
+    /// roundings of the geometry's largest coordinate), m (the "room size"); the diagonal for a
+    /// flat scene. Scale for defaults such as the kernel regularisation radius.
     pub room_scale: f64,
+    /// The area emitters alone, by flux (indexed like the emitters, others weigh 0); `None`
+    /// without area emitters.
+    area_choice: Option<Distribution1D>,
 }
 
-/// A side of the bounding box at most this fraction of its diagonal is flat (a scene in one
-/// plane, up to the rounding of rotated f32 vertices, about 1e-16 of their size). It was 1e-6:
-/// two 2e6 m planes 2 m apart (Sobolev's planes made wider) counted as flat, the room scale
-/// became 2e6 m and the default kernel radius 2 km, which cut the indirect light without a word.
-pub const FLAT_SIDE: f64 = 1e-9;
+/// A side of the bounding box at most this many f32 roundings (`f32::EPSILON`) of the
+/// geometry's largest |coordinate| is flat: a scene in one plane, up to the noise of its f32
+/// vertices (rotated analytic shapes, exported meshes: about 1e-7 of their coordinates). It was
+/// 1e-6 of the diagonal, which sensors and lights far off enlarge: two 2e6 m planes 2 m apart
+/// (Sobolev's planes made wider) counted as flat, the room scale became 2e6 m and the default
+/// kernel radius 2 km, which cut the indirect light without a word (with 4 roundings the
+/// threshold there is 0.48 m).
+pub const FLAT_ULPS: f64 = 4.0;
 
 /// Largest image side of a camera stage (as scene-compile allows for the scene's camera).
 pub const MAX_RESOLUTION: u32 = 1 << 15;
@@ -242,10 +248,31 @@ impl World {
         }
         let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
         let size = hi - lo;
+        // Flat: within the rounding of the geometry's f32 coordinates (sensors and lights are
+        // f64 and may lie far off without making the room's sides flat).
+        let geometry = s
+            .bounds_min
+            .max_abs_component()
+            .max(s.bounds_max.max_abs_component());
+        let flat = if geometry.is_finite() {
+            FLAT_ULPS * f32::EPSILON as f64 * geometry
+        } else {
+            0.0
+        };
         let room_scale = [size.x, size.y, size.z]
             .into_iter()
-            .filter(|&s| s > FLAT_SIDE * diagonal)
+            .filter(|&s| s > flat)
             .fold(diagonal, f64::min);
+        let area_weights: Vec<f64> = scene
+            .header
+            .emitters
+            .iter()
+            .map(|e| match e {
+                Emitter::Area { .. } => e.flux_lm(),
+                _ => 0.0,
+            })
+            .collect();
+        let area_choice = Distribution1D::new(&area_weights);
         let extent = lo
             .max_abs_component()
             .max(hi.max_abs_component())
@@ -266,6 +293,7 @@ impl World {
             epsilon,
             diagonal,
             room_scale,
+            area_choice,
         })
     }
 
@@ -497,6 +525,41 @@ impl World {
                     pdf: p_e / area_m2,
                 }
             }
+        }
+    }
+
+    /// A point on an area emitter, the emitter chosen among the area emitters alone by flux
+    /// (point sources and luminaires are exact elsewhere, so an estimator that needs area
+    /// emitters only does not spend samples on them); `None` without area emitters. Its `pdf`
+    /// is [`World::area_light_point_pdf`].
+    pub fn sample_area_light_point(&self, rng: &mut impl Sampler) -> Option<LightPoint> {
+        let (ei, p_e) = self.area_choice.as_ref()?.sample(rng.next_f64());
+        let Emitter::Area {
+            radiance_rgb,
+            area_m2,
+            ..
+        } = &self.scene.header.emitters[ei]
+        else {
+            unreachable!("the area choice gives area emitters only")
+        };
+        let (position, normal, _) = self.sample_area_point(ei, rng);
+        Some(LightPoint {
+            position,
+            normal: Some(normal),
+            emitted: *radiance_rgb,
+            pdf: p_e / area_m2,
+        })
+    }
+
+    /// Area density with which [`World::sample_area_light_point`] picks a point on the area
+    /// emitter `emitter`.
+    pub fn area_light_point_pdf(&self, emitter: u32) -> f64 {
+        match (
+            &self.area_choice,
+            &self.scene.header.emitters[emitter as usize],
+        ) {
+            (Some(choice), Emitter::Area { area_m2, .. }) => choice.pmf(emitter as usize) / area_m2,
+            _ => 0.0,
         }
     }
 

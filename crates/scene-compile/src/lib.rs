@@ -262,6 +262,13 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
 }
 
 /// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
+/// The first coordinate of `p` beyond ±[`validate::MAX_COORDINATE`] (or NaN), if any.
+fn out_of_world(p: Vec3) -> Option<f64> {
+    [p.x, p.y, p.z]
+        .into_iter()
+        .find(|c| c.is_nan() || c.abs() > validate::MAX_COORDINATE)
+}
+
 pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     validate::check_scene(path, scene)?;
     let mut report = Report::default();
@@ -459,6 +466,35 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             &format!("calculation_surfaces[{i}]"),
             s,
         )?);
+    }
+    // Points made from corners plus edges (sensor grids, calculation surfaces, luminaire
+    // openings) are bounded like the authored ones.
+    for set in &sensors {
+        for (k, p) in set.points.iter().enumerate() {
+            if let Some(c) = out_of_world(p.position) {
+                return Err(Error::at(
+                    path,
+                    format!("sensors \"{}\", point {k}", set.name),
+                    validate::out_of_world(c),
+                ));
+            }
+        }
+    }
+    for e in &emitters {
+        if let Emitter::Luminaire {
+            name,
+            opening_points,
+            ..
+        } = e
+        {
+            if let Some(c) = opening_points.iter().find_map(|&p| out_of_world(p)) {
+                return Err(Error::at(
+                    path,
+                    format!("luminaire \"{name}\", its opening"),
+                    validate::out_of_world(c),
+                ));
+            }
+        }
     }
     let header = SceneHeader {
         name,
