@@ -124,6 +124,15 @@ fn scene_compile_refuses_wrong_scenes_with_the_place() {
             ),
             &["point_lights[0].position[2]", "-1e20 m is outside the world coordinates"],
         ),
+        // A scene a nanometre across (lengths given in the wrong unit, or scaled away).
+        (
+            scene(
+                MATERIALS,
+                r#"(name: "floor", shape: Quad(corner: (0.0, 0.0, 0.0), u: (1e-9, 0.0, 0.0), v: (0.0, 0.0, -1e-9)), material: "w"),"#,
+                r#"point_lights: [(position: (5e-10, 1e-9, -5e-10), power: Intensity(10.0))],"#,
+            ),
+            &["the geometry spans 1.41", "e-9 m, below the 1e-6 m luxest traces reliably"],
+        ),
         // Grid points are a corner plus finite edges, each of which may be huge.
         (
             scene(
