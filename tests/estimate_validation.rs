@@ -894,3 +894,46 @@ fn near_field_emission_matches_the_backward_estimator_with_tilt_occluder_and_two
         );
     }
 }
+
+#[test]
+fn a_light_mounted_exactly_on_the_ceiling_lights_the_room_by_reflection_too() {
+    // Expectation: a point light placed exactly on the ceiling of a closed room (as recessed
+    // luminaires are placed) reflects light like one just below it: the local estimate agrees
+    // with the backward estimator (whose shadow rays stop short of the light) within 4
+    // combined standard errors at sensors on the floor and a wall, and the indirect part is
+    // well above zero (every light path's first ray hit the ceiling at t = 0 and its reflected
+    // light was lost: indirect 0 ± 0).
+    let text = r#"Scene(
+        materials: { "w": Lambertian(reflectance: (0.5, 0.5, 0.5)) },
+        objects: [(shape: Box(size: (4.0, 3.0, 4.0)), material: "w", flip_normals: true)],
+        point_lights: [(position: (0.5, 1.5, -0.3), power: Flux(1000.0))],
+        sensors: [Points(name: "room", points: [
+            (position: (0.0, -1.5, 0.0), normal: (0.0, 1.0, 0.0)),
+            (position: (1.0, -1.5, 1.0), normal: (0.0, 1.0, 0.0)),
+            (position: (2.0, 0.0, 0.5), normal: (-1.0, 0.0, 0.0)),
+        ])],
+    )"#;
+    let w = world_from(text);
+    let s = sensors(&w);
+    let r = local::estimate(&w, &s, &vec![0.0; s.len()], &config(40_000, 9, 2, &w));
+    let reference = estimate::gather::estimate(
+        &w,
+        &s,
+        &estimate::gather::GatherConfig {
+            samples: 20_000,
+            batches: 32,
+            seed: 10,
+            threads: 2,
+            max_depth: 100_000,
+        },
+    );
+    for (i, &(_, g, gse)) in reference.iter().enumerate() {
+        let (e, se) = (r.value[i], r.standard_error[i]);
+        let (indirect, _) = r.indirect[i];
+        assert!(indirect > 0.2 * e, "sensor {i}: indirect {indirect} of {e}");
+        assert!(
+            (e - g).abs() <= 4.0 * se.hypot(gse),
+            "sensor {i}: local {e} ± {se} vs gather {g} ± {gse}"
+        );
+    }
+}

@@ -524,6 +524,21 @@ fn malformed_photometric_files_are_one_line_errors_and_leave_nothing() {
     );
     let (_, msg) = scene_compile(&[ron.to_str().unwrap(), "--check"]).unwrap_err();
     assert!(msg.contains("luminaires[0].multiplier"), "{msg}");
+    // The table × multiplier is bounded like every emitter (1e300 cd gave Eavg inf ± NaN).
+    dir.write("cos2.ies", &cos2);
+    let ron = dir.write(
+        "big.ron",
+        scene("cos2.ies").replace(
+            "position: (0.0, 2.0, 0.0)",
+            "position: (0.0, 2.0, 0.0), multiplier: 1e30",
+        ),
+    );
+    let (code, msg) = scene_compile(&[ron.to_str().unwrap(), "--check"]).unwrap_err();
+    assert_eq!(code, 1, "{msg}");
+    assert!(
+        msg.contains("luminaires[0].multiplier") && msg.contains("exceeds 1e25"),
+        "{msg}"
+    );
 }
 
 #[test]

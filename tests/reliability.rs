@@ -133,6 +133,15 @@ fn scene_compile_refuses_wrong_scenes_with_the_place() {
             ),
             &["the geometry spans 1.41", "e-9 m, below the 1e-6 m luxest traces reliably"],
         ),
+        // A Floor's corners the wrong way round turned the plane over (0 lx below the floor).
+        (
+            scene(
+                MATERIALS,
+                FLOOR,
+                r#"point_lights: [(position: (0.5, 1.0, -0.5), power: Intensity(10.0))], calculation_surfaces: [(name: "p", area: Floor(min: (6.0, 0.0), max: (0.0, 4.0), y: 0.0), offset: 0.75)],"#,
+            ),
+            &["calculation_surfaces[0].area", "Floor min.x 6 is not below max.x 0"],
+        ),
         // Grid points are a corner plus finite edges, each of which may be huge.
         (
             scene(

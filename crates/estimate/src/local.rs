@@ -328,8 +328,16 @@ fn run_batch(
         }
         let mut dir = e.direction;
         let mut going = true;
+        // A point light or luminaire source may sit on a surface: its first ray starts beyond.
+        let mut from_source = e.normal.is_none();
         for _ in 0..cfg.max_depth {
-            let Some(sp) = world.intersect(origin, dir) else {
+            let hit = if from_source {
+                world.intersect_from_source(origin, dir)
+            } else {
+                world.intersect(origin, dir)
+            };
+            from_source = false;
+            let Some(sp) = hit else {
                 going = false;
                 break;
             };

@@ -84,8 +84,16 @@ pub fn walk_light_path(
         };
     }
     let mut dir = e.direction;
+    // A point light or luminaire source may sit on a surface: its first ray starts beyond.
+    let mut from_source = e.normal.is_none();
     for depth in 0..max_depth {
-        let Some(sp) = world.intersect(origin, dir) else {
+        let hit = if from_source {
+            world.intersect_from_source(origin, dir)
+        } else {
+            world.intersect(origin, dir)
+        };
+        from_source = false;
+        let Some(sp) = hit else {
             break;
         };
         let delta = bsdf::is_delta(world.material(sp.triangle));

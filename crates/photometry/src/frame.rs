@@ -212,7 +212,14 @@ fn rotation_taking_nadir_to(a: [f64; 3]) -> M3 {
         return rot_x(std::f64::consts::PI);
     }
     let v = cross(n, a);
-    let k = 1.0 / (1.0 + c);
+    // k = 1 / (1 + c). Near straight up 1 + c cancels (an aim 1e-7 off vertical lost 2 % of
+    // it to rounding, and R was no rotation: RᵀR − I = 0.1, intensities off by 0.7 %); there
+    // (1 + c)(1 − c) = |v|² gives it from v, exactly as consistent with v as R needs.
+    let k = if c < 0.0 {
+        (1.0 - c) / dot(v, v)
+    } else {
+        1.0 / (1.0 + c)
+    };
     // R = I + [v]x + [v]x^2 / (1 + c)
     [
         [
@@ -235,6 +242,35 @@ fn rotation_taking_nadir_to(a: [f64; 3]) -> M3 {
 
 #[cfg(test)]
 mod tests {
+
+    /// The rotation taking the nadir to an aim is a rotation (RᵀR = I) and takes the nadir to
+    /// the aim, also for aims a hair off straight up, where 1 + cos cancels.
+    #[test]
+    fn nadir_rotation_stays_orthogonal_near_straight_up() {
+        for a in [
+            [1e-7, 0.0, 1.0],
+            [0.0, 1e-7, 1.0],
+            [3e-8, -2e-8, 1.0],
+            [1e-6, 0.0, 1.0],
+            [0.6, 0.0, -0.8],
+            [0.0, 0.8, 0.6],
+        ] {
+            let l = dot(a, a).sqrt();
+            let a = [a[0] / l, a[1] / l, a[2] / l];
+            let r = rotation_taking_nadir_to(a);
+            for i in 0..3 {
+                for j in 0..3 {
+                    let rtr: f64 = (0..3).map(|k| r[k][i] * r[k][j]).sum();
+                    let want = if i == j { 1.0 } else { 0.0 };
+                    assert!((rtr - want).abs() < 1e-12, "{a:?}: RᵀR[{i}][{j}] = {rtr}");
+                }
+                let rn: f64 = (0..3).map(|k| r[i][k] * [0.0, 0.0, -1.0][k]).sum();
+                // Aims within 4.5e-8 rad of vertical are taken as vertical (that branch).
+                assert!((rn - a[i]).abs() < 1e-7, "{a:?}: (R n)[{i}] = {rn}");
+            }
+        }
+    }
+
     use super::*;
 
     fn close(a: [f64; 3], b: [f64; 3], tol: f64) -> bool {

@@ -203,22 +203,40 @@ pub fn parse_ies_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
     if lines.iter().all(|l| l.trim().is_empty()) {
         return Err(err(None, "empty file: not an IES LM-63 file".into()));
     }
-    let first = lines[0].trim().to_ascii_uppercase();
-    let (format, mut k) = if first.starts_with("IESNA:LM-63-1995") {
-        (SourceFormat::Ies1995, 1)
-    } else if first.starts_with("IESNA:LM-63-2002") {
-        (SourceFormat::Ies2002, 1)
-    } else if first.starts_with("IES:LM-63-2019") || first.starts_with("IESNA:LM-63-2019") {
-        (SourceFormat::Ies2019, 1)
-    } else if first.starts_with("IESNA91") {
-        (SourceFormat::Ies1991, 1)
-    } else if first.starts_with("IESNA:") || first.starts_with("IES:") {
-        return Err(err(
-            Some(1),
-            format!("unknown LM-63 version line '{}'", show(lines[0].trim())),
-        ));
-    } else {
-        (SourceFormat::Ies1986, 0)
+    // The version line, read without its spaces and colons: files in the wild write
+    // `IESNA: LM-63-2002`, `IESNA LM-63-2002` (which was read as a 1986 file, whose line 2 then
+    // set the candela multiplier: 1.5 times the intensities) or `IESNA:LM-63-1991`.
+    let first: String = lines[0]
+        .trim()
+        .to_ascii_uppercase()
+        .chars()
+        .filter(|c| !c.is_whitespace() && *c != ':')
+        .collect();
+    let version = first
+        .strip_prefix("IESNALM-63-")
+        .or_else(|| first.strip_prefix("IESLM-63-"));
+    let (format, mut k) = match version {
+        Some(v) if v.starts_with("1995") => (SourceFormat::Ies1995, 1),
+        Some(v) if v.starts_with("2002") => (SourceFormat::Ies2002, 1),
+        Some(v) if v.starts_with("2019") => (SourceFormat::Ies2019, 1),
+        Some(v) if v.starts_with("1991") => (SourceFormat::Ies1991, 1),
+        Some(_) => {
+            return Err(err(
+                Some(1),
+                format!("unknown LM-63 version line '{}'", show(lines[0].trim())),
+            ))
+        }
+        None if first.starts_with("IESNA91") => (SourceFormat::Ies1991, 1),
+        None if ["IESNA:", "IES:"]
+            .iter()
+            .any(|p| lines[0].trim().to_ascii_uppercase().starts_with(p)) =>
+        {
+            return Err(err(
+                Some(1),
+                format!("unknown LM-63 version line '{}'", show(lines[0].trim())),
+            ))
+        }
+        None => (SourceFormat::Ies1986, 0),
     };
 
     // Keywords (or 1986 free text) up to the TILT line.

@@ -224,6 +224,13 @@ fn versions_and_units() {
         ("IESNA:LM-63-1995", SourceFormat::Ies1995),
         ("IES:LM-63-2019", SourceFormat::Ies2019),
         ("IESNA91", SourceFormat::Ies1991),
+        // Spellings found in the wild: a space after the colon, no colon (read as a 1986 file
+        // before, whose line 2 then scaled the intensities), IES: for 2002, LM-63-1991.
+        ("IESNA: LM-63-2002", SourceFormat::Ies2002),
+        ("IESNA LM-63-2002", SourceFormat::Ies2002),
+        ("IES:LM-63-2002", SourceFormat::Ies2002),
+        ("iesna:lm-63-1995", SourceFormat::Ies1995),
+        ("IESNA:LM-63-1991", SourceFormat::Ies1991),
     ] {
         let p = parse_ies_str("v.ies", &format!("{tag}\n{body}")).unwrap();
         assert_eq!(p.format, fmt);
@@ -307,6 +314,16 @@ fn malformed_ies_files_give_one_line_errors_with_file_and_line() {
         (String::new(), None, "empty file"),
         (
             b.replace("IESNA:LM-63-2002", "IESNA:LM-63-2030"),
+            Some(1),
+            "unknown LM-63 version",
+        ),
+        (
+            b.replace("IESNA:LM-63-2002", "IESNA LM-63-2030"),
+            Some(1),
+            "unknown LM-63 version",
+        ),
+        (
+            b.replace("IESNA:LM-63-2002", "IESNA:PHOTOMETRY"),
             Some(1),
             "unknown LM-63 version",
         ),

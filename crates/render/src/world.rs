@@ -337,6 +337,21 @@ impl World {
         }
     }
 
+    /// Closest surface along a ray leaving a point light or a luminaire's source, beyond the
+    /// margin around it: a luminaire mounted exactly on a ceiling or wall (its position on that
+    /// surface, as recessed troffers are placed) emits into the room. The first hit was the
+    /// surface itself at t = 0, and every light path's reflected light was lost without a word.
+    pub fn intersect_from_source(&self, origin: Vec3, direction: Vec3) -> Option<SurfacePoint> {
+        self.tracer
+            .intersect(
+                origin,
+                direction,
+                self.margin(origin, origin),
+                f64::INFINITY,
+            )
+            .map(|h| self.surface(&h))
+    }
+
     /// Closest surface along a ray.
     pub fn intersect(&self, origin: Vec3, direction: Vec3) -> Option<SurfacePoint> {
         self.tracer

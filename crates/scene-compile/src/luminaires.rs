@@ -197,6 +197,26 @@ pub fn compile(scene_path: &Path, luminaires: &[Luminaire]) -> Result<CompiledLu
                 format!("the luminaire's flux {flux_lm} lm is not finite and positive"),
             ));
         }
+        // The bound every other emitter has (a 1e300 cd table gave Eavg inf ± NaN).
+        let peak_cd = l.multiplier
+            * out.tables[index as usize]
+                .cd
+                .iter()
+                .fold(0.0f64, |m, &v| m.max(v));
+        if flux_lm > crate::validate::MAX_EMISSION || peak_cd > crate::validate::MAX_EMISSION {
+            return Err(Error::at(
+                scene_path,
+                format!("{place}.multiplier"),
+                format!(
+                    "the luminaire's peak intensity {} cd or flux {} lm (its table × \
+                     multiplier) exceeds {}, beyond which the estimators' arithmetic and f32 \
+                     images overflow",
+                    luxest_io::num::show(peak_cd),
+                    luxest_io::num::show(flux_lm),
+                    luxest_io::num::show(crate::validate::MAX_EMISSION)
+                ),
+            ));
+        }
         let opening_points = match &l.opening {
             Opening::Point => Vec::new(),
             Opening::Area {

@@ -74,6 +74,22 @@ fn spec(s: &CalculationSurface) -> GridSpec {
 /// Validates a surface (finite numbers, perpendicular non-zero edges, a margin that leaves an
 /// area, a positive spacing, a usable sensor kind) and lays out its grid.
 pub(crate) fn check(c: &Check, place: &str, s: &CalculationSurface) -> Result<CalcGrid> {
+    if let SurfaceArea::Floor { min, max, .. } = &s.area {
+        // Corners the wrong way round turned the plane over: its points went below the floor,
+        // facing down, and read 0 lx without a word.
+        for (axis, lo, hi) in [("x", min.0, max.0), ("z", min.1, max.1)] {
+            if lo >= hi {
+                return Err(c.fail(
+                    &format!("{place}.area"),
+                    format!(
+                        "Floor min.{axis} {} is not below max.{axis} {}",
+                        luxest_io::num::show(lo),
+                        luxest_io::num::show(hi)
+                    ),
+                ));
+            }
+        }
+    }
     let (o, u, v) = rectangle(&s.area);
     c.position(&format!("{place}.area"), o)?;
     c.nonzero_vec(&format!("{place}.area.u"), u)?;
