@@ -590,3 +590,34 @@ fn cos3_luminaire_over_a_black_floor_gives_the_closed_form_work_plane() {
         "flux {flux:.1} lm not in\n{md}"
     );
 }
+
+/// A surface that receives no light at any point (facing away, below the floor) has no
+/// uniformity: the report says so instead of "U0 0.000 ± 0.000".
+#[test]
+fn uniformity_of_an_unlit_surface_is_undefined() {
+    let dir = TempDir::new("report-dark");
+    let res = dir.path().join("room.sensors.ron");
+    let zeros = vec![vec![0.0; NU * NV]; 4];
+    results(&zeros).write_ron(&res).unwrap();
+    let out = dir.path().join("out");
+    report(&[res.to_str().unwrap(), "-o", out.to_str().unwrap()]).unwrap();
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for figure in ["U0 = Emin/Eavg", "Ud = Emin/Emax"] {
+        assert!(
+            md.contains(&format!(
+                "| {figure} | undefined: no point of the surface receives light |"
+            )),
+            "{md}"
+        );
+    }
+    // A lit surface keeps its numbers.
+    let lit = dir.path().join("lit.sensors.ron");
+    results(&batches()).write_ron(&lit).unwrap();
+    let out = dir.path().join("out-lit");
+    report(&[lit.to_str().unwrap(), "-o", out.to_str().unwrap()]).unwrap();
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        md.contains("| U0 = Emin/Eavg | 0.") && !md.contains("undefined"),
+        "{md}"
+    );
+}

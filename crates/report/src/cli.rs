@@ -117,6 +117,13 @@ pub fn run(args: Args) -> Result<()> {
             stats.u0.value,
             stats.u0.std_error
         );
+        if stats.e_max.value <= 0.0 {
+            eprintln!(
+                "warning: surface \"{}\" receives no light at any point: U0 and Ud are \
+                 undefined (the tables show 0); is it facing away from the luminaires?",
+                s.name
+            );
+        }
         let rows = tables::rows(s);
         tables::write_csv_to(&mut plan, &dir.join(csv), &rows)?;
         tables::write_ron_to(

@@ -172,8 +172,15 @@ fn surface_section(s: &mut String, r: &SurfaceReport) {
     let _ = writeln!(s, "| Eavg | {} |", format_estimate(st.e_avg, "lx"));
     let _ = writeln!(s, "| Emin | {} |", format_estimate(st.e_min, "lx"));
     let _ = writeln!(s, "| Emax | {} |", format_estimate(st.e_max, "lx"));
-    let _ = writeln!(s, "| U0 = Emin/Eavg | {} |", format_estimate(st.u0, ""));
-    let _ = writeln!(s, "| Ud = Emin/Emax | {} |\n", format_estimate(st.ud, ""));
+    // Without light anywhere on the surface the ratios are 0/0 (they read 0.000 ± 0.000).
+    let (u0, ud) = if st.e_max.value > 0.0 {
+        (format_estimate(st.u0, ""), format_estimate(st.ud, ""))
+    } else {
+        let none = "undefined: no point of the surface receives light".to_string();
+        (none.clone(), none)
+    };
+    let _ = writeln!(s, "| U0 = Emin/Eavg | {u0} |");
+    let _ = writeln!(s, "| Ud = Emin/Emax | {ud} |\n");
     let _ = writeln!(
         s,
         "{}{}\n",
