@@ -241,7 +241,16 @@ pub fn parse_ldt_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
             ))
         }
     })?;
-    let (gamma, _, ()) = ts.angles(ng, "gamma", 180.0, |_, _| Ok(()))?;
+    // As for IES type C files: a table from 10° left straight down at 0 cd without a word.
+    let (gamma, _, ()) = ts.angles(ng, "gamma", 180.0, |first, last| {
+        if (first == 0.0 || first == 90.0) && (last == 90.0 || last == 180.0) && first < last {
+            Ok(())
+        } else {
+            Err(format!(
+                "gamma angles must run from 0 or 90 to 90 or 180, found {first} to {last}"
+            ))
+        }
+    })?;
 
     // The stored planes' angles, with Isym 3's 270..360..90 unwrapped to -90..90.
     let mut c_given = Vec::with_capacity(n_planes);

@@ -456,6 +456,12 @@ fn malformed_ldt_files_give_one_line_errors_with_file_and_line() {
         (set(50, "200"), Some(51), "C angles not strictly increasing"),
         (set(80, "NaN"), Some(80), "expected a number, found 'NaN'"),
         (set(103, "190"), Some(103), "outside [0, 180]"),
+        // A table that does not start at 0 (or 90) left straight down at 0 cd.
+        (
+            set(67, "1"),
+            Some(67),
+            "gamma angles must run from 0 or 90 to 90 or 180, found 1 to 90",
+        ),
         (set(120, "-1"), Some(120), "negative luminous intensity -1"),
         (
             format!("{b}5\r\n"),
