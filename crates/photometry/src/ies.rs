@@ -198,6 +198,8 @@ pub(crate) fn parse_number(s: &str) -> Result<f64, String> {
 /// Parses an IES LM-63 file from text; `name` is used in error messages. Never panics.
 pub fn parse_ies_str(name: &str, text: &str) -> Result<Photometry, PhotometryError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let unified = crate::unify_line_ends(text);
+    let text = unified.as_ref();
     let lines: Vec<&str> = text.lines().collect();
     let err = |line: Option<usize>, m: String| PhotometryError::new(name, line, m);
     if lines.iter().all(|l| l.trim().is_empty()) {

@@ -92,6 +92,8 @@ fn decimal_comma(t: &str) -> std::borrow::Cow<'_, str> {
 /// Parses a EULUMDAT file from text; `name` is used in error messages. Never panics.
 pub fn parse_ldt_str(name: &str, text: &str) -> Result<Photometry, PhotometryError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let unified = crate::unify_line_ends(text);
+    let text = unified.as_ref();
     let l = Lines {
         name,
         lines: text.lines().collect(),

@@ -97,3 +97,14 @@ pub(crate) fn read_text(path: &Path) -> Result<String, PhotometryError> {
         Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
     })
 }
+
+/// `text` with every line ending a `\n`: files from classic Mac OS end lines with CR alone,
+/// which `str::lines` does not split (an IES file was "missing TILT=" on line 1, an EULUMDAT
+/// file "truncated" at 1 line). CRLF files are unchanged in meaning.
+pub(crate) fn unify_line_ends(text: &str) -> std::borrow::Cow<'_, str> {
+    if text.contains('\r') {
+        std::borrow::Cow::Owned(text.replace("\r\n", "\n").replace('\r', "\n"))
+    } else {
+        std::borrow::Cow::Borrowed(text)
+    }
+}

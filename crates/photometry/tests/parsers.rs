@@ -610,3 +610,27 @@ fn table_round_trip_is_exact() {
         assert_eq!(p.flux_from_table_lm(), q.flux_from_table_lm());
     }
 }
+
+/// Files with classic Mac OS line ends (CR alone) read like their LF and CRLF versions.
+#[test]
+fn cr_only_line_ends_read_like_lf() {
+    for (name, parse) in [
+        (
+            "cos2.ies",
+            parse_ies_str as fn(&str, &str) -> Result<luxest_photometry::Photometry, _>,
+        ),
+        ("cos2.ldt", parse_ldt_str),
+    ] {
+        let lf = text(name).replace("\r\n", "\n");
+        let cr = lf.replace('\n', "\r");
+        let (a, b) = (parse(name, &lf).unwrap(), parse(name, &cr).unwrap());
+        for (c, g) in [(0.0, 0.0), (45.0, 30.0), (180.0, 60.0)] {
+            assert_eq!(
+                a.intensity_cd(c, g),
+                b.intensity_cd(c, g),
+                "{name} C {c} γ {g}"
+            );
+        }
+        assert!(a.intensity_cd(0.0, 0.0) > 0.0);
+    }
+}
