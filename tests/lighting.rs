@@ -272,6 +272,19 @@ fn bad_results_are_refused_in_one_line_without_outputs() {
     let mut r = results(&batches());
     r.sets[0].points[1].position.x += 0.25;
     refused(&dir, &r, "not the grid's");
+    // A value edited away from its batches' mean (it was shown beside figures from the
+    // batches), and a negative illuminance (U0 came out negative).
+    let mut r = results(&batches());
+    r.sets[0].points[2].value = 1000.0;
+    refused(
+        &dir,
+        &r,
+        "point 2: value 1000 is not the mean of its 4 batch values",
+    );
+    let mut r = results(&batches());
+    r.sets[0].batches.clear();
+    r.sets[0].points[5].value = -5.0;
+    refused(&dir, &r, "point 5: illuminance -5 lx is negative");
     // A results file that is not RON at all.
     let path = dir.write("bad.sensors.ron", "SensorResults(scene: ");
     let (code, msg) = report(&[

@@ -145,6 +145,31 @@ impl Surface {
                     "batch value is not a finite number",
                 ));
             }
+            // estimate sensors writes each value as the mean of its batches: a value edited
+            // (or from another run) would be shown beside figures computed from the batches.
+            if let Some(k) = (0..n).find(|&k| {
+                let mean = b.iter().map(|x| x[k]).sum::<f64>() / b.len() as f64;
+                (self.values[k] - mean).abs() > 1e-9 * self.values[k].abs().max(mean.abs())
+            }) {
+                return Err(Error::at(
+                    file,
+                    format!("{place}, point {k}"),
+                    format!(
+                        "value {} is not the mean of its {} batch values; the results were \
+                         edited or mixed",
+                        self.values[k],
+                        b.len()
+                    ),
+                ));
+            }
+        }
+        // Illuminance is a sum of non-negative contributions.
+        if let Some(k) = (0..n).find(|&k| self.values[k] < 0.0) {
+            return Err(Error::at(
+                file,
+                format!("{place}, point {k}"),
+                format!("illuminance {} lx is negative", self.values[k]),
+            ));
         }
         self.grid
             .calc_grid()
