@@ -222,6 +222,8 @@ pub fn parse_ies_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
         Some(v) if v.starts_with("2002") => (SourceFormat::Ies2002, 1),
         Some(v) if v.starts_with("2019") => (SourceFormat::Ies2019, 1),
         Some(v) if v.starts_with("1991") => (SourceFormat::Ies1991, 1),
+        // LM-63-1986 has no version line: such a first line is the free text it begins with.
+        Some(v) if v.starts_with("1986") => (SourceFormat::Ies1986, 0),
         Some(_) => {
             return Err(err(
                 Some(1),

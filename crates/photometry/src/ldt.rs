@@ -244,12 +244,14 @@ pub fn parse_ldt_str(name: &str, text: &str) -> Result<Photometry, PhotometryErr
         }
     })?;
     // As for IES type C files: a table from 10° left straight down at 0 cd without a word.
-    let (gamma, _, ()) = ts.angles(ng, "gamma", 180.0, |first, last| {
-        if (first == 0.0 || first == 90.0) && (last == 90.0 || last == 180.0) && first < last {
+    // (Its end is not checked: older files may stop short of 90 or 180.)
+    let (gamma, _, ()) = ts.angles(ng, "gamma", 180.0, |first, _| {
+        if first == 0.0 || first == 90.0 {
             Ok(())
         } else {
             Err(format!(
-                "gamma angles must run from 0 or 90 to 90 or 180, found {first} to {last}"
+                "gamma angles must start at 0 or 90, found {first} (the table would leave the \
+                 directions below it dark)"
             ))
         }
     })?;

@@ -98,12 +98,14 @@ pub(crate) fn read_text(path: &Path) -> Result<String, PhotometryError> {
     })
 }
 
-/// `text` with every line ending a `\n`: files from classic Mac OS end lines with CR alone,
+/// `text` with its lines split by `\n`: a file from classic Mac OS ends lines with CR alone,
 /// which `str::lines` does not split (an IES file was "missing TILT=" on line 1, an EULUMDAT
-/// file "truncated" at 1 line). CRLF files are unchanged in meaning.
+/// file "truncated" at 1 line). Only a file without any LF is converted: CRLF files, and
+/// CR CR LF ones (a CRLF file through text-mode FTP), whose trailing CRs each line's trim
+/// removes, keep their lines and line numbers.
 pub(crate) fn unify_line_ends(text: &str) -> std::borrow::Cow<'_, str> {
-    if text.contains('\r') {
-        std::borrow::Cow::Owned(text.replace("\r\n", "\n").replace('\r', "\n"))
+    if text.contains('\r') && !text.contains('\n') {
+        std::borrow::Cow::Owned(text.replace('\r', "\n"))
     } else {
         std::borrow::Cow::Borrowed(text)
     }

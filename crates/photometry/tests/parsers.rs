@@ -247,6 +247,17 @@ fn versions_and_units() {
     .unwrap();
     assert_eq!(p.format, SourceFormat::Ies1986);
     assert!(p.keywords.is_empty());
+    // A 1986 file whose free text names its standard is still a 1986 file.
+    let p = parse_ies_str(
+        "v.ies",
+        &format!(
+            "IESNA LM-63-1986 Acme
+{}",
+            &body[body.find("TILT").unwrap()..]
+        ),
+    )
+    .unwrap();
+    assert_eq!(p.format, SourceFormat::Ies1986);
     // The ballast-lamp factor multiplies in 1991 files only; in 2002 the field is "future use".
     let halved = body.replace("\n1 1 0\n", "\n1 0.5 0\n");
     let p91 = parse_ies_str("v.ies", &format!("IESNA91\n{halved}")).unwrap();
@@ -460,7 +471,7 @@ fn malformed_ldt_files_give_one_line_errors_with_file_and_line() {
         (
             set(67, "1"),
             Some(67),
-            "gamma angles must run from 0 or 90 to 90 or 180, found 1 to 90",
+            "gamma angles must start at 0 or 90, found 1 (the table",
         ),
         (set(120, "-1"), Some(120), "negative luminous intensity -1"),
         (
@@ -611,9 +622,9 @@ fn table_round_trip_is_exact() {
     }
 }
 
-/// Files with classic Mac OS line ends (CR alone) read like their LF and CRLF versions.
+/// Files with classic Mac OS line ends (CR alone), or CR CR LF, read like their LF versions.
 #[test]
-fn cr_only_line_ends_read_like_lf() {
+fn cr_only_and_cr_cr_lf_line_ends_read_like_lf() {
     for (name, parse) in [
         (
             "cos2.ies",
@@ -622,14 +633,19 @@ fn cr_only_line_ends_read_like_lf() {
         ("cos2.ldt", parse_ldt_str),
     ] {
         let lf = text(name).replace("\r\n", "\n");
+        // CR alone (classic Mac OS), and CR CR LF (a CRLF file through text-mode FTP).
         let cr = lf.replace('\n', "\r");
-        let (a, b) = (parse(name, &lf).unwrap(), parse(name, &cr).unwrap());
-        for (c, g) in [(0.0, 0.0), (45.0, 30.0), (180.0, 60.0)] {
-            assert_eq!(
-                a.intensity_cd(c, g),
-                b.intensity_cd(c, g),
-                "{name} C {c} γ {g}"
-            );
+        let crcrlf = lf.replace('\n', "\r\r\n");
+        let a = parse(name, &lf).unwrap();
+        for other in [&cr, &crcrlf] {
+            let b = parse(name, other).unwrap();
+            for (c, g) in [(0.0, 0.0), (45.0, 30.0), (180.0, 60.0)] {
+                assert_eq!(
+                    a.intensity_cd(c, g),
+                    b.intensity_cd(c, g),
+                    "{name} C {c} γ {g}"
+                );
+            }
         }
         assert!(a.intensity_cd(0.0, 0.0) > 0.0);
     }
