@@ -527,19 +527,26 @@ impl World {
                 emitted: *intensity_rgb,
                 pdf: p_e,
             },
-            Emitter::Area {
-                radiance_rgb,
-                area_m2,
-                ..
-            } => {
-                let (position, normal, _) = self.sample_area_point(ei, rng);
-                LightPoint {
-                    position,
-                    normal: Some(normal),
-                    emitted: *radiance_rgb,
-                    pdf: p_e / area_m2,
-                }
-            }
+            Emitter::Area { .. } => self.area_light_point(ei, p_e, rng),
+        }
+    }
+
+    /// A uniformly sampled point of the area emitter `ei`, chosen with probability `p_e`.
+    fn area_light_point(&self, ei: usize, p_e: f64, rng: &mut impl Sampler) -> LightPoint {
+        let Emitter::Area {
+            radiance_rgb,
+            area_m2,
+            ..
+        } = &self.scene.header.emitters[ei]
+        else {
+            unreachable!("area_light_point on an emitter without area")
+        };
+        let (position, normal, _) = self.sample_area_point(ei, rng);
+        LightPoint {
+            position,
+            normal: Some(normal),
+            emitted: *radiance_rgb,
+            pdf: p_e / area_m2,
         }
     }
 
@@ -549,21 +556,7 @@ impl World {
     /// is [`World::area_light_point_pdf`].
     pub fn sample_area_light_point(&self, rng: &mut impl Sampler) -> Option<LightPoint> {
         let (ei, p_e) = self.area_choice.as_ref()?.sample(rng.next_f64());
-        let Emitter::Area {
-            radiance_rgb,
-            area_m2,
-            ..
-        } = &self.scene.header.emitters[ei]
-        else {
-            unreachable!("the area choice gives area emitters only")
-        };
-        let (position, normal, _) = self.sample_area_point(ei, rng);
-        Some(LightPoint {
-            position,
-            normal: Some(normal),
-            emitted: *radiance_rgb,
-            pdf: p_e / area_m2,
-        })
+        Some(self.area_light_point(ei, p_e, rng))
     }
 
     /// Area density with which [`World::sample_area_light_point`] picks a point on the area

@@ -114,7 +114,7 @@ impl Builder {
             if let Some(c) = w
                 .iter()
                 .map(|&c| c as f64)
-                .find(|c| c.is_nan() || c.abs() > validate::MAX_COORDINATE)
+                .find(|&c| validate::beyond_world(c))
             {
                 return Err(Error::at(
                     path,
@@ -262,13 +262,6 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
 }
 
 /// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
-/// The first coordinate of `p` beyond ±[`validate::MAX_COORDINATE`] (or NaN), if any.
-fn out_of_world(p: Vec3) -> Option<f64> {
-    [p.x, p.y, p.z]
-        .into_iter()
-        .find(|c| c.is_nan() || c.abs() > validate::MAX_COORDINATE)
-}
-
 pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     validate::check_scene(path, scene)?;
     let mut report = Report::default();
@@ -485,7 +478,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     // openings) are bounded like the authored ones.
     for set in &sensors {
         for (k, p) in set.points.iter().enumerate() {
-            if let Some(c) = out_of_world(p.position) {
+            if let Some(c) = validate::first_beyond_world(p.position) {
                 return Err(Error::at(
                     path,
                     format!("sensors \"{}\", point {k}", set.name),
@@ -501,7 +494,10 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             ..
         } = e
         {
-            if let Some(c) = opening_points.iter().find_map(|&p| out_of_world(p)) {
+            if let Some(c) = opening_points
+                .iter()
+                .find_map(|&p| validate::first_beyond_world(p))
+            {
                 return Err(Error::at(
                     path,
                     format!("luminaire \"{name}\", its opening"),

@@ -32,7 +32,18 @@ pub const MAX_COORDINATE: f64 = 1e15;
 /// lost light below; 1e-6 m keeps a margin of fifty, and no lighting scene is smaller.
 pub const MIN_SCENE_SPAN: f64 = 1e-6;
 
-/// The message for a coordinate beyond ±[`MAX_COORDINATE`].
+/// Whether the coordinate `c` lies beyond ±[`MAX_COORDINATE`] (or is NaN): the one test of
+/// every point of a scene, authored or computed.
+pub(crate) fn beyond_world(c: f64) -> bool {
+    c.is_nan() || c.abs() > MAX_COORDINATE
+}
+
+/// The first coordinate of `p` that is [`beyond_world`], if any.
+pub(crate) fn first_beyond_world(p: Vec3) -> Option<f64> {
+    [p.x, p.y, p.z].into_iter().find(|&c| beyond_world(c))
+}
+
+/// The message for a coordinate [`beyond_world`].
 pub(crate) fn out_of_world(v: f64) -> String {
     format!(
         "{} m is outside the world coordinates luxest can trace (±{} m)",
@@ -67,7 +78,7 @@ impl Check<'_> {
         for (i, c) in [v.x, v.y, v.z].into_iter().enumerate() {
             let place = format!("{place}[{i}]");
             self.finite(&place, c)?;
-            if c.abs() > MAX_COORDINATE {
+            if beyond_world(c) {
                 return Err(self.fail(&place, out_of_world(c)));
             }
         }
@@ -287,7 +298,7 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
             .into_iter()
             .enumerate()
         {
-            if v.abs() > MAX_COORDINATE {
+            if beyond_world(v) {
                 return Err(c.fail(
                     &format!("{place}.transform.translate[{i}]"),
                     out_of_world(v),
