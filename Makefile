@@ -31,6 +31,16 @@ EVALUATE ?= $(RELEASE)/evaluate
 REPORT ?= $(RELEASE)/report
 DEFAULT_MODEL := models/default.onnx
 
+# Launchers, empty by default: every stage call of every rule runs as `$(LAUNCH) $(STAGE) ...`,
+# the training step as `$(TRAIN_LAUNCH) python train.py ...`, so that a scheduler runs each one
+# as a job step while Make keeps the DAG (README, *On a Slurm cluster*):
+#   make -j64 reference noisy LAUNCH="srun --ntasks=1 --cpus-per-task=8 --exact"
+#   make train TRAIN_LAUNCH="srun --ntasks=1 --gres=gpu:1"
+# A stage's --threads default is the CPUs its process may run on (Slurm binds a step to its
+# --cpus-per-task), so a step of -c8 runs eight threads.
+LAUNCH ?=
+TRAIN_LAUNCH ?= $(LAUNCH)
+
 SCENES := $(basename $(notdir $(wildcard scenes/*.ron)))
 COMPILED := $(patsubst %,build/%/scene.lxs,$(SCENES))
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml Cargo.lock
@@ -40,7 +50,7 @@ VENV := .venv
 VENV_STAMP := .luxest-setup-3
 PYTHON := $(VENV)/bin/python
 
-.PHONY: run scenes test lint bench validate singularity clean train pytest eval
+.PHONY: run scenes test lint bench validate singularity clean train pytest eval test-slurm
 # Every file make builds is kept: none is a throwaway intermediate (compiled scenes, renders).
 .SECONDARY:
 
@@ -71,12 +81,12 @@ include pipelines/bench.mk
 # (local estimate), render its double-local-estimate luminance image with a PNG preview.
 RUN_PREFIX := build/$(DEFAULT_SCENE)/$(DEFAULT_SCENE)
 run: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE) $(TRACE) $(AOV_WRITE) $(DENOISE)
-	$(SCENE_COMPILE) --info $< > build/$(DEFAULT_SCENE)/scene.info.ron
-	$(TRACE) $< --spp 64 --snapshots 1,4,16 --resolution 256x256 --preview $(RUN_PREFIX)_$(call lx_count,64)spp.png
-	$(AOV_WRITE) $< --spp 64 --snapshots 1,4,16 --min-samples $(FEATURE_SPP) --resolution 256x256
-	$(DENOISE) --model $(DEFAULT_MODEL) --preview $(foreach s,1 4 16 64,$(call lx_image,$(RUN_PREFIX),$(s),hdr))
-	$(ESTIMATE) sensors $< --paths 200000 --csv $(RUN_PREFIX).sensors.csv
-	$(ESTIMATE) image $< --paths 300 --resolution 256x256 --preview $(RUN_PREFIX)_$(call lx_count,300)le.png
+	$(LAUNCH) $(SCENE_COMPILE) --info $< > build/$(DEFAULT_SCENE)/scene.info.ron
+	$(LAUNCH) $(TRACE) $< --spp 64 --snapshots 1,4,16 --resolution 256x256 --preview $(RUN_PREFIX)_$(call lx_count,64)spp.png
+	$(LAUNCH) $(AOV_WRITE) $< --spp 64 --snapshots 1,4,16 --min-samples $(FEATURE_SPP) --resolution 256x256
+	$(LAUNCH) $(DENOISE) --model $(DEFAULT_MODEL) --preview $(foreach s,1 4 16 64,$(call lx_image,$(RUN_PREFIX),$(s),hdr))
+	$(LAUNCH) $(ESTIMATE) sensors $< --paths 200000 --csv $(RUN_PREFIX).sensors.csv
+	$(LAUNCH) $(ESTIMATE) image $< --paths 300 --resolution 256x256 --preview $(RUN_PREFIX)_$(call lx_count,300)le.png
 
 scenes: $(COMPILED)
 
@@ -95,7 +105,7 @@ $(addprefix $(RELEASE)/,$(STAGE_BINS)): $(RELEASE)/%:
 
 # The compiled scene depends on its source, the meshes it may load and the compiler.
 build/%/scene.lxs: scenes/%.ron $(MESHES) $(SCENE_COMPILE)
-	$(SCENE_COMPILE) $< -o $@
+	$(LAUNCH) $(SCENE_COMPILE) $< -o $@
 
 lint:
 	$(CARGO) fmt --all -- --check
@@ -119,6 +129,13 @@ test: pytest
 		if grep -qi embree target/debug/$$b.dynamic; then echo "error: target/debug/$$b links Embree" >&2; exit 1; fi; \
 	done; echo "denoise and evaluate link no Embree"
 
+# The Make DAG through a real single-node Slurm cluster (pipelines/tests/test_slurm.py; set up
+# by scripts/slurm-cluster.sh, Slurm and munge from scripts/setup.sh) with the debug stage
+# programs that make test builds.
+test-slurm: $(VENV)/$(VENV_STAMP)
+	$(CARGO) build -p scene-compile -p trace -p aov-write -p estimate --bins
+	LUXEST_BIN_DIR=target/debug $(PYTHON) -m pytest pipelines/tests -q
+
 $(VENV)/$(VENV_STAMP): scripts/setup-python.sh training/requirements.txt
 	scripts/setup-python.sh
 
@@ -136,15 +153,15 @@ train: $(MODEL)
 # or out of date.
 ifeq ($(if $(filter command line,$(origin EVAL_MODEL)),$(if $(filter train,$(MAKECMDGOALS)),,$(filter $(MODEL),$(EVAL_MODEL)))),)
 $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract.py $(EVALUATE) | reference noisy
-	cd training && ../$(PYTHON) preprocess.py --data-dir ../$(DATA_DIR) --prep-dir ../build/train/$(DATASET) \
+	cd training && $(LAUNCH) ../$(PYTHON) preprocess.py --data-dir ../$(DATA_DIR) --prep-dir ../build/train/$(DATASET) \
 		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) \
 		--extra-seeds $(if $(NOISY_EXTRA),$(NOISY_EXTRA_SEEDS)) --extra-spp $(NOISY_EXTRA)
-	cd training && ../$(PYTHON) train.py --prep-dir ../build/train/$(DATASET) --run-dir ../runs/$(DATASET) \
+	cd training && $(TRAIN_LAUNCH) ../$(PYTHON) train.py --prep-dir ../build/train/$(DATASET) --run-dir ../runs/$(DATASET) \
 		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) --extra-seeds $(if $(NOISY_EXTRA),$(NOISY_EXTRA_SEEDS)) \
 		--extra-spp $(NOISY_EXTRA) --steps $(TRAIN_STEPS) --minutes $(TRAIN_MINUTES) \
 		--schedule $(TRAIN_SCHEDULE) --loss $(TRAIN_LOSS)
-	cd training && ../$(PYTHON) export.py --run-dir ../runs/$(DATASET) --out ../$@
-	cd training && ../$(PYTHON) compare_image.py --model ../$@ --split-dir ../$(DATA_DIR)/test \
+	cd training && $(LAUNCH) ../$(PYTHON) export.py --run-dir ../runs/$(DATASET) --out ../$@
+	cd training && $(LAUNCH) ../$(PYTHON) compare_image.py --model ../$@ --split-dir ../$(DATA_DIR)/test \
 		--work-dir ../build/train/$(DATASET)/compare --evaluate $(if $(findstring /,$(EVALUATE)),$(abspath $(EVALUATE)),$(EVALUATE)) \
 		--json ../models/$(DATASET).metrics.json
 	cp runs/$(DATASET)/run.json models/$(DATASET).config.json
@@ -160,7 +177,7 @@ bench: build/sobolev/scene.lxs build/cie171-5.8/scene.lxs build/cornell-box/scen
 build/bench-1m/scene.ron: pipelines/bench_scene.py
 	python3 pipelines/bench_scene.py
 build/bench-1m/scene.lxs: build/bench-1m/scene.ron $(SCENE_COMPILE)
-	$(SCENE_COMPILE) $< -o $@
+	$(LAUNCH) $(SCENE_COMPILE) $< -o $@
 
 clean:
 	rm -rf build data

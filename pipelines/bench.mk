@@ -16,10 +16,10 @@ bench_source = $(if $(filter bench-1m,$(1)),build/bench-1m/scene.ron,scenes/$(1)
 
 define lx_bench_rules
 $(call lx_ref,build/bench/$(1)/ref,hdr): build/$(1)/scene.lxs $$(TRACE)
-	$$(TRACE) $$< --reference --spp $$(BENCH_REF_SPP) --resolution $$(BENCH_RESOLUTION) --seed $$(REF_SEED) -o build/bench/$(1)/ref
+	$$(LAUNCH) $$(TRACE) $$< --reference --spp $$(BENCH_REF_SPP) --resolution $$(BENCH_RESOLUTION) --seed $$(REF_SEED) -o build/bench/$(1)/ref
 
 build/bench/$(1)/scene.xml: $(call bench_source,$(1)) $$(MESHES) $$(SCENE_COMPILE)
-	$$(SCENE_COMPILE) $$< -o build/bench/$(1)/scene.lxs --export-mitsuba build/bench/$(1) -q
+	$$(LAUNCH) $$(SCENE_COMPILE) $$< -o build/bench/$(1)/scene.lxs --export-mitsuba build/bench/$(1) -q
 
 build/bench/$(1)/pt.md: build/$(1)/scene.lxs $(call lx_ref,build/bench/$(1)/ref,hdr) build/bench/$(1)/scene.xml \
 		$$(TRACE) $$(ESTIMATE) $$(EVALUATE) pipelines/bench_pt.py pipelines/mitsuba_render.py $$(VENV)/$$(VENV_STAMP)
@@ -65,11 +65,11 @@ BENCH_EDGES_IMAGES := $(foreach m,mis plain,$(call lx_le,$(BENCH_EDGES_DIR)/$(m)
 .PHONY: bench-edges
 
 $(call lx_ref,$(BENCH_EDGES_DIR)/ref,hdr) $(call lx_ref,$(BENCH_EDGES_DIR)/ref,se) &: build/$(DEFAULT_SCENE)/scene.lxs $(TRACE)
-	$(TRACE) $< --reference --stderr --spp $(BENCH_EDGE_REF_SPP) --resolution $(BENCH_RESOLUTION) --seed $(REF_SEED) -o $(BENCH_EDGES_DIR)/ref
+	$(LAUNCH) $(TRACE) $< --reference --stderr --spp $(BENCH_EDGE_REF_SPP) --resolution $(BENCH_RESOLUTION) --seed $(REF_SEED) -o $(BENCH_EDGES_DIR)/ref
 
 define lx_bench_edge_image
 $(call lx_le,$(BENCH_EDGES_DIR)/$(1),$(BENCH_EDGE_PATHS),hdr): build/$(DEFAULT_SCENE)/scene.lxs $$(ESTIMATE)
-	$$(ESTIMATE) image $$< --paths $(BENCH_EDGE_PATHS) --resolution $(BENCH_RESOLUTION) --seed $(NOISY_SEED) \
+	$$(LAUNCH) $$(ESTIMATE) image $$< --paths $(BENCH_EDGE_PATHS) --resolution $(BENCH_RESOLUTION) --seed $(NOISY_SEED) \
 		$(if $(filter plain,$(1)),--mis-paths 0) -o $$@ --stderr-out $(call lx_le,$(BENCH_EDGES_DIR)/$(1),$(BENCH_EDGE_PATHS),se)
 endef
 $(foreach m,mis plain,$(eval $(call lx_bench_edge_image,$(m))))

@@ -41,7 +41,7 @@ $(GEN_DIR)/%.ron: data-gen/generate.py $(MESHES) $(SIDE_STAMP)
 	@$(GENERATE) --side $(DATASET_SIDE) --out $(GEN_DIR)
 
 build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(SCENE_COMPILE)
-	$(SCENE_COMPILE) -q $< -o $@
+	$(LAUNCH) $(SCENE_COMPILE) -q $< -o $@
 
 # REF_SPP is part of what a reference is: a stamp named after it (the only one of its kind) is a
 # prerequisite of every reference, so changing REF_SPP re-renders them (preprocess.py also
@@ -57,14 +57,14 @@ FEATURE_SPP_STAMP := $(call lx_stamp,build/dataset/$(DATASET),feature-spp,$(FEAT
 # it marks a complete feature set; the radiance of the last level marks a complete progressive
 # run.
 $(call lx_ref,$(DATA_DIR)/%,hdr): build/dataset/$(DATASET)/%.lxs $(TRACE) $(REF_SPP_STAMP)
-	$(TRACE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) -o $(DATA_DIR)/$*
+	$(LAUNCH) $(TRACE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) -o $(DATA_DIR)/$*
 $(call lx_ref,$(DATA_DIR)/%,nrm): build/dataset/$(DATASET)/%.lxs $(AOV_WRITE) $(REF_SPP_STAMP) $(FEATURE_SPP_STAMP)
-	$(AOV_WRITE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) --min-samples $(FEATURE_SPP) -o $(DATA_DIR)/$*
+	$(LAUNCH) $(AOV_WRITE) $< --spp $(REF_SPP) --reference --seed $(REF_SEED) --min-samples $(FEATURE_SPP) -o $(DATA_DIR)/$*
 
 $(call lx_image,$(DATA_DIR)/%,$(NOISY_MAX),hdr): build/dataset/$(DATASET)/%.lxs $(TRACE)
-	$(TRACE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) -o $(DATA_DIR)/$*
+	$(LAUNCH) $(TRACE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) -o $(DATA_DIR)/$*
 $(call lx_image,$(DATA_DIR)/%,$(NOISY_MAX),nrm): build/dataset/$(DATASET)/%.lxs $(AOV_WRITE) $(FEATURE_SPP_STAMP)
-	$(AOV_WRITE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) --min-samples $(FEATURE_SPP) -o $(DATA_DIR)/$*
+	$(LAUNCH) $(AOV_WRITE) $< --spp $(NOISY_MAX) --snapshots $(NOISY_SNAPSHOTS) --seed $(NOISY_SEED) --min-samples $(FEATURE_SPP) -o $(DATA_DIR)/$*
 
 # Extra noise realizations of the training scenes (NOISY_EXTRA_SEEDS, pipelines/presets.mk): the
 # levels NOISY_EXTRA_LEVELS that are noisy levels rendered again with each of these seeds into
@@ -84,8 +84,8 @@ extra_set = $(call lx_image,$(call extra_prefix,$(1),$(2)),$(NOISY_EXTRA_MAX),nr
 define dataset_realization
 $(call extra_set,$(1),$(2)): build/dataset/$(DATASET)/train/$(1).lxs $(TRACE) $(AOV_WRITE) $(FEATURE_SPP_STAMP)
 	@mkdir -p $(call lx_realization,$(DATA_DIR)/train,$(2))
-	$$(TRACE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) -o $(call extra_prefix,$(1),$(2))
-	$$(AOV_WRITE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) --min-samples $(FEATURE_SPP) -o $(call extra_prefix,$(1),$(2))
+	$$(LAUNCH) $$(TRACE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) -o $(call extra_prefix,$(1),$(2))
+	$$(LAUNCH) $$(AOV_WRITE) $$< --spp $(NOISY_EXTRA_MAX) --snapshots $(NOISY_EXTRA_SNAPSHOTS) --seed $(2) --min-samples $(FEATURE_SPP) -o $(call extra_prefix,$(1),$(2))
 endef
 DATASET_REALIZATIONS :=
 ifneq ($(NOISY_EXTRA),)
@@ -97,7 +97,7 @@ endif
 DATASET_LE_SCENES := $(filter-out test/%,$(DATASET_SCENES))
 define dataset_le
 $(call lx_le,$(DATA_DIR)/$(1),$(2),hdr): build/dataset/$(DATASET)/$(1).lxs $(ESTIMATE)
-	$$(ESTIMATE) image $$< --paths $(2) --seed $(NOISY_SEED) -o $$@
+	$$(LAUNCH) $$(ESTIMATE) image $$< --paths $(2) --seed $(NOISY_SEED) -o $$@
 endef
 $(foreach s,$(DATASET_LE_SCENES),$(foreach n,$(DATASET_DLE),$(eval $(call dataset_le,$(s),$(n)))))
 

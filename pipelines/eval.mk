@@ -45,33 +45,33 @@ eval_cb_lt = $(foreach n,$(EVAL_LT),$(call lx_le,$(EVAL_CB_LT),$(n),hdr))
 
 $(call lx_ref,$(EVAL_CB),hdr): $(EVAL_CB_SCENE) $(TRACE)
 	@mkdir -p $(@D)
-	$(TRACE) $< --spp $(EVAL_REF_SPP) --reference --seed $(REF_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
+	$(LAUNCH) $(TRACE) $< --spp $(EVAL_REF_SPP) --reference --seed $(REF_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
 
 # One progressive run writes every snapshot; the last marks it complete.
 $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr): $(EVAL_CB_SCENE) $(TRACE)
 	@mkdir -p $(@D)
-	$(TRACE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
+	$(LAUNCH) $(TRACE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB)
 $(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr),$(call eval_cb,hdr)): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),hdr) ;
 
 # Features of at least FEATURE_SPP samples (pipelines/presets.mk), stamped like the dataset's.
 $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm): $(EVAL_CB_SCENE) $(AOV_WRITE) $(call lx_stamp,$(EVAL_DIR),feature-spp,$(FEATURE_SPP))
 	@mkdir -p $(@D)
-	$(AOV_WRITE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --min-samples $(FEATURE_SPP) --resolution $(EVAL_RES) -o $(EVAL_CB)
+	$(LAUNCH) $(AOV_WRITE) $< --spp $(EVAL_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_SNAPSHOTS)) --seed $(NOISY_SEED) --min-samples $(FEATURE_SPP) --resolution $(EVAL_RES) -o $(EVAL_CB)
 $(filter-out $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm),$(foreach k,$(LX_FEATURES),$(call eval_cb,$(k)))): $(call lx_image,$(EVAL_CB),$(EVAL_LAST),nrm) ;
 
 $(call lx_image_pattern,$(EVAL_CB),dn): $(foreach k,hdr $(LX_FEATURES),$(call lx_image_pattern,$(EVAL_CB),$(k))) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
-	$(DENOISE) $< --model $(EVAL_MODEL) -o $@
+	$(LAUNCH) $(DENOISE) $< --model $(EVAL_MODEL) -o $@
 
 $(call lx_le_pattern,$(EVAL_CB),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
 	@mkdir -p $(@D)
-	$(ESTIMATE) image $< --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
+	$(LAUNCH) $(ESTIMATE) image $< --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
 
 $(call lx_le_pattern,$(EVAL_CB_LT),hdr): $(EVAL_CB_SCENE) $(ESTIMATE)
 	@mkdir -p $(@D)
-	$(ESTIMATE) image $< --light-tracing --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
+	$(LAUNCH) $(ESTIMATE) image $< --light-tracing --paths $* --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $@
 
 $(call lx_le_pattern,$(EVAL_CB),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_features,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP)) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
-	$(DENOISE) $< --model $(EVAL_MODEL) --features-of $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),hdr) -o $@
+	$(LAUNCH) $(DENOISE) $< --model $(EVAL_MODEL) --features-of $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),hdr) -o $@
 
 # Intel Open Image Denoise, the peer, on the same inputs (pipelines/oidn_denoise.py): in an oidn/
 # directory beside them, the scene's name suffixed `-oidn` (the FLIP maps share one directory).
@@ -82,15 +82,15 @@ eval_cb_oidn = $(foreach s,$(EVAL_SNAPSHOTS),$(call lx_image,$(EVAL_CB_OIDN),$(s
 
 $(call lx_image_pattern,$(EVAL_CB_OIDN),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB),alb) $(call lx_image_pattern,$(EVAL_CB),nrm) pipelines/oidn_denoise.py
 	@mkdir -p $(@D)
-	$(OIDN_DENOISE) $< --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
+	$(LAUNCH) $(OIDN_DENOISE) $< --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
 
 $(call lx_le_pattern,$(EVAL_CB_OIDN),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),alb) $(call lx_image,$(EVAL_CB),$(EVAL_DLE_FEATURES_SPP),nrm) pipelines/oidn_denoise.py
 	@mkdir -p $(@D)
-	$(OIDN_DENOISE) $< --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
+	$(LAUNCH) $(OIDN_DENOISE) $< --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
 
 $(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb,hdr) $(call eval_cb,dn) $(call eval_cb_le,hdr) $(call eval_cb_le,dn) $(eval_cb_lt) $(eval_cb_oidn) $(EVALUATE)
 	@mkdir -p $(@D) $(EVAL_DIR)/flip
-	$(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip
+	$(LAUNCH) $(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip
 
 # (2) The held-out test scenes (references and noisy levels from make reference noisy; the
 #    local-estimate images from the scenes compiled for the dataset).
@@ -109,7 +109,7 @@ EVAL_HELDOUT_REF_STAMP := $(if $(filter eval $(EVAL_DIR)/% $(REPORTS)/%,$(MAKECM
 
 $(call lx_ref,$(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/%,hdr): build/dataset/$(DATASET)/test/%.lxs $(TRACE)
 	@mkdir -p $(@D)
-	$(TRACE) $< --spp $(EVAL_HELDOUT_REF_SPP) --reference --seed $(REF_SEED) -o $(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/$*
+	$(LAUNCH) $(TRACE) $< --spp $(EVAL_HELDOUT_REF_SPP) --reference --seed $(REF_SEED) -o $(EVAL_DS)/ref-$(EVAL_HELDOUT_REF_SPP)/$*
 
 define eval_test_scene
 # The levels below the last are written by the runs whose last images mark them (the radiance
@@ -119,40 +119,40 @@ $(filter-out $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm),$(foreach k,$(L
 
 $(call lx_image_pattern,$(EVAL_DS)/$(1),dn): $(foreach k,hdr $(LX_FEATURES),$(call lx_image_pattern,$(EVAL_DATA)/$(1),$(k))) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	@mkdir -p $$(@D)
-	$$(DENOISE) $$< --model $(EVAL_MODEL) -o $$@
+	$$(LAUNCH) $$(DENOISE) $$< --model $(EVAL_MODEL) -o $$@
 
 $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr): build/dataset/$(DATASET)/test/$(1).lxs $(ESTIMATE)
 	@mkdir -p $$(@D)
-	$$(ESTIMATE) image $$< --paths $$* --seed $(NOISY_SEED) -o $$@
+	$$(LAUNCH) $$(ESTIMATE) image $$< --paths $$* --seed $(NOISY_SEED) -o $$@
 
 $(call lx_le_pattern,$(EVAL_DS)/$(1),dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_features,$(EVAL_DATA)/$(1),$(NOISY_MAX)) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
-	$$(DENOISE) $$< --model $(EVAL_MODEL) --features-of $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),hdr) -o $$@
+	$$(LAUNCH) $$(DENOISE) $$< --model $(EVAL_MODEL) --features-of $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),hdr) -o $$@
 
 $(call lx_image_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_image_pattern,$(EVAL_DATA)/$(1),hdr) $(call lx_image_pattern,$(EVAL_DATA)/$(1),alb) $(call lx_image_pattern,$(EVAL_DATA)/$(1),nrm) pipelines/oidn_denoise.py
 	@mkdir -p $$(@D)
-	$(OIDN_DENOISE) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
+	$(LAUNCH) $(OIDN_DENOISE) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
 
 $(call lx_le_pattern,$(EVAL_DS)/oidn/$(1)-oidn,dn): $(call lx_le_pattern,$(EVAL_DS)/$(1),hdr) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),alb) $(call lx_image,$(EVAL_DATA)/$(1),$(NOISY_MAX),nrm) pipelines/oidn_denoise.py
 	@mkdir -p $$(@D)
-	$(OIDN_DENOISE) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
+	$(LAUNCH) $(OIDN_DENOISE) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
 
 $(EVAL_CSV)/dataset-$(1).images.csv: $(call eval_heldout_ref,$(1)) $(EVAL_HELDOUT_REF_STAMP) \
 		$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr) $(call lx_image,$(EVAL_DS)/$(1),$(s),dn) $(call lx_image,$(EVAL_DS)/oidn/$(1)-oidn,$(s),dn)) \
 		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/oidn/$(1)-oidn,$(n),dn)) \
 		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/$(1),$(n),hdr) $(call lx_le,$(EVAL_DS)/$(1),$(n),dn)) $(EVALUATE)
 	@mkdir -p $$(@D)
-	$$(EVALUATE) images --reference $$< $$(filter-out $$< $(EVALUATE) $(EVAL_HELDOUT_REF_STAMP),$$^) -o $$@ --ron $$(@:.csv=.ron)
+	$$(LAUNCH) $$(EVALUATE) images --reference $$< $$(filter-out $$< $(EVALUATE) $(EVAL_HELDOUT_REF_STAMP),$$^) -o $$@ --ron $$(@:.csv=.ron)
 endef
 $(foreach n,$(EVAL_TEST_SCENES),$(eval $(call eval_test_scene,$(n))))
 
 # (3) Sensors: the scenes of make validate (pipelines/validate.mk), fewer paths, own directory.
 $(EVAL_DIR)/sensors/%.sensors.ron: $(VALIDATE_DIR)/%.lxs $(ESTIMATE) $(VALIDATE_DIR)/cases.mk
 	@mkdir -p $(@D)
-	$(ESTIMATE) sensors $< -o $@ --paths $(EVAL_SENSOR_PATHS_$*) --seed $(NOISY_SEED)
+	$(LAUNCH) $(ESTIMATE) sensors $< -o $@ --paths $(EVAL_SENSOR_PATHS_$*) --seed $(NOISY_SEED)
 
 $(EVAL_CSV)/sensors-%.csv: $(EVAL_DIR)/sensors/%.sensors.ron $(VALIDATE_DIR)/%.lxs $(EVALUATE)
 	@mkdir -p $(@D)
-	$(EVALUATE) sensors $< --scene $(VALIDATE_DIR)/$*.lxs --case '$(VALIDATE_CASE_$*)' $(VALIDATE_EXTRA_$*) -o $@ --ron $(@:.csv=.ron)
+	$(LAUNCH) $(EVALUATE) sensors $< --scene $(VALIDATE_DIR)/$*.lxs --case '$(VALIDATE_CASE_$*)' $(VALIDATE_EXTRA_$*) -o $@ --ron $(@:.csv=.ron)
 
 # The summary: tables and plots from the reports (pipelines/eval.py summary).
 EVAL_REPORTS := $(EVAL_CSV)/cornell-box.images.csv $(patsubst %,$(EVAL_CSV)/dataset-%.images.csv,$(EVAL_TEST_SCENES)) \

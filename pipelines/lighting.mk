@@ -23,13 +23,13 @@ lighting: $(LIGHTING_DIR)/report.md
 $(LIGHTING_BUILD)/scene.lxs: $(wildcard scenes/photometry/*.ies scenes/photometry/*.ldt)
 
 $(LIGHTING_BUILD)/scene.info.ron: $(LIGHTING_BUILD)/scene.lxs $(SCENE_COMPILE)
-	$(SCENE_COMPILE) --info $< > $@.tmp && mv $@.tmp $@
+	$(LAUNCH) $(SCENE_COMPILE) --info $< > $@.tmp && mv $@.tmp $@
 
 $(LIGHTING_BUILD)/$(LIGHTING_SCENE).sensors.ron: $(LIGHTING_BUILD)/scene.lxs $(ESTIMATE)
-	$(ESTIMATE) sensors $< -o $@ --paths $(LIGHTING_PATHS) --seed $(LIGHTING_SEED) --batch-values
+	$(LAUNCH) $(ESTIMATE) sensors $< -o $@ --paths $(LIGHTING_PATHS) --seed $(LIGHTING_SEED) --batch-values
 
 $(LIGHTING_DIR)/report.md: $(LIGHTING_BUILD)/$(LIGHTING_SCENE).sensors.ron $(LIGHTING_BUILD)/scene.info.ron $(REPORT) $(LIGHTING_PEER)
-	$(REPORT) $< --scene-info $(LIGHTING_BUILD)/scene.info.ron -o $(LIGHTING_DIR) $(if $(LIGHTING_PEER),--peer $(LIGHTING_PEER))
+	$(LAUNCH) $(REPORT) $< --scene-info $(LIGHTING_BUILD)/scene.info.ron -o $(LIGHTING_DIR) $(if $(LIGHTING_PEER),--peer $(LIGHTING_PEER))
 
 # The peer: Radiance (rtrace -I) on the same room, luminaire tables and points.
 lighting-radiance: $(LIGHTING_BUILD)/scene.info.ron pipelines/radiance_office.py

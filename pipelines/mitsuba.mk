@@ -11,10 +11,10 @@ MITSUBA_DIR := build/mitsuba/$(MITSUBA_SCENE)
 .PHONY: mitsuba-check
 
 $(MITSUBA_DIR)/scene.xml: scenes/$(MITSUBA_SCENE).ron $(MESHES) $(SCENE_COMPILE)
-	$(SCENE_COMPILE) $< -o $(MITSUBA_DIR)/scene.lxs --export-mitsuba $(MITSUBA_DIR) -q
+	$(LAUNCH) $(SCENE_COMPILE) $< -o $(MITSUBA_DIR)/scene.lxs --export-mitsuba $(MITSUBA_DIR) -q
 
 $(call lx_image,$(MITSUBA_DIR)/luxest,$(MITSUBA_SPP),hdr): $(MITSUBA_DIR)/scene.xml $(TRACE)
-	$(TRACE) $(MITSUBA_DIR)/scene.lxs --spp $(MITSUBA_SPP) --seed $(REF_SEED) -o $(MITSUBA_DIR)/luxest
+	$(LAUNCH) $(TRACE) $(MITSUBA_DIR)/scene.lxs --spp $(MITSUBA_SPP) --seed $(REF_SEED) -o $(MITSUBA_DIR)/luxest
 
 $(MITSUBA_DIR)/check.md: $(MITSUBA_DIR)/scene.xml $(call lx_image,$(MITSUBA_DIR)/luxest,$(MITSUBA_SPP),hdr) pipelines/mitsuba_render.py
 	@test -x $(PEERS_PYTHON) || { echo "error: $(PEERS_PYTHON) missing: run scripts/setup.sh --peers" >&2; exit 1; }

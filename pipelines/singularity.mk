@@ -14,14 +14,14 @@ $(SINGULARITY_DIR)/cornell-corners.scene.ron: pipelines/singularity.py scenes/co
 	python3 pipelines/singularity.py scene -o $@
 
 $(SINGULARITY_DIR)/cornell-corners.lxs: $(SINGULARITY_DIR)/cornell-corners.scene.ron $(SCENE_COMPILE)
-	$(SCENE_COMPILE) $< -o $@ -q
+	$(LAUNCH) $(SCENE_COMPILE) $< -o $@ -q
 
 # The reference: the backward gather estimator at the same points (own seed).
 $(SINGULARITY_DIR)/gather.sensors.ron: $(SINGULARITY_DIR)/cornell-corners.lxs $(ESTIMATE)
-	$(ESTIMATE) gather $< -o $@ --csv $(@:.ron=.csv) --samples $(SINGULARITY_SAMPLES) --seed 11
+	$(LAUNCH) $(ESTIMATE) gather $< -o $@ --csv $(@:.ron=.csv) --samples $(SINGULARITY_SAMPLES) --seed 11
 
 $(SINGULARITY_DIR)/le-%.sensors.ron: $(SINGULARITY_DIR)/cornell-corners.lxs $(ESTIMATE) $(SINGULARITY_DIR)/runs.mk
-	$(ESTIMATE) sensors $< -o $@ --csv $(@:.ron=.csv) --paths $(SINGULARITY_PATHS) --seed 12 $(SINGULARITY_ARGS_le-$*)
+	$(LAUNCH) $(ESTIMATE) sensors $< -o $@ --csv $(@:.ron=.csv) --paths $(SINGULARITY_PATHS) --seed 12 $(SINGULARITY_ARGS_le-$*)
 
 singularity: $(patsubst %,$(SINGULARITY_DIR)/%.sensors.ron,gather $(SINGULARITY_RUNS)) $(VENV)/$(VENV_STAMP)
 	$(PYTHON) pipelines/singularity.py summary --dir $(SINGULARITY_DIR) -o $(SINGULARITY_DIR)/summary.md

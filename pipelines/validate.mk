@@ -19,17 +19,17 @@ $(VALIDATE_DIR)/%.scene.ron: pipelines/validate.py scenes/integrating-sphere.ron
 	python3 pipelines/validate.py scene $* -o $@
 
 $(VALIDATE_DIR)/%.lxs: $(VALIDATE_DIR)/%.scene.ron $(SCENE_COMPILE)
-	$(SCENE_COMPILE) $< -o $@ -q
+	$(LAUNCH) $(SCENE_COMPILE) $< -o $@ -q
 
 $(VALIDATE_DIR)/%.sensors.ron: $(VALIDATE_DIR)/%.lxs $(ESTIMATE) $(VALIDATE_DIR)/cases.mk
-	$(ESTIMATE) sensors $< -o $@ --paths $(VALIDATE_PATHS_$*) --seed $(VALIDATE_SEED)
+	$(LAUNCH) $(ESTIMATE) sensors $< -o $@ --paths $(VALIDATE_PATHS_$*) --seed $(VALIDATE_SEED)
 
 $(VALIDATE_DIR)/%.exact.csv: $(VALIDATE_DIR)/%.sensors.ron $(EVALUATE)
-	$(EVALUATE) sensors $< --case '$(VALIDATE_CASE_$*)' $(VALIDATE_EXTRA_$*) -o $@
+	$(LAUNCH) $(EVALUATE) sensors $< --case '$(VALIDATE_CASE_$*)' $(VALIDATE_EXTRA_$*) -o $@
 
 # Path tracing inside the sphere with a central source (its scene has a camera inside).
 $(call lx_image,$(VALIDATE_DIR)/trace-sphere-rho%,$(VALIDATE_TRACE_SPP),hdr): $(VALIDATE_DIR)/trace-sphere-rho%.lxs $(TRACE)
-	$(TRACE) $< --spp $(VALIDATE_TRACE_SPP) --stderr --seed $(VALIDATE_SEED) -o $(VALIDATE_DIR)/trace-sphere-rho$*
+	$(LAUNCH) $(TRACE) $< --spp $(VALIDATE_TRACE_SPP) --stderr --seed $(VALIDATE_SEED) -o $(VALIDATE_DIR)/trace-sphere-rho$*
 
 $(VALIDATE_DIR)/trace-sphere-rho%.check.json: $(call lx_image,$(VALIDATE_DIR)/trace-sphere-rho%,$(VALIDATE_TRACE_SPP),hdr) pipelines/validate.py
 	$(PYTHON) pipelines/validate.py trace-check --rho $* --hdr $< --se $(call lx_image,$(VALIDATE_DIR)/trace-sphere-rho$*,$(VALIDATE_TRACE_SPP),se) -o $@
@@ -39,21 +39,21 @@ VALIDATE_DIRECT_SCENE := $(VALIDATE_DIR)/sobolev-h1.0-1.0-rho0.5-0.5.lxs
 VALIDATE_DIRECT_PATHS := 1000000
 
 $(VALIDATE_DIR)/le.sensors.ron: $(VALIDATE_DIRECT_SCENE) $(ESTIMATE)
-	$(ESTIMATE) sensors $< -o $@ --paths $(VALIDATE_DIRECT_PATHS) --seed 2
+	$(LAUNCH) $(ESTIMATE) sensors $< -o $@ --paths $(VALIDATE_DIRECT_PATHS) --seed 2
 
 $(VALIDATE_DIR)/le.exact.csv: $(VALIDATE_DIR)/le.sensors.ron $(EVALUATE)
-	$(EVALUATE) sensors $< --case '$(VALIDATE_DIRECT_CASE)' -o $@
+	$(LAUNCH) $(EVALUATE) sensors $< --case '$(VALIDATE_DIRECT_CASE)' -o $@
 
 $(VALIDATE_DIR)/direct-b%.sensors.ron: $(VALIDATE_DIRECT_SCENE) $(ESTIMATE)
-	$(ESTIMATE) direct $< -o $@ --paths $(VALIDATE_DIRECT_PATHS) --bin-radius $* --seed 3
+	$(LAUNCH) $(ESTIMATE) direct $< -o $@ --paths $(VALIDATE_DIRECT_PATHS) --bin-radius $* --seed 3
 
 $(VALIDATE_DIR)/direct-b%.exact.csv: $(VALIDATE_DIR)/direct-b%.sensors.ron $(EVALUATE)
-	$(EVALUATE) sensors $< --case '$(VALIDATE_DIRECT_CASE),bin=$*' -o $@
+	$(LAUNCH) $(EVALUATE) sensors $< --case '$(VALIDATE_DIRECT_CASE),bin=$*' -o $@
 
 # The cosⁿ luminaire over a black plane: the direct simulation (sampled emission) against the
 # closed-form direct illuminance (the local estimate computes that term deterministically).
 $(VALIDATE_DIR)/cosn-plane.sensors.ron: $(VALIDATE_DIR)/cosn-plane.lxs $(ESTIMATE) $(VALIDATE_DIR)/cases.mk
-	$(ESTIMATE) direct $< -o $@ --paths $(VALIDATE_COSN_PLANE_PATHS) --bin-radius $(VALIDATE_COSN_PLANE_BIN) --seed $(VALIDATE_SEED)
+	$(LAUNCH) $(ESTIMATE) direct $< -o $@ --paths $(VALIDATE_COSN_PLANE_PATHS) --bin-radius $(VALIDATE_COSN_PLANE_BIN) --seed $(VALIDATE_SEED)
 
 VALIDATE_OUTPUTS := $(patsubst %,$(VALIDATE_DIR)/%.exact.csv,$(VALIDATE_CASES) le cosn-plane $(addprefix direct-b,$(VALIDATE_DIRECT_BINS))) \
 	$(patsubst %,$(VALIDATE_DIR)/trace-sphere-rho%.check.json,$(VALIDATE_TRACE_RHOS))

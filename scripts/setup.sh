@@ -34,7 +34,8 @@ sudo_cmd=()
 if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
 
 missing=()
-for pkg in libembree-dev pkg-config make gcc python3 python3-pip python3-venv; do
+# Slurm and munge: the real single-node cluster of make test-slurm (scripts/slurm-cluster.sh).
+for pkg in libembree-dev pkg-config make gcc python3 python3-pip python3-venv slurmctld slurmd slurm-client munge; do
     if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
         missing+=("$pkg")
     fi
