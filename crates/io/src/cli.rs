@@ -85,7 +85,9 @@ impl CommonArgs {
     }
 }
 
-/// The number of worker threads: `requested`, or all available cores.
+/// The number of worker threads: `requested`, or the CPUs this process may run on (its
+/// affinity mask and cgroup quota, as `std::thread::available_parallelism` reads them), so that
+/// a Slurm step of `--cpus-per-task=8`, bound to eight CPUs, runs eight threads.
 pub fn thread_count(requested: Option<usize>) -> usize {
     requested.filter(|&t| t > 0).unwrap_or_else(|| {
         std::thread::available_parallelism()
@@ -169,5 +171,41 @@ mod tests {
             "{line}"
         );
         assert_eq!(e.exit_code(), 1);
+    }
+
+    /// The child half of `default_threads_follow_the_cpu_affinity`: run alone, it checks
+    /// nothing; run by the parent under `taskset`, it checks the count the parent expects.
+    #[test]
+    fn thread_count_child() {
+        if let Ok(expected) = std::env::var("LUXEST_EXPECT_THREADS") {
+            assert_eq!(thread_count(None).to_string(), expected);
+            assert_eq!(thread_count(Some(3)), 3);
+        }
+    }
+
+    #[test]
+    fn default_threads_follow_the_cpu_affinity() {
+        // This test binary again, bound to one CPU (as Slurm binds a step of -c1): the default
+        // thread count must be 1 there.
+        let exe = std::env::current_exe().unwrap();
+        let out = std::process::Command::new("taskset")
+            .args(["-c", "0"])
+            .arg(&exe)
+            .args([
+                "--exact",
+                "cli::tests::thread_count_child",
+                "--test-threads",
+                "1",
+            ])
+            .env("LUXEST_EXPECT_THREADS", "1")
+            .output()
+            .expect("taskset (util-linux) runs");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{text}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(text.contains("1 passed"), "the child test ran: {text}");
     }
 }
