@@ -101,3 +101,14 @@ reports/bench/denoise.md: $(foreach k,hdr $(LX_FEATURES),$(call lx_image,$(EVAL_
 		--model $(DEFAULT_MODEL) --denoise $(DENOISE) --oidn "$(OIDN_DENOISE)" --work-dir build/bench/denoise -o $@
 
 bench-denoise: reports/bench/denoise.md
+
+# `make bench-slurm`: the overhead of a stage call as a Slurm job step, `make -j reference noisy`
+# of the quick dataset with and without LAUNCH on a real single-node cluster, and what
+# PRESET=full costs in core-hours and GPU-hours (pipelines/bench_slurm.py).
+.PHONY: bench-slurm
+bench-slurm: $(SCENE_COMPILE) $(TRACE) $(AOV_WRITE) $(ESTIMATE) $(VENV)/$(VENV_STAMP)
+	$(PYTHON) pipelines/bench_slurm.py --bin-dir $(RELEASE) -o reports/bench/slurm.md
+
+# `make lx-print-VAR`: a make variable's value (pipelines/bench_slurm.py reads the presets so).
+lx-print-%:
+	@echo $($*)

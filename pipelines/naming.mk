@@ -7,7 +7,8 @@
 #   $(call lx_le,PREFIX,1000,hdr)          PREFIX_001000le.hdr.exr   (double local estimate)
 #   $(call lx_ref,PREFIX,hdr)              PREFIX_ref.hdr.exr
 
-lx_count = $(shell printf '%06d' $(1))
+# Memoised: one shell per distinct count, not per name composed (a make run composes hundreds).
+lx_count = $(or $(lx_count_$(1)),$(eval lx_count_$(1) := $(shell printf '%06d' $(1)))$(lx_count_$(1)))
 lx_image = $(1)_$(call lx_count,$(2))spp.$(3).exr
 lx_le = $(1)_$(call lx_count,$(2))le.$(3).exr
 lx_ref = $(1)_ref.$(2).exr
