@@ -33,14 +33,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 THRESHOLDS = (0.95, 0.98)
 METRICS = [("rel_mse", "relMSE (linear)"), ("one_minus_ssim", "1 - SSIM (tonemapped)"), ("flip", "FLIP (LDR)")]
+PT, DLE, LT = contract.PATH_TRACING, contract.DOUBLE_LOCAL_ESTIMATE, contract.LIGHT_TRACING
+DENOISED, OIDN = contract.DENOISED_SUFFIX, contract.OIDN_SUFFIX
 STYLE = {
-    "path-tracing": ("tab:blue", "o"),
-    "path-tracing+denoise": ("tab:orange", "s"),
-    "double-local-estimate": ("tab:green", "^"),
-    "double-local-estimate+denoise": ("tab:red", "D"),
-    "light-tracing": ("tab:purple", "v"),
-    "path-tracing+oidn": ("tab:gray", "P"),
-    "double-local-estimate+oidn": ("tab:brown", "X"),
+    PT: ("tab:blue", "o"),
+    PT + DENOISED: ("tab:orange", "s"),
+    DLE: ("tab:green", "^"),
+    DLE + DENOISED: ("tab:red", "D"),
+    LT: ("tab:purple", "v"),
+    PT + OIDN: ("tab:gray", "P"),
+    DLE + OIDN: ("tab:brown", "X"),
 }
 
 
@@ -277,18 +279,18 @@ def peer_table(rows, what):
     and CPU seconds (excluding I/O, the run's threads)."""
     by = {(r["estimator"], int(r["samples"])): r for r in rows}
     out = []
-    for base in ("path-tracing", "double-local-estimate"):
-        levels = sorted(n for (e, n) in by if e == base + "+oidn" and (base, n) in by and (base + "+denoise", n) in by)
+    for base in (PT, DLE):
+        levels = sorted(n for (e, n) in by if e == base + OIDN and (base, n) in by and (base + DENOISED, n) in by)
         if not levels:
             continue
         trs = []
         for n in levels:
-            a, d, o = by[(base, n)], by[(base + "+denoise", n)], by[(base + "+oidn", n)]
+            a, d, o = by[(base, n)], by[(base + DENOISED, n)], by[(base + OIDN, n)]
             trs.append([n] + [f"{a[k]:{f}} / {d[k]:{f}} / {o[k]:{f}}" for k, f in (("psnr_db", ".2f"), ("ssim", ".4f"), ("flip", ".4f"))]
                        + [" / ".join("—" if v is None else f"{scale * v:{f}}" for v in (row_denoise_costs(d)[j], row_denoise_costs(o)[j]))
                           for j, scale, f in ((0, 1e3, ".0f"), (1, 1.0, ".2f"))]
                        + [" / ".join(_pct(row_colour_shift(r)) for r in (a, d, o))])
-        unit = "spp" if base == "path-tracing" else "paths"
+        unit = "spp" if base == PT else "paths"
         out += [f"### {base}: luxest's denoiser against Intel Open Image Denoise 1.4.3 ({what})", "",
                 "Each cell: noisy / luxest (`denoise`) / OIDN (hdr + albedo + normal, pipelines/oidn_denoise.py), "
                 "the same inputs and features.", "",
@@ -305,14 +307,14 @@ def paired_gaps(rows, base, key="psnr_db"):
     difference}, [scenes scored by one of the two only, or with a non-finite difference])]."""
     by = {}
     for r in rows:
-        if r["estimator"] in (base + "+denoise", base + "+oidn"):
+        if r["estimator"] in (base + DENOISED, base + OIDN):
             one = by.setdefault(int(r["samples"]), {}).setdefault(r["scene"], {})
             if r["estimator"] in one:
                 raise SystemExit(f"eval: scene {r['scene']}: two {r['estimator']} rows at {int(r['samples'])}")
             one[r["estimator"]] = r[key]
     out = []
     for n, scenes in sorted(by.items()):
-        diffs = {s: v[base + "+denoise"] - v[base + "+oidn"] for s, v in sorted(scenes.items()) if len(v) == 2}
+        diffs = {s: v[base + DENOISED] - v[base + OIDN] for s, v in sorted(scenes.items()) if len(v) == 2}
         diffs = {s: d for s, d in diffs.items() if math.isfinite(d)}
         if diffs:
             out.append((n, diffs, sorted(set(scenes) - set(diffs))))
@@ -329,12 +331,12 @@ def gap_stats(diffs):
 
 
 def gap_table(rows, names):
-    """Issue 11's held-out bar (luxest ≥ OIDN + 1 dB in mean PSNR at every level), scene by
+    """The held-out bar (luxest ≥ OIDN + 1 dB in mean PSNR at every level), scene by
     scene: the mean difference with its standard error over the scenes, its range, the scenes
     where luxest is ahead, and each scene's difference when there are few; a level where a scene
     lacks one of the two is scored over the others and says which."""
     out, few = [], len(names) <= 6
-    for base, unit in (("path-tracing", "spp"), ("double-local-estimate", "paths")):
+    for base, unit in ((PT, "spp"), (DLE, "paths")):
         gaps = paired_gaps(rows, base)
         if not gaps:
             continue
@@ -375,8 +377,8 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
         plot_trade(ds_mean, f"Held-out test scenes ({len(ds_names)}), mean — error vs time", plots / "dataset-time.png")
         plot_trade(ds_mean, f"Held-out test scenes ({len(ds_names)}), mean — error vs samples", plots / "dataset-samples.png",
                    x_key="samples", x_label="samples per pixel (PT) / light paths (DLE)")
-    noisy = [r for r in cb_rows if r["estimator"] == "path-tracing"]
-    den = [r for r in cb_rows if r["estimator"] == "path-tracing+denoise"]
+    noisy = [r for r in cb_rows if r["estimator"] == PT]
+    den = [r for r in cb_rows if r["estimator"] == PT + DENOISED]
     plot_progressive(noisy, den, plots / "cornell-box-progressive.png")
 
     lines = [f"# luxest evaluation summary ({args.preset})", "",
@@ -393,7 +395,7 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
               f"Reference: {args.ref_spp} spp path tracing (seed {args.ref_seed}, independent of the runs scored). Path tracing "
               f"is one progressive run (seed {args.noisy_seed}) whose snapshots are denoised with the albedo/normal features of the same snapshot; "
               "double-local-estimate (DLE) images (one camera sample per pixel) are denoised with the 64-spp features.", ""]
-    show = [r for r in cb_rows if r["estimator"].startswith(("double", "light"))
+    show = [r for r in cb_rows if r["estimator"].startswith((DLE, LT))
             or int(r["samples"]) in (1, 4, 16, 64, 256, 1024, 4096)]
     rows = [[r["estimator"], int(r["samples"]), f"{r['total_seconds']:.2f}", f"{r['psnr_db']:.2f}", f"{r['ssim']:.4f}",
              "" if math.isnan(r["ms_ssim"]) else f"{r['ms_ssim']:.4f}", f"{r['flip']:.4f}", f"{r['rel_mse']:.3e}", f"{r['smape']:.4f}"]

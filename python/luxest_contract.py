@@ -1,10 +1,12 @@
-"""The contracts between luxest's stages, for Python: file naming, EXR header keys, EXR I/O and
-the autoexposure. The one Python place for each (docs/architecture.md, *Contracts*).
+"""The contracts between luxest's stages, for Python: file naming, EXR header keys and estimator
+names, the denoiser model's ONNX tensor names, EXR I/O and the autoexposure. The one Python place
+for each (docs/architecture.md, *Contracts*).
 
-Rust has the same in `luxest-io` (`naming`, `header`, `exr_io`); the two are tied by the
-fixtures in `tests/fixtures/contract/`, which Rust writes and `training/tests/test_contract.py`
-reads: every name composed and parsed alike, a ZIP-compressed Rust EXR read to the header values
-Rust wrote, Python's exposure equal to Rust's.
+Rust has the same in `luxest-io` (`naming`, `header`, `exr_io`) and crates/denoise
+(`model::tensor`); the two are tied by the fixtures in `tests/fixtures/contract/`, which Rust
+writes and `training/tests/test_contract.py` reads: every name composed and parsed alike, a
+ZIP-compressed Rust EXR read to the header values Rust wrote, the same estimator and tensor
+names, Python's exposure equal to Rust's.
 
 Naming (the Intel Open Image Denoise training-toolkit layout):
     <name>_<spp, 6 digits>spp.<kind>.exr     a noisy image at spp samples per pixel
@@ -134,6 +136,32 @@ TYPES = {SAMPLES: int, SEED: int, SECONDS: float, PIXEL_SAMPLES: int, DENOISE_SE
 """Keys whose values are numbers; every other key is text."""
 
 
+# --- Estimator names: the values of ESTIMATOR (luxest-io's `header::estimator`) -----------------
+
+PATH_TRACING = "path-tracing"                    # trace
+FIRST_HIT_FEATURES = "first-hit-features"        # aov-write
+LOCAL_ESTIMATE = "local-estimate"                # estimate sensors
+DIRECT_SIMULATION = "direct-simulation"          # estimate direct
+GATHER = "gather"                                # estimate gather
+DOUBLE_LOCAL_ESTIMATE = "double-local-estimate"  # estimate image
+LIGHT_TRACING = "light-tracing"                  # estimate image --light-tracing
+
+ESTIMATORS = (PATH_TRACING, FIRST_HIT_FEATURES, LOCAL_ESTIMATE, DIRECT_SIMULATION, GATHER,
+              DOUBLE_LOCAL_ESTIMATE, LIGHT_TRACING)
+"""Every estimator name, in the order of Rust's `header::estimator::ALL`."""
+
+DENOISED_SUFFIX = "+denoise"  # evaluate's label of an image a luxest model denoised: <estimator>+denoise
+OIDN_SUFFIX = "+oidn"         # ... and of one Intel Open Image Denoise denoised: <estimator>+oidn
+
+
+def estimator_label(estimator, denoiser=None):
+    """How `evaluate images` labels an image of `estimator` denoised by `denoiser` (its
+    `luxest.denoiser`, None if not denoised): evaluate's `images::estimator_label`."""
+    if denoiser is None:
+        return estimator
+    return estimator + (OIDN_SUFFIX if denoiser.startswith(OIDN_DENOISER_PREFIX) else DENOISED_SUFFIX)
+
+
 class ContractError(ValueError):
     """Bad input: the message is one line naming the file and the problem."""
 
@@ -163,6 +191,16 @@ def samples(header, path="<header>"):
 def seed(header, path="<header>"):
     """The seed of an image header; required."""
     return header_value(header, SEED, path, required=True)
+
+
+# --- The denoiser model's ONNX graph (crates/denoise `model::tensor`) -------------------------
+
+INPUT_TENSOR = "input"        # float32 (N, 3 x features, H, W): the raw linear features of CHANNELS
+EXPOSURE_TENSOR = "exposure"  # float32 (N,): the autoexposure of each whole image (`exposure`)
+OUTPUT_TENSOR = "output"      # float32 (N, 3, H, W): the denoised linear radiance
+
+TENSORS = (INPUT_TENSOR, EXPOSURE_TENSOR, OUTPUT_TENSOR)
+"""The graph's tensor names: its inputs, then its output (Rust's `model::tensor::ALL`)."""
 
 
 # --- EXR I/O -----------------------------------------------------------------------------------

@@ -2,7 +2,7 @@
 """Exports a trained run to ONNX: inputs `input` (N, 3 x features, H, W) = raw linear hdr + alb +
 nrm (+ emi [+ ema]: the run's `features`, listed in the metadata `luxest.channels`) and
 `exposure` (N,) = transfer.exposure of each whole image, output `output` (N, 3, H, W) linear
-radiance, dynamic H and W; the log1p transfer and the padding to multiples of 16 are inside the
+radiance (the names: luxest_contract.TENSORS), dynamic H and W; the log1p transfer and the padding to multiples of 16 are inside the
 graph (transfer.py), the exposure formula is recorded in the metadata."""
 import argparse
 import json
@@ -114,8 +114,8 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
     e = torch.tensor([0.5])
     h, w = torch.export.Dim("h", min=1, max=16384), torch.export.Dim("w", min=1, max=16384)
     tmp = temp_of(out_path)
-    torch.onnx.export(net, (x, e), str(tmp), input_names=["input", "exposure"],
-                      output_names=["output"], dynamic_shapes={"x": {2: h, 3: w}, "exposure": None},
+    torch.onnx.export(net, (x, e), str(tmp), input_names=[contract.INPUT_TENSOR, contract.EXPOSURE_TENSOR],
+                      output_names=[contract.OUTPUT_TENSOR], dynamic_shapes={"x": {2: h, 3: w}, "exposure": None},
                       external_data=False)
     proto = onnx.load(str(tmp))
     meta = {

@@ -29,8 +29,8 @@ def denoise(session, hdr, *features):
         images = [(np.asarray(im, dtype=np.float64) * s).astype(np.float32) if n in contract.RADIANCE_FEATURES else im
                   for n, im in zip(names, images)]
     x = np.concatenate(images, axis=-1).transpose(2, 0, 1)[None].astype(np.float32)
-    feed = {"input": x, "exposure": transfer.exposure_np(hdr, s)}
-    out = session.run(None, feed)[0][0].transpose(1, 2, 0)
+    feed = {contract.INPUT_TENSOR: x, contract.EXPOSURE_TENSOR: transfer.exposure_np(hdr, s)}
+    out = session.run([contract.OUTPUT_TENSOR], feed)[0][0].transpose(1, 2, 0)
     return (out.astype(np.float64) / s).astype(np.float32) if e else out
 
 

@@ -1,8 +1,9 @@
 """The Python side of the stage contracts (python/luxest_contract.py) against Rust.
 
 The fixtures in tests/fixtures/contract/ are written by Rust (luxest-io's naming and header
-modules, `RgbImage::autoexposure`); here Python must compose and parse the same names, read the
-ZIP-compressed EXR Rust wrote to the header values Rust recorded, and compute the same exposure.
+modules, `RgbImage::autoexposure`, crates/denoise's model tensor names); here Python must compose
+and parse the same names, read the ZIP-compressed EXR Rust wrote to the header values Rust
+recorded, use the same estimator and tensor names, and compute the same exposure.
 The Makefile's naming function (pipelines/naming.mk) is checked against the same names."""
 import json
 import math
@@ -67,7 +68,7 @@ def test_bad_input_is_one_line_naming_the_file(tmp_path):
     assert str(garbage) in str(e.value) and "\n" not in str(e.value)
     with pytest.raises(contract.ContractError, match="missing header attribute luxest.seed"):
         contract.seed({}, "f.exr")
-    with pytest.raises(contract.ContractError, match="luxest.samples = `x` is not a valid int"):
+    with pytest.raises(contract.ContractError, match=f"{contract.SAMPLES} = `x` is not a valid int"):
         contract.samples({contract.SAMPLES: "x"}, "f.exr")
 
 
@@ -231,3 +232,27 @@ def test_oidn_denoiser_name_and_labels_match_rust():
     labels = {(c["estimator"], c["denoiser"]): c["label"] for c in expected["labels"]}
     assert labels[("double-local-estimate", contract.OIDN_DENOISER_PREFIX + "1.4.3")] == "double-local-estimate+oidn"
     assert labels[("path-tracing", "default.onnx")] == "path-tracing+denoise"
+    # luxest_contract.estimator_label (pipelines/eval.py's labels) gives every one of Rust's.
+    for (estimator, denoiser), label in labels.items():
+        assert contract.estimator_label(estimator, denoiser) == label
+
+
+def test_estimator_names_match_rust():
+    # Every value of `luxest.estimator` the stages write (luxest-io's header::estimator), by the
+    # name of its constant: the same names and order as luxest_contract.ESTIMATORS.
+    expected = json.loads(fixture("estimators.json").read_text())
+    assert len(expected) >= 7
+    for name, value in expected.items():
+        assert getattr(contract, name) == value, name
+    assert contract.ESTIMATORS == tuple(expected.values())
+
+
+def test_model_tensor_names_match_rust():
+    # The names crates/denoise looks up in a model's graph (model::tensor) are those export.py
+    # gives it and infer.py feeds (luxest_contract.TENSORS); test_training's export tests check
+    # an exported graph has exactly these.
+    expected = json.loads(fixture("tensors.json").read_text())
+    assert list(expected) == ["INPUT", "EXPOSURE", "OUTPUT"]
+    for role, value in expected.items():
+        assert getattr(contract, f"{role}_TENSOR") == value, role
+    assert contract.TENSORS == tuple(expected.values())

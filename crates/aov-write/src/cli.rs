@@ -15,7 +15,7 @@ use luxest_render::world::{load_with_camera, Traversal};
 use std::path::PathBuf;
 
 /// The estimator name recorded in the features' headers.
-pub const ESTIMATOR: &str = "first-hit-features";
+pub const ESTIMATOR: &str = header::estimator::FIRST_HIT_FEATURES;
 
 /// Write albedo / normal / emission (/ depth) feature images with trace's pixel sampling.
 #[derive(Parser, Debug)]

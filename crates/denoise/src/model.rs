@@ -47,6 +47,21 @@ fn environment() -> Result<&'static Environment> {
     .map_err(|m| Error::input(&path, m.clone()))
 }
 
+/// The names of the model graph's tensors (`training/export.py` names them through
+/// `luxest_contract`'s `INPUT_TENSOR`, `EXPOSURE_TENSOR`, `OUTPUT_TENSOR`; tied by
+/// `tests/fixtures/contract/tensors.json`).
+pub mod tensor {
+    /// Input: float32 NCHW, the raw linear features named in `luxest.channels`.
+    pub const INPUT: &str = "input";
+    /// Input: float32 (N,), the autoexposure of each whole image.
+    pub const EXPOSURE: &str = "exposure";
+    /// Output: float32 N×3×H×W, the denoised linear radiance.
+    pub const OUTPUT: &str = "output";
+
+    /// Every tensor name: the inputs, then the output.
+    pub const ALL: [&str; 3] = [INPUT, EXPOSURE, OUTPUT];
+}
+
 /// A loaded denoising model.
 pub struct Denoiser {
     session: Session,
@@ -84,33 +99,39 @@ impl Denoiser {
             .commit_from_memory(&bytes)
             .map_err(|e| load_error(model, &bytes, &e.to_string()))?;
 
-        let input = session.inputs().iter().find(|o| o.name() == "input");
+        let input = session.inputs().iter().find(|o| o.name() == tensor::INPUT);
         let input_shape = input
             .and_then(|o| tensor_shape(o.dtype()))
             .filter(|s| s.len() == 4)
             .ok_or_else(|| {
                 Error::input(
                     model,
-                    "model has no float32 NCHW input named `input` (see models/README.md)",
+                    format!(
+                        "model has no float32 NCHW input named `{}` (see models/README.md)",
+                        tensor::INPUT
+                    ),
                 )
             })?;
         let exposure_ok = session
             .inputs()
             .iter()
-            .find(|o| o.name() == "exposure")
+            .find(|o| o.name() == tensor::EXPOSURE)
             .and_then(|o| tensor_shape(o.dtype()))
             .is_some_and(|s| s.len() == 1);
         if !exposure_ok {
             return Err(Error::input(
                 model,
-                "model has no float32 (N,) input named `exposure` (exported before the \
-                 whole-image exposure contract? re-export it with training/export.py)",
+                format!(
+                    "model has no float32 (N,) input named `{}` (exported before the \
+                     whole-image exposure contract? re-export it with training/export.py)",
+                    tensor::EXPOSURE
+                ),
             ));
         }
         if let Some(extra) = session
             .inputs()
             .iter()
-            .find(|o| o.name() != "input" && o.name() != "exposure")
+            .find(|o| o.name() != tensor::INPUT && o.name() != tensor::EXPOSURE)
         {
             return Err(Error::input(
                 model,
@@ -120,13 +141,16 @@ impl Denoiser {
         let output_ok = session
             .outputs()
             .iter()
-            .find(|o| o.name() == "output")
+            .find(|o| o.name() == tensor::OUTPUT)
             .and_then(|o| tensor_shape(o.dtype()))
             .is_some_and(|s| s.len() == 4 && (s[1] == 3 || s[1] < 0));
         if !output_ok {
             return Err(Error::input(
                 model,
-                "model has no float32 N×3×H×W output named `output`",
+                format!(
+                    "model has no float32 N×3×H×W output named `{}`",
+                    tensor::OUTPUT
+                ),
             ));
         }
 
@@ -315,9 +339,9 @@ impl Denoiser {
         let exposure = Tensor::from_array(([1usize], vec![exposure])).map_err(|e| err(&e))?;
         let outputs = self
             .session
-            .run(ort::inputs!["input" => input, "exposure" => exposure])
+            .run(ort::inputs![tensor::INPUT => input, tensor::EXPOSURE => exposure])
             .map_err(|e| err(&e))?;
-        let (shape, values) = outputs["output"]
+        let (shape, values) = outputs[tensor::OUTPUT]
             .try_extract_tensor::<f32>()
             .map_err(|e| err(&e))?;
         if **shape != [1, 3, h as i64, w as i64] {

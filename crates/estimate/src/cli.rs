@@ -368,11 +368,11 @@ pub enum ExactCase {
 
 /// Estimator names recorded in the results' run metadata.
 pub mod estimator {
-    pub const LOCAL_ESTIMATE: &str = "local-estimate";
-    pub const DIRECT_SIMULATION: &str = "direct-simulation";
-    pub const GATHER: &str = "gather";
-    pub const DOUBLE_LOCAL_ESTIMATE: &str = "double-local-estimate";
-    pub const LIGHT_TRACING: &str = "light-tracing";
+    pub const LOCAL_ESTIMATE: &str = luxest_io::header::estimator::LOCAL_ESTIMATE;
+    pub const DIRECT_SIMULATION: &str = luxest_io::header::estimator::DIRECT_SIMULATION;
+    pub const GATHER: &str = luxest_io::header::estimator::GATHER;
+    pub const DOUBLE_LOCAL_ESTIMATE: &str = luxest_io::header::estimator::DOUBLE_LOCAL_ESTIMATE;
+    pub const LIGHT_TRACING: &str = luxest_io::header::estimator::LIGHT_TRACING;
 }
 
 /// Runs the command line.

@@ -62,7 +62,7 @@ pub const MAX_SECONDS: f64 = 1e6;
 pub const MAX_DEPTH: Count<u32> = Count::range(1, 1 << 20, "bounces");
 
 /// The estimator name recorded in image headers.
-pub const ESTIMATOR: &str = "path-tracing";
+pub const ESTIMATOR: &str = luxest_io::header::estimator::PATH_TRACING;
 
 /// Runs the command line.
 pub fn run(args: Args) -> Result<()> {
