@@ -1,6 +1,8 @@
 # The presets: every number that `PRESET=quick|full` scales, defined once, here. The Python steps
-# receive these values as arguments from the rules; none has its own copy. (The dataset's scene
-# count is data-gen/generate.py's, selected by --preset $(PRESET), unless DATASET_COUNT names one.)
+# receive these values as arguments from the rules; none has its own copy: training/config.py's
+# defaults are read from this file (for the PRESET of the environment, as make reads it). (The
+# dataset's scene count is data-gen/generate.py's, selected by --preset $(PRESET), unless
+# DATASET_COUNT names one.)
 #
 # quick fits a 2-core machine: `make reference noisy train eval` in 42 minutes from a clean clone
 # (2026-11-26, evening, release build included; issue 11 asks for at most 45).
@@ -43,7 +45,7 @@ $(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))
 $(eval $(call lx_preset,NOISY_EXTRA_SEEDS,,))
 $(eval $(call lx_preset,NOISY_EXTRA_LEVELS,1 2 4 8 16 32,1 2 4 8 16 32))
 
-# Training (make train): steps of the one-cycle schedule, and the time budget in minutes (quick:
+# Training (make train, and train.py's defaults: training/config.py reads them here): steps of the one-cycle schedule, and the time budget in minutes (quick:
 # the kernel-predicting model took about 0.29 s per step on 2 cores, so 3400 steps ended within 17
 # minutes; with the detail gates, 5-8 % more a step, a clean-clone run of 2026-11-26 evening took
 # 0.33 s and stopped at 3065 steps, its rate at 4 % of the peak: docs/measurements.md, *The quick

@@ -327,3 +327,45 @@ def test_extra_noise_realizations_render_the_training_scenes_with_their_own_seed
         return [(after(c, "--extra-seeds"), after(c, "--extra-spp")) for c in runs]
     assert told(NOISY_EXTRA_SEEDS="2 3") == [(["2", "3"], ["1", "2", "4", "8", "16", "32"])] * 2
     assert told(NOISY_EXTRA_SEEDS="2 3", NOISY_LEVELS="64 256 1024") == [([], [])] * 2
+
+
+def test_train_py_defaults_are_the_presets_make_train_passes(monkeypatch):
+    # `python train.py` without options trains as `make train` does: training/config.py's
+    # defaults are read from pipelines/presets.mk (config.presets, checked against make's own
+    # reading of every variable there), for the PRESET of the environment, which make reads too;
+    # an environment variable replaces a preset in both.
+    import sys
+
+    sys.path.insert(0, str(ROOT / "training"))
+    import config
+
+    names = [n for n in config.presets("quick", environ={}) if n != "PRESET"]
+    assert {"TRAIN_STEPS", "TRAIN_MINUTES", "TRAIN_SCHEDULE", "TRAIN_LOSS", "NOISY_LEVELS", "DATASET_DLE"} <= set(names)
+    for n in names + ["PRESET"]:  # this process's environment is that of each case alone
+        monkeypatch.delenv(n, raising=False)
+    clean = dict(os.environ)
+    for environ in ({"PRESET": "quick"}, {"PRESET": "full"}, {"PRESET": "full", "TRAIN_STEPS": "123", "DATASET_DLE": "7 8"}):
+        env = {**clean, **environ}
+        calls = "".join(f"$(info {n}=$({n}))" for n in names)
+        out = subprocess.run(["make", "--no-print-directory", "-f", str(ROOT / "pipelines/presets.mk"), "-f", "-", "all"],
+                             input=f"{calls}\nall: ;@:\n", capture_output=True, text=True, check=True, env=env).stdout
+        assert dict(line.split("=", 1) for line in out.splitlines()) == {n: config.presets(environ=environ)[n] for n in names}
+        # make train's train.py command line against train.py's defaults in the same environment.
+        r = subprocess.run(["make", "--no-print-directory", "-n", "-W", "training/train.py", "models/pytest-dry-run.onnx"]
+                           + [f"{k}={v}" for k, v in {**STAGES, "DATASET": "pytest-dry-run", "DATASET_COUNT": "12",
+                                                          "EVAL_DIR": str(_STAGE_DIR / "eval")}.items()],
+                           cwd=ROOT, capture_output=True, text=True, env=env)
+        assert r.returncode == 0, r.stderr
+        [train] = [shlex.split(line.split("&&", 1)[1]) for line in r.stdout.replace("\\\n", " ").splitlines() if "train.py" in line]
+        for k, v in environ.items():
+            monkeypatch.setenv(k, v)
+        config._presets.cache_clear()
+        try:
+            made, default = config.parse(train[train.index("train.py") + 1:]), config.parse([])
+        finally:
+            for k in environ:
+                monkeypatch.delenv(k)
+            config._presets.cache_clear()
+        for key in ("noisy_spp", "dle_paths", "extra_seeds", "extra_spp", "steps", "minutes", "schedule", "loss"):
+            assert getattr(made, key) == getattr(default, key), (environ, key)
+    assert default.steps == 123 and default.dle_paths == [7, 8] and default.schedule == "time"

@@ -807,7 +807,7 @@ def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
     assert record["run"]["steps"] == 5 and record["run"]["resumed_at"] == [3] and record["schedule"] == "time"
     with pytest.raises(SystemExit, match="--schedule 'epochs'"):
         train.main(args + ["--schedule", "epochs"])
-    steps_args = [a for a in args if a not in ("--schedule", "time")]
+    steps_args = [a for a in args if a not in ("--schedule", "time")] + ["--schedule", "steps"]
     with pytest.raises(SystemExit, match="the run's schedule is 'time', not 'steps'"):
         train.main(steps_args + ["--steps", "8", "--resume"])
 
