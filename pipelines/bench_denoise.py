@@ -9,8 +9,9 @@ user calls it (model or library load included); its CPU seconds are the process'
 system, all threads, from the kernel: `getrusage(RUSAGE_CHILDREN)`). Rounds alternate which
 denoiser goes first. The marginal cost per megapixel — (median CPU-s on the large image − median
 on the small one) / (the difference in megapixels) — cancels what does not grow with the image
-(start-up, model load, file names); it is what issue 11's inference criterion compares. Any
-denoiser honouring the `denoise` command line can be measured (`--denoise`, `DENOISE=` in make).
+(start-up, model load, file names); the inference criterion compares it (luxest's over OIDN's).
+Any denoiser honouring the `denoise` command line can be measured (`--denoise`, `DENOISE=` in
+make).
 
 Output: a Markdown table (`-o`) with a row per denoiser and the peer's column kept, and a CSV
 beside it (`.csv`)."""

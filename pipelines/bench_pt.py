@@ -149,7 +149,7 @@ def main(argv=None):
     TARGET = TARGETS[-1]
     if peer:
         pt = to_target["luxest trace", TARGET] / to_target["Mitsuba 3 llvm_ad_rgb path", TARGET]
-        lines.append(f"luxest trace / Mitsuba path, CPU time to relMSE {TARGET:g}: {pt:.2f} (issue 13's target: at most 0.5).")
+        lines.append(f"luxest trace / Mitsuba path, CPU time to relMSE {TARGET:g}: {pt:.2f} (the target: at most 0.5).")
         if (PTRACER, TARGET) in to_target:
             for n in ("luxest light tracer", DLE, DLE_PLAIN):
                 if (n, TARGET) in to_target:

@@ -1,4 +1,4 @@
-"""Radiance as the peer of luxest's lighting report (issue 14): the same room, the same luminaire
+"""Radiance as the peer of luxest's lighting report: the same room, the same luminaire
 tables, the same work-plane points, illuminance by `rtrace -I`.
 
     .venv-peers/bin/python pipelines/radiance_office.py --scene scenes/office.ron \

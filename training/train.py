@@ -17,6 +17,7 @@ import torch
 
 import config
 import dataset
+import grow
 import luxest_contract as contract
 import loss as losses
 import model
@@ -28,7 +29,7 @@ def autocast_dtype(device, precision, cpu_capability=None):
 
     `auto` takes bf16 on CUDA and on CPUs whose PyTorch kernels use AVX-512 (oneDNN's bf16
     paths), float32 elsewhere: on an AVX2-only CPU PyTorch emulates bf16, and a training step
-    took 2.2 s instead of 0.28 s in float32 (AMD EPYC, 2 threads, 2026-11-25)."""
+    took 2.2 s instead of 0.28 s in float32 (AMD EPYC, 2 threads)."""
     if precision not in ("auto", "bf16", "fp32"):
         raise SystemExit(f"train: --precision {precision!r}: expected auto, bf16 or fp32")
     if precision == "auto":
@@ -217,7 +218,7 @@ def main(argv=None):
     step, earlier_seconds, resumed_at = 0, 0.0, []
     if cfg.init_from and not (cfg.resume and ckpt.exists()):
         try:
-            net.load_state_dict(initial_weights(cfg.init_from, cfg))
+            net.load_state_dict(grow.initial_weights(cfg.init_from, cfg))
         except RuntimeError as e:
             raise SystemExit(f"train: --init-from {cfg.init_from}: weights of another network ({str(e).splitlines()[0]})")
         print(f"weights from {cfg.init_from}")
@@ -288,50 +289,6 @@ def main(argv=None):
     # What models/<dataset>.config.json records: the configuration and how the run went.
     (run / "run.json").write_text(json.dumps({**asdict(cfg), "run": summary}, indent=2))
     print(f"train: {step} steps in {summary['seconds']:.0f} s of training, validation loss {v:.4f}")
-
-
-def initial_weights(path, cfg):
-    """The state dict of `path` (a model exported by export.py, or a run's checkpoint.pt) for a
-    run of `cfg`: a fine-tuning starts from it with its own schedule. A `kpn` model may grow into
-    the run's network: without detail gates it gets them (model.add_detail_gates), with 4 scales a
-    fifth (model.add_coarsest_scale), and an exported one of smaller width is widened (model.widen,
-    the same function). Any other difference of network is refused in one line."""
-    import export
-
-    path = Path(path)
-    if not path.is_file():
-        raise SystemExit(f"train: --init-from {path}: no such file")
-    if path.suffix == ".onnx":
-        src, state = export.load_onnx(path)
-    else:
-        src = None
-        state = torch.load(path, weights_only=False, map_location="cpu")["model"]
-    if src is not None:
-        grows = src.head == cfg.head == "kpn" and src.base_width <= cfg.base_width and src.scales <= cfg.scales
-        if (src.head, list(src.features)) != (cfg.head, list(cfg.features)) or (
-                (src.base_width, src.scales) != (cfg.base_width, cfg.scales) and not grows):
-            raise SystemExit(f"train: --init-from {path}: a width-{src.base_width} {src.head} model of {src.scales} scales "
-                             f"on {','.join(src.features)}, this run trains width {cfg.base_width} {cfg.head} of "
-                             f"{cfg.scales} scales on {','.join(cfg.features)}")
-    if cfg.head == "kpn" and "heads.0.weight" in state:
-        gated = model.has_detail_gates(state)
-        if gated and not cfg.detail_gate:
-            raise SystemExit(f"train: --init-from {path}: a model with detail gates, this run trains one without (--detail-gate)")
-        if cfg.detail_gate and not gated:
-            try:
-                state = model.add_detail_gates(state)
-            except ValueError as e:
-                raise SystemExit(f"train: --init-from {path}: weights of another network ({e})")
-            print(f"detail gates added to the weights of {path} (bias {model.DETAIL_GATE_INIT})")
-        if model.scales_of(state) < cfg.scales:
-            state = model.add_coarsest_scale(state, cfg.detail_gate)
-            print(f"a fifth scale (1/16) added to the weights of {path} (blend bias -{model.DETAIL_GATE_INIT})")
-        if src is not None and src.base_width < cfg.base_width:
-            grown = config.Config.from_values({**asdict(src), "detail_gate": cfg.detail_gate, "scales": cfg.scales})
-            state = model.widen(state, grown, cfg.base_width, seed=0)  # one init for all runs: soupable
-            print(f"widened the width-{src.base_width} weights of {path} to width {cfg.base_width} "
-                  "(same function: new channels feed nothing until trained; model.widen)")
-    return state
 
 
 def save(net, opt, sched, step, seconds, resumed_at, path):

@@ -11,6 +11,7 @@ import torch
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import config  # noqa: E402
+import grow  # noqa: E402
 import loss as losses  # noqa: E402
 import model  # noqa: E402
 import transfer  # noqa: E402
@@ -642,13 +643,13 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
         train.main(args + ["--run-dir", str(gated_dir), "--base-width", "8", "--minutes", "0", "--detail-gate",
                            "--init-from", str(src)])
         gated = torch.load(gated_dir / "checkpoint.pt", weights_only=False)["model"]
-        assert model.has_detail_gates(gated) and not model.has_detail_gates(first)
+        assert grow.has_detail_gates(gated) and not grow.has_detail_gates(first)
         assert all(torch.equal(first[k], gated[k]) for k in first if not k.startswith("heads."))
         for s in range(model.SCALES):
             w, b = gated[f"heads.{s}.weight"], gated[f"heads.{s}.bias"]
             assert torch.equal(w[:k2 + 1], first[f"heads.{s}.weight"]) and torch.equal(b[:k2 + 1], first[f"heads.{s}.bias"])
             if s < model.SCALES - 1:  # a gate of weights 0 and bias DETAIL_GATE_INIT
-                assert w.shape[0] == k2 + 2 and not w[k2 + 1].any() and float(b[k2 + 1]) == model.DETAIL_GATE_INIT
+                assert w.shape[0] == k2 + 2 and not w[k2 + 1].any() and float(b[k2 + 1]) == grow.DETAIL_GATE_INIT
             else:
                 assert w.shape[0] == k2
         # The same network with those gate logits written out: beta = sigmoid(5) everywhere.
@@ -659,7 +660,7 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
             feats = a.unet.decoder(torch.cat([transfer.forward(x[:, 0:3], transfer.exposure_of(x[:, 0:3]).view(-1, 1, 1, 1)),
                                               x[:, 3:9], transfer.forward(x[:, 9:12], transfer.exposure_of(x[:, 0:3]).view(-1, 1, 1, 1))], 1))
             heads = [h(f) for h, f in zip(a.heads, feats)]
-            heads = [torch.cat([h, torch.full_like(h[:, :1], model.DETAIL_GATE_INIT)], 1) if s < model.SCALES - 1 else h
+            heads = [torch.cat([h, torch.full_like(h[:, :1], grow.DETAIL_GATE_INIT)], 1) if s < model.SCALES - 1 else h
                      for s, h in enumerate(heads)]
             want = model.reconstruct(x[:, 0:3], x[:, 3:6], heads, detail_gate=True) + x[:, 12:15]
             ya = a(x)
@@ -679,7 +680,7 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
 
 
 def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_path):
-    # --init-from a narrower kpn model widens it (model.widen): the same outputs, old weights in
+    # --init-from a narrower kpn model widens it (grow.widen): the same outputs, old weights in
     # place, new channels feeding nothing, the same new channels whatever the run's seed (so
     # that fine-tunings of one widened model can be souped), and a step moves the zeros.
     import export
@@ -719,11 +720,11 @@ def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_pat
     moved = runs["stepped"]["unet.enc1.0.weight"][:12, 8:]
     assert moved.abs().sum() > 0  # the new channels' fan-out learns
     with pytest.raises(ValueError, match="cannot narrow"):
-        model.widen(wide, cfg16, 8)
+        grow.widen(wide, cfg16, 8)
 
 
 def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(tmp_path):
-    # --scales 5 --init-from a 4-scale model (model.add_coarsest_scale): the weights in place, a
+    # --scales 5 --init-from a 4-scale model (grow.add_coarsest_scale): the weights in place, a
     # blend logit of bias -5 at 1/8 (alpha 0.0067) and a zero 1/16 head, so the output moves
     # from the 4-scale model's by 0.0067 of the 1/8 scale's coarse band at most; hand-computed.
     import export
