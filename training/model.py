@@ -239,7 +239,7 @@ class Denoiser(nn.Module):
         h, w = x.shape[2], x.shape[3]
         if exposure is None:
             exposure = transfer.exposure_of(x[:, 0:3]).to(x.device)
-        ph, pw = (16 - h % 16) % 16, (16 - w % 16) % 16
+        ph, pw = (h + 15) // 16 * 16 - h, (w + 15) // 16 * 16 - w
         x = F.pad(x, (0, pw, 0, ph), mode="replicate")
         out, exp = self.transferred(x, exposure)
         out = out[:, :, :h, :w]

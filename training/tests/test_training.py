@@ -13,8 +13,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import config  # noqa: E402
 import grow  # noqa: E402
 import loss as losses  # noqa: E402
+import luxest_contract as contract  # noqa: E402
 import model  # noqa: E402
 import transfer  # noqa: E402
+from conftest import tiny_split  # noqa: E402
 from model import Denoiser, UNet  # noqa: E402
 
 
@@ -346,33 +348,44 @@ def test_split_joins_compute_the_same_decoder():
     assert float(a[0].abs().max()) > 0
 
 
-@pytest.mark.parametrize("head,features,gate", [(h, model.FEATURE_SETS[0], False) for h in model.HEADS]
-                         + [("kpn", model.FEATURE_SETS[1], False), ("kpn", model.FEATURE_SETS[2], False),
-                            ("kpn", model.FEATURE_SETS[2], True), ("kpn", model.FEATURE_SETS[2], "5 scales")])
-def test_export_matches_onnxruntime(tmp_path, head, features, gate):
+# The network of each shared model (conftest.MODELS): head, features, detail gate, scales. `ema`
+# is the `emi` run exported to add back the antialiased emission: the same weights, all five
+# features; `five` the `gated` run grown to five scales.
+EXPORTED = {"kpn": ("kpn", model.FEATURE_SETS[0], False, 4), "direct": ("direct", model.FEATURE_SETS[0], False, 4),
+            "emi": ("kpn", model.FEATURE_SETS[1], False, 4), "ema": ("kpn", model.FEATURE_SETS[2], False, 4),
+            "gated": ("kpn", model.FEATURE_SETS[2], True, 4), "five": ("kpn", model.FEATURE_SETS[2], True, 5)}
+
+
+def exported_network(models, name):
+    """(the torch network of shared model `name` with its run's weights, in eval mode; its ONNX path)."""
+    head, features, gate, scales = EXPORTED[name]
+    net = Denoiser(width=8, head=head, features=features, detail_gate=gate, scales=scales)
+    net.load_state_dict(torch.load(models[name]["run"] / "checkpoint.pt", weights_only=False)["model"])
+    return net.eval(), models[name]["onnx"]
+
+
+@pytest.mark.parametrize("name", list(EXPORTED))
+def test_export_matches_onnxruntime(models, name):
+    # Every network shape the exporter writes: each head, feature set, with and without detail
+    # gates, 4 and 5 scales (shared exports: conftest.py).
     ort = pytest.importorskip("onnxruntime")
     import export
 
-    torch.manual_seed(2)
-    scales = 5 if gate == "5 scales" else 4
-    gate = bool(gate)
-    cfg = config.Config(base_width=8, head=head, features=list(features), detail_gate=gate, scales=scales)
-    cfg.save(tmp_path / "config.json")
-    net = Denoiser(width=8, head=head, features=features, detail_gate=gate, scales=scales)
-    c = 3 * len(features)
-    torch.save({"model": net.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
-    onnx_path = tmp_path / "m.onnx"
-    export.export(tmp_path, onnx_path)
+    head, features, gate, scales = EXPORTED[name]
+    net, onnx_path = exported_network(models, name)
     session = ort.InferenceSession(str(onnx_path), providers=["CPUExecutionProvider"])
-    net.eval()
+    assert [i.name for i in session.get_inputs()] + [o.name for o in session.get_outputs()] == list(contract.TENSORS)
+    c = 3 * len(features)
+    torch.manual_seed(2)
     for h, w in [(40, 56), (33, 17)]:
         x = torch.rand(1, c, h, w) * torch.tensor([5.0] * 3 + [1.0] * 6 + [2.0] * (c - 9)).view(1, c, 1, 1)
         if c >= 12:
             x[:, 9:c, : h // 2] = 0.0  # emission in the lower half only
-        a = net(x).detach().numpy()
+        with torch.no_grad():
+            a = net(x).numpy()
         e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
         assert abs(float(e[0]) - float(transfer.exposure_of(x[:, 0:3])[0])) <= 1e-6 * float(e[0])
-        b = session.run(None, {"input": x.numpy(), "exposure": e})[0]
+        b = session.run([contract.OUTPUT_TENSOR], {contract.INPUT_TENSOR: x.numpy(), contract.EXPOSURE_TENSOR: e})[0]
         assert a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-4 * max(1.0, float(np.abs(a).max()))
     graph = __import__("onnx").load(str(onnx_path)).graph
@@ -383,43 +396,43 @@ def test_export_matches_onnxruntime(tmp_path, head, features, gate):
              and any(producer.get(i) in ("Resize", "Upsample") for i in n.input)]
     assert not joins and any(n.op_type == "Resize" for n in graph.node)
     meta = {p.key: p.value for p in __import__("onnx").load(str(onnx_path)).metadata_props}
-    assert meta["luxest.channels"] == ",".join(features)
-    assert (export.EMISSION in meta["luxest.transfer"]) == ("emi" in features)
-    assert (export.EMISSION_AA in meta["luxest.transfer"]) == ("ema" in features)
-    assert json.loads(meta["luxest.config"])["base_width"] == 8
-    assert json.loads(meta["luxest.config"])["head"] == head
-    assert export.outputs(head, scales) in meta["luxest.transfer"]
-    assert (export.DETAIL_GATE in meta["luxest.transfer"]) == gate
+    assert meta[contract.CHANNELS] == ",".join(features)
+    assert (export.EMISSION in meta[contract.MODEL_TRANSFER]) == ("emi" in features)
+    assert (export.EMISSION_AA in meta[contract.MODEL_TRANSFER]) == ("ema" in features)
+    assert json.loads(meta[contract.MODEL_CONFIG])["base_width"] == 8
+    assert json.loads(meta[contract.MODEL_CONFIG])["head"] == head
+    assert export.outputs(head, scales) in meta[contract.MODEL_TRANSFER]
+    assert (export.DETAIL_GATE in meta[contract.MODEL_TRANSFER]) == gate
     back, state = export.load_onnx(onnx_path)
     assert back.detail_gate == gate and back.scales == scales
     assert all(torch.equal(state[k], v) for k, v in net.state_dict().items())
 
 
-def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(tmp_path):
+def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(models, tmp_path):
+    # The shared `ema` model: the `emi` run (hdr, alb, nrm, emi) exported with
+    # antialiased_emission: it takes ema too and adds it back in place of emi.
     ort = pytest.importorskip("onnxruntime")
     import export
 
-    torch.manual_seed(5)
-    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[1]), detail_gate=False)
-    cfg.save(tmp_path / "config.json")
     net4 = Denoiser(width=8, head="kpn", features=model.FEATURE_SETS[1]).eval()
-    torch.save({"model": net4.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
-    export.export(tmp_path, tmp_path / "m.onnx", antialiased_emission=True)
-    session = ort.InferenceSession(str(tmp_path / "m.onnx"), providers=["CPUExecutionProvider"])
-    meta = {p.key: p.value for p in __import__("onnx").load(str(tmp_path / "m.onnx")).metadata_props}
-    assert meta["luxest.channels"] == "hdr,alb,nrm,emi,ema" and export.EMISSION_AA in meta["luxest.transfer"]
+    net4.load_state_dict(torch.load(models["emi"]["run"] / "checkpoint.pt", weights_only=False)["model"])
+    assert json.loads((models["emi"]["run"] / "config.json").read_text())["features"] == list(model.FEATURE_SETS[1])
+    session = ort.InferenceSession(str(models["ema"]["onnx"]), providers=["CPUExecutionProvider"])
+    meta = {p.key: p.value for p in __import__("onnx").load(str(models["ema"]["onnx"])).metadata_props}
+    assert meta[contract.CHANNELS] == "hdr,alb,nrm,emi,ema" and export.EMISSION_AA in meta[contract.MODEL_TRANSFER]
+    torch.manual_seed(5)
     x = torch.rand(1, 12, 32, 48) * 3.0
     ema = torch.rand(1, 3, 32, 48) * 7.0
     e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
-    b = session.run(None, {"input": torch.cat([x, ema], 1).numpy(), "exposure": e})[0]
+    b = session.run(None, {contract.INPUT_TENSOR: torch.cat([x, ema], 1).numpy(), contract.EXPOSURE_TENSOR: e})[0]
     with torch.no_grad():
         a = net4(x, torch.from_numpy(e)).numpy()
     added = (ema - x[:, 9:12]).numpy()
     assert np.max(np.abs(b - a - added)) <= 1e-4 * max(1.0, float(np.abs(b).max()))
-    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[0]), detail_gate=False)
-    cfg.save(tmp_path / "config.json")
+    # A run without the emission cannot (refused before anything is exported).
     with pytest.raises(ValueError, match="emi"):
-        export.export(tmp_path, tmp_path / "n.onnx", antialiased_emission=True)
+        export.export(models["kpn"]["run"], tmp_path / "n.onnx", antialiased_emission=True)
+    assert not (tmp_path / "n.onnx").exists()
 
 
 def test_config_round_trip(tmp_path):
@@ -449,29 +462,6 @@ def test_config_round_trip(tmp_path):
     assert asdict(config.Config.load(tmp_path / "later.json")) == asdict(cfg)
     assert config.parse([]).detail_gate is True
     assert config.parse(["--no-detail-gate"]).detail_gate is False
-
-
-def tiny_split(d, side, rng):
-    """A rendered split of one scene `g` in directory `d` (created): a 64-spp reference (seed 2)
-    and a 4-spp level (seed 1) with every feature, side x side random pixels drawn from `rng`."""
-    import luxest_contract as contract
-
-    d.mkdir(parents=True)
-    contract.write(d / contract.image_name("g", "hdr"), rng.random((side, side, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
-    for kind in contract.FEATURES:
-        contract.write(d / contract.image_name("g", kind, 4), rng.random((side, side, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
-    return d
-
-
-def tiny_prep(tmp_path, seed):
-    """tiny_split's scene (pixels from `seed`) preprocessed at 4 spp without local-estimate images
-    into tmp_path/prep, and train.py's arguments for it: 32² crops, batches of 2, one thread."""
-    import preprocess
-
-    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(seed))
-    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
-    return ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
-            "--threads", "1"]
 
 
 def test_training_runs_its_steps_and_resumes(tmp_path):
@@ -608,17 +598,16 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path, capsys, monkeypatch):
         next(train.batches(data, cfg, cpu))
 
 
-def test_a_run_starts_from_an_exported_models_weights(tmp_path):
+def test_a_run_starts_from_an_exported_models_weights(models, tiny_prep, tmp_path):
     # --init-from: a fine-tuning starts from the weights of an exported model (or a checkpoint)
-    # with its own schedule; a network of another width is refused in one line.
-    import export
+    # with its own schedule; a network of another width is refused in one line. The model: the
+    # shared `ema` export (all five features, no detail gates) of the `emi` run's weights.
     import train
 
-    args = tiny_prep(tmp_path, 4) + ["--steps", "2", "--no-detail-gate"]
-    train.main(args + ["--run-dir", str(tmp_path / "first"), "--base-width", "8"])
-    export.export(tmp_path / "first", tmp_path / "first.onnx")
-    train.main(args + ["--run-dir", str(tmp_path / "second"), "--base-width", "8", "--minutes", "0", "--init-from", str(tmp_path / "first.onnx")])
-    first = torch.load(tmp_path / "first" / "checkpoint.pt", weights_only=False)["model"]
+    args = tiny_prep + ["--steps", "2", "--no-detail-gate"]
+    first_onnx, first_pt = models["ema"]["onnx"], models["emi"]["run"] / "checkpoint.pt"
+    train.main(args + ["--run-dir", str(tmp_path / "second"), "--base-width", "8", "--minutes", "0", "--init-from", str(first_onnx)])
+    first = torch.load(first_pt, weights_only=False)["model"]
     second = torch.load(tmp_path / "second" / "checkpoint.pt", weights_only=False)["model"]
     assert first.keys() == second.keys() and all(torch.equal(first[k], second[k]) for k in first)
     # Not the initialisation it would have had otherwise.
@@ -627,10 +616,10 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     assert not all(torch.equal(first[k], fresh[k]) for k in first)
     with pytest.raises(SystemExit, match="a width-8 kpn model .* this run trains width 4"):
         train.main(args + ["--base-width", "4", "--minutes", "0", "--run-dir", str(tmp_path / "third"),
-                           "--init-from", str(tmp_path / "first.onnx")])
+                           "--init-from", str(first_onnx)])
     with pytest.raises(SystemExit, match="weights of another network"):
         train.main(args + ["--base-width", "16", "--minutes", "0", "--run-dir", str(tmp_path / "fourth"),
-                           "--init-from", str(tmp_path / "first" / "checkpoint.pt")])
+                           "--init-from", str(first_pt)])
     # A run with detail gates from a model without them: its weights, and gates that keep 0.993
     # of the detail, so the output starts within that fraction of the detail band of the model's.
     k2 = model.KERNEL ** 2
@@ -638,7 +627,7 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     a.load_state_dict(first)
     x = torch.rand(1, a.in_channels, 32, 32) * 2
     x[:, 9:] = 0.0  # no emission
-    for src in (tmp_path / "first.onnx", tmp_path / "first" / "checkpoint.pt"):
+    for src in (first_onnx, first_pt):
         gated_dir = tmp_path / f"gated-{src.suffix[1:]}"
         train.main(args + ["--run-dir", str(gated_dir), "--base-width", "8", "--minutes", "0", "--detail-gate",
                            "--init-from", str(src)])
@@ -666,8 +655,8 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
             ya = a(x)
         assert torch.allclose(yb, want, rtol=1e-4, atol=1e-5), float((yb - want).abs().max())
         assert float((ya - yb).abs().max()) > 0  # the gates start a little below 1
-    export.export(gated_dir, tmp_path / "gated.onnx")
-    for src in (gated_dir / "checkpoint.pt", tmp_path / "gated.onnx"):
+    # A gated checkpoint, and a gated model's export (the shared `gated` one), for a run without.
+    for src in (gated_dir / "checkpoint.pt", models["gated"]["onnx"]):
         with pytest.raises(SystemExit, match="a model with detail gates"):
             train.main(args + ["--base-width", "8", "--minutes", "0", "--run-dir", str(tmp_path / "fifth"),
                                "--init-from", str(src)])
@@ -679,23 +668,21 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
                            "--features", "hdr", "alb", "nrm"])
 
 
-def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_path):
+def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(models, tiny_prep, tmp_path):
     # --init-from a narrower kpn model widens it (grow.widen): the same outputs, old weights in
     # place, new channels feeding nothing, the same new channels whatever the run's seed (so
-    # that fine-tunings of one widened model can be souped), and a step moves the zeros.
-    import export
+    # that fine-tunings of one widened model can be souped), and a step moves the zeros. The
+    # narrow model: the shared `gated` one (width 8, trained 3 steps).
     import train
 
-    args = tiny_prep(tmp_path, 5) + ["--detail-gate"]
-    train.main(args + ["--run-dir", str(tmp_path / "narrow"), "--base-width", "8", "--steps", "3"])
-    export.export(tmp_path / "narrow", tmp_path / "narrow.onnx")
+    args = tiny_prep + ["--detail-gate"]
     runs = {}
     for name, extra in (("a", ["--seed", "1", "--minutes", "0"]), ("b", ["--seed", "7", "--minutes", "0"]),
                         ("stepped", ["--seed", "1", "--steps", "2", "--lr", "1e-2"])):
         train.main(args + extra + ["--run-dir", str(tmp_path / name), "--base-width", "16",
-                                   "--init-from", str(tmp_path / "narrow.onnx")])
+                                   "--init-from", str(models["gated"]["onnx"])])
         runs[name] = torch.load(tmp_path / name / "checkpoint.pt", weights_only=False)["model"]
-    narrow = torch.load(tmp_path / "narrow" / "checkpoint.pt", weights_only=False)["model"]
+    narrow = torch.load(models["gated"]["run"] / "checkpoint.pt", weights_only=False)["model"]
     wide = runs["a"]
     assert all(torch.equal(wide[k], runs["b"][k]) for k in wide)
     assert wide["unet.enc1.0.weight"].shape == (24, 16, 3, 3) and narrow["unet.enc1.0.weight"].shape == (12, 8, 3, 3)
@@ -723,19 +710,18 @@ def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_pat
         grow.widen(wide, cfg16, 8)
 
 
-def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(tmp_path):
+def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(models, tiny_prep, tmp_path):
     # --scales 5 --init-from a 4-scale model (grow.add_coarsest_scale): the weights in place, a
     # blend logit of bias -5 at 1/8 (alpha 0.0067) and a zero 1/16 head, so the output moves
     # from the 4-scale model's by 0.0067 of the 1/8 scale's coarse band at most; hand-computed.
+    # The 4-scale model: the shared `gated` one (trained 3 steps).
     import export
     import train
 
-    args = tiny_prep(tmp_path, 6) + ["--detail-gate", "--base-width", "8"]
-    train.main(args + ["--run-dir", str(tmp_path / "four"), "--steps", "3"])
-    export.export(tmp_path / "four", tmp_path / "four.onnx")
-    train.main(args + ["--run-dir", str(tmp_path / "five"), "--scales", "5", "--minutes", "0",
-                       "--init-from", str(tmp_path / "four.onnx")])
-    four = torch.load(tmp_path / "four" / "checkpoint.pt", weights_only=False)["model"]
+    args = tiny_prep + ["--detail-gate", "--base-width", "8"]
+    four_onnx = models["gated"]["onnx"]
+    train.main(args + ["--run-dir", str(tmp_path / "five"), "--scales", "5", "--minutes", "0", "--init-from", str(four_onnx)])
+    four = torch.load(models["gated"]["run"] / "checkpoint.pt", weights_only=False)["model"]
     five = torch.load(tmp_path / "five" / "checkpoint.pt", weights_only=False)["model"]
     k2 = model.KERNEL ** 2
     assert all(torch.equal(four[k], five[k]) for k in four if k not in ("heads.3.weight", "heads.3.bias"))
@@ -762,19 +748,21 @@ def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(tmp_path):
     rel = float((ya - yb).abs().mean() / ya.abs().mean())
     assert 0 < rel < 0.01, rel
     train.main(args + ["--run-dir", str(tmp_path / "stepped"), "--scales", "5", "--steps", "2", "--lr", "1e-2",
-                       "--init-from", str(tmp_path / "four.onnx")])
+                       "--init-from", str(four_onnx)])
     stepped = torch.load(tmp_path / "stepped" / "checkpoint.pt", weights_only=False)["model"]
     assert stepped["heads.4.weight"].abs().sum() > 0 and stepped["heads.3.weight"][k2:].abs().sum() > 0
-    # Exported and read back whole, the zero 1/16 head included (the exporter's optimiser may drop
-    # a Conv's zero bias; export.load_onnx restores it).
-    export.export(tmp_path / "five", tmp_path / "f.onnx")
-    back, state = export.load_onnx(tmp_path / "f.onnx")
-    assert back.scales == 5 and state.keys() == five.keys() and all(torch.equal(state[k], five[k]) for k in five)
+    # Exported and read back whole, the zero bias of the 1/16 head included (the exporter's
+    # optimiser may drop a Conv's zero bias; export.load_onnx restores it): the shared `five`
+    # model, this grown model with random weights in its 1/16 head.
+    grown = torch.load(models["five"]["run"] / "checkpoint.pt", weights_only=False)["model"]
+    assert all(torch.equal(grown[k], five[k]) for k in five if k != "heads.4.weight") and not grown["heads.4.bias"].any()
+    back, state = export.load_onnx(models["five"]["onnx"])
+    assert back.scales == 5 and state.keys() == grown.keys() and all(torch.equal(state[k], grown[k]) for k in grown)
     with pytest.raises(SystemExit, match="of 5 scales .* this run trains width 8 kpn of 4 scales"):
-        train.main(args + ["--run-dir", str(tmp_path / "back"), "--minutes", "0", "--init-from", str(tmp_path / "f.onnx")])
+        train.main(args + ["--run-dir", str(tmp_path / "back"), "--minutes", "0", "--init-from", str(models["five"]["onnx"])])
 
 
-def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
+def test_time_schedule_is_torchs_one_cycle_over_the_budget(tiny_prep, tmp_path):
     # --schedule time: the rates of torch's OneCycleLR at the same fraction of the cycle,
     # the fraction being the larger of steps / cap and seconds / budget; a run ends its cycle
     # at the cap (or the budget) and a resumed one goes on from its step.
@@ -800,7 +788,7 @@ def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
         assert abs(opt.param_groups[0]["lr"] - lr) < 1e-6
     assert sched.done(0, 600.0) and sched.done(n - 1, 0.0) and not sched.done(10, 10.0)
 
-    args = tiny_prep(tmp_path, 6) + ["--run-dir", str(tmp_path / "run"), "--base-width", "8", "--schedule", "time"]
+    args = tiny_prep + ["--run-dir", str(tmp_path / "run"), "--base-width", "8", "--schedule", "time"]
     train.main(args + ["--steps", "3", "--minutes", "5"])
     assert json.loads((tmp_path / "run" / "summary.json").read_text())["steps"] == 3
     train.main(args + ["--steps", "5", "--minutes", "5", "--resume"])
