@@ -1,4 +1,4 @@
-"""Data flow of preprocessing (issue 11): independent reference seeds, spp from headers, and the
+"""Data flow of preprocessing: independent reference seeds, spp from headers, and the
 whole-image exposure stored for training."""
 import math
 import subprocess
@@ -42,7 +42,7 @@ def test_refuses_a_reference_with_the_noisy_seed(tmp_path):
     with pytest.raises(contract.ContractError) as e:
         preprocess.preprocess_split(src, tmp_path / "prep", [4])
     msg = str(e.value)
-    assert "gen0000_ref.hdr.exr" in msg and "gen0000_000004spp.hdr.exr" in msg and "luxest.seed = 1" in msg
+    assert "gen0000_ref.hdr.exr" in msg and "gen0000_000004spp.hdr.exr" in msg and f"{contract.SEED} = 1" in msg
     assert "\n" not in msg
     # The command line: exit 1, one line on stderr naming both files.
     for split in ("valid", "test"):
@@ -59,7 +59,7 @@ def test_spp_comes_from_the_header(tmp_path):
     src.mkdir()
     write_ref(src, "g", 1000001, rng)
     write_set(src, "g", 8, 1, rng, file_spp=4)  # the name says 4, the header 8
-    with pytest.raises(contract.ContractError, match="luxest.samples = 8 but the file name says 4"):
+    with pytest.raises(contract.ContractError, match=f"{contract.SAMPLES} = 8 but the file name says 4"):
         preprocess.preprocess_split(src, tmp_path / "prep", [4, 8])
 
 
