@@ -3,6 +3,7 @@ grows into the run's network computing the same function, or nearly. Detail gate
 (`add_detail_gates`: gates that keep 0.993 of the detail), a fifth scale (`add_coarsest_scale`:
 a blend that takes 0.007 of the coarser band), more channels (`widen`: new channels that feed
 nothing until trained), so that a fine-tuning starts where the model it grows from stands."""
+
 from dataclasses import asdict
 from pathlib import Path
 
@@ -37,7 +38,9 @@ def add_detail_gates(state):
     for s in range(scales - 1):
         w, b = state[f"heads.{s}.weight"], state[f"heads.{s}.bias"]
         if w.shape[0] != model.head_outputs(s, False, scales):
-            raise ValueError(f"heads.{s}: {w.shape[0]} outputs, expected {model.head_outputs(s, False, scales)} (no detail gate)")
+            raise ValueError(
+                f"heads.{s}: {w.shape[0]} outputs, expected {model.head_outputs(s, False, scales)} (no detail gate)"
+            )
         state[f"heads.{s}.weight"] = torch.cat([w, torch.zeros_like(w[:1])])
         state[f"heads.{s}.bias"] = torch.cat([b, torch.full_like(b[:1], DETAIL_GATE_INIT)])
     return state
@@ -57,15 +60,30 @@ def widen(state, cfg, to_width, seed=0):
         raise ValueError(f"widen: cannot narrow a width-{cfg.base_width} network to {to_width}")
     old = model.denoiser(cfg).unet.channels
     torch.manual_seed(seed)
-    net = model.Denoiser(width=to_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate, scales=cfg.scales)
+    net = model.Denoiser(
+        width=to_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate, scales=cfg.scales
+    )
     new = net.unet.channels
     fresh = net.state_dict()
     c1, c2, c3, c4, c5 = range(5)
     # The input channel groups of each convolution (levels; None: the network's input), in the
     # order they are concatenated (UNet.join: the upsampled coarse level first, then the skip).
-    inputs = {"enc0.0": [None], "enc0.1": [c1], "enc1": [c1], "enc2": [c2], "enc3": [c3],
-              "bottleneck": [c4], "dec3.0": [c5, c4], "dec3.1": [c4], "dec2.0": [c4, c3],
-              "dec2.1": [c3], "dec1.0": [c3, c2], "dec1.1": [c2], "dec0.0": [c2, c1], "dec0.1": [c1]}
+    inputs = {
+        "enc0.0": [None],
+        "enc0.1": [c1],
+        "enc1": [c1],
+        "enc2": [c2],
+        "enc3": [c3],
+        "bottleneck": [c4],
+        "dec3.0": [c5, c4],
+        "dec3.1": [c4],
+        "dec2.0": [c4, c3],
+        "dec2.1": [c3],
+        "dec1.0": [c3, c2],
+        "dec1.1": [c2],
+        "dec0.0": [c2, c1],
+        "dec0.1": [c1],
+    }
     inputs.update({f"heads.{s}": [s] for s in range(cfg.scales)})
     out = {}
     for key, w in fresh.items():
@@ -86,7 +104,7 @@ def widen(state, cfg, to_width, seed=0):
             for level in inputs[name]:
                 # The network's input (its channels, not widened) or a level's channels.
                 n_old, n_new = (src.shape[1],) * 2 if level is None else (old[level], new[level])
-                w[:n_out, o_new:o_new + n_old] = src[:, o_old:o_old + n_old]
+                w[:n_out, o_new : o_new + n_old] = src[:, o_old : o_old + n_old]
                 o_new, o_old = o_new + n_new, o_old + n_old
             if o_old != src.shape[1] or o_new != w.shape[1]:
                 raise ValueError(f"widen: {key}: {src.shape[1]} inputs, expected {o_old}")
@@ -135,14 +153,19 @@ def initial_weights(path, cfg):
     if src is not None:
         grows = src.head == cfg.head == "kpn" and src.base_width <= cfg.base_width and src.scales <= cfg.scales
         if (src.head, list(src.features)) != (cfg.head, list(cfg.features)) or (
-                (src.base_width, src.scales) != (cfg.base_width, cfg.scales) and not grows):
-            raise SystemExit(f"train: --init-from {path}: a width-{src.base_width} {src.head} model of {src.scales} scales "
-                             f"on {','.join(src.features)}, this run trains width {cfg.base_width} {cfg.head} of "
-                             f"{cfg.scales} scales on {','.join(cfg.features)}")
+            (src.base_width, src.scales) != (cfg.base_width, cfg.scales) and not grows
+        ):
+            raise SystemExit(
+                f"train: --init-from {path}: a width-{src.base_width} {src.head} model of {src.scales} scales "
+                f"on {','.join(src.features)}, this run trains width {cfg.base_width} {cfg.head} of "
+                f"{cfg.scales} scales on {','.join(cfg.features)}"
+            )
     if cfg.head == "kpn" and "heads.0.weight" in state:
         gated = has_detail_gates(state)
         if gated and not cfg.detail_gate:
-            raise SystemExit(f"train: --init-from {path}: a model with detail gates, this run trains one without (--detail-gate)")
+            raise SystemExit(
+                f"train: --init-from {path}: a model with detail gates, this run trains one without (--detail-gate)"
+            )
         if cfg.detail_gate and not gated:
             try:
                 state = add_detail_gates(state)
@@ -155,6 +178,8 @@ def initial_weights(path, cfg):
         if src is not None and src.base_width < cfg.base_width:
             grown = config.Config.from_values({**asdict(src), "detail_gate": cfg.detail_gate, "scales": cfg.scales})
             state = widen(state, grown, cfg.base_width, seed=0)  # one init for all runs: soupable
-            print(f"widened the width-{src.base_width} weights of {path} to width {cfg.base_width} "
-                  "(same function: new channels feed nothing until trained; grow.widen)")
+            print(
+                f"widened the width-{src.base_width} weights of {path} to width {cfg.base_width} "
+                "(same function: new channels feed nothing until trained; grow.widen)"
+            )
     return state

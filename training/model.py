@@ -40,6 +40,7 @@ inference. Both heads are scale-equivariant through the exposure input: hdr time
 exposure over s gives the result times s (denoise's rescaling near the f32 limit relies on it).
 Near the autoexposure's 1e-4 floor they are not: callers brighten a dim image first
 (luxest_contract.dim_exponent). Growing a model into a larger network is grow.py's."""
+
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
@@ -84,15 +85,15 @@ class UNet(nn.Module):
         self.joins = None  # split_joins (export)
 
     def decoder(self, x):
-        e0 = self.enc0(x)                      # H
-        e1 = self.enc1(F.max_pool2d(e0, 2))    # H/2
-        e2 = self.enc2(F.max_pool2d(e1, 2))    # H/4
-        e3 = self.enc3(F.max_pool2d(e2, 2))    # H/8
+        e0 = self.enc0(x)  # H
+        e1 = self.enc1(F.max_pool2d(e0, 2))  # H/2
+        e2 = self.enc2(F.max_pool2d(e1, 2))  # H/4
+        e3 = self.enc3(F.max_pool2d(e2, 2))  # H/8
         b = self.bottleneck(F.max_pool2d(e3, 2))  # H/16
-        d3 = self.join("dec3", b, e3)    # H/8
-        d2 = self.join("dec2", d3, e2)   # H/4
-        d1 = self.join("dec1", d2, e1)   # H/2
-        d0 = self.join("dec0", d1, e0)   # H
+        d3 = self.join("dec3", b, e3)  # H/8
+        d2 = self.join("dec2", d3, e2)  # H/4
+        d1 = self.join("dec1", d2, e1)  # H/2
+        d0 = self.join("dec0", d1, e0)  # H
         return [d0, d1, d2, d3, b]
 
     def join(self, name, coarse, skip):
@@ -103,8 +104,9 @@ class UNet(nn.Module):
         if self.joins is None:
             return block(torch.cat([up, skip], 1))
         conv = block[0][0]
-        y = (F.conv2d(up, self.joins[name + "_up"], conv.bias, padding=1)
-             + F.conv2d(skip, self.joins[name + "_skip"], None, padding=1))
+        y = F.conv2d(up, self.joins[name + "_up"], conv.bias, padding=1) + F.conv2d(
+            skip, self.joins[name + "_skip"], None, padding=1
+        )
         return block[1:](F.relu(y))
 
     def split_joins(self):
@@ -144,7 +146,7 @@ def apply_kernels(img, logits, gather="unfold"):
         num = None
         for i in range(KERNEL * KERNEL):
             dy, dx = divmod(i, KERNEL)
-            term = e[:, i:i + 1] * p[:, :, dy:dy + h, dx:dx + wd]
+            term = e[:, i : i + 1] * p[:, :, dy : dy + h, dx : dx + wd]
             num = term if num is None else num + term
     return num / e.sum(1, keepdim=True)
 
@@ -165,10 +167,10 @@ def reconstruct(hdr, albedo, heads, gather="unfold", detail_gate=False):
         for s in range(len(heads) - 2, -1, -1):
             pred = heads[s].float()
             f = apply_kernels(irr[s], pred[:, :k2], gather)
-            alpha = torch.sigmoid(pred[:, k2:k2 + 1])
+            alpha = torch.sigmoid(pred[:, k2 : k2 + 1])
             low = up(F.avg_pool2d(f, 2))
             if detail_gate:  # beta f + (1 - beta) U(D(f)): exactly f where beta is 1
-                beta = torch.sigmoid(pred[:, k2 + 1:k2 + 2])
+                beta = torch.sigmoid(pred[:, k2 + 1 : k2 + 2])
                 f = beta * f + (1 - beta) * low
             out = f + alpha * (up(out) - low)
         # The blend is not a convex combination (a dark pixel beside a firefly can go below
@@ -192,8 +194,9 @@ def head_outputs(scale, detail_gate, scales=SCALES):
 
 def denoiser(cfg):
     """The Denoiser of a configuration (config.Config): width, head, features, detail gate."""
-    return Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate,
-                    scales=cfg.scales)
+    return Denoiser(
+        width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate, scales=cfg.scales
+    )
 
 
 class Denoiser(nn.Module):
@@ -211,8 +214,9 @@ class Denoiser(nn.Module):
             raise ValueError(f"head {head!r}: expected one of {', '.join(HEADS)}")
         features = tuple(features)
         if features not in FEATURE_SETS:
-            raise ValueError(f"features {', '.join(features)}: expected one of "
-                             + "; ".join(", ".join(f) for f in FEATURE_SETS))
+            raise ValueError(
+                f"features {', '.join(features)}: expected one of " + "; ".join(", ".join(f) for f in FEATURE_SETS)
+            )
         self.emission = "emi" in features
         if self.emission and head != "kpn":
             raise ValueError("the emi feature needs the kpn head")
@@ -230,8 +234,10 @@ class Denoiser(nn.Module):
             self.unet = UNet(in_channels=network_channels, width=width)
         else:
             self.unet = UNet(in_channels=network_channels, width=width, out_channels=0)
-            self.heads = nn.ModuleList(nn.Conv2d(c, head_outputs(s, self.detail_gate, scales), 1)
-                                       for s, c in enumerate(self.unet.channels[:scales]))
+            self.heads = nn.ModuleList(
+                nn.Conv2d(c, head_outputs(s, self.detail_gate, scales), 1)
+                for s, c in enumerate(self.unet.channels[:scales])
+            )
 
     def forward(self, x, exposure=None):
         """`exposure` (N,) float: the exposure of each whole image; if None, x must hold whole
@@ -269,7 +275,7 @@ class Denoiser(nn.Module):
             out = reconstruct(hdr, x[:, 3:6], heads, self.kernel_gather, self.detail_gate)
             if self.emission:
                 a = self.added_emission
-                out = out + x[:, a:a + 3].float().clamp(min=0)
+                out = out + x[:, a : a + 3].float().clamp(min=0)
         return out, exp
 
     def linear(self, out, exp):

@@ -31,9 +31,13 @@ def tiny_split(d, side, rng):
     import luxest_contract as contract
 
     d.mkdir(parents=True)
-    contract.write(d / contract.image_name("g", "hdr"), rng.random((side, side, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
+    contract.write(
+        d / contract.image_name("g", "hdr"), rng.random((side, side, 3)), {contract.SAMPLES: 64, contract.SEED: 2}
+    )
     for kind in contract.FEATURES:
-        contract.write(d / contract.image_name("g", kind, 4), rng.random((side, side, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
+        contract.write(
+            d / contract.image_name("g", kind, 4), rng.random((side, side, 3)), {contract.SAMPLES: 4, contract.SEED: 1}
+        )
     return d
 
 
@@ -44,8 +48,19 @@ def make_tiny_prep(root):
 
     d = tiny_split(root / "data" / "train", 32, np.random.default_rng(4))
     preprocess.preprocess_split(d, root / "prep" / "train", [4], [])
-    return ["--prep-dir", str(root / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
-            "--threads", "1"]
+    return [
+        "--prep-dir",
+        str(root / "prep"),
+        "--noisy-spp",
+        "4",
+        "--dle-paths",
+        "--crop",
+        "32",
+        "--batch",
+        "2",
+        "--threads",
+        "1",
+    ]
 
 
 # --- The models (built in worker processes) ---------------------------------------------------
@@ -80,7 +95,9 @@ def build_model(name, root, prep_args, done):
     torch.set_num_threads(1)
     root = Path(root)
     if name == "kpn":  # hdr, alb, nrm; no detail gates
-        return _export(_random_run(root / name, 2, features=["hdr", "alb", "nrm"], detail_gate=False), root / f"{name}.onnx")
+        return _export(
+            _random_run(root / name, 2, features=["hdr", "alb", "nrm"], detail_gate=False), root / f"{name}.onnx"
+        )
     if name == "direct":
         run = _random_run(root / name, 2, head="direct", features=["hdr", "alb", "nrm"], detail_gate=False)
         return _export(run, root / f"{name}.onnx")
@@ -92,15 +109,31 @@ def build_model(name, root, prep_args, done):
     if name == "gated":  # all five features, detail gates: trained 3 steps on the tiny dataset
         import train
 
-        train.main(prep_args + ["--run-dir", str(root / name), "--base-width", str(WIDTH), "--detail-gate", "--steps", "3"])
+        train.main(
+            prep_args + ["--run-dir", str(root / name), "--base-width", str(WIDTH), "--detail-gate", "--steps", "3"]
+        )
         return _export(root / name, root / f"{name}.onnx")
     if name == "five":  # gated grown to 5 scales (train.py --init-from), its new 1/16 head given random weights
         import config
         import export
         import train
 
-        train.main(prep_args + ["--run-dir", str(root / "five-grown"), "--base-width", str(WIDTH), "--detail-gate",
-                                "--scales", "5", "--minutes", "0", "--init-from", str(done["gated"]["onnx"])])
+        train.main(
+            prep_args
+            + [
+                "--run-dir",
+                str(root / "five-grown"),
+                "--base-width",
+                str(WIDTH),
+                "--detail-gate",
+                "--scales",
+                "5",
+                "--minutes",
+                "0",
+                "--init-from",
+                str(done["gated"]["onnx"]),
+            ]
+        )
         state = torch.load(root / "five-grown" / "checkpoint.pt", weights_only=False)["model"]
         torch.manual_seed(5)
         state["heads.4.weight"] = torch.randn_like(state["heads.4.weight"])  # its bias stays zero
@@ -144,7 +177,9 @@ class Models:
                 return
             done = {d: self.futures[d].result() for d in MODELS[name]}
             inner = self.pool.submit(build_model, name, str(self.root), self.prep_args, done)
-            inner.add_done_callback(lambda f: result.set_exception(f.exception()) if f.exception() else result.set_result(f.result()))
+            inner.add_done_callback(
+                lambda f: result.set_exception(f.exception()) if f.exception() else result.set_result(f.result())
+            )
 
         if deps:
             for d in deps:

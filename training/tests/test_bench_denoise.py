@@ -1,5 +1,6 @@
 """pipelines/bench_denoise.py: the CPU seconds per megapixel it reports are those its denoisers
 spend per megapixel, whatever they spend per call."""
+
 import subprocess
 import sys
 import textwrap
@@ -36,8 +37,11 @@ FAKE = textwrap.dedent("""
 def scene(tmp_path, kinds=("hdr", "alb", "nrm", "emi", "ema")):
     rng = np.random.default_rng(2)
     for kind in kinds:
-        contract.write(tmp_path / contract.image_name("cb", kind, 16), rng.random((64, 64, 3)),
-                       {contract.SAMPLES: 16, contract.SEED: 1})
+        contract.write(
+            tmp_path / contract.image_name("cb", kind, 16),
+            rng.random((64, 64, 3)),
+            {contract.SAMPLES: 16, contract.SEED: 1},
+        )
     return tmp_path / contract.image_name("cb", "hdr", 16)
 
 
@@ -45,10 +49,31 @@ def bench(tmp_path, hdr, luxest, peer, *extra):
     fake = tmp_path / "fake.py"
     fake.write_text(FAKE)
     cmd = lambda fixed, per_mp: f"{sys.executable} {fake} {fixed} {per_mp}"
-    return subprocess.run([sys.executable, str(BENCH), "--input", str(hdr), "--model", "m.onnx",
-                           "--denoise", cmd(*luxest), "--oidn", cmd(*peer), "--side", "256", "--rounds", "3",
-                           "--work-dir", str(tmp_path / "work"), "-o", str(tmp_path / "out" / "bench.md"), *extra],
-                          capture_output=True, text=True)
+    return subprocess.run(
+        [
+            sys.executable,
+            str(BENCH),
+            "--input",
+            str(hdr),
+            "--model",
+            "m.onnx",
+            "--denoise",
+            cmd(*luxest),
+            "--oidn",
+            cmd(*peer),
+            "--side",
+            "256",
+            "--rounds",
+            "3",
+            "--work-dir",
+            str(tmp_path / "work"),
+            "-o",
+            str(tmp_path / "out" / "bench.md"),
+            *extra,
+        ],
+        capture_output=True,
+        text=True,
+    )
 
 
 def test_the_marginal_cost_per_megapixel_is_the_denoisers_own(tmp_path):
@@ -79,7 +104,10 @@ def test_bad_input_one_line_and_nothing_written(tmp_path):
     assert "cb_000016spp.emi.exr: missing" in r.stderr
     assert not (tmp_path / "out" / "bench.md").exists()
     r = bench(tmp_path, hdr, (0, 0), (0, 0), "--features", "alb,nrm", "--denoise", "/no/such/denoiser")
-    assert r.returncode == 1 and r.stderr.strip() == "bench_denoise: error: /no/such/denoiser: cannot run it (No such file or directory)"
+    assert (
+        r.returncode == 1
+        and r.stderr.strip() == "bench_denoise: error: /no/such/denoiser: cannot run it (No such file or directory)"
+    )
     assert not list((tmp_path / "out").iterdir())
     r = bench(tmp_path, hdr, (0, 0), (0, 0), "--features", "alb,nrm", "-o", str(tmp_path / "out" / "bench.csv"))
     assert r.returncode == 1 and "the Markdown table's name" in r.stderr

@@ -1,5 +1,6 @@
 """Tests of soup.py: the weighted mean of the ingredients' weights, from runs and exported models
 alike; other networks and overwriting an ingredient refused in one line."""
+
 import hashlib
 import json
 import sys
@@ -74,8 +75,10 @@ def test_a_soup_of_one_model_is_that_model_and_exports(runs, tmp_path):
     x = torch.rand(1, 9, 24, 40)
     e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
     feed = {contract.INPUT_TENSOR: x.numpy(), contract.EXPOSURE_TENSOR: e}
-    outs = [ort.InferenceSession(str(p), providers=["CPUExecutionProvider"]).run(None, feed)[0]
-            for p in (src["b.onnx"], tmp_path / "s.onnx")]
+    outs = [
+        ort.InferenceSession(str(p), providers=["CPUExecutionProvider"]).run(None, feed)[0]
+        for p in (src["b.onnx"], tmp_path / "s.onnx")
+    ]
     assert (outs[0] == outs[1]).all()
 
 
@@ -103,9 +106,15 @@ def test_soup_refuses_other_networks_and_overwriting_an_ingredient(tmp_path):
     before = {p: p.read_bytes() for p in (tmp_path / "a").iterdir()}
     for args, message in [
         (["--run-dir", str(tmp_path / "a")], "--run-dir .*a/config.json: is an ingredient's file"),
-        (["--run-dir", str(tmp_path / "s"), "--out", str(tmp_path / "a" / "checkpoint.pt")], "--out .*: is an ingredient's file"),
+        (
+            ["--run-dir", str(tmp_path / "s"), "--out", str(tmp_path / "a" / "checkpoint.pt")],
+            "--out .*: is an ingredient's file",
+        ),
         (["--run-dir", str(tmp_path / "s"), "--out", str(tmp_path / "s" / "soup.json")], "is one of --run-dir's files"),
-        (["--run-dir", str(tmp_path / "s"), "--out", str(tmp_path / "nowhere" / "s.onnx")], "not a file in an existing directory"),
+        (
+            ["--run-dir", str(tmp_path / "s"), "--out", str(tmp_path / "nowhere" / "s.onnx")],
+            "not a file in an existing directory",
+        ),
         (["--run-dir", str(tmp_path / "w")], "--run-dir .*w: holds something other than a soup"),
     ]:
         with pytest.raises(SystemExit, match=message):

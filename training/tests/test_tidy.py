@@ -37,7 +37,12 @@ def test_header_keys_are_spelled_only_in_the_contract_module(tmp_path):
     files = python_files()
     assert CONTRACT in files and len(files) > 30
     assert header_key_literals(CONTRACT), "the contract module spells the keys"
-    found = [f"{p.relative_to(ROOT)}:{line}: {text!r}" for p in files if p != CONTRACT for line, text in header_key_literals(p)]
+    found = [
+        f"{p.relative_to(ROOT)}:{line}: {text!r}"
+        for p in files
+        if p != CONTRACT
+        for line, text in header_key_literals(p)
+    ]
     assert found == [], "header keys outside python/luxest_contract.py:\n" + "\n".join(found)
     # The check can fail: a literal key in a source, plain or as an f-string's text, is found.
     bad = tmp_path / "bad.py"
@@ -54,6 +59,7 @@ def test_python_sources_are_ruff_formatted(tmp_path):
     # The check can fail: an unformatted file under the same configuration is reported.
     bad = tmp_path / "bad.py"
     bad.write_text("x = [ 1,2 ]\n")
-    r = subprocess.run([str(ruff), "format", "--check", "--config", str(ROOT / "ruff.toml"), str(bad)],
-                       capture_output=True, text=True)
+    r = subprocess.run(
+        [str(ruff), "format", "--check", "--config", str(ROOT / "ruff.toml"), str(bad)], capture_output=True, text=True
+    )
     assert r.returncode == 1 and "bad.py" in r.stdout + r.stderr
