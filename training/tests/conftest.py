@@ -8,10 +8,12 @@ while the other tests run; a test that needs one waits for it (`models[name]`). 
 read only: a test that trains or exports writes into its own tmp_path."""
 
 import concurrent.futures
+import functools
 import multiprocessing
 import shutil
 import sys
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -142,8 +144,10 @@ def build_model(name, root, prep_args, done):
     raise ValueError(f"no test model {name!r}")
 
 
-# name: the models it starts from. Submitted in this order: the longest chain first.
-MODELS = {"gated": (), "emi": (), "five": ("gated",), "ema": ("emi",), "kpn": (), "direct": ()}
+# name: the models it starts from; in the order the workers take them: the soup tests' first
+# (they run before the training tests), then the longest chain.
+MODELS = {"direct": (), "gated": (), "five": ("gated",), "emi": (), "ema": ("emi",), "kpn": ()}
+WORKERS = 2
 
 
 class Models:
@@ -153,40 +157,39 @@ class Models:
     def __init__(self):
         self.root = Path(tempfile.mkdtemp(prefix="luxest-test-models-"))
         self.prep_args = make_tiny_prep(self.root / "tiny")
-        self.pool = concurrent.futures.ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn"))
-        self.futures = {}
-        for name in MODELS:
-            self._submit(name)
+        self.pool = concurrent.futures.ProcessPoolExecutor(WORKERS, mp_context=multiprocessing.get_context("spawn"))
+        self.futures = {name: concurrent.futures.Future() for name in MODELS}
+        self.started, self.running, self.lock = set(), 0, threading.RLock()
+        self._next()
 
-    def _submit(self, name):
-        deps = [self._submit(d) if d not in self.futures else self.futures[d] for d in MODELS[name]]
-        if name in self.futures:
-            return self.futures[name]
-        result = concurrent.futures.Future()
-        self.futures[name] = result
+    def _next(self):
+        """Gives the free workers the first models in MODELS' order whose sources are built."""
+        with self.lock:
+            while self.running < WORKERS:
+                ready = [n for n in MODELS if n not in self.started and all(self.futures[d].done() for d in MODELS[n])]
+                if not ready:
+                    return
+                name = ready[0]
+                self.started.add(name)
+                failed = next((self.futures[d].exception() for d in MODELS[name] if self.futures[d].exception()), None)
+                if failed is not None:
+                    self.futures[name].set_exception(failed)
+                    continue
+                self.running += 1
+                done = {d: self.futures[d].result() for d in MODELS[name]}
+                job = self.pool.submit(build_model, name, str(self.root), self.prep_args, done)
+                job.add_done_callback(functools.partial(self._finished, name))
 
-        started = []
-
-        def start(_=None):
-            if started or not all(d.done() for d in deps):
-                return
-            started.append(True)
-            failed = next((d.exception() for d in deps if d.exception()), None)
-            if failed is not None:
-                result.set_exception(failed)
-                return
-            done = {d: self.futures[d].result() for d in MODELS[name]}
-            inner = self.pool.submit(build_model, name, str(self.root), self.prep_args, done)
-            inner.add_done_callback(
-                lambda f: result.set_exception(f.exception()) if f.exception() else result.set_result(f.result())
-            )
-
-        if deps:
-            for d in deps:
-                d.add_done_callback(start)
+    def _finished(self, name, job):
+        with self.lock:
+            self.running -= 1
+        if job.cancelled():
+            self.futures[name].cancel()
+        elif job.exception() is not None:
+            self.futures[name].set_exception(job.exception())
         else:
-            start()
-        return result
+            self.futures[name].set_result(job.result())
+        self._next()
 
     def __getitem__(self, name):
         return self.futures[name].result()
@@ -196,6 +199,7 @@ class Models:
         shutil.rmtree(self.root, ignore_errors=True)
 
 
+@pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(session, config, items):
     # Start building the models as soon as a collected test is known to need them.
     if any("models" in getattr(item, "fixturenames", ()) for item in items):
