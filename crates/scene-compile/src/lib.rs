@@ -8,7 +8,7 @@
 //! expansion (with calculation surfaces, [`surfaces`]).
 //!
 //! Modules: [`cli`] (arguments and run), [`validate`], [`shapes`] (tessellation), [`meshes`]
-//! (OBJ and glTF), [`luminaires`], [`surfaces`]; this file assembles the world-space scene.
+//! (OBJ and glTF), [`luminaires`], [`surfaces`], [`mitsuba`] (export to Mitsuba 3); this file assembles the world-space scene.
 
 pub mod cli;
 pub mod luminaires;
