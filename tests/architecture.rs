@@ -432,7 +432,7 @@ fn prose_lines(path: &Path) -> Vec<(usize, String)> {
     text.lines()
         .enumerate()
         .filter(|(_, l)| comment.is_none_or(|c| l.trim_start().starts_with(c)))
-                // From the root, or from a folder the file is in (a crate names its own).
+        .map(|(i, l)| (i + 1, l.to_string()))
         .collect()
 }
 
@@ -445,7 +445,7 @@ fn every_repository_path_named_in_docs_and_comments_exists() {
         for (n, line) in prose_lines(&path) {
             for named in named_paths(&line) {
                 checked += 1;
-                // From the root, or from a folder the file is in (a crate names its own tests folder).
+                // From the root, or from a folder the file is in (a crate names its own).
                 let exists = path
                     .ancestors()
                     .take_while(|a| a.starts_with(&root))

@@ -1,6 +1,6 @@
-//! Issue 15: bad or extreme input is refused with one line naming the file and the problem, no
+//! Bad or extreme input is refused with one line naming the file and the problem, no
 //! run overwrites its inputs or a non-regular file, no run hangs, and no wrong input is accepted.
-//! One table-driven test per class of cause; the numbers in comments are the issue's items.
+//! One table-driven test per class of cause.
 
 use crate::util::{scene_compile, StageResult, TempDir};
 

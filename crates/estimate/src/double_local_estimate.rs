@@ -38,7 +38,7 @@
 use crate::image::{ImageResult, BATCHES};
 use crate::light_tracing::connect_to_camera;
 use crate::singularity::Singularity;
-use crate::transport::{point_source_direct_to, survival, walk_light_path, Arrival, LightVertex};
+use crate::transport::{delta_light_reflected, survival, walk_light_path, Arrival, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
@@ -499,7 +499,7 @@ pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageRes
                     let round = b as u64 * rounds_per_batch + r;
                     let (views, emitted) = view_points(world, cam, cfg, &pixels, round);
                     let view_local: Vec<usize> = views.iter().map(|v| local(v.pixel)).collect();
-                    let direct = point_source_direct_to(
+                    let direct = delta_light_reflected(
                         world,
                         &views
                             .iter()

@@ -28,7 +28,7 @@
 
 use crate::sensor_batches::{self, BatchSums, Batches, SensorEstimates};
 pub use crate::singularity::Singularity;
-use crate::transport::{point_source_direct, walk_light_path, LightVertex};
+use crate::transport::{delta_light_illuminance, walk_light_path, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf;
@@ -248,7 +248,7 @@ pub fn estimate(
     near_radius: &[f64],
     cfg: &LocalConfig,
 ) -> SensorEstimates {
-    let delta_light = point_source_direct(world, sensors);
+    let delta_light = delta_light_illuminance(world, sensors);
     // The backward near-field estimate samples the cosine about the normal: planar only.
     let skip_within: Vec<f64> = near_radius
         .iter()

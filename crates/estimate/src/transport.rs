@@ -213,7 +213,7 @@ fn response_toward(s: &SensorPoint, v: Vec3, d: f64) -> f64 {
 
 /// Exact direct illuminance from the delta lights (point sources, luminaires), RGB, with
 /// visibility.
-pub fn point_source_direct(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
+pub fn delta_light_illuminance(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
     let emitters = world.scene.header.emitters.len();
     sensors
         .iter()
@@ -240,7 +240,7 @@ pub fn point_source_direct(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
 
 /// Exact delta-light (point source, luminaire) luminance towards the camera at view points
 /// given as (position, geometric normal, direction to the camera, triangle, weight).
-pub fn point_source_direct_to(world: &World, points: &[(Vec3, Vec3, Vec3, u32, Rgb)]) -> Vec<Rgb> {
+pub fn delta_light_reflected(world: &World, points: &[(Vec3, Vec3, Vec3, u32, Rgb)]) -> Vec<Rgb> {
     let emitters = world.scene.header.emitters.len();
     points
         .iter()

@@ -411,7 +411,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             _ => 0.0,
         };
         if let Some(c) = (0..3).find(|&c| albedo(c) >= 1.0) {
-            // Choice (issue 15): reflectance 1 stays allowed (an ideal mirror or white is a
+            // Choice: reflectance 1 stays allowed (an ideal mirror or white is a
             // legitimate test), but its dependence on the path-depth cap is stated.
             report.warnings.push(format!(
                 "{}: materials[\"{}\"]: reflectance 1 in channel {c} absorbs no light; in a \
