@@ -17,11 +17,14 @@
 //! - [`png`]: PNG previews of linear images, and the PNG encoder of 8-bit sRGB rasters;
 //! - [`sensors`]: sensor results (RON + CSV);
 //! - [`math`], [`color`]: f64 vectors and transforms, RGB, luminance and the sRGB transfer
-//!   function.
+//!   function;
+//! - [`chi2`]: a test utility, the chi-square test every sampling routine's tests call (no stage
+//!   uses it).
 //!
 //! Invariant: no stage depends on another stage's crate; whatever two stages exchange is read and
 //! written through this crate.
 
+pub mod chi2;
 pub mod cli;
 pub mod color;
 pub mod error;
