@@ -172,8 +172,13 @@ pub fn pdf(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> f64 {
             let Some(pd) = glossy_lobe_probability(diffuse, specular) else {
                 return 0.0;
             };
+            // [`sample`] rejects a direction below the shading normal's horizon (where `eval` is
+            // zero), even above the geometric one: the specular lobe's density there is lost.
+            if wi.dot(n) <= 0.0 {
+                return 0.0;
+            }
             let alpha = roughness * roughness;
-            let diff = wi.dot(n).max(0.0) / PI;
+            let diff = wi.dot(n) / PI;
             let spec = match (wo + wi).try_normalize() {
                 Some(h) if h.dot(n) > 0.0 && wo.dot(h) > 0.0 => {
                     ggx_d(h.dot(n), alpha) * h.dot(n) / (4.0 * wo.dot(h))
@@ -430,9 +435,11 @@ mod tests {
             (Vec3::new(0.5, 0.0, 0.8), UP),
             (Vec3::new(0.5, 0.3, -0.8), UP),
             (Vec3::new(0.98, 0.0, 0.2), UP),
-            // The shading normal's horizon cuts the specular lobe above the geometric one.
+            // The shading normal's horizon cuts the specular lobe above the geometric one: the
+            // cut part has no density (the last case rejects a pdf giving it one at p ≈ 1e-35).
             (Vec3::new(-0.5, 0.2, 0.6), tilted),
             (Vec3::new(-0.95, 0.1, 0.2), tilted),
+            (Vec3::new(0.3, 0.0, 0.9), Vec3::new(1.0, 0.0, 1.0)),
         ];
         assert_sampling_matches_pdf(&rough, &cases, 12);
         assert_sampling_matches_pdf(&smoother, &cases[..1], 13);
