@@ -112,6 +112,7 @@ mod tests {
     use super::*;
     use crate::sampling::Rng;
     use luxest_io::chi2::{ChiSquareTest, Rectangle, Sphere};
+    use std::f64::consts::TAU;
 
     #[test]
     fn project_inverts_direction() {
@@ -194,8 +195,12 @@ mod tests {
         })
         .unwrap();
         let area = cam.pixel_area() * 40.0 * 30.0;
+        // Bins on the image's cap (its corners are 63° off the axis, cos θ = 0.45), one below.
+        let cos_theta = std::iter::once(-1.0).chain((0..=16).map(|k| 0.4 + 0.6 * k as f64 / 16.0));
+        let phi = (0..=32).map(|k| TAU * k as f64 / 32.0);
         let mut r = Rng::new(8, 0);
         ChiSquareTest::new(Sphere)
+            .edges(cos_theta.collect(), phi.collect())
             .integration(16)
             .run(
                 || Some(cam.direction(40.0 * r.next_f64(), 30.0 * r.next_f64())),
