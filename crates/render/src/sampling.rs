@@ -211,7 +211,7 @@ pub fn uniform_sphere(u1: f64, u2: f64) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use luxest_io::chi2::{ChiSquareTest, Discrete, Hemisphere, Sphere};
+    use luxest_io::chi2::{ChiSquareTest, Discrete, Hemisphere, Rectangle, Sphere};
 
     #[test]
     fn same_seed_same_sequence_and_streams_differ() {
@@ -229,21 +229,17 @@ mod tests {
     }
 
     #[test]
-    fn uniform_floats_have_right_moments() {
+    fn successive_uniform_floats_are_uniform_in_the_square() {
+        // Pairs of successive numbers: uniform each, and independent of the one before.
         let mut r = Rng::new(1, 0);
-        let n = 200_000;
-        let (mut s, mut s2) = (0.0, 0.0);
-        for _ in 0..n {
+        let mut next = || {
             let x = r.next_f64();
             assert!((0.0..1.0).contains(&x));
-            s += x;
-            s2 += x * x;
-        }
-        let mean = s / n as f64;
-        let var = s2 / n as f64 - mean * mean;
-        // Standard error of the mean is sqrt(1/12/n) ~ 6.5e-4.
-        assert!((mean - 0.5).abs() < 5.0 * (1.0 / 12.0 / n as f64).sqrt());
-        assert!((var - 1.0 / 12.0).abs() < 2e-3);
+            x
+        };
+        ChiSquareTest::new(Rectangle::UNIT)
+            .run(|| Some([next(), next()]), |_| 1.0)
+            .unwrap();
     }
 
     #[test]
