@@ -60,7 +60,7 @@ pub use error::PhotometryError;
 pub use frame::{c_gamma_from_direction, direction_from_c_gamma, Frame, Luminaire, Orientation};
 pub use grid::{CalcGrid, Estimate, GridError, GridSpec, GridStats, Spacing};
 pub use illuminance::{direct_illuminance_lx, direct_sensor_illuminance_lx, SensorKind};
-pub use isolux::{render_isolux, IsoluxOptions, RgbImage};
+pub use isolux::{render_isolux, IsoluxOptions, SrgbRaster};
 pub use photometry::{
     FluxCheck, LampFlux, LuminousOpening, OpeningShape, Photometry, SourceFormat, Symmetry,
 };
