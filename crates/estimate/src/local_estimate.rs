@@ -175,42 +175,32 @@ fn run_batch(
     let mut scratch = Scratch::default();
     let sing = &cfg.singularity;
     for _ in 0..paths {
-        let end = walk_light_path(world, &mut rng, cfg.max_depth, |v, q| match v {
-            LightVertex::Emission { position, normal } => {
-                let src = Source::Emitter { normal };
-                let at = (position, normal);
-                connect(
-                    world,
-                    sensors,
-                    skip_within,
-                    sing,
-                    at,
-                    &src,
-                    q,
-                    &mut scratch,
-                    &mut out,
-                );
-            }
-            LightVertex::Collision { sp, dir, .. } => {
-                let src = Source::Collision {
-                    material: world.material(sp.triangle),
-                    wo: -dir,
-                    ng: sp.ng,
-                    ns: sp.ng,
-                };
-                let at = (sp.position, sp.ng);
-                connect(
-                    world,
-                    sensors,
-                    skip_within,
-                    sing,
-                    at,
-                    &src,
-                    q,
-                    &mut scratch,
-                    &mut out,
-                );
-            }
+        let end = walk_light_path(world, &mut rng, cfg.max_depth, |v, q| {
+            let (at, src) = match v {
+                LightVertex::Emission { position, normal } => {
+                    ((position, normal), Source::Emitter { normal })
+                }
+                LightVertex::Collision { sp, dir, .. } => {
+                    let src = Source::Collision {
+                        material: world.material(sp.triangle),
+                        wo: -dir,
+                        ng: sp.ng,
+                        ns: sp.ng,
+                    };
+                    ((sp.position, sp.ng), src)
+                }
+            };
+            connect(
+                world,
+                sensors,
+                skip_within,
+                sing,
+                at,
+                &src,
+                q,
+                &mut scratch,
+                &mut out,
+            );
         });
         out.collisions += end.collisions;
         out.truncated += u64::from(end.truncated);
