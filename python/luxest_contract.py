@@ -2,7 +2,7 @@
 names, the denoiser model's ONNX tensor names, EXR I/O and the autoexposure. The one Python place
 for each (docs/architecture.md, *Contracts*).
 
-Rust has the same in `luxest-io` (`naming`, `header`, `exr_io`) and crates/denoise
+Rust has the same in `luxest-io` (`naming`, `header`, `exr`, `exposure`) and crates/denoise
 (`model::tensor`); the two are tied by the fixtures in `tests/fixtures/contract/`, which Rust
 writes and `training/tests/test_contract.py` reads: every name composed and parsed alike, a
 ZIP-compressed Rust EXR read to the header values Rust wrote, the same estimator and tensor

@@ -5,7 +5,7 @@
 //! - `naming.json`: image file names with their parts (`name`, `spp`, `reference`, `unit`
 //!   `spp`|`le`, `kind`, `file`), composed by [`luxest_io::naming`];
 //! - `header.exr` + `header.json`: a 5×3 RGB f32 ZIP-compressed EXR from
-//!   [`luxest_io::exr_io::write_rgb`] with every image header key of [`luxest_io::header`] set,
+//!   [`luxest_io::exr::write_rgb`] with every image header key of [`luxest_io::header`] set,
 //!   and those values by key (numbers as JSON numbers);
 //! - `denoiser.json`: how `luxest.denoiser` names Intel Open Image Denoise, and the estimator
 //!   labels `evaluate` gives denoised images ([`evaluate::images::estimator_label`]);
@@ -15,7 +15,7 @@
 //!   ([`denoise::model::tensor`]), which `training/export.py` gives the graph;
 //! - `exposure_input.exr` + `exposure.json`: a fixed image and its
 //!   [`RgbImage::autoexposure`], the denoiser's brightening of it scaled dim
-//!   ([`luxest_io::exr_io::dim_exponent`], with and without emission, the exposure the model then
+//!   ([`luxest_io::exposure::dim_exponent`], with and without emission, the exposure the model then
 //!   gets, and the evaluation's, `evaluate::metrics::autoexposure`), and
 //!   the evaluation tonemap of a few values (`evaluate::metrics::tonemap`) at its exposure.
 //!
@@ -27,9 +27,11 @@
 
 use crate::util::{repo_root, TempDir};
 use denoise::model::tensor;
-use luxest_io::exr_io::{dim_exponent, write_rgb, RgbImage, DIM_LUMINANCE};
+use luxest_io::exposure::{dim_exponent, DIM_LUMINANCE};
+use luxest_io::exr::write_rgb;
 use luxest_io::header;
 use luxest_io::header::estimator;
+use luxest_io::image::RgbImage;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{ImageName, Kind, Level};
 use std::path::Path;

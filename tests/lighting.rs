@@ -1,4 +1,4 @@
-//! The `report` stage (issue 14): figures, tables and plots of calculation surfaces from sensor
+//! The `report` stage: figures, tables and plots of calculation surfaces from sensor
 //! results, checked against numbers computed here independently — on constructed results with
 //! known batches (jackknife standard errors by hand), on bad input (one-line errors, no partial
 //! outputs), against a peer, and end to end on a cos³ luminaire over a black floor, where the

@@ -1,6 +1,6 @@
-//! Issue 15: bad or extreme input is refused with one line naming the file and the problem, no
+//! Bad or extreme input is refused with one line naming the file and the problem, no
 //! run overwrites its inputs or a non-regular file, no run hangs, and no wrong input is accepted.
-//! One table-driven test per class of cause; the numbers in comments are the issue's items.
+//! One table-driven test per class of cause.
 
 use crate::util::{scene_compile, StageResult, TempDir};
 
@@ -448,7 +448,8 @@ fn estimate_exact_refuses_parameters_outside_their_domain() {
 /// Writes a uniform 20x12 image of `value` with albedo, normal and (zero) emission features (emi,
 /// ema) beside it; returns the hdr path.
 fn uniform_with_features(dir: &TempDir, name: &str, value: f32) -> std::path::PathBuf {
-    use luxest_io::exr_io::{write_rgb, RgbImage};
+    use luxest_io::exr::write_rgb;
+    use luxest_io::image::RgbImage;
     let mut img = RgbImage::new(20, 12);
     img.pixels.iter_mut().for_each(|p| *p = [value; 3]);
     let hdr = dir.path().join(format!("{name}.hdr.exr"));
@@ -483,7 +484,7 @@ fn denoise_handles_radiance_near_the_f32_limit() {
         let hdr = uniform_with_features(&dir, name, v);
         crate::util::denoise(&[hdr.to_str().unwrap(), "--model", model.to_str().unwrap()]).unwrap();
         let out = dir.path().join(format!("{name}.dn.exr"));
-        results.push(luxest_io::exr_io::read_rgb(&out).unwrap());
+        results.push(luxest_io::exr::read_rgb(&out).unwrap());
     }
     for (a, b) in results[0].pixels.iter().zip(&results[1].pixels) {
         for c in 0..3 {
@@ -507,7 +508,7 @@ fn denoise_handles_radiance_near_the_f32_limit() {
 /// The other extreme: an image whose radiance is in a tiny unit. The autoexposure's 1e-4 floor
 /// made the model see a dim image as black (the fixture's denoised mean came out 2.7 times
 /// that of the same image at its own scale); now `denoise` brightens it by a power of two
-/// (luxest_io::exr_io::dim_exponent), so images differing by a power of two are denoised alike
+/// (luxest_io::exposure::dim_exponent), so images differing by a power of two are denoised alike
 /// to the bit, and like the bright image to within the model's own scale dependence (0.5 %
 /// measured on this image; 0.05 dB on the Cornell box, docs/measurements.md, *Dim images*).
 #[test]
@@ -524,19 +525,17 @@ fn denoise_brightens_dim_images() {
         let scale = 2f32.powi(e);
         for f in ["hdr", "alb", "nrm", "emi", "ema"] {
             let mut img =
-                luxest_io::exr_io::read_rgb(&fixture.join(format!("odd_000004spp.{f}.exr")))
-                    .unwrap();
+                luxest_io::exr::read_rgb(&fixture.join(format!("odd_000004spp.{f}.exr"))).unwrap();
             if matches!(f, "hdr" | "emi" | "ema") {
                 for p in &mut img.pixels {
                     *p = p.map(|c| c * scale);
                 }
             }
-            luxest_io::exr_io::write_rgb(&dir.path().join(format!("{name}.{f}.exr")), &img)
-                .unwrap();
+            luxest_io::exr::write_rgb(&dir.path().join(format!("{name}.{f}.exr")), &img).unwrap();
         }
         let hdr = dir.path().join(format!("{name}.hdr.exr"));
         crate::util::denoise(&[hdr.to_str().unwrap(), "--model", model.to_str().unwrap()]).unwrap();
-        let out = luxest_io::exr_io::read_rgb(&dir.path().join(format!("{name}.dn.exr"))).unwrap();
+        let out = luxest_io::exr::read_rgb(&dir.path().join(format!("{name}.dn.exr"))).unwrap();
         let unscaled: Vec<f64> = out
             .pixels
             .iter()
@@ -650,7 +649,8 @@ fn denoise_never_overwrites_inputs_or_non_regular_files() {
 /// A small valid EXR whose header is rewritten to claim `w`x`h` pixels (data and display
 /// window), the rest of the file unchanged: a few hundred bytes claiming 100000² pixels.
 fn exr_claiming(path: &std::path::Path, w: i32, h: i32) {
-    use luxest_io::exr_io::{write_rgb, RgbImage};
+    use luxest_io::exr::write_rgb;
+    use luxest_io::image::RgbImage;
     write_rgb(path, &RgbImage::new(2, 2)).unwrap();
     let mut bytes = std::fs::read(path).unwrap();
     for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
@@ -675,7 +675,7 @@ fn exr_headers_claiming_huge_images_are_refused_before_reading() {
     let huge = dir.path().join("h_000001spp.hdr.exr");
     exr_claiming(&huge, 100_000, 100_000);
     assert!(std::fs::metadata(&huge).unwrap().len() < 1000);
-    let e = luxest_io::exr_io::read_rgb(&huge).unwrap_err().to_string();
+    let e = luxest_io::exr::read_rgb(&huge).unwrap_err().to_string();
     assert!(
         e.contains("header claims 100000x100000 pixels") || e.contains("needs"),
         "{e}"
@@ -690,7 +690,7 @@ fn exr_headers_claiming_huge_images_are_refused_before_reading() {
     assert_eq!(code, 1);
     assert!(msg.starts_with(huge.to_str().unwrap()), "{msg}");
     let reference = dir.path().join("ref.exr");
-    luxest_io::exr_io::write_rgb(&reference, &luxest_io::exr_io::RgbImage::new(2, 2)).unwrap();
+    luxest_io::exr::write_rgb(&reference, &luxest_io::image::RgbImage::new(2, 2)).unwrap();
     let (code, msg) = crate::util::evaluate(&[
         "images",
         "--reference",
@@ -705,7 +705,7 @@ fn exr_headers_claiming_huge_images_are_refused_before_reading() {
     // A header claiming an image that would fit in memory, but that no compression could
     // pack into the file's few hundred bytes (found by fuzzing: it allocated the claim first).
     exr_claiming(&huge, 4000, 4000);
-    let e = luxest_io::exr_io::read_rgb(&huge).unwrap_err().to_string();
+    let e = luxest_io::exr::read_rgb(&huge).unwrap_err().to_string();
     assert!(
         e.contains("header claims 4000x4000 pixels, 192.0 MB of samples, more than its")
             && e.contains("bytes can hold with its compression"),
@@ -713,7 +713,7 @@ fn exr_headers_claiming_huge_images_are_refused_before_reading() {
     );
     // The same header claiming 2x2 (its true size) reads.
     exr_claiming(&huge, 2, 2);
-    assert_eq!(luxest_io::exr_io::read_rgb(&huge).unwrap().width, 2);
+    assert_eq!(luxest_io::exr::read_rgb(&huge).unwrap().width, 2);
 }
 
 /// Item 19 (denoise): an ONNX file of a newer IR version is one line naming the file, its IR
@@ -880,7 +880,8 @@ fn evaluate_sensors_checks_the_scene_hash_of_the_results() {
 /// a report that cannot be written leaves none of the run's reports behind.
 #[test]
 fn evaluate_never_overwrites_inputs_and_commits_reports_together() {
-    use luxest_io::exr_io::{write_rgb, RgbImage};
+    use luxest_io::exr::write_rgb;
+    use luxest_io::image::RgbImage;
     let dir = TempDir::new("rel-eval-out");
     let reference = dir.path().join("ref.hdr.exr");
     let test = dir.path().join("t_000001spp.hdr.exr");

@@ -4,8 +4,9 @@
 use crate::features::FeatureFilm;
 use clap::Parser;
 use luxest_io::cli::CommonArgs;
-use luxest_io::exr_io::{write_rgb_to, RgbImage};
+use luxest_io::exr::write_rgb_to;
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{image_path, Kind, Level};
 use luxest_io::num::Count;

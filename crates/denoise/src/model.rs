@@ -1,8 +1,9 @@
 //! The ONNX model through ONNX Runtime: loading it (once per process, the library found at run
 //! time), checking it against the model contract, and running it over an image in tiles.
 
-use luxest_io::exr_io::{dim_exponent, RgbImage};
+use luxest_io::exposure::dim_exponent;
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 
 use luxest_io::{Error, Result};
 use ort::environment::Environment;
@@ -239,7 +240,7 @@ impl Denoiser {
         };
         // A dim image (mean luminance below DIM_LUMINANCE) is brightened by a power of two
         // instead, with the exposure of the brightened image: the autoexposure's 1e-4 would
-        // otherwise make the model's input depend on the radiance's unit (luxest_io::exr_io::
+        // otherwise make the model's input depend on the radiance's unit (luxest_io::exposure::
         // dim_exponent). Exclusive with the above: a dim image's peak is far from the limit.
         let (hdr_scale, exposure) = if k > 0 {
             let s = 2f64.powi(-k);

@@ -8,7 +8,7 @@
 //! the estimator needs a scene without specular paths, and is unbiased with bounded variance
 //! wherever the sensor is.
 
-use crate::transport::{point_source_direct, scatter};
+use crate::transport::{delta_light_illuminance, scatter};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
@@ -206,7 +206,7 @@ pub fn estimate(
     sensors: &[SensorPoint],
     cfg: &GatherConfig,
 ) -> Vec<(Rgb, f64, f64)> {
-    let direct = point_source_direct(world, sensors);
+    let direct = delta_light_illuminance(world, sensors);
     let batches = cfg.batches.max(2);
     let per_batch = (cfg.samples / batches as u64).max(1);
     let results = run_batches(batches, cfg.threads, "gather", |b| {

@@ -84,7 +84,7 @@ pub fn compiled(data: &[u8]) {
 
 /// An OpenEXR image as the stages read it.
 pub fn exr(data: &[u8]) {
-    let _ = luxest_io::exr_io::read_rgb_bytes(&Path::new(NOWHERE).join("i.exr"), data.to_vec());
+    let _ = luxest_io::exr::read_rgb_bytes(&Path::new(NOWHERE).join("i.exr"), data.to_vec());
 }
 
 /// An IES LM-63 photometric file, then what the compiler asks of it.

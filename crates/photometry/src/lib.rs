@@ -12,6 +12,8 @@
 //! - [`grid`] lays out calculation grids (EN 12464-1 rule) and computes Eavg, Emin, Emax, U0, Ud
 //!   with Monte Carlo uncertainties propagated from the per-point estimates.
 //! - [`isolux`] renders a false-colour isolux PNG with contours, legend and outline.
+//! - [`photometry`] holds the distribution both parsers produce, [`error`] the crate's one error
+//!   type.
 //!
 //! Units: metres, degrees in files and in the (C, γ) API, radians nowhere in the public API except
 //! solid angles (steradians), candela, lumen, lux. All accumulation is in f64.
@@ -58,7 +60,7 @@ pub use error::PhotometryError;
 pub use frame::{c_gamma_from_direction, direction_from_c_gamma, Frame, Luminaire, Orientation};
 pub use grid::{CalcGrid, Estimate, GridError, GridSpec, GridStats, Spacing};
 pub use illuminance::{direct_illuminance_lx, direct_sensor_illuminance_lx, SensorKind};
-pub use isolux::{render_isolux, IsoluxOptions, RgbImage};
+pub use isolux::{render_isolux, IsoluxOptions, SrgbRaster};
 pub use photometry::{
     FluxCheck, LampFlux, LuminousOpening, OpeningShape, Photometry, SourceFormat, Symmetry,
 };

@@ -8,7 +8,7 @@
 //! expansion (with calculation surfaces, [`surfaces`]).
 //!
 //! Modules: [`cli`] (arguments and run), [`validate`], [`shapes`] (tessellation), [`meshes`]
-//! (OBJ and glTF), [`luminaires`], [`surfaces`]; this file assembles the world-space scene.
+//! (OBJ and glTF), [`luminaires`], [`surfaces`], [`mitsuba`] (export to Mitsuba 3); this file assembles the world-space scene.
 
 pub mod cli;
 pub mod luminaires;
@@ -411,7 +411,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             _ => 0.0,
         };
         if let Some(c) = (0..3).find(|&c| albedo(c) >= 1.0) {
-            // Choice (issue 15): reflectance 1 stays allowed (an ideal mirror or white is a
+            // Choice: reflectance 1 stays allowed (an ideal mirror or white is a
             // legitimate test), but its dependence on the path-depth cap is stated.
             report.warnings.push(format!(
                 "{}: materials[\"{}\"]: reflectance 1 in channel {c} absorbs no light; in a \

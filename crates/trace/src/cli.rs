@@ -174,7 +174,7 @@ pub fn run(args: Args) -> Result<()> {
     } else if let Some(p) = &args.preview {
         // The final image is the last snapshot, already written; only its preview is left.
         let img = crate::output::mean_image(&final_path, &film, &info(&film))?;
-        luxest_io::exr_io::write_preview_png_auto_to(&mut plan, p, &img)?;
+        luxest_io::png::write_preview_png_auto_to(&mut plan, p, &img)?;
     }
     let unreached: Vec<String> = snapshots
         .iter()
