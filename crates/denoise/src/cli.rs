@@ -180,6 +180,9 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &args.out {
         Format::Exr.check(out, "-o/--out")?;
     }
+    // What each image's line will say, printed once every output is in place: a line per
+    // image as it was denoised announced outputs that a later image's failure then withheld.
+    let mut done = Vec::new();
     for job in &jobs {
         let images = job
             .features
@@ -225,14 +228,18 @@ pub fn run(args: Args) -> Result<()> {
         if let Some(p) = &job.preview {
             write_preview_png_auto_to(&mut plan, p, &result)?;
         }
-        eprintln!(
+        done.push(format!(
             "denoise: {} ({w}x{h}, {:.1} ms/megapixel)",
             job.out.display(),
             1e3 * seconds / (w * h) as f64 * 1e6
-        );
+        ));
     }
     // All outputs of the run appear together, or none (a later failure leaves nothing).
-    plan.commit()
+    plan.commit()?;
+    for line in done {
+        eprintln!("{line}");
+    }
+    Ok(())
 }
 
 /// The CPU seconds (user + system, all threads) this process has used so far, from the clock
