@@ -67,44 +67,65 @@ fn long_runs_state_their_plan_before_they_start() {
     let lxs = lxs.to_str().unwrap();
     let ron = dir.path().join("w.ron");
     let exr = dir.path().join("w.exr");
-    for (args, wants) in [
+    let prefix = dir.path().join("w");
+    let prefix = prefix.to_str().unwrap();
+    let one = ["--threads", "1"];
+    let sensors = [
+        &["sensors", lxs, "--paths", "64", "--near-samples", "20000"][..],
+        &one,
+        &["-o", ron.to_str().unwrap()],
+    ]
+    .concat();
+    let image = [
+        &["image", lxs, "--paths", "8"][..],
+        &one,
+        &["-o", exr.to_str().unwrap()],
+    ]
+    .concat();
+    // The camera stages: their paths end by roulette, but a million samples per pixel are
+    // hours all the same.
+    let camera = |resolution| {
+        [
+            &[lxs, "--spp", "1000000", "--resolution", resolution][..],
+            &one,
+            &["-o", prefix],
+        ]
+        .concat()
+    };
+    let cases: [(&str, Vec<&str>, &[&str]); 4] = [
         (
-            vec![
-                "sensors",
-                lxs,
-                "--paths",
-                "64",
-                "--near-samples",
-                "20000",
-                "--threads",
-                "1",
-                "-o",
-                ron.to_str().unwrap(),
-            ],
+            "estimate",
+            sensors,
             &[
                 "estimate sensors: plan: 64 light paths of ~1.0e5 collisions",
                 "20000 near-field samples at each of",
                 "--near-samples",
-            ][..],
+            ],
         ),
         (
-            vec![
-                "image",
-                lxs,
-                "--paths",
-                "8",
-                "--threads",
-                "1",
-                "-o",
-                exr.to_str().unwrap(),
-            ],
+            "estimate",
+            image,
             &[
                 "estimate image: plan: 8 light paths of ~1.0e5 collisions",
                 "10000 light-tracing paths per light path (--mis-paths)",
             ],
         ),
-    ] {
-        let mut child = stage_process("estimate", &args)
+        (
+            "trace",
+            camera("64x64"),
+            &["trace: plan: 64x64 pixels x 1000000 samples of ~", "--spp"],
+        ),
+        (
+            "aov-write",
+            camera("256x256"),
+            &[
+                "aov-write: plan: 256x256 pixels x 1000000 first hits",
+                "--min-samples",
+            ],
+        ),
+    ];
+    for (stage, args, wants) in cases {
+        let mut child = stage_process(stage, &args)
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
@@ -117,7 +138,7 @@ fn long_runs_state_their_plan_before_they_start() {
         }
         // Printed only for runs predicted beyond a minute: minutes or hours, not seconds.
         assert!(!plan.contains(" s on 1 thread"), "{plan}");
-        assert!(!ron.exists() && !exr.exists());
+        assert_eq!(dir.files().len(), 2, "only the scene: {:?}", dir.files());
     }
 }
 

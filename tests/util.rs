@@ -162,6 +162,8 @@ fn stage_child() {
         "denoise" => exit_status(argv, denoise::cli::run),
         "report" => exit_status(argv, report::cli::run),
         "evaluate" => exit_status(argv, evaluate::cli::run),
+        "trace" => exit_status(argv, trace::run),
+        "aov-write" => exit_status(argv, aov_write::run),
         "slow-writer" => {
             let (out, marker) = (Path::new(args[0]), Path::new(args[1]));
             let mut plan =

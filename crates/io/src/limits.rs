@@ -283,6 +283,20 @@ impl WorkPlan {
     }
 }
 
+/// Times `unit(k)` for k = 0, 1, ... until it has run at least 64 times and 20 ms, or 4096
+/// times: a stage's calibration of one unit of its work (a pixel sample, a path) on the scene
+/// at hand. Returns the seconds per unit and the seconds spent.
+pub fn seconds_per_unit(mut unit: impl FnMut(u64)) -> (f64, f64) {
+    let start = std::time::Instant::now();
+    let mut k = 0;
+    while k < 4096 && !(k >= 64 && start.elapsed().as_secs_f64() >= 0.02) {
+        unit(k);
+        k += 1;
+    }
+    let spent = start.elapsed().as_secs_f64();
+    (spent / k as f64, spent)
+}
+
 /// A duration for messages: `45 s`, `12 min`, `3.2 h`, `4.1 days`, `2.3e3 years`.
 pub fn show_duration(seconds: f64) -> String {
     let s = seconds.max(0.0);
