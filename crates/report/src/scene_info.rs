@@ -106,8 +106,13 @@ pub const CONTENT_HASH_LINE: &str = "// content hash ";
 /// Reads the header printed by `scene-compile --info` and the content hash its last line
 /// states (`None` where the file has no such line).
 pub fn read(path: &Path) -> Result<(SceneHeader, Option<String>)> {
-    let header = luxest_io::fsio::read_ron(path)?;
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &text)
+}
+
+/// [`read`] of the file's `text`; `path` names it in errors.
+pub fn parse(path: &Path, text: &str) -> Result<(SceneHeader, Option<String>)> {
+    let header = luxest_io::fsio::parse_ron(path, text)?;
     let hash = text
         .lines()
         .rev()
