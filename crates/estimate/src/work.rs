@@ -329,7 +329,7 @@ pub fn image_plan(
             * double_local_estimate::VIEW_POINT_BYTES as u128
         + pixels as u128 * crate::image::BYTES_PER_PIXEL as u128;
     // Light paths and light tracing run by batch, the camera points and connections by tile.
-    let light_threads = cfg.threads.min(BATCHES).max(1) as f64;
+    let light_threads = cfg.threads.clamp(1, BATCHES) as f64;
     let light_tracing = cfg.paths as f64 * cfg.mis_paths as f64 * (cal.light_path + 1.0) * 2.0;
     let camera = (image_rounds(cfg.paths) * pixels * spp) as f64;
     let connections = records * (pixels * spp) as f64;
@@ -371,7 +371,7 @@ pub fn light_tracing_plan(
 ) -> WorkPlan {
     let cal = calibrate(world, seed, max_depth);
     let units = paths as f64 * (cal.light_path + 1.0) * 2.0;
-    let parallel = threads.min(BATCHES).max(1);
+    let parallel = threads.clamp(1, BATCHES);
     WorkPlan {
         stage: "estimate image --light-tracing".into(),
         work: format!(

@@ -115,7 +115,7 @@ pub fn ldt(data: &[u8]) {
 /// the calculation surfaces' figures (jackknife over the batches) and each kind of exact case's
 /// geometry check and rows.
 pub fn sensors(data: &[u8]) {
-    let path = Path::new(NOWHERE).join("r.sensors.ron");
+    let path = Path::new(NOWHERE).join("results.ron");
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
