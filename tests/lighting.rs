@@ -523,10 +523,7 @@ fn cos3_luminaire_over_a_black_floor_gives_the_closed_form_work_plane() {
     .unwrap();
     // The header as `scene-compile --info` prints it (the same function).
     let scene = luxest_render::compiled::CompiledScene::load(&lxs).unwrap();
-    let info = dir.write(
-        "scene.info.ron",
-        luxest_io::fsio::to_ron_string(&scene.header),
-    );
+    let info = dir.write("scene.info.ron", scene_compile::cli::info_text(&scene));
     let out = dir.path().join("report");
     report(&[
         res.to_str().unwrap(),

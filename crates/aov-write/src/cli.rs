@@ -86,6 +86,13 @@ pub fn run(args: Args) -> Result<()> {
     counts.dedup();
     let start = std::time::Instant::now();
     let threads = args.common.thread_count();
+    luxest_io::limits::check_image(
+        "feature film",
+        cam.width.into(),
+        cam.height.into(),
+        crate::features::BYTES_PER_PIXEL,
+    )
+    .map_err(Error::Usage)?;
     let mut film = FeatureFilm::new(cam.width as usize, cam.height as usize);
     let final_level = if args.reference {
         Level::Reference
@@ -133,6 +140,9 @@ pub fn run(args: Args) -> Result<()> {
         .collect();
     checkpoints.sort_unstable();
     checkpoints.dedup();
+    if let Some(&last) = checkpoints.last() {
+        film.plan(&world, &cam, threads, last).announce();
+    }
     for &samples in &checkpoints {
         film.advance(&world, &cam, args.common.seed, threads, samples);
         let info = RunInfo::new(

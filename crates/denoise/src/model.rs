@@ -216,6 +216,32 @@ impl Denoiser {
         &self.features
     }
 
+    /// Seconds per pixel of [`Denoiser::denoise`] on this machine and model, timed on a
+    /// synthetic 128² image (a grey wall, facing the camera, no emitter): the calibration of a
+    /// denoise run's plan. Small images pay the graph's fixed costs per pixel, so the figure
+    /// errs on the long side.
+    pub fn seconds_per_pixel(&mut self, tiling: Tiling) -> Result<f64> {
+        let side = 128;
+        let image = |v: [f32; 3]| {
+            let mut img = RgbImage::new(side, side);
+            img.pixels.iter_mut().for_each(|p| *p = v);
+            img
+        };
+        let inputs: Vec<RgbImage> = self
+            .features
+            .iter()
+            .map(|f| match f {
+                Feature::Hdr | Feature::Alb => image([0.5; 3]),
+                Feature::Nrm => image([0.0, 0.0, 1.0]),
+                Feature::Emi | Feature::Ema => image([0.0; 3]),
+            })
+            .collect();
+        let refs: Vec<&RgbImage> = inputs.iter().collect();
+        let start = std::time::Instant::now();
+        self.denoise(&refs, tiling)?;
+        Ok(start.elapsed().as_secs_f64() / (side * side) as f64)
+    }
+
     /// Denoises one image. `inputs` holds one image per feature of [`Denoiser::features`], in
     /// that order, all of the same size and finite (the caller checks and names the files).
     pub fn denoise(&mut self, inputs: &[&RgbImage], tiling: Tiling) -> Result<RgbImage> {

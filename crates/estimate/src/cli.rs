@@ -13,7 +13,7 @@ use crate::sensors::{
     all_sensors, evaluation_points, load_world, record_evaluation_points, results, Estimate,
 };
 use crate::singularity::Singularity;
-use crate::{exact_table, gather};
+use crate::{exact_table, gather, work};
 use clap::{Parser, Subcommand, ValueEnum};
 use luxest_io::cli::CommonArgs;
 use luxest_io::exr::write_rgb_to;
@@ -87,10 +87,19 @@ impl RunArgs {
         luxest_io::limits::check_allocation(
             &format!("--batches {} over {points} sensor points", self.batches),
             self.batches as u128 * points as u128,
-            BYTES_PER_BATCH_POINT,
+            crate::sensor_batches::BYTES_PER_BATCH_POINT,
         )
         .map_err(Error::Usage)?;
         Ok(world)
+    }
+    /// What a work plan needs of the run: seed, --max-depth, threads and batches.
+    fn plan_terms(&self) -> (u64, u32, usize, usize) {
+        (
+            self.common.seed,
+            self.max_depth,
+            self.common.thread_count(),
+            self.batches.max(2),
+        )
     }
     /// `count` (`--paths` or `--samples`, named `what`) must fill every batch.
     fn check(&self, what: &str, count: u64) -> Result<()> {
@@ -156,10 +165,6 @@ impl RunArgs {
     }
 }
 
-/// Bytes the sensor estimators keep per batch and sensor point until the batches are combined
-/// (RGB sums and their direct part in f64, the batch's Y; measured 56).
-const BYTES_PER_BATCH_POINT: u128 = 64;
-
 /// Path-length bound of every estimator: 0 would give nothing but the direct light, or black.
 pub const MAX_DEPTH: Count<u32> = Count::range(1, 1 << 20, "bounces");
 
@@ -179,6 +184,12 @@ pub const DEFAULT_IMAGE_EPS_FRACTION: f64 = 1e-2;
 /// 6.2e-3; 1000 × 3 000: 7.1e-3, 5.7e-3 (light tracing alone 1.9e-2, 1.8e-2; the plain
 /// estimate, 300 paths: 9.6e-2, 4.9e-2).
 pub const DEFAULT_MIS_PATHS: u32 = 10_000;
+
+/// Most backward samples per near-field sensor by default (the default is --paths, at most
+/// this). A fixed 20 000 made the near field's work independent of --paths: in a closed room of
+/// reflectance 1, where every walk runs to --max-depth, 64 light paths took seconds and their
+/// near field hours.
+pub const DEFAULT_NEAR_SAMPLES: u64 = 20_000;
 
 /// Default near-field radius, as a fraction of the room scale. Chosen by measurement on the
 /// Cornell box's 88 lit sensors (docs/measurements.md): 1e-2 left sensors just beyond it (8 mm
@@ -240,9 +251,11 @@ pub enum Command {
         /// --near-samples 0 turns the split off].
         #[arg(long, value_parser = LENGTH)]
         near_radius: Option<f64>,
-        /// Backward samples per near-field sensor (0 disables the split).
-        #[arg(long, default_value_t = 20_000)]
-        near_samples: u64,
+        /// Backward samples per near-field sensor (0 disables the split) [default: --paths, at
+        /// most 20 000, so that the near field's work grows with the light paths' and never
+        /// exceeds about twice theirs].
+        #[arg(long)]
+        near_samples: Option<u64>,
         /// Also write every batch's estimate per point (`batches[b][k]` of each set), from
         /// which statistics over several points (a grid's Emin, U0) get their uncertainty.
         #[arg(long)]
@@ -503,10 +516,14 @@ fn image_run(args: ImageArgs) -> Result<()> {
             threads: common.thread_count(),
             max_depth,
         };
+        work::light_tracing_plan(&world, &cam, paths, (lt.seed, max_depth, lt.threads)).announce();
         let r = light_tracing::render(&world, &cam, &lt);
         let info = info(estimator::LIGHT_TRACING, r.seconds);
         write_image(&mut plan, &scene, &r, info, None, outputs)
     } else {
+        work::image_plan(&world, &cam, &cfg)
+            .map_err(Error::Usage)?
+            .announce();
         let r = double_local_estimate::render(&world, &cam, &cfg);
         let info = info(estimator::DOUBLE_LOCAL_ESTIMATE, r.seconds);
         write_image(&mut plan, &scene, &r, info, Some(&cfg), outputs)
@@ -551,11 +568,12 @@ fn sensors(
     paths: u64,
     singularity: SingularityMode,
     eps: Option<f64>,
-    (near_radius, near_samples): (Option<f64>, u64),
+    (near_radius, near_samples): (Option<f64>, Option<u64>),
     batch_values: bool,
 ) -> Result<()> {
     run.check("--paths", paths)?;
     check_eps(singularity, eps)?;
+    let near_samples = near_samples.unwrap_or(paths.min(DEFAULT_NEAR_SAMPLES));
     if near_samples == 0 && near_radius.is_some() {
         return Err(no_effect(
             "--near-radius",
@@ -576,6 +594,20 @@ fn sensors(
         max_depth: run.max_depth,
         near_field,
     };
+    // Each batch takes at least one near-field sample per sensor.
+    let near_total = match cfg.near_field {
+        Some(nf) => (nf.samples / cfg.batches.count() as u64).max(1) * cfg.batches.count() as u64,
+        None => 0,
+    };
+    work::sensors_plan(
+        &world,
+        &placed.points,
+        &placed.near_radius,
+        paths,
+        near_total,
+        run.plan_terms(),
+    )
+    .announce();
     let r = local_estimate::estimate(&world, &placed.points, &placed.near_radius, &cfg);
     warn_truncated(&r, paths, run.max_depth);
     let info = run.info(&world, estimator::LOCAL_ESTIMATE, paths, r.seconds);
@@ -613,6 +645,7 @@ fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
         radius: bin_radius,
         max_depth: run.max_depth,
     };
+    work::direct_plan(&world, sensors.len(), paths, run.plan_terms()).announce();
     let r = direct_simulation::estimate(&world, &sensors, &cfg);
     warn_truncated(&r, paths, run.max_depth);
     let info = run.info(&world, estimator::DIRECT_SIMULATION, paths, r.seconds);
@@ -649,6 +682,8 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
         threads: run.common.thread_count(),
         max_depth: run.max_depth,
     };
+    let per_sensor = (samples / cfg.batches.max(2) as u64).max(1) * cfg.batches.max(2) as u64;
+    work::gather_plan(&world, &sensors, per_sensor, run.plan_terms()).announce();
     let start = std::time::Instant::now();
     let mut values: Vec<Estimate> = gather::estimate(&world, &sensors, &cfg)
         .into_iter()

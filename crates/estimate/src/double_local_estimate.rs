@@ -57,6 +57,15 @@ pub const TILE: usize = 16;
 /// collisions per path.
 pub const ROUND_PATHS: u64 = 32;
 
+/// Bytes of a stored light-path vertex: every batch's are held until they are connected.
+pub const RECORD_BYTES: u64 = std::mem::size_of::<Record>() as u64;
+/// Bytes a tile in work keeps per camera point of a round: the point, the input and result of
+/// its exact delta-light term, its pixel within the tile.
+pub const VIEW_POINT_BYTES: u64 = (std::mem::size_of::<ViewPoint>()
+    + std::mem::size_of::<(Vec3, Vec3, Vec3, u32, Rgb)>()
+    + std::mem::size_of::<Rgb>()
+    + std::mem::size_of::<usize>()) as u64;
+
 #[derive(Clone, Debug)]
 pub struct ImageConfig {
     pub paths: u64,
@@ -144,7 +153,8 @@ fn view_points(
     let spp = cfg.pixel_samples.max(1);
     // Every round has its own jitter and specular-bounce streams.
     let round_seed = cfg.seed ^ luxest_render::sampling::splitmix64(round ^ VIEW_POINT_SEED_SALT);
-    let mut out = Vec::with_capacity(pixels.len());
+    // Sized before the run (crate::work::image_plan): a round's points of the tile at once.
+    let mut out = Vec::with_capacity(pixels.len() * spp as usize);
     let mut emitted = vec![Rgb::BLACK; pixels.len()];
     for (&pixel, emitted_px) in pixels.iter().zip(emitted.iter_mut()) {
         let mut rng = Rng::new(round_seed ^ VIEW_POINT_SEED_SALT, pixel as u64);

@@ -12,7 +12,8 @@
 //! the exact point-source light), [`sensor_batches`] (batches of light paths at sensor points
 //! and their standard errors), [`image`] (the image estimators' result), [`singularity`] (the
 //! kernel's treatment); [`placement`] and [`sensors`] (sensor points and the results
-//! contract), [`exact_table`] (`estimate exact`), [`cli`] (arguments and runs).
+//! contract), [`work`] (each run's work and memory, predicted before it starts), [`exact_table`]
+//! (`estimate exact`), [`cli`] (arguments and runs).
 //!
 //! Dependencies run one way: `cli` → the methods → `transport`, `sensor_batches`, `image`;
 //! `double_local_estimate` uses `light_tracing`'s camera connection for its multiple
@@ -31,6 +32,7 @@ pub mod sensor_batches;
 pub mod sensors;
 pub mod singularity;
 pub mod transport;
+pub mod work;
 
 pub use cli::{run, Args};
 pub use sensors::all_sensors;

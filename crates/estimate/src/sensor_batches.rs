@@ -12,6 +12,10 @@ use luxest_io::color::Rgb;
 use luxest_io::sensors::Part;
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
 
+/// Bytes the sensor estimators keep per batch and sensor point until the batches are combined
+/// (RGB sums and their direct part in f64, the batch's Y; measured 56).
+pub const BYTES_PER_BATCH_POINT: u128 = 64;
+
 /// How a forward estimator's light paths are split and seeded.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Batches {

@@ -9,7 +9,8 @@
 //! - [`naming`]: the file names stages exchange (`<name>_<spp>spp.<kind>.exr`, ...);
 //! - [`outputs`]: the output plan every stage makes before writing (no output over an input,
 //!   another output or a non-regular file; all outputs of a run committed together);
-//! - [`limits`]: image and mesh sizes checked against available memory before allocating;
+//! - [`limits`]: the resource rule: buffers sized against the memory available before
+//!   allocating, and the one-line plan of a long run;
 //! - [`num`]: validated numbers for command-line options (finite, in range, unit in messages);
 //! - [`image`]: the linear RGB image every stage exchanges, with its header attributes;
 //! - [`exposure`]: the exposure contract shared with Python (autoexposure, dim-image exponent);

@@ -89,11 +89,35 @@ pub fn load(path: &Path) -> Result<Photometry, PhotometryError> {
     }
 }
 
-/// Reads a file as text: UTF-8 when valid, else Latin-1.
+/// Reads a file as text (see [`text_of`]).
 pub(crate) fn read_text(path: &Path) -> Result<String, PhotometryError> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path)
         .map_err(|e| PhotometryError::new(&name, None, format!("cannot read: {e}")))?;
+    text_of(&name, bytes)
+}
+
+/// A photometric file's bytes as text: UTF-8 when valid, else Latin-1 (older files are). A
+/// file with a control character other than tabs, line and page ends (and a trailing DOS end
+/// mark, ^Z) is not text: a binary file (an image, a compiled scene given by mistake) is named
+/// as such with the first such byte, rather than as an IES file "missing TILT=".
+pub fn text_of(name: &str, bytes: Vec<u8>) -> Result<String, PhotometryError> {
+    let body = bytes.strip_suffix(b"\x1a").unwrap_or(&bytes);
+    if let Some(at) = body
+        .iter()
+        .position(|&b| (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0b | 0x0c)) || b == 0x7f)
+    {
+        let line = 1 + body[..at].iter().filter(|&&b| b == b'\n').count();
+        return Err(PhotometryError::new(
+            name,
+            Some(line),
+            format!(
+                "not a text file: byte {at} is 0x{:02x}, a control character (a binary file? \
+                 photometric files are text)",
+                body[at]
+            ),
+        ));
+    }
     Ok(match String::from_utf8(bytes) {
         Ok(s) => s,
         Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),

@@ -171,11 +171,18 @@ fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMes
         let full = scene_path.parent().unwrap_or(Path::new(".")).join(p);
         if full.is_file() {
             Ok(full)
-        } else if full.is_dir() {
+        } else if let Some(kind) = luxest_io::fsio::non_file_kind(&full) {
+            // It exists (a directory, /dev/null, a FIFO): "not found" would send the user
+            // looking for a file that is there.
+            let what = if kind == "a directory" {
+                "a mesh file"
+            } else {
+                "a regular file, as a mesh must be"
+            };
             Err(Error::at(
                 scene_path,
                 format!("{place}.shape.path"),
-                format!("{} is a directory, not a mesh file", full.display()),
+                format!("{} is {kind}, not {what}", full.display()),
             ))
         } else {
             Err(Error::at(

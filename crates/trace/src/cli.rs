@@ -131,6 +131,10 @@ pub fn run(args: Args) -> Result<()> {
         args.common.thread_count(),
         args.max_depth,
     );
+    if let Some(spp) = args.spp {
+        // A --time run is as long as asked; a --spp run says first when it is long.
+        renderer.plan(spp).announce();
+    }
     let mut film = Film::new(camera.width as usize, camera.height as usize);
     let start = Instant::now();
     let info = |film: &Film| {
