@@ -299,7 +299,8 @@ fn camera_points_are_sized_under_the_processs_memory_limit() {
 /// of the images denoised come only once all are written.
 #[test]
 fn denoise_says_first_what_failed() {
-    use luxest_io::exr_io::{write_rgb, RgbImage};
+    use luxest_io::exr::write_rgb;
+    use luxest_io::image::RgbImage;
     let dir = TempDir::new("rel-dn-first");
     let model = crate::util::repo_root().join("tests/fixtures/denoise/tiny.onnx");
     let mut img = RgbImage::new(8, 8);
