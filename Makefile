@@ -47,7 +47,7 @@ RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml
 MESHES := $(wildcard scenes/meshes/*)
 
 VENV := .venv
-VENV_STAMP := .luxest-setup-3
+VENV_STAMP := .luxest-setup-4
 PYTHON := $(VENV)/bin/python
 
 .PHONY: run scenes test lint bench validate singularity clean train pytest eval test-slurm
@@ -107,9 +107,13 @@ $(addprefix $(RELEASE)/,$(STAGE_BINS)): $(RELEASE)/%:
 build/%/scene.lxs: scenes/%.ron $(MESHES) $(SCENE_COMPILE)
 	$(LAUNCH) $(SCENE_COMPILE) $< -o $@
 
-lint:
+# The Python sources' formatting (ruff.toml); make test checks it too (training/tests/test_tidy.py).
+PYTHON_SOURCES := training pipelines data-gen python
+
+lint: $(VENV)/$(VENV_STAMP)
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
+	$(VENV)/bin/ruff format --check $(PYTHON_SOURCES)
 
 # make test lints as make lint does, in the one build that links the tests: clippy-driver is the
 # compiler of the workspace's own crates (RUSTC_WORKSPACE_WRAPPER, as cargo clippy sets it, with

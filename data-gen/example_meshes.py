@@ -8,6 +8,7 @@
 
 Re-running reproduces the files byte for byte.
 """
+
 import json
 import math
 import struct
@@ -83,8 +84,10 @@ def trefoil_glb(nu=256, nv=12, tube=0.35):
         "asset": {"version": "2.0", "generator": "luxest data-gen/example_meshes.py"},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
-        "nodes": [{"name": "trefoil", "children": [1], "scale": [0.1, 0.1, 0.1]},
-                  {"name": "tube", "mesh": 0, "translation": [0.0, 0.0, 0.0]}],
+        "nodes": [
+            {"name": "trefoil", "children": [1], "scale": [0.1, 0.1, 0.1]},
+            {"name": "tube", "mesh": 0, "translation": [0.0, 0.0, 0.0]},
+        ],
         "meshes": [{"primitives": [{"attributes": {"POSITION": 1, "NORMAL": 2}, "indices": 0, "mode": 4}]}],
         "buffers": [{"byteLength": len(binary)}],
         "bufferViews": [

@@ -20,6 +20,7 @@ Scene i does not depend on the count, so a dataset of more scenes contains the s
 
 Splits: scene i goes to test if i % 6 == 5, to valid if i % 6 == 4, else to train.
 """
+
 import argparse
 import os
 import random
@@ -86,8 +87,10 @@ def scene(preset, index, seed, side, scene_dir=None):
         elif kind == "glossy":
             dif = rng.uniform(0.05, 0.5)
             spec = rng.uniform(0.1, 0.9 - dif)
-            materials[name] = (f"Glossy(diffuse: {v3(dif, dif * rng.uniform(0.7, 1.0), dif * rng.uniform(0.5, 1.0))}, "
-                               f"specular: {v3(spec, spec, spec)}, roughness: {f(rng.uniform(0.08, 0.7))})")
+            materials[name] = (
+                f"Glossy(diffuse: {v3(dif, dif * rng.uniform(0.7, 1.0), dif * rng.uniform(0.5, 1.0))}, "
+                f"specular: {v3(spec, spec, spec)}, roughness: {f(rng.uniform(0.08, 0.7))})"
+            )
         elif kind == "mirror":
             r = rng.uniform(0.7, 0.95)
             materials[name] = f"Mirror(reflectance: {v3(r, r, r)})"
@@ -110,7 +113,9 @@ def scene(preset, index, seed, side, scene_dir=None):
     for name, corner, u, v in walls:
         if open_front and name == "front":
             continue
-        objects.append(f'(name: "{name}", shape: Quad(corner: {corner}, u: {u}, v: {v}), material: "{material("lambert")}")')
+        objects.append(
+            f'(name: "{name}", shape: Quad(corner: {corner}, u: {u}, v: {v}), material: "{material("lambert")}")'
+        )
 
     # Furniture.
     targets = []
@@ -121,24 +126,34 @@ def scene(preset, index, seed, side, scene_dir=None):
         m = material()
         if kind == "table":
             tw, td, th = rng.uniform(0.6, 1.6), rng.uniform(0.5, 1.0), rng.uniform(0.6, 0.9)
-            objects.append(f'(name: "table{k}", shape: Box(size: {v3(tw, 0.05, td)}), transform: (translate: {v3(x, th, z)}), material: "{m}")')
+            objects.append(
+                f'(name: "table{k}", shape: Box(size: {v3(tw, 0.05, td)}), transform: (translate: {v3(x, th, z)}), material: "{m}")'
+            )
             for dx in (-1, 1):
                 for dz in (-1, 1):
-                    objects.append(f'(shape: Box(size: {v3(0.05, th, 0.05)}), transform: (translate: {v3(x + dx * (tw / 2 - 0.05), th / 2, z + dz * (td / 2 - 0.05))}), material: "{m}")')
+                    objects.append(
+                        f'(shape: Box(size: {v3(0.05, th, 0.05)}), transform: (translate: {v3(x + dx * (tw / 2 - 0.05), th / 2, z + dz * (td / 2 - 0.05))}), material: "{m}")'
+                    )
         elif kind in ("block", "cabinet"):
             s = v3(rng.uniform(0.2, 1.2), rng.uniform(0.2, 1.8 if kind == "cabinet" else 0.8), rng.uniform(0.2, 1.0))
             hgt = float(s.split(",")[1])
-            objects.append(f'(name: "{kind}{k}", shape: Box(size: {s}), transform: (rotate_deg: {v3(0, rng.uniform(0, 90), 0)}, translate: {v3(x, hgt / 2, z)}), material: "{m}")')
+            objects.append(
+                f'(name: "{kind}{k}", shape: Box(size: {s}), transform: (rotate_deg: {v3(0, rng.uniform(0, 90), 0)}, translate: {v3(x, hgt / 2, z)}), material: "{m}")'
+            )
         elif kind == "sphere":
             r = rng.uniform(0.1, 0.5)
-            objects.append(f'(name: "sphere{k}", shape: Sphere(radius: {f(r)}, subdivisions: 3), transform: (translate: {v3(x, r, z)}), material: "{m}")')
+            objects.append(
+                f'(name: "sphere{k}", shape: Sphere(radius: {f(r)}, subdivisions: 3), transform: (translate: {v3(x, r, z)}), material: "{m}")'
+            )
         else:
             mesh = rng.choice(["torus.obj", "trefoil.glb"])
             # Relative to the scene file, so the generated text does not depend on the checkout.
             rel = os.path.relpath(MESHES / mesh, scene_dir) if scene_dir else str(MESHES / mesh)
             shape = f'Obj(path: "{rel}")' if mesh.endswith(".obj") else f'Gltf(path: "{rel}")'
             sc = rng.uniform(0.6, 1.5)
-            objects.append(f'(name: "mesh{k}", shape: {shape}, transform: (scale: {v3(sc, sc, sc)}, rotate_deg: {v3(rng.uniform(0, 90), rng.uniform(0, 360), 0)}, translate: {v3(x, rng.uniform(0.3, 1.2), z)}), material: "{m}")')
+            objects.append(
+                f'(name: "mesh{k}", shape: {shape}, transform: (scale: {v3(sc, sc, sc)}, rotate_deg: {v3(rng.uniform(0, 90), rng.uniform(0, 360), 0)}, translate: {v3(x, rng.uniform(0.3, 1.2), z)}), material: "{m}")'
+            )
 
     # Emitters: at least one, of several kinds.
     emitter_material = material("lambert")
@@ -148,15 +163,21 @@ def scene(preset, index, seed, side, scene_dir=None):
         if kind == "panel":
             pw, pd = rng.uniform(0.2, 1.5), rng.uniform(0.2, 1.5)
             px, pz = rng.uniform(0.2, w - pw - 0.2), rng.uniform(0.2, d - pd - 0.2)
-            objects.append(f'(name: "panel{k}", shape: Quad(corner: {v3(px, h - 0.01, pz)}, u: {v3(pw, 0, 0)}, v: {v3(0, 0, pd)}), '
-                           f'material: "{emitter_material}", emission: Flux(lumens: {f(rng.uniform(500, 6000))}, color: {tint}))')
+            objects.append(
+                f'(name: "panel{k}", shape: Quad(corner: {v3(px, h - 0.01, pz)}, u: {v3(pw, 0, 0)}, v: {v3(0, 0, pd)}), '
+                f'material: "{emitter_material}", emission: Flux(lumens: {f(rng.uniform(500, 6000))}, color: {tint}))'
+            )
         elif kind == "bulb":
             # Small and bright: the caustic and firefly makers.
             r = rng.uniform(0.02, 0.08)
-            objects.append(f'(name: "bulb{k}", shape: Sphere(radius: {f(r)}, subdivisions: 2), transform: (translate: {v3(rng.uniform(0.3, w - 0.3), rng.uniform(0.5, h - 0.3), rng.uniform(0.3, d - 0.3))}), '
-                           f'material: "{emitter_material}", emission: Flux(lumens: {f(rng.uniform(200, 3000))}, color: {tint}))')
+            objects.append(
+                f'(name: "bulb{k}", shape: Sphere(radius: {f(r)}, subdivisions: 2), transform: (translate: {v3(rng.uniform(0.3, w - 0.3), rng.uniform(0.5, h - 0.3), rng.uniform(0.3, d - 0.3))}), '
+                f'material: "{emitter_material}", emission: Flux(lumens: {f(rng.uniform(200, 3000))}, color: {tint}))'
+            )
         else:
-            lights.append(f'(position: {v3(rng.uniform(0.3, w - 0.3), rng.uniform(0.5, h - 0.2), rng.uniform(0.3, d - 0.3))}, power: Flux({f(rng.uniform(300, 3000))}), color: {tint})')
+            lights.append(
+                f"(position: {v3(rng.uniform(0.3, w - 0.3), rng.uniform(0.5, h - 0.2), rng.uniform(0.3, d - 0.3))}, power: Flux({f(rng.uniform(300, 3000))}), color: {tint})"
+            )
 
     # The camera looks at a piece of furniture from the front part of the room.
     tx, tz = rng.choice(targets)
@@ -192,8 +213,12 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--side", type=int, help="image side in pixels (required with --out)")
     ap.add_argument("--out", type=Path)
-    ap.add_argument("--scenes", type=int, help="number of scenes (default: the preset's); scene i "
-                    "is the same whatever the count, so a larger count adds scenes to every split")
+    ap.add_argument(
+        "--scenes",
+        type=int,
+        help="number of scenes (default: the preset's); scene i "
+        "is the same whatever the count, so a larger count adds scenes to every split",
+    )
     ap.add_argument("--list", action="store_true")
     args = ap.parse_args()
     if args.scenes is not None and not 6 <= args.scenes <= 100_000:

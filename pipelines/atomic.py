@@ -1,5 +1,6 @@
 """Atomic text output for the pipeline scripts (standard library only, so that the scripts run
 by the system python3 can use it): the file appears complete or not at all."""
+
 from pathlib import Path
 
 

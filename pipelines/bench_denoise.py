@@ -9,11 +9,13 @@ user calls it (model or library load included); its CPU seconds are the process'
 system, all threads, from the kernel: `getrusage(RUSAGE_CHILDREN)`). Rounds alternate which
 denoiser goes first. The marginal cost per megapixel — (median CPU-s on the large image − median
 on the small one) / (the difference in megapixels) — cancels what does not grow with the image
-(start-up, model load, file names); it is what issue 11's inference criterion compares. Any
-denoiser honouring the `denoise` command line can be measured (`--denoise`, `DENOISE=` in make).
+(start-up, model load, file names); the inference criterion compares it (luxest's over OIDN's).
+Any denoiser honouring the `denoise` command line can be measured (`--denoise`, `DENOISE=` in
+make).
 
 Output: a Markdown table (`-o`) with a row per denoiser and the peer's column kept, and a CSV
 beside it (`.csv`)."""
+
 import argparse
 import csv
 import resource
@@ -84,9 +86,22 @@ def commands(denoise, model, oidn, hdr, out_dir, kinds):
     """The two command lines for one input: luxest's `denoise` and the OIDN peer."""
     parsed = contract.parse_image_name(hdr.name)
     feature = lambda kind: str(hdr.with_name(contract.image_name(parsed.name, kind, parsed.spp, parsed.unit)))
-    luxest = shlex.split(denoise) + [str(hdr), "--model", str(model), "-o", str(out_dir / f"luxest-{hdr.parent.name}.dn.exr")]
-    peer = shlex.split(oidn) + [str(hdr), "--alb", feature("alb"), "--nrm", feature("nrm"),
-                                "-o", str(out_dir / f"oidn-{hdr.parent.name}.dn.exr")]
+    luxest = shlex.split(denoise) + [
+        str(hdr),
+        "--model",
+        str(model),
+        "-o",
+        str(out_dir / f"luxest-{hdr.parent.name}.dn.exr"),
+    ]
+    peer = shlex.split(oidn) + [
+        str(hdr),
+        "--alb",
+        feature("alb"),
+        "--nrm",
+        feature("nrm"),
+        "-o",
+        str(out_dir / f"oidn-{hdr.parent.name}.dn.exr"),
+    ]
     return {"luxest": luxest, "oidn": peer}
 
 
@@ -134,14 +149,16 @@ def main(argv=None):
                 wall[(d, size)].append(w)
     rows = []
     for d in ("luxest", "oidn"):
-        rows.append({
-            "denoiser": d,
-            "cpu_s_small": statistics.median(cpu[(d, "small")]),
-            "cpu_s_large": statistics.median(cpu[(d, "large")]),
-            "wall_s_large": statistics.median(wall[(d, "large")]),
-            "cpu_s_per_megapixel": marginal(cpu[(d, "small")], cpu[(d, "large")], mp["small"], mp["large"]),
-            "wall_s_per_megapixel": marginal(wall[(d, "small")], wall[(d, "large")], mp["small"], mp["large"]),
-        })
+        rows.append(
+            {
+                "denoiser": d,
+                "cpu_s_small": statistics.median(cpu[(d, "small")]),
+                "cpu_s_large": statistics.median(cpu[(d, "large")]),
+                "wall_s_large": statistics.median(wall[(d, "large")]),
+                "cpu_s_per_megapixel": marginal(cpu[(d, "small")], cpu[(d, "large")], mp["small"], mp["large"]),
+                "wall_s_per_megapixel": marginal(wall[(d, "small")], wall[(d, "large")], mp["small"], mp["large"]),
+            }
+        )
     ratio = rows[0]["cpu_s_per_megapixel"] / rows[1]["cpu_s_per_megapixel"]
     tmp_csv = out_csv.with_name(out_csv.name + ".tmp")
     with open(tmp_csv, "w", newline="") as f:
@@ -150,17 +167,21 @@ def main(argv=None):
         wr.writerows(rows)
     small_side = round((mp["small"] * 1e6) ** 0.5)
     lines = [
-        f"# Denoiser inference: luxest against Intel Open Image Denoise ({Path(args.input).name})", "",
+        f"# Denoiser inference: luxest against Intel Open Image Denoise ({Path(args.input).name})",
+        "",
         f"Whole processes on {host_summary()}, {args.rounds} interleaved rounds, medians; CPU seconds = "
         "user + system of the process (all threads). Per megapixel: the marginal cost between the "
-        f"{small_side}² input and its {args.side}² tiling (start-up and model load cancel).", "",
+        f"{small_side}² input and its {args.side}² tiling (start-up and model load cancel).",
+        "",
         f"| denoiser | CPU-s, {small_side}² | CPU-s, {args.side}² | wall s, {args.side}² | CPU-s per megapixel | wall s per megapixel |",
         "|---|---|---|---|---|---|",
     ]
     for row in rows:
         label = f"luxest `denoise` ({Path(args.model).name})" if row["denoiser"] == "luxest" else "OIDN 1.4.3 (peer)"
-        lines.append(f"| {label} | {row['cpu_s_small']:.2f} | {row['cpu_s_large']:.2f} | {row['wall_s_large']:.2f} | "
-                     f"{row['cpu_s_per_megapixel']:.2f} | {row['wall_s_per_megapixel']:.2f} |")
+        lines.append(
+            f"| {label} | {row['cpu_s_small']:.2f} | {row['cpu_s_large']:.2f} | {row['wall_s_large']:.2f} | "
+            f"{row['cpu_s_per_megapixel']:.2f} | {row['wall_s_per_megapixel']:.2f} |"
+        )
     lines += ["", f"luxest / OIDN, CPU-s per megapixel: {ratio:.2f}", ""]
     tmp_md = out.with_name(out.name + ".tmp")
     tmp_md.write_text("\n".join(lines))

@@ -10,6 +10,7 @@ CPU-second, relMSE, and the CPU seconds to reach relMSE 1e-2 and 1e-3, each from
 whose relMSE is nearest (log scale) as relMSE x CPU-seconds / target (relMSE falls as 1/time at
 these budgets; the measured points are in the table). Mitsuba's columns need .venv-peers
 (`scripts/setup.sh --no-python --no-ort --peers`)."""
+
 import argparse
 import csv
 import math
@@ -60,10 +61,17 @@ def main(argv=None):
     ap.add_argument("--spp", required=True, help="path tracing: comma-separated samples per pixel")
     ap.add_argument("--lt-paths", default="", help="light tracing: comma-separated light paths")
     ap.add_argument("--dle-paths", default="", help="double local estimate: comma-separated light paths")
-    ap.add_argument("--dle-mis-paths", type=int, default=10000,
-                    help="its light-tracing paths per light path (estimate image --mis-paths)")
-    ap.add_argument("--dle-plain-paths", default="",
-                    help="the plain double local estimate (--mis-paths 0): comma-separated light paths")
+    ap.add_argument(
+        "--dle-mis-paths",
+        type=int,
+        default=10000,
+        help="its light-tracing paths per light path (estimate image --mis-paths)",
+    )
+    ap.add_argument(
+        "--dle-plain-paths",
+        default="",
+        help="the plain double local estimate (--mis-paths 0): comma-separated light paths",
+    )
     ap.add_argument("--reps", type=int, default=2)
     ap.add_argument("--work-dir", required=True)
     ap.add_argument("-o", "--out", required=True, help="Markdown table")
@@ -83,9 +91,24 @@ def main(argv=None):
     def luxest_image(extra, tag):
         def run(rep, paths):
             out = work / image_name(f"{tag}_r{rep}", "hdr", paths, unit="le")
-            cpu, _ = child_cpu([a.estimate, "image", a.scene, "--paths", paths, "--resolution", a.resolution,
-                                "--seed", rep, "-o", out, *extra])
+            cpu, _ = child_cpu(
+                [
+                    a.estimate,
+                    "image",
+                    a.scene,
+                    "--paths",
+                    paths,
+                    "--resolution",
+                    a.resolution,
+                    "--seed",
+                    rep,
+                    "-o",
+                    out,
+                    *extra,
+                ]
+            )
             return cpu, out
+
         return run
 
     def mitsuba(integrator, per_pixel):
@@ -93,9 +116,25 @@ def main(argv=None):
             out = work / f"mitsuba_{integrator}_r{rep}_{budget}.exr"
             # ptracer's sample count is light paths per pixel of the film.
             spp = budget if per_pixel else max(1, round(budget / pixels))
-            _, text = child_cpu([a.peers_python, MITSUBA, a.mitsuba_scene, "--spp", spp, "--seed", rep,
-                                 "--resolution", a.resolution, "--integrator", integrator, "-o", out])
+            _, text = child_cpu(
+                [
+                    a.peers_python,
+                    MITSUBA,
+                    a.mitsuba_scene,
+                    "--spp",
+                    spp,
+                    "--seed",
+                    rep,
+                    "--resolution",
+                    a.resolution,
+                    "--integrator",
+                    integrator,
+                    "-o",
+                    out,
+                ]
+            )
             return float(text.split()[-3]), out
+
         return run
 
     # (name, unit, budgets, samples per budget unit, runner)
@@ -107,11 +146,17 @@ def main(argv=None):
         if peer:
             methods.append(("Mitsuba 3 llvm_ad_rgb ptracer", "paths", counts(a.lt_paths), 1, mitsuba("ptracer", False)))
     if a.dle_paths:
-        methods.append((DLE, f"paths (+{a.dle_mis_paths} light-tracing paths each)", counts(a.dle_paths), 1,
-                        luxest_image(["--mis-paths", a.dle_mis_paths], "dle")))
+        methods.append(
+            (
+                DLE,
+                f"paths (+{a.dle_mis_paths} light-tracing paths each)",
+                counts(a.dle_paths),
+                1,
+                luxest_image(["--mis-paths", a.dle_mis_paths], "dle"),
+            )
+        )
     if a.dle_plain_paths:
-        methods.append((DLE_PLAIN, "paths", counts(a.dle_plain_paths), 1,
-                        luxest_image(["--mis-paths", 0], "dleplain")))
+        methods.append((DLE_PLAIN, "paths", counts(a.dle_plain_paths), 1, luxest_image(["--mis-paths", 0], "dleplain")))
     runs = []  # (method, rep, budget, cpu, image)
     for rep in range(1, a.reps + 1):
         for k in range(max(len(m[2]) for m in methods)):
@@ -120,13 +165,19 @@ def main(argv=None):
                     cpu, image = run(rep, budgets[k])
                     runs.append((name, rep, budgets[k], cpu, str(image)))
     report = work / "scores.csv"
-    subprocess.run([a.evaluate, "images", "--reference", a.reference, *[r[4] for r in runs], "-o", str(report)],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [a.evaluate, "images", "--reference", a.reference, *[r[4] for r in runs], "-o", str(report)],
+        check=True,
+        capture_output=True,
+    )
     rel = {row["image"]: float(row["rel_mse"]) for row in csv.DictReader(open(report))}
-    lines = [f"Speed at equal error: `{a.scene}` at {a.resolution}, reference `{a.reference}`, {a.reps} interleaved "
-             f"repetitions ({time.strftime('%Y-%m-%d %H:%M')}; {host_summary()}).", "",
-             "| method | budget | CPU-s (each rep) | M samples or paths / CPU-s | relMSE (each rep) |",
-             "|---|---|---|---|---|"]
+    lines = [
+        f"Speed at equal error: `{a.scene}` at {a.resolution}, reference `{a.reference}`, {a.reps} interleaved "
+        f"repetitions ({time.strftime('%Y-%m-%d %H:%M')}; {host_summary()}).",
+        "",
+        "| method | budget | CPU-s (each rep) | M samples or paths / CPU-s | relMSE (each rep) |",
+        "|---|---|---|---|---|",
+    ]
     to_target = {}  # (method, target) -> CPU-s
     for name, unit, budgets, per_unit, _ in methods:
         points = []  # (mean relMSE, mean relMSE x CPU-s)
@@ -135,21 +186,26 @@ def main(argv=None):
             cpus = [r[3] for r in rs]
             errs = [rel.get(Path(r[4]).name, rel.get(r[4])) for r in rs]
             rate = per_unit * b / (sum(cpus) / len(cpus)) / 1e6
-            lines.append(f"| {name} | {b} {unit} | {', '.join(f'{c:.2f}' for c in cpus)} | {rate:.3g} | "
-                         f"{', '.join(f'{e:.3e}' for e in errs)} |")
+            lines.append(
+                f"| {name} | {b} {unit} | {', '.join(f'{c:.2f}' for c in cpus)} | {rate:.3g} | "
+                f"{', '.join(f'{e:.3e}' for e in errs)} |"
+            )
             points.append((sum(errs) / len(errs), sum(c * e for c, e in zip(cpus, errs)) / len(cpus)))
         for t in TARGETS:
             _, efficiency = min(points, key=lambda p: abs(math.log(p[0] / t)))
             to_target[name, t] = efficiency / t
-    lines += ["", "| method | " + " | ".join(f"CPU-s to relMSE {t:g}" for t in TARGETS) + " |",
-              "|---|" + "---|" * len(TARGETS)]
+    lines += [
+        "",
+        "| method | " + " | ".join(f"CPU-s to relMSE {t:g}" for t in TARGETS) + " |",
+        "|---|" + "---|" * len(TARGETS),
+    ]
     for name, *_ in methods:
         lines.append(f"| {name} | " + " | ".join(f"{to_target[name, t]:.2f}" for t in TARGETS) + " |")
     lines.append("")
     TARGET = TARGETS[-1]
     if peer:
         pt = to_target["luxest trace", TARGET] / to_target["Mitsuba 3 llvm_ad_rgb path", TARGET]
-        lines.append(f"luxest trace / Mitsuba path, CPU time to relMSE {TARGET:g}: {pt:.2f} (issue 13's target: at most 0.5).")
+        lines.append(f"luxest trace / Mitsuba path, CPU time to relMSE {TARGET:g}: {pt:.2f} (the target: at most 0.5).")
         if (PTRACER, TARGET) in to_target:
             for n in ("luxest light tracer", DLE, DLE_PLAIN):
                 if (n, TARGET) in to_target:
@@ -167,8 +223,10 @@ def plot(path, runs, rel, methods, title):
     """relMSE against CPU seconds, log-log: each method's mean over the repetitions per budget,
     joined (Mitsuba dashed), with the targets as grey lines. Written atomically."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
     for name, _, budgets, _, _ in methods:
         xs, ys = [], []

@@ -2,6 +2,7 @@
 """Writes build/bench-1m/scene.ron: a 1 000 000-triangle heightfield mesh (OBJ, 1000 x 500 quads)
 in a lit room with a camera, for `make bench` (trace and ray rates on a large mesh).
 Standard library only; deterministic."""
+
 import math
 from pathlib import Path
 

@@ -17,6 +17,7 @@ and (0.137, 0, 0.363), 4 × 4096 samples: `ptracer` 0.574 ± 0.001 and 0.658 ± 
 0.438 ± 0.03 and 0.712 ± 0.03, luxest's local estimate 0.4489 ± 0.0002 and 0.7327 ± 0.0007 (its
 backward estimate 0.4492 ± 0.0016 and 0.7325 ± 0.0023). The table checks the values: per sensor
 z = (Mitsuba − luxest) / √(se² + se²)."""
+
 import argparse
 import statistics
 import sys
@@ -64,12 +65,14 @@ def meter_xml(i, position, normal, radius, spp):
     t = tuple(p[k] + normal[k] for k in range(3))
     up = (0.0, 0.0, 1.0) if abs(normal[2]) < 0.9 else (1.0, 0.0, 0.0)
     f = lambda v: ", ".join(f"{x:.9g}" for x in v)
-    return (f'<shape type="disk" id="meter{i}"><transform name="to_world"><scale value="{radius:.9g}"/>'
-            f'<lookat origin="{f(p)}" target="{f(t)}" up="{f(up)}"/></transform>'
-            f'<sensor type="irradiancemeter" id="meter{i}_sensor"><film type="hdrfilm"><integer name="width" value="1"/>'
-            f'<integer name="height" value="1"/><rfilter type="box"/><string name="pixel_format" value="rgb"/>'
-            f'<string name="component_format" value="float32"/></film>'
-            f'<sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler></sensor></shape>')
+    return (
+        f'<shape type="disk" id="meter{i}"><transform name="to_world"><scale value="{radius:.9g}"/>'
+        f'<lookat origin="{f(p)}" target="{f(t)}" up="{f(up)}"/></transform>'
+        f'<sensor type="irradiancemeter" id="meter{i}_sensor"><film type="hdrfilm"><integer name="width" value="1"/>'
+        f'<integer name="height" value="1"/><rfilter type="box"/><string name="pixel_format" value="rgb"/>'
+        f'<string name="component_format" value="float32"/></film>'
+        f'<sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler></sensor></shape>'
+    )
 
 
 def main(argv=None):
@@ -79,16 +82,24 @@ def main(argv=None):
     ap.add_argument("--estimate", required=True)
     ap.add_argument("--paths", type=int, default=400000, help="light paths of the luxest run")
     ap.add_argument("--spp", type=int, default=65536, help="samples per estimate of a Mitsuba meter")
-    ap.add_argument("--gather-samples", type=int, default=20000,
-                    help="samples per sensor of luxest's backward estimate (estimate gather)")
+    ap.add_argument(
+        "--gather-samples",
+        type=int,
+        default=20000,
+        help="samples per sensor of luxest's backward estimate (estimate gather)",
+    )
     ap.add_argument("--replicates", type=int, default=8, help="independent estimates per Mitsuba meter")
     ap.add_argument("--disk-radius", type=float, default=1e-4, help="radius of the meters' disks (m)")
     ap.add_argument("--variant", default="llvm_ad_rgb")
-    ap.add_argument("--integrator", default="path", choices=["path", "ptracer"],
-                    help="Mitsuba's integrator for the meters: path samples directions from the meter (no "
-                         "next-event estimation there: the direct light of a small emitter is a rare event); "
-                         "ptracer connects every light-path vertex to the meter but is biased for irradiance "
-                         "meters in Mitsuba 3.9.1 (see the module docs)")
+    ap.add_argument(
+        "--integrator",
+        default="path",
+        choices=["path", "ptracer"],
+        help="Mitsuba's integrator for the meters: path samples directions from the meter (no "
+        "next-event estimation there: the direct light of a small emitter is a rare event); "
+        "ptracer connects every light-path vertex to the meter but is biased for irradiance "
+        "meters in Mitsuba 3.9.1 (see the module docs)",
+    )
     ap.add_argument("--work-dir", required=True)
     ap.add_argument("-o", "--out", required=True, help="Markdown table")
     a = ap.parse_args(argv)
@@ -105,6 +116,7 @@ def main(argv=None):
     import drjit as dr
     import mitsuba as mi
     import numpy as np
+
     mi.set_variant(a.variant)
     xml = scene_xml(mi, a.mitsuba_scene, integrator=a.integrator)
     # Mitsuba's parser merges identical nested objects, and a meter can belong to one shape only:
@@ -140,23 +152,33 @@ def main(argv=None):
     ga_all, ga_med = sum(ga_time.values()), statistics.median(ga_time.values())
     speedups = sorted(mi_time[i] / lx_time[i] for i, _ in lit)
     z = {i: (mi_value[i] - s[2]) / (mi_se[i] ** 2 + s[3] ** 2) ** 0.5 for i, s in lit}
-    lines = [f"Sensors at 1 % standard error: `{a.scene}`, {len(lit)} lit sensors of {len(sensors)}; luxest `estimate sensors` "
-             f"{a.paths} paths ({t_lx:.1f} CPU-s), Mitsuba 3 `{a.variant}` `{a.integrator}` irradiance meters (disk radius {a.disk_radius:g} m, "
-             f"{a.replicates} x {a.spp} samples each) ({time.strftime('%Y-%m-%d %H:%M')}; {host_summary()}).", "",
-             f"luxest `estimate gather` (backward estimate) {a.gather_samples} samples per sensor ({t_ga:.1f} CPU-s).", "",
-             "| | luxest local estimate | luxest backward estimate | Mitsuba 3 irradiance meters |", "|---|---|---|---|",
-             f"| every lit sensor at 1 % | {lx_all:.1f} CPU-s (one run, the slowest sensor) | {ga_all:.2f} CPU-s (per sensor, summed) "
-             f"| {mi_all:.1f} CPU-s (one render per sensor, summed) |",
-             f"| median sensor at 1 % | {lx_med:.2f} CPU-s | {ga_med:.4f} CPU-s | {mi_med:.2f} CPU-s |", "",
-             f"Per sensor, Mitsuba's time / luxest's time to 1 %: median {statistics.median(speedups):.1f}, "
-             f"lowest {speedups[0]:.2f}, highest {speedups[-1]:.1f}. Mitsuba's value / luxest's: median "
-             f"{statistics.median(mi_value[i] / s[2] for i, s in lit):.4f}; z = (Mitsuba − luxest) / combined standard "
-             f"error: max abs {max(abs(v) for v in z.values()):.2f}, mean z² {sum(v * v for v in z.values()) / len(z):.2f} "
-             f"(the two agree when mean z² is near 1; Mitsuba's standard errors come from {a.replicates} replicates).", "",
-             "| sensor | luxest E | rel. SE | Mitsuba / luxest | z | luxest CPU-s to 1 % | backward CPU-s to 1 % | Mitsuba CPU-s to 1 % |",
-             "|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {i} | {s[2]:.4g} | {s[3] / s[2]:.2e} | {mi_value[i] / s[2]:.4f} | {z[i]:+.2f} | {lx_time[i]:.3f} | "
-              f"{ga_time[i]:.4f} | {mi_time[i]:.3f} |" for i, s in rows]
+    lines = [
+        f"Sensors at 1 % standard error: `{a.scene}`, {len(lit)} lit sensors of {len(sensors)}; luxest `estimate sensors` "
+        f"{a.paths} paths ({t_lx:.1f} CPU-s), Mitsuba 3 `{a.variant}` `{a.integrator}` irradiance meters (disk radius {a.disk_radius:g} m, "
+        f"{a.replicates} x {a.spp} samples each) ({time.strftime('%Y-%m-%d %H:%M')}; {host_summary()}).",
+        "",
+        f"luxest `estimate gather` (backward estimate) {a.gather_samples} samples per sensor ({t_ga:.1f} CPU-s).",
+        "",
+        "| | luxest local estimate | luxest backward estimate | Mitsuba 3 irradiance meters |",
+        "|---|---|---|---|",
+        f"| every lit sensor at 1 % | {lx_all:.1f} CPU-s (one run, the slowest sensor) | {ga_all:.2f} CPU-s (per sensor, summed) "
+        f"| {mi_all:.1f} CPU-s (one render per sensor, summed) |",
+        f"| median sensor at 1 % | {lx_med:.2f} CPU-s | {ga_med:.4f} CPU-s | {mi_med:.2f} CPU-s |",
+        "",
+        f"Per sensor, Mitsuba's time / luxest's time to 1 %: median {statistics.median(speedups):.1f}, "
+        f"lowest {speedups[0]:.2f}, highest {speedups[-1]:.1f}. Mitsuba's value / luxest's: median "
+        f"{statistics.median(mi_value[i] / s[2] for i, s in lit):.4f}; z = (Mitsuba − luxest) / combined standard "
+        f"error: max abs {max(abs(v) for v in z.values()):.2f}, mean z² {sum(v * v for v in z.values()) / len(z):.2f} "
+        f"(the two agree when mean z² is near 1; Mitsuba's standard errors come from {a.replicates} replicates).",
+        "",
+        "| sensor | luxest E | rel. SE | Mitsuba / luxest | z | luxest CPU-s to 1 % | backward CPU-s to 1 % | Mitsuba CPU-s to 1 % |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {i} | {s[2]:.4g} | {s[3] / s[2]:.2e} | {mi_value[i] / s[2]:.4f} | {z[i]:+.2f} | {lx_time[i]:.3f} | "
+        f"{ga_time[i]:.4f} | {mi_time[i]:.3f} |"
+        for i, s in rows
+    ]
     write_text(a.out, "\n".join(lines) + "\n")
     print("\n".join(lines[:8]))
 

@@ -6,6 +6,7 @@ singular and its footprint matters), and on the rest. Per group: the ratio of th
 (test / reference) with its standard error, the mean z and mean z² of
 z = (test − reference) / √(se_test² + se_ref²) (with standard errors from 8 batches, z follows
 Student's t with 7 degrees of freedom: mean z² 7/5), and the share of pixels with |z| > 4."""
+
 import argparse
 import sys
 from pathlib import Path
@@ -47,8 +48,15 @@ def group_stats(test, se_test, ref, se_ref, mask):
     # error of the sum treats them as independent too (a lower bound for the double local
     # estimate, whose pixels share light paths).
     ratio_se = np.sqrt((se_test[mask] ** 2).sum() + (se_ref[mask] ** 2).sum()) / ref[mask].sum()
-    return {"pixels": n, "ratio": ratio, "ratio_se": ratio_se, "mean_z": float(z.mean()),
-            "mean_z2": float((z * z).mean()), "over4": float((np.abs(z) > 4).mean()), "no_se": int((~ok).sum())}
+    return {
+        "pixels": n,
+        "ratio": ratio,
+        "ratio_se": ratio_se,
+        "mean_z": float(z.mean()),
+        "mean_z2": float((z * z).mean()),
+        "over4": float((np.abs(z) > 4).mean()),
+        "no_se": int((~ok).sum()),
+    }
 
 
 def main(argv=None):
@@ -65,10 +73,13 @@ def main(argv=None):
     ref = luminance(read_rgb(a.reference).astype(np.float64))
     se_ref = read_rgb(a.reference_se).astype(np.float64)[..., 0]
     edges = edge_mask(ref)
-    lines = [f"Edge bias against `{a.reference}` (edges: {edges.sum()} of {edges.size} pixels differ by more "
-             f"than {EDGE_CONTRAST:.0%} from a neighbour).", "",
-             "| image | pixels | n | Y test / reference | mean z | mean z² (7/5 expected) | share of abs(z) > 4 |",
-             "|---|---|---|---|---|---|---|"]
+    lines = [
+        f"Edge bias against `{a.reference}` (edges: {edges.sum()} of {edges.size} pixels differ by more "
+        f"than {EDGE_CONTRAST:.0%} from a neighbour).",
+        "",
+        "| image | pixels | n | Y test / reference | mean z | mean z² (7/5 expected) | share of abs(z) > 4 |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for i, (t, ts) in enumerate(zip(a.test, a.test_se)):
         test = luminance(read_rgb(t).astype(np.float64))
         se_test = read_rgb(ts).astype(np.float64)[..., 0]
@@ -77,8 +88,10 @@ def main(argv=None):
         name = a.label[i] if a.label and i < len(a.label) else Path(t).name
         for group, mask in (("edges", edges), ("the rest", ~edges)):
             s = group_stats(test, se_test, ref, se_ref, mask)
-            lines.append(f"| {name} | {group} | {s['pixels']} | {s['ratio']:.4f} ± {s['ratio_se']:.4f} | "
-                         f"{s['mean_z']:+.3f} | {s['mean_z2']:.2f} | {s['over4']:.4f} |")
+            lines.append(
+                f"| {name} | {group} | {s['pixels']} | {s['ratio']:.4f} ± {s['ratio_se']:.4f} | "
+                f"{s['mean_z']:+.3f} | {s['mean_z2']:.2f} | {s['over4']:.4f} |"
+            )
     write_text(a.out, "\n".join(lines) + "\n")
     print("\n".join(lines))
 

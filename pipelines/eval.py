@@ -17,6 +17,7 @@ from the CSV/RON reports of the `evaluate` stage that the rules of pipelines/eva
 
 Times are wall-clock seconds recorded in the images' headers: render (trace/estimate) +
 features (aov-write) + inference (denoise), excluding file I/O and process start."""
+
 import argparse
 import functools
 import math
@@ -33,14 +34,16 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 THRESHOLDS = (0.95, 0.98)
 METRICS = [("rel_mse", "relMSE (linear)"), ("one_minus_ssim", "1 - SSIM (tonemapped)"), ("flip", "FLIP (LDR)")]
+PT, DLE, LT = contract.PATH_TRACING, contract.DOUBLE_LOCAL_ESTIMATE, contract.LIGHT_TRACING
+DENOISED, OIDN = contract.DENOISED_SUFFIX, contract.OIDN_SUFFIX
 STYLE = {
-    "path-tracing": ("tab:blue", "o"),
-    "path-tracing+denoise": ("tab:orange", "s"),
-    "double-local-estimate": ("tab:green", "^"),
-    "double-local-estimate+denoise": ("tab:red", "D"),
-    "light-tracing": ("tab:purple", "v"),
-    "path-tracing+oidn": ("tab:gray", "P"),
-    "double-local-estimate+oidn": ("tab:brown", "X"),
+    PT: ("tab:blue", "o"),
+    PT + DENOISED: ("tab:orange", "s"),
+    DLE: ("tab:green", "^"),
+    DLE + DENOISED: ("tab:red", "D"),
+    LT: ("tab:purple", "v"),
+    PT + OIDN: ("tab:gray", "P"),
+    DLE + OIDN: ("tab:brown", "X"),
 }
 
 
@@ -121,7 +124,15 @@ def plot_trade(rows, title, path, x_key="total_seconds", x_label="wall-clock sec
         if x_key == "total_seconds":
             front = pareto([(r[x_key], r[key], r["estimator"]) for r in rows if r[key] > 0])
             if front:
-                ax.step([p[0] for p in front], [p[1] for p in front], where="post", color="k", lw=2, alpha=0.35, label="Pareto front")
+                ax.step(
+                    [p[0] for p in front],
+                    [p[1] for p in front],
+                    where="post",
+                    color="k",
+                    lw=2,
+                    alpha=0.35,
+                    label="Pareto front",
+                )
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel(x_label)
@@ -136,7 +147,9 @@ def plot_trade(rows, title, path, x_key="total_seconds", x_label="wall-clock sec
 
 def plot_progressive(noisy, denoised, path):
     fig, axes = plt.subplots(1, 3, figsize=(15.6, 4.2))
-    for ax, (key, label) in zip(axes, [("psnr_db", "PSNR dB (tonemapped)"), ("ssim", "SSIM (tonemapped)"), ("flip", "FLIP (LDR)")]):
+    for ax, (key, label) in zip(
+        axes, [("psnr_db", "PSNR dB (tonemapped)"), ("ssim", "SSIM (tonemapped)"), ("flip", "FLIP (LDR)")]
+    ):
         for rows, name, color in [(noisy, "noisy", "tab:blue"), (denoised, "denoised", "tab:orange")]:
             pts = sorted((r["total_seconds"], r[key]) for r in rows)
             ax.plot(*zip(*pts), marker="o", ms=3, color=color, label=name)
@@ -171,10 +184,17 @@ def sensor_row(csv_path):
     zs = [r["z"] for r in rows]
     rel = [r["relative_error"] for r in rows]
     run = contract.read_sensor_run(rows[0]["results"])
-    name = Path(csv_path).name[len("sensors-"):-len(".csv")]
-    return [name, rows[0]["case"].split(":")[0], len(rows), run["samples"], f"{run['seconds']:.2f}",
-            f"{max(abs(z) for z in zs):.2f}", f"{sum(z * z for z in zs) / len(zs):.2f}",
-            f"{math.sqrt(sum(e * e for e in rel) / len(rel)):.2e}"]
+    name = Path(csv_path).name[len("sensors-") : -len(".csv")]
+    return [
+        name,
+        rows[0]["case"].split(":")[0],
+        len(rows),
+        run["samples"],
+        f"{run['seconds']:.2f}",
+        f"{max(abs(z) for z in zs):.2f}",
+        f"{sum(z * z for z in zs) / len(zs):.2f}",
+        f"{math.sqrt(sum(e * e for e in rel) / len(rel)):.2e}",
+    ]
 
 
 def main(argv=None):
@@ -199,7 +219,7 @@ def main(argv=None):
     cb_rows = read_csv(args.cornell)
     ds_rows, ds_names = [], []
     for f in sorted(args.dataset):
-        name = Path(f).name[len("dataset-"):-len(".images.csv")]
+        name = Path(f).name[len("dataset-") : -len(".images.csv")]
         for r in read_csv(f):
             r["scene"] = name
             ds_rows.append(r)
@@ -220,8 +240,10 @@ def _image_facts(path):
     (`luxest.denoiseSeconds`, `luxest.denoiseCpuSeconds`; None where absent)."""
     img = contract.read(path)
     mp = img.pixels.shape[0] * img.pixels.shape[1] / 1e6
-    costs = tuple(None if v is None else v / mp for v in (img.value(contract.DENOISE_SECONDS),
-                                                          img.value(contract.DENOISE_CPU_SECONDS)))
+    costs = tuple(
+        None if v is None else v / mp
+        for v in (img.value(contract.DENOISE_SECONDS), img.value(contract.DENOISE_CPU_SECONDS))
+    )
     return img.pixels.reshape(-1, 3).astype("float64").mean(0), costs
 
 
@@ -277,25 +299,50 @@ def peer_table(rows, what):
     and CPU seconds (excluding I/O, the run's threads)."""
     by = {(r["estimator"], int(r["samples"])): r for r in rows}
     out = []
-    for base in ("path-tracing", "double-local-estimate"):
-        levels = sorted(n for (e, n) in by if e == base + "+oidn" and (base, n) in by and (base + "+denoise", n) in by)
+    for base in (PT, DLE):
+        levels = sorted(n for (e, n) in by if e == base + OIDN and (base, n) in by and (base + DENOISED, n) in by)
         if not levels:
             continue
         trs = []
         for n in levels:
-            a, d, o = by[(base, n)], by[(base + "+denoise", n)], by[(base + "+oidn", n)]
-            trs.append([n] + [f"{a[k]:{f}} / {d[k]:{f}} / {o[k]:{f}}" for k, f in (("psnr_db", ".2f"), ("ssim", ".4f"), ("flip", ".4f"))]
-                       + [" / ".join("—" if v is None else f"{scale * v:{f}}" for v in (row_denoise_costs(d)[j], row_denoise_costs(o)[j]))
-                          for j, scale, f in ((0, 1e3, ".0f"), (1, 1.0, ".2f"))]
-                       + [" / ".join(_pct(row_colour_shift(r)) for r in (a, d, o))])
-        unit = "spp" if base == "path-tracing" else "paths"
-        out += [f"### {base}: luxest's denoiser against Intel Open Image Denoise 1.4.3 ({what})", "",
-                "Each cell: noisy / luxest (`denoise`) / OIDN (hdr + albedo + normal, pipelines/oidn_denoise.py), "
-                "the same inputs and features.", "",
-                table([unit, "PSNR dB", "SSIM", "FLIP", "inference ms per megapixel (luxest / OIDN)",
-                       "inference CPU-s per megapixel (luxest / OIDN)",
-                       "colour shift: max over R, G, B of abs(mean / reference mean − 1)"
-                       + (" (mean over scenes)" if "colour_shift" in rows[0] else "")], trs), ""]
+            a, d, o = by[(base, n)], by[(base + DENOISED, n)], by[(base + OIDN, n)]
+            trs.append(
+                [n]
+                + [
+                    f"{a[k]:{f}} / {d[k]:{f}} / {o[k]:{f}}"
+                    for k, f in (("psnr_db", ".2f"), ("ssim", ".4f"), ("flip", ".4f"))
+                ]
+                + [
+                    " / ".join(
+                        "—" if v is None else f"{scale * v:{f}}"
+                        for v in (row_denoise_costs(d)[j], row_denoise_costs(o)[j])
+                    )
+                    for j, scale, f in ((0, 1e3, ".0f"), (1, 1.0, ".2f"))
+                ]
+                + [" / ".join(_pct(row_colour_shift(r)) for r in (a, d, o))]
+            )
+        unit = "spp" if base == PT else "paths"
+        out += [
+            f"### {base}: luxest's denoiser against Intel Open Image Denoise 1.4.3 ({what})",
+            "",
+            "Each cell: noisy / luxest (`denoise`) / OIDN (hdr + albedo + normal, pipelines/oidn_denoise.py), "
+            "the same inputs and features.",
+            "",
+            table(
+                [
+                    unit,
+                    "PSNR dB",
+                    "SSIM",
+                    "FLIP",
+                    "inference ms per megapixel (luxest / OIDN)",
+                    "inference CPU-s per megapixel (luxest / OIDN)",
+                    "colour shift: max over R, G, B of abs(mean / reference mean − 1)"
+                    + (" (mean over scenes)" if "colour_shift" in rows[0] else ""),
+                ],
+                trs,
+            ),
+            "",
+        ]
     return out
 
 
@@ -305,14 +352,14 @@ def paired_gaps(rows, base, key="psnr_db"):
     difference}, [scenes scored by one of the two only, or with a non-finite difference])]."""
     by = {}
     for r in rows:
-        if r["estimator"] in (base + "+denoise", base + "+oidn"):
+        if r["estimator"] in (base + DENOISED, base + OIDN):
             one = by.setdefault(int(r["samples"]), {}).setdefault(r["scene"], {})
             if r["estimator"] in one:
                 raise SystemExit(f"eval: scene {r['scene']}: two {r['estimator']} rows at {int(r['samples'])}")
             one[r["estimator"]] = r[key]
     out = []
     for n, scenes in sorted(by.items()):
-        diffs = {s: v[base + "+denoise"] - v[base + "+oidn"] for s, v in sorted(scenes.items()) if len(v) == 2}
+        diffs = {s: v[base + DENOISED] - v[base + OIDN] for s, v in sorted(scenes.items()) if len(v) == 2}
         diffs = {s: d for s, d in diffs.items() if math.isfinite(d)}
         if diffs:
             out.append((n, diffs, sorted(set(scenes) - set(diffs))))
@@ -329,35 +376,54 @@ def gap_stats(diffs):
 
 
 def gap_table(rows, names):
-    """Issue 11's held-out bar (luxest ≥ OIDN + 1 dB in mean PSNR at every level), scene by
+    """The held-out bar (luxest ≥ OIDN + 1 dB in mean PSNR at every level), scene by
     scene: the mean difference with its standard error over the scenes, its range, the scenes
     where luxest is ahead, and each scene's difference when there are few; a level where a scene
     lacks one of the two is scored over the others and says which."""
     out, few = [], len(names) <= 6
-    for base, unit in (("path-tracing", "spp"), ("double-local-estimate", "paths")):
+    for base, unit in ((PT, "spp"), (DLE, "paths")):
         gaps = paired_gaps(rows, base)
         if not gaps:
             continue
         trs, notes = [], []
         for n, d, missing in gaps:
             mean, se, lo, hi, ahead = gap_stats(d.values())
-            trs.append([n, f"{mean:+.2f}" + ("" if se is None else f" ± {se:.2f}"), f"{lo:+.2f} … {hi:+.2f}", f"{ahead} of {len(d)}",
-                        "yes" if mean >= 1.0 else "no"]
-                       + ([" / ".join(f"{d[s]:+.2f}" if s in d else "—" for s in names)] if few else []))
+            trs.append(
+                [
+                    n,
+                    f"{mean:+.2f}" + ("" if se is None else f" ± {se:.2f}"),
+                    f"{lo:+.2f} … {hi:+.2f}",
+                    f"{ahead} of {len(d)}",
+                    "yes" if mean >= 1.0 else "no",
+                ]
+                + ([" / ".join(f"{d[s]:+.2f}" if s in d else "—" for s in names)] if few else [])
+            )
             if missing:
                 notes.append(f"- {n} {unit}: without {', '.join(missing)} (scored by one denoiser only, or not finite)")
-        out += [f"### {base}: luxest − OIDN in PSNR dB, scene by scene (held-out scenes)", "",
-                "The mean difference ± its standard error over the scenes (sample standard deviation / √n): how far the "
-                "held-out bar's mean would move with other scenes of the same kind.", "",
-                table([unit, "mean ± s.e.", "range", "luxest ahead", "mean ≥ +1 dB"]
-                      + ([" / ".join(names)] if few else []), trs), ""] + (notes + [""] if notes else [])
+        out += [
+            f"### {base}: luxest − OIDN in PSNR dB, scene by scene (held-out scenes)",
+            "",
+            "The mean difference ± its standard error over the scenes (sample standard deviation / √n): how far the "
+            "held-out bar's mean would move with other scenes of the same kind.",
+            "",
+            table(
+                [unit, "mean ± s.e.", "range", "luxest ahead", "mean ≥ +1 dB"] + ([" / ".join(names)] if few else []),
+                trs,
+            ),
+            "",
+        ] + (notes + [""] if notes else [])
     return out
 
 
 def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, model):
     plot_trade(cb_rows, "Cornell box 256² — error vs time", plots / "cornell-box-time.png")
-    plot_trade(cb_rows, "Cornell box 256² — error vs samples (spp or light paths)", plots / "cornell-box-samples.png",
-               x_key="samples", x_label="samples per pixel (PT) / light paths (DLE)")
+    plot_trade(
+        cb_rows,
+        "Cornell box 256² — error vs samples (spp or light paths)",
+        plots / "cornell-box-samples.png",
+        x_key="samples",
+        x_label="samples per pixel (PT) / light paths (DLE)",
+    )
     # Dataset: mean over scenes per estimator and level (relMSE, FLIP, 1-SSIM arithmetic means).
     agg = {}
     for r in ds_rows:
@@ -373,43 +439,84 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
         ds_mean.append(m)
     if ds_mean:
         plot_trade(ds_mean, f"Held-out test scenes ({len(ds_names)}), mean — error vs time", plots / "dataset-time.png")
-        plot_trade(ds_mean, f"Held-out test scenes ({len(ds_names)}), mean — error vs samples", plots / "dataset-samples.png",
-                   x_key="samples", x_label="samples per pixel (PT) / light paths (DLE)")
-    noisy = [r for r in cb_rows if r["estimator"] == "path-tracing"]
-    den = [r for r in cb_rows if r["estimator"] == "path-tracing+denoise"]
+        plot_trade(
+            ds_mean,
+            f"Held-out test scenes ({len(ds_names)}), mean — error vs samples",
+            plots / "dataset-samples.png",
+            x_key="samples",
+            x_label="samples per pixel (PT) / light paths (DLE)",
+        )
+    noisy = [r for r in cb_rows if r["estimator"] == PT]
+    den = [r for r in cb_rows if r["estimator"] == PT + DENOISED]
     plot_progressive(noisy, den, plots / "cornell-box-progressive.png")
 
-    lines = [f"# luxest evaluation summary ({args.preset})", "",
-             f"Written by `make eval` (pipelines/eval.mk; this summary by pipelines/eval.py) on this machine "
-             f"({os.cpu_count()} cores). Denoiser: `{model.relative_to(ROOT) if model.is_absolute() and ROOT in model.parents else model}`.", "",
-             "Metrics (crates/evaluate, each checked against an established implementation to 1e-4): PSNR, SSIM, "
-             "MS-SSIM and FLIP on tonemapped images — per channel `x = max(v, 0)·k` with `k` the reference's autoexposure "
-             "`0.18 / exp(mean ln(Y + 1e-4))`, Reinhard `x / (1 + x)`, sRGB OETF, clamped to [0, 1]; FLIP is LDR-FLIP at "
-             "67 pixels per degree; relMSE `mean (t - r)² / (r² + 0.01)` and SMAPE `mean |t - r| / (|t| + |r| + 0.01)` on "
-             "linear values. Times are wall-clock seconds: render + albedo/normal features + inference, excluding I/O.", ""]
+    lines = [
+        f"# luxest evaluation summary ({args.preset})",
+        "",
+        f"Written by `make eval` (pipelines/eval.mk; this summary by pipelines/eval.py) on this machine "
+        f"({os.cpu_count()} cores). Denoiser: `{model.relative_to(ROOT) if model.is_absolute() and ROOT in model.parents else model}`.",
+        "",
+        "Metrics (crates/evaluate, each checked against an established implementation to 1e-4): PSNR, SSIM, "
+        "MS-SSIM and FLIP on tonemapped images — per channel `x = max(v, 0)·k` with `k` the reference's autoexposure "
+        "`0.18 / exp(mean ln(Y + 1e-4))`, Reinhard `x / (1 + x)`, sRGB OETF, clamped to [0, 1]; FLIP is LDR-FLIP at "
+        "67 pixels per degree; relMSE `mean (t - r)² / (r² + 0.01)` and SMAPE `mean |t - r| / (|t| + |r| + 0.01)` on "
+        "linear values. Times are wall-clock seconds: render + albedo/normal features + inference, excluding I/O.",
+        "",
+    ]
 
     # Cornell trade table.
-    lines += ["## Cornell box: the speed/accuracy trade", "",
-              f"Reference: {args.ref_spp} spp path tracing (seed {args.ref_seed}, independent of the runs scored). Path tracing "
-              f"is one progressive run (seed {args.noisy_seed}) whose snapshots are denoised with the albedo/normal features of the same snapshot; "
-              "double-local-estimate (DLE) images (one camera sample per pixel) are denoised with the 64-spp features.", ""]
-    show = [r for r in cb_rows if r["estimator"].startswith(("double", "light"))
-            or int(r["samples"]) in (1, 4, 16, 64, 256, 1024, 4096)]
-    rows = [[r["estimator"], int(r["samples"]), f"{r['total_seconds']:.2f}", f"{r['psnr_db']:.2f}", f"{r['ssim']:.4f}",
-             "" if math.isnan(r["ms_ssim"]) else f"{r['ms_ssim']:.4f}", f"{r['flip']:.4f}", f"{r['rel_mse']:.3e}", f"{r['smape']:.4f}"]
-            for r in sorted(show, key=lambda r: (r["estimator"], r["samples"]))]
-    lines += [table(["estimator", "spp / paths", "seconds", "PSNR dB", "SSIM", "MS-SSIM", "FLIP", "relMSE", "SMAPE"], rows), ""]
+    lines += [
+        "## Cornell box: the speed/accuracy trade",
+        "",
+        f"Reference: {args.ref_spp} spp path tracing (seed {args.ref_seed}, independent of the runs scored). Path tracing "
+        f"is one progressive run (seed {args.noisy_seed}) whose snapshots are denoised with the albedo/normal features of the same snapshot; "
+        "double-local-estimate (DLE) images (one camera sample per pixel) are denoised with the 64-spp features.",
+        "",
+    ]
+    show = [
+        r
+        for r in cb_rows
+        if r["estimator"].startswith((DLE, LT)) or int(r["samples"]) in (1, 4, 16, 64, 256, 1024, 4096)
+    ]
+    rows = [
+        [
+            r["estimator"],
+            int(r["samples"]),
+            f"{r['total_seconds']:.2f}",
+            f"{r['psnr_db']:.2f}",
+            f"{r['ssim']:.4f}",
+            "" if math.isnan(r["ms_ssim"]) else f"{r['ms_ssim']:.4f}",
+            f"{r['flip']:.4f}",
+            f"{r['rel_mse']:.3e}",
+            f"{r['smape']:.4f}",
+        ]
+        for r in sorted(show, key=lambda r: (r["estimator"], r["samples"]))
+    ]
+    lines += [
+        table(["estimator", "spp / paths", "seconds", "PSNR dB", "SSIM", "MS-SSIM", "FLIP", "relMSE", "SMAPE"], rows),
+        "",
+    ]
     for key, label in METRICS:
         front = pareto([(r["total_seconds"], r[key], f"{r['estimator']} {int(r['samples'])}") for r in cb_rows])
         lines.append(f"- Pareto front in {label}: " + front_text(front))
-    lines += ["", "![error vs time](plots/cornell-box-time.png)", "", "![error vs samples](plots/cornell-box-samples.png)", ""]
+    lines += [
+        "",
+        "![error vs time](plots/cornell-box-time.png)",
+        "",
+        "![error vs samples](plots/cornell-box-samples.png)",
+        "",
+    ]
 
     lines += peer_table(cb_rows, "Cornell box 256²")
 
     # Progressive experiment.
-    lines += ["## The progressive experiment (the thesis' Fig. done against a converged reference)", "",
-              "Each snapshot of the progressive path-traced run, noisy and denoised, is scored against the converged reference "
-              "(the thesis scored denoised against noisy, which measures nothing about correctness).", ""]
+    lines += [
+        "## The progressive experiment (the thesis' Fig. done against a converged reference)",
+        "",
+        "Each snapshot of the progressive path-traced run, noisy and denoised, is scored against the converged reference "
+        "(the thesis scored denoised against noisy, which measures nothing about correctness).",
+        "",
+    ]
     trow = []
     for t in THRESHOLDS:
         row = [f"SSIM ≥ {t}"]
@@ -422,41 +529,90 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
                 e = extrapolated_time(rows_, t)
                 best = max(r["ssim"] for r in rows_)
                 last = max(rows_, key=lambda r: r["total_seconds"])
-                row.append(f"not reached in {last['total_seconds']:.0f} s (best {best:.4f})"
-                           + (f"; power-law extrapolation of 1 − SSIM: ≈ {e[0]:.0f} s" if e else "; no longer improving"))
+                row.append(
+                    f"not reached in {last['total_seconds']:.0f} s (best {best:.4f})"
+                    + (f"; power-law extrapolation of 1 − SSIM: ≈ {e[0]:.0f} s" if e else "; no longer improving")
+                )
         trow.append(row)
     lines += [table(["threshold", "noisy path tracing", "denoised path tracing"], trow), ""]
     prow = []
     for rn in sorted(noisy, key=lambda r: r["samples"]):
         rd = next((r for r in den if r["samples"] == rn["samples"]), None)
         if rd and int(rn["samples"]) in set([1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192]):
-            prow.append([int(rn["samples"]), f"{rn['total_seconds']:.2f}", f"{rd['total_seconds']:.2f}", f"{rn['psnr_db']:.2f}",
-                         f"{rd['psnr_db']:.2f}", f"{rn['ssim']:.4f}", f"{rd['ssim']:.4f}", f"{rn['flip']:.4f}", f"{rd['flip']:.4f}"])
-    lines += [table(["spp", "s noisy", "s denoised", "PSNR noisy", "PSNR dn", "SSIM noisy", "SSIM dn", "FLIP noisy", "FLIP dn"], prow), "",
-              "![progressive](plots/cornell-box-progressive.png)", ""]
+            prow.append(
+                [
+                    int(rn["samples"]),
+                    f"{rn['total_seconds']:.2f}",
+                    f"{rd['total_seconds']:.2f}",
+                    f"{rn['psnr_db']:.2f}",
+                    f"{rd['psnr_db']:.2f}",
+                    f"{rn['ssim']:.4f}",
+                    f"{rd['ssim']:.4f}",
+                    f"{rn['flip']:.4f}",
+                    f"{rd['flip']:.4f}",
+                ]
+            )
+    lines += [
+        table(
+            ["spp", "s noisy", "s denoised", "PSNR noisy", "PSNR dn", "SSIM noisy", "SSIM dn", "FLIP noisy", "FLIP dn"],
+            prow,
+        ),
+        "",
+        "![progressive](plots/cornell-box-progressive.png)",
+        "",
+    ]
 
     # Dataset.
     if ds_mean:
-        lines += [f"## Held-out test scenes ({', '.join(ds_names)})", "",
-                  f"Noisy levels as rendered by `make reference noisy`; references of {args.dataset_ref_spp} spp with their own "
-                  "seed (`EVAL_HELDOUT_REF_SPP`; the dataset's own when it equals `REF_SPP`), so the error floor at high spp is "
-                  "partly the reference's own noise. Means over the scenes.", ""]
-        rows = [[m["estimator"], m["samples"], m["scenes"], f"{m['total_seconds']:.2f}", f"{m['psnr_db']:.2f}", f"{m['ssim']:.4f}",
-                 f"{m['flip']:.4f}", f"{m['rel_mse']:.3e}"] for m in ds_mean]
-        lines += [table(["estimator", "spp / paths", "scenes", "seconds", "PSNR dB", "SSIM", "FLIP", "relMSE"], rows), ""]
+        lines += [
+            f"## Held-out test scenes ({', '.join(ds_names)})",
+            "",
+            f"Noisy levels as rendered by `make reference noisy`; references of {args.dataset_ref_spp} spp with their own "
+            "seed (`EVAL_HELDOUT_REF_SPP`; the dataset's own when it equals `REF_SPP`), so the error floor at high spp is "
+            "partly the reference's own noise. Means over the scenes.",
+            "",
+        ]
+        rows = [
+            [
+                m["estimator"],
+                m["samples"],
+                m["scenes"],
+                f"{m['total_seconds']:.2f}",
+                f"{m['psnr_db']:.2f}",
+                f"{m['ssim']:.4f}",
+                f"{m['flip']:.4f}",
+                f"{m['rel_mse']:.3e}",
+            ]
+            for m in ds_mean
+        ]
+        lines += [
+            table(["estimator", "spp / paths", "scenes", "seconds", "PSNR dB", "SSIM", "FLIP", "relMSE"], rows),
+            "",
+        ]
         for key, label in METRICS:
             front = pareto([(m["total_seconds"], m[key], f"{m['estimator']} {m['samples']}") for m in ds_mean])
             lines.append(f"- Pareto front in {label}: " + front_text(front))
-        lines += ["", "![dataset error vs time](plots/dataset-time.png)", "", "![dataset error vs samples](plots/dataset-samples.png)", ""]
+        lines += [
+            "",
+            "![dataset error vs time](plots/dataset-time.png)",
+            "",
+            "![dataset error vs samples](plots/dataset-samples.png)",
+            "",
+        ]
 
     if ds_mean:
         lines += peer_table(ds_mean, f"held-out scenes, mean over {len(ds_names)}") + gap_table(ds_rows, ds_names)
 
     # Sensors.
-    lines += ["## Local estimate at sensors vs exact solutions", "",
-              f"The cases of `make validate` at {args.sensor_scale:g}× its path counts; z = (estimate − exact) / standard error, "
-              "mean z² ≈ 1 for an unbiased estimate with honest errors (the 5.8 row compares one area-weighted mean).", "",
-              table(["case", "kind", "points", "paths", "seconds", "max abs z", "mean z²", "RMS rel. error"], sensor_rows), ""]
+    lines += [
+        "## Local estimate at sensors vs exact solutions",
+        "",
+        f"The cases of `make validate` at {args.sensor_scale:g}× its path counts; z = (estimate − exact) / standard error, "
+        "mean z² ≈ 1 for an unbiased estimate with honest errors (the 5.8 row compares one area-weighted mean).",
+        "",
+        table(["case", "kind", "points", "paths", "seconds", "max abs z", "mean z²", "RMS rel. error"], sensor_rows),
+        "",
+    ]
     lines += ["Per-image and per-point numbers: `reports/csv/*.csv` and `*.ron`.", ""]
     (reports / "summary.md").write_text("\n".join(lines))
     print(f"eval: wrote {reports / 'summary.md'}")

@@ -1,6 +1,7 @@
 """The machine a peer benchmark ran on, for its report (standard library only): the peers'
 speed depends on the CPU's vector width (Mitsuba's LLVM backend compiles its wavefront for 16
 lanes with AVX-512 and 8 with AVX2; OIDN picks its kernels the same way), luxest's much less."""
+
 import os
 
 

@@ -1,4 +1,4 @@
-# `make lighting`: the lighting report of the example office (issue 14), one rule per output
+# `make lighting`: the lighting report of the example office, one rule per output
 # file. Compile the scene, print its header (calculation grids, luminaires), estimate the work
 # plane by the local estimate, and write reports/lighting/office/ with the `report` stage:
 # report.md, work-plane.csv/.ron and work-plane.isolux.png. The Radiance results committed

@@ -4,6 +4,7 @@ luxest image of the same scene: whole-image and 4 x 4 block means of Y and of ea
 ratios Mitsuba / luxest. Runs in .venv-peers (`scripts/setup.sh --peers`); prints the CPU
 seconds of loading and rendering the scene (JIT compilation included; Python and Mitsuba's
 import excluded), alone as `cpu_seconds <s> wall_seconds <s>` without --summary."""
+
 import argparse
 import os
 import re
@@ -19,6 +20,7 @@ from luxest_contract import luminance  # noqa: E402
 def read_exr(path):
     """R, G, B of an EXR file as float64 (H, W, 3), read with Mitsuba's own EXR reader."""
     import mitsuba as mi
+
     return np.array(mi.Bitmap(str(path)), dtype=np.float64)[..., :3]
 
 
@@ -45,8 +47,12 @@ def main(argv=None):
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("--seed", type=int, default=5)
     ap.add_argument("--resolution", help="WIDTHxHEIGHT instead of the scene's")
-    ap.add_argument("--integrator", default="path", choices=["path", "ptracer"],
-                    help="the exported `path` (max_depth -1, rr_depth 5) or `ptracer` with the same settings")
+    ap.add_argument(
+        "--integrator",
+        default="path",
+        choices=["path", "ptracer"],
+        help="the exported `path` (max_depth -1, rr_depth 5) or `ptracer` with the same settings",
+    )
     ap.add_argument("--luxest", help="a luxest image of the same scene (EXR), to compare with")
     ap.add_argument("-o", "--out", required=True, help="the Mitsuba image (EXR)")
     ap.add_argument("--summary", help="the comparison (Markdown; with --luxest)")
@@ -54,9 +60,11 @@ def main(argv=None):
     if (a.luxest is None) != (a.summary is None):
         sys.exit("error: --luxest and --summary go together")
     import mitsuba as mi
+
     mi.set_variant(a.variant)
     xml = scene_xml(mi, a.scene, a.resolution, a.integrator)
     import drjit as dr
+
     t, w = time.process_time(), time.time()
     scene = mi.load_string(xml, spp=a.spp)
     img = mi.render(scene, seed=a.seed)
@@ -71,13 +79,21 @@ def main(argv=None):
     if m.shape != lx.shape:
         sys.exit(f"error: {a.luxest}: {lx.shape[1]}x{lx.shape[0]}, Mitsuba rendered {m.shape[1]}x{m.shape[0]}")
     y_m, y_l = luminance(m), luminance(lx)
-    rows = [f"Mitsuba 3 `{a.variant}` `path`, {a.spp} spp: {cpu:.1f} CPU-s ({wall:.1f} s wall), against `{a.luxest}`.", "",
-            "| region | Y ratio Mitsuba / luxest |", "|---|---|",
-            f"| whole image | {y_m.mean() / y_l.mean():.4f} |"]
+    rows = [
+        f"Mitsuba 3 `{a.variant}` `path`, {a.spp} spp: {cpu:.1f} CPU-s ({wall:.1f} s wall), against `{a.luxest}`.",
+        "",
+        "| region | Y ratio Mitsuba / luxest |",
+        "|---|---|",
+        f"| whole image | {y_m.mean() / y_l.mean():.4f} |",
+    ]
     rows += [f"| channel {c} | {m[..., i].mean() / lx[..., i].mean():.4f} |" for i, c in enumerate("RGB")]
     h, w_ = m.shape[0] // 4, m.shape[1] // 4
-    blocks = [y_m[i * h:(i + 1) * h, j * w_:(j + 1) * w_].mean() / max(y_l[i * h:(i + 1) * h, j * w_:(j + 1) * w_].mean(), 1e-300)
-              for i in range(4) for j in range(4)]
+    blocks = [
+        y_m[i * h : (i + 1) * h, j * w_ : (j + 1) * w_].mean()
+        / max(y_l[i * h : (i + 1) * h, j * w_ : (j + 1) * w_].mean(), 1e-300)
+        for i in range(4)
+        for j in range(4)
+    ]
     rows += [f"| 4 x 4 blocks | {min(blocks):.4f} to {max(blocks):.4f} |", ""]
     text = "\n".join(rows)
     with open(a.summary, "w") as f:

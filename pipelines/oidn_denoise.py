@@ -11,6 +11,7 @@ the filter's execution, excluding I/O, as `denoise` records its inference),
 `luxest.featureSeconds` (the features' render seconds); both times are also printed, per
 megapixel. Bad input: one line naming the file, exit 1;
 the output may not be one of the inputs and is written atomically."""
+
 import argparse
 import ctypes
 import sys
@@ -75,8 +76,10 @@ def main(argv=None):
         feats = [contract.read(p) for p in (a.alb, a.nrm)]
         for f in feats:
             if f.pixels.shape != noisy.pixels.shape:
-                raise contract.ContractError(f"{f.path}: {f.pixels.shape[1]}x{f.pixels.shape[0]}, the noisy image "
-                                             f"is {noisy.pixels.shape[1]}x{noisy.pixels.shape[0]}")
+                raise contract.ContractError(
+                    f"{f.path}: {f.pixels.shape[1]}x{f.pixels.shape[0]}, the noisy image "
+                    f"is {noisy.pixels.shape[1]}x{noisy.pixels.shape[0]}"
+                )
         if not np.isfinite(noisy.pixels).all():
             raise contract.ContractError(f"{a.noisy}: pixels that are not finite")
         feature_seconds = max(f.value(contract.SECONDS) or 0.0 for f in feats)
@@ -90,8 +93,11 @@ def main(argv=None):
     header[contract.FEATURE_SECONDS] = repr(feature_seconds)
     contract.write(a.out, out, header)
     mp = noisy.pixels.shape[0] * noisy.pixels.shape[1] / 1e6
-    print(f"oidn: {a.out} ({noisy.pixels.shape[1]}x{noisy.pixels.shape[0]}, {1e3 * wall / mp:.1f} ms/megapixel, "
-          f"{cpu / mp:.3f} CPU-s/megapixel)", file=sys.stderr)
+    print(
+        f"oidn: {a.out} ({noisy.pixels.shape[1]}x{noisy.pixels.shape[0]}, {1e3 * wall / mp:.1f} ms/megapixel, "
+        f"{cpu / mp:.3f} CPU-s/megapixel)",
+        file=sys.stderr,
+    )
 
 
 if __name__ == "__main__":

@@ -1,9 +1,11 @@
 # The presets: every number that `PRESET=quick|full` scales, defined once, here. The Python steps
-# receive these values as arguments from the rules; none has its own copy. (The dataset's scene
-# count is data-gen/generate.py's, selected by --preset $(PRESET), unless DATASET_COUNT names one.)
+# receive these values as arguments from the rules; none has its own copy: training/config.py's
+# defaults are read from this file (for the PRESET of the environment, as make reads it). (The
+# dataset's scene count is data-gen/generate.py's, selected by --preset $(PRESET), unless
+# DATASET_COUNT names one.)
 #
-# quick fits a 2-core machine: `make reference noisy train eval` in 42 minutes from a clean clone
-# (2026-11-26, evening, release build included; issue 11 asks for at most 45).
+# quick is sized for a 2-core machine: `make reference noisy train eval` from a clean clone,
+# release build included, within 45 minutes (docs/measurements.md).
 
 PRESET ?= quick
 ifeq ($(filter $(PRESET),quick full),)
@@ -16,9 +18,8 @@ lx_preset = $(1) ?= $(if $(filter full,$(PRESET)),$(3),$(2))
 
 # Dataset (pipelines/dataset.mk): the number of generated scenes, empty for the preset's own
 # (data-gen/generate.py's PRESETS; scene i is the same whatever the count, and its split too),
-# image side in pixels (data-gen/generate.py --side; quick was
-# 160 until 2026-11-23, the side models/default.onnx was trained at: 112 renders in half the
-# time); reference samples per pixel; noisy snapshot levels.
+# image side in pixels (data-gen/generate.py --side; models/default.onnx was trained at 160);
+# reference samples per pixel; noisy snapshot levels.
 DATASET_COUNT ?=
 $(eval $(call lx_preset,DATASET_SIDE,112,384))
 $(eval $(call lx_preset,REF_SPP,1024,4096))
@@ -43,17 +44,16 @@ $(eval $(call lx_preset,DATASET_DLE,100 300 1000,100 1000 10000))
 $(eval $(call lx_preset,NOISY_EXTRA_SEEDS,,))
 $(eval $(call lx_preset,NOISY_EXTRA_LEVELS,1 2 4 8 16 32,1 2 4 8 16 32))
 
-# Training (make train): steps of the one-cycle schedule, and the time budget in minutes (quick:
-# the kernel-predicting model took about 0.29 s per step on 2 cores, so 3400 steps ended within 17
-# minutes; with the detail gates, 5-8 % more a step, a clean-clone run of 2026-11-26 evening took
-# 0.33 s and stopped at 3065 steps, its rate at 4 % of the peak: docs/measurements.md, *The quick
-# pipeline with detail gates*).
+# Training (make train, and train.py's defaults: training/config.py reads them here): steps of
+# the one-cycle schedule, and the time budget in minutes (quick: 0.29 to 0.33 s a step on 2
+# cores, so that 17 minutes are 3100 to 3500 steps; docs/measurements.md, *The quick pipeline
+# with detail gates*).
 $(eval $(call lx_preset,TRAIN_STEPS,3400,60000))
 $(eval $(call lx_preset,TRAIN_MINUTES,17,600))
 # TRAIN_SCHEDULE=time (the default) makes the one cycle span TRAIN_MINUTES, or TRAIN_STEPS if
 # those come first (train.py --schedule): the learning rate anneals to its end whatever the
 # machine's speed. With `steps` the cycle spans TRAIN_STEPS alone, and a run the time budget cuts
-# short ends with its rate still high (the clean-clone run above: 4 % of the peak).
+# short ends with its rate still high.
 TRAIN_SCHEDULE ?= time
 # TRAIN_LOSS: l1 (L1 + MS-SSIM of the log-transferred radiance) or psnr (minus the evaluation's
 # PSNR per crop; training/loss.py). The committed default model was fine-tuned with psnr from a

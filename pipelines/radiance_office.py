@@ -1,4 +1,4 @@
-"""Radiance as the peer of luxest's lighting report (issue 14): the same room, the same luminaire
+"""Radiance as the peer of luxest's lighting report: the same room, the same luminaire
 tables, the same work-plane points, illuminance by `rtrace -I`.
 
     .venv-peers/bin/python pipelines/radiance_office.py --scene scenes/office.ron \
@@ -36,6 +36,7 @@ work plane's mean moves by about 0.1 % at most (docs/measurements.md has the ser
 CSV follows `report::peer` (comment lines, then `set,index,x,y,z,illuminance_lx,
 standard_error_lx`) in luxest's coordinates.
 """
+
 import argparse
 import math
 import os
@@ -69,7 +70,7 @@ def tokens(text, path):
         m = TOKEN.match(text, pos)
         if not m:
             line = text.count("\n", 0, pos) + 1
-            raise SystemExit(f"error: {path}:{line}: cannot read RON at {text[pos:pos + 20]!r}")
+            raise SystemExit(f"error: {path}:{line}: cannot read RON at {text[pos : pos + 20]!r}")
         pos = m.end()
         for kind in ("str", "num", "id", "p"):
             if m.group(kind) is not None:
@@ -288,9 +289,26 @@ def luminaires_rad(scene_path, info, work):
         else:
             ies.write_bytes(source.read_bytes())
         subprocess.run(
-            ["ies2rad", "-dm", "-c", "1", "1", "1", "-i", str(SPHERE_RADIUS), "-m", repr(e["multiplier"]),
-             "-l", str(work), "-o", e["name"], ies.name],
-            check=True, cwd=work, capture_output=True,
+            [
+                "ies2rad",
+                "-dm",
+                "-c",
+                "1",
+                "1",
+                "1",
+                "-i",
+                str(SPHERE_RADIUS),
+                "-m",
+                repr(e["multiplier"]),
+                "-l",
+                str(work),
+                "-o",
+                e["name"],
+                ies.name,
+            ],
+            check=True,
+            cwd=work,
+            capture_output=True,
         )
         x, y, z = rad(e["position"])
         out.append(f"!xform -rz {rz:.9g} -t {x:.9g} {y:.9g} {z:.9g} {e['name']}.rad\n")
@@ -333,20 +351,43 @@ def main():
         # Unbiased settings where Radiance has a choice: no irradiance cache (-aa 0), no
         # adaptive super-sampling (-as 0), every source tested for shadows (-dt 0), and no
         # reflection limit below the ambient bounces (-lr).
-        settings = ["-I", "-h", "-ab", str(a.ab), "-ad", str(a.ad), "-aa", "0", "-as", "0",
-                    "-dt", "0", "-lr", str(-(a.ab + 4)), "-lw", str(a.lw), "-u+", "-n", str(a.procs)]
-        res = subprocess.run(["rtrace", *settings, "office.oct"], input=text, capture_output=True,
-                             text=True, cwd=work, check=True)
+        settings = [
+            "-I",
+            "-h",
+            "-ab",
+            str(a.ab),
+            "-ad",
+            str(a.ad),
+            "-aa",
+            "0",
+            "-as",
+            "0",
+            "-dt",
+            "0",
+            "-lr",
+            str(-(a.ab + 4)),
+            "-lw",
+            str(a.lw),
+            "-u+",
+            "-n",
+            str(a.procs),
+        ]
+        res = subprocess.run(
+            ["rtrace", *settings, "office.oct"], input=text, capture_output=True, text=True, cwd=work, check=True
+        )
     wall = time.time() - t0
     cpu = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu_s = cpu.ru_utime + cpu.ru_stime
-    vals = [EFFICACY * sum(w * float(x) for w, x in zip(WEIGHTS, line.split()[:3]))
-            for line in res.stdout.splitlines() if line.strip()]
+    vals = [
+        EFFICACY * sum(w * float(x) for w, x in zip(WEIGHTS, line.split()[:3]))
+        for line in res.stdout.splitlines()
+        if line.strip()
+    ]
     if len(vals) != len(rays) * a.repeats:
         raise SystemExit(f"error: rtrace returned {len(vals)} values for {len(rays) * a.repeats} rays")
     rows = []
     for n, (name, k, p) in enumerate(index):
-        v = vals[n * a.repeats:(n + 1) * a.repeats]
+        v = vals[n * a.repeats : (n + 1) * a.repeats]
         mean = sum(v) / len(v)
         sd = math.sqrt(sum((x - mean) ** 2 for x in v) / (len(v) - 1))
         rows.append(f"{name},{k},{p[0]!r},{p[1]!r},{p[2]!r},{mean!r},{sd / math.sqrt(len(v))!r}")

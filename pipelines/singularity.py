@@ -14,6 +14,7 @@ surfaces (see estimate/src/placement.rs), and the reference at the same points i
 `gather` estimator, which has no singularity. Reported per run: mean |bias| / reference, mean
 relative standard error, the relative RMS error sqrt(bias² + se²), and the run's seconds (from
 its results' metadata). Standard library + the contract module."""
+
 import argparse
 import sys
 from pathlib import Path
@@ -32,7 +33,9 @@ def runs():
     out = []
     for frac in EPS_FRACTIONS:
         for mode in MODES:
-            out.append((f"le-{mode}-{frac:g}", ["--eps", f"{frac * ROOM:.6g}", "--singularity", mode, "--near-samples", "0"]))
+            out.append(
+                (f"le-{mode}-{frac:g}", ["--eps", f"{frac * ROOM:.6g}", "--singularity", mode, "--near-samples", "0"])
+            )
     for frac in NEAR_FRACTIONS:
         out.append((f"le-near-{frac:g}", ["--near-radius", f"{frac * ROOM:.6g}"]))
     return out
@@ -41,8 +44,8 @@ def runs():
 def corners_scene():
     text = (ROOT / "scenes" / "cornell-box.ron").read_text()
     head = text[: text.index("    sensors: [")]
-    body = text[text.index("    sensors: ["):]
-    corners = body[body.index("        Points(name: \"corners\""): body.index("        // The floor")]
+    body = text[text.index("    sensors: [") :]
+    corners = body[body.index('        Points(name: "corners"') : body.index("        // The floor")]
     return head + "    sensors: [\n" + corners + "    ],\n)\n"
 
 
@@ -76,14 +79,19 @@ def cmd_summary(args):
     ref = read(d / "gather.sensors.csv")
     gather = contract.read_sensor_run(d / "gather.sensors.ron")
     le0 = contract.read_sensor_run(d / f"{runs()[0][0]}.sensors.ron")
-    out = [f"Cornell box corner/edge sensors: local estimate ({le0['samples']} paths) vs gather reference "
-           f"({gather['samples']} samples/sensor)", "",
-           "reference (lx): " + ", ".join(f"{v:.4f}±{s:.4f}" for v, s in ref), "",
-           "| run | eps or R / room | mean abs bias / ref | se / ref | rms error | seconds |", "|---|---|---|---|---|---|"]
+    out = [
+        f"Cornell box corner/edge sensors: local estimate ({le0['samples']} paths) vs gather reference "
+        f"({gather['samples']} samples/sensor)",
+        "",
+        "reference (lx): " + ", ".join(f"{v:.4f}±{s:.4f}" for v, s in ref),
+        "",
+        "| run | eps or R / room | mean abs bias / ref | se / ref | rms error | seconds |",
+        "|---|---|---|---|---|---|",
+    ]
     for name, _ in runs():
         bias, se, rms = errors(read(d / f"{name}.sensors.csv"), ref)
         seconds = contract.read_sensor_run(d / f"{name}.sensors.ron")["seconds"]
-        kind, frac = name[len("le-"):].rsplit("-", 1)
+        kind, frac = name[len("le-") :].rsplit("-", 1)
         out.append(f"| {kind} | {frac} | {bias:.3e} | {se:.3e} | {rms:.3e} | {seconds:.2f} |")
     text = "\n".join(out) + "\n"
     write(args.out, text)

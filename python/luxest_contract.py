@@ -1,10 +1,12 @@
-"""The contracts between luxest's stages, for Python: file naming, EXR header keys, EXR I/O and
-the autoexposure. The one Python place for each (docs/architecture.md, *Contracts*).
+"""The contracts between luxest's stages, for Python: file naming, EXR header keys and estimator
+names, the denoiser model's ONNX tensor names, EXR I/O and the autoexposure. The one Python place
+for each (docs/architecture.md, *Contracts*).
 
-Rust has the same in `luxest-io` (`naming`, `header`, `exr_io`); the two are tied by the
-fixtures in `tests/fixtures/contract/`, which Rust writes and `training/tests/test_contract.py`
-reads: every name composed and parsed alike, a ZIP-compressed Rust EXR read to the header values
-Rust wrote, Python's exposure equal to Rust's.
+Rust has the same in `luxest-io` (`naming`, `header`, `exr`, `exposure`) and crates/denoise
+(`model::tensor`); the two are tied by the fixtures in `tests/fixtures/contract/`, which Rust
+writes and `training/tests/test_contract.py` reads: every name composed and parsed alike, a
+ZIP-compressed Rust EXR read to the header values Rust wrote, the same estimator and tensor
+names, Python's exposure equal to Rust's.
 
 Naming (the Intel Open Image Denoise training-toolkit layout):
     <name>_<spp, 6 digits>spp.<kind>.exr     a noisy image at spp samples per pixel
@@ -17,6 +19,7 @@ Counts have at least 6 digits; a name that does not follow the layout parses to 
 
 Images are OpenEXR scanline files, 32-bit float R, G, B, ZIP-compressed, read and written with
 PyPI `openexr`; run metadata are string attributes under the keys below."""
+
 import math
 import re
 from dataclasses import dataclass
@@ -104,34 +107,88 @@ def scan(directory, unit="spp"):
 
 # --- Header keys (the same names as luxest-io's `header` module) -------------------------------
 
-SAMPLES = "luxest.samples"                # samples per pixel, or light paths (integer)
-SEED = "luxest.seed"                      # the seed of all random numbers of the run (integer)
-SECONDS = "luxest.seconds"                # wall-clock render seconds, excluding I/O (float)
-ESTIMATOR = "luxest.estimator"            # path-tracing, first-hit-features, double-local-estimate, ...
-SCENE_HASH = "luxest.sceneHash"           # content hash of the compiled scene
-VERSION = "luxest.version"                # version of the program that wrote the file
-PIXEL_FILTER = "luxest.pixelFilter"       # pixel reconstruction filter of camera estimators (box)
-SINGULARITY = "luxest.singularity"        # the double local estimate's singularity handling
-PIXEL_SAMPLES = "luxest.pixelSamples"     # camera samples per pixel of the double local estimate
-DENOISER = "luxest.denoiser"              # what denoised the image: a luxest model's file name, or
-OIDN_DENOISER_PREFIX = "oidn-"            # ... this prefix and the version for Intel Open Image Denoise
+SAMPLES = "luxest.samples"  # samples per pixel, or light paths (integer)
+SEED = "luxest.seed"  # the seed of all random numbers of the run (integer)
+SECONDS = "luxest.seconds"  # wall-clock render seconds, excluding I/O (float)
+ESTIMATOR = "luxest.estimator"  # path-tracing, first-hit-features, double-local-estimate, ...
+SCENE_HASH = "luxest.sceneHash"  # content hash of the compiled scene
+VERSION = "luxest.version"  # version of the program that wrote the file
+PIXEL_FILTER = "luxest.pixelFilter"  # pixel reconstruction filter of camera estimators (box)
+SINGULARITY = "luxest.singularity"  # the double local estimate's singularity handling
+PIXEL_SAMPLES = "luxest.pixelSamples"  # camera samples per pixel of the double local estimate
+DENOISER = "luxest.denoiser"  # what denoised the image: a luxest model's file name, or
+OIDN_DENOISER_PREFIX = "oidn-"  # ... this prefix and the version for Intel Open Image Denoise
 DENOISE_SECONDS = "luxest.denoiseSeconds"  # wall-clock seconds of denoising inference
 DENOISE_CPU_SECONDS = "luxest.denoiseCpuSeconds"  # its CPU seconds: the process's user + system, all threads
 FEATURE_SECONDS = "luxest.featureSeconds"  # render seconds of the feature images a denoising used
-CHANNELS = "luxest.channels"              # ONNX metadata: input features in order (hdr,alb,nrm)
-MODEL_TRANSFER = "luxest.transfer"        # ONNX metadata: the transfer function and exposure input
-MODEL_PADDING = "luxest.padding"          # ONNX metadata: how H and W are padded
-MODEL_CONFIG = "luxest.config"            # ONNX metadata: the training configuration (JSON)
-MODEL_METRICS = "luxest.metrics"          # ONNX metadata: scores on the held-out scenes (JSON)
-EXPOSURE = "luxest.exposure"              # preprocessed data: the whole image's autoexposure
+CHANNELS = "luxest.channels"  # ONNX metadata: input features in order (hdr,alb,nrm)
+MODEL_TRANSFER = "luxest.transfer"  # ONNX metadata: the transfer function and exposure input
+MODEL_PADDING = "luxest.padding"  # ONNX metadata: how H and W are padded
+MODEL_CONFIG = "luxest.config"  # ONNX metadata: the training configuration (JSON)
+MODEL_METRICS = "luxest.metrics"  # ONNX metadata: scores on the held-out scenes (JSON)
+EXPOSURE = "luxest.exposure"  # preprocessed data: the whole image's autoexposure
 
-KEYS = (SAMPLES, SEED, SECONDS, ESTIMATOR, SCENE_HASH, VERSION, PIXEL_FILTER, SINGULARITY,
-        PIXEL_SAMPLES, DENOISER, DENOISE_SECONDS, DENOISE_CPU_SECONDS, FEATURE_SECONDS, CHANNELS)
+KEYS = (
+    SAMPLES,
+    SEED,
+    SECONDS,
+    ESTIMATOR,
+    SCENE_HASH,
+    VERSION,
+    PIXEL_FILTER,
+    SINGULARITY,
+    PIXEL_SAMPLES,
+    DENOISER,
+    DENOISE_SECONDS,
+    DENOISE_CPU_SECONDS,
+    FEATURE_SECONDS,
+    CHANNELS,
+)
 """The keys of Rust's header module, in its order. (EXPOSURE is Python's: preprocessing only.)"""
 
-TYPES = {SAMPLES: int, SEED: int, SECONDS: float, PIXEL_SAMPLES: int, DENOISE_SECONDS: float,
-         DENOISE_CPU_SECONDS: float, FEATURE_SECONDS: float}
+TYPES = {
+    SAMPLES: int,
+    SEED: int,
+    SECONDS: float,
+    PIXEL_SAMPLES: int,
+    DENOISE_SECONDS: float,
+    DENOISE_CPU_SECONDS: float,
+    FEATURE_SECONDS: float,
+}
 """Keys whose values are numbers; every other key is text."""
+
+
+# --- Estimator names: the values of ESTIMATOR (luxest-io's `header::estimator`) -----------------
+
+PATH_TRACING = "path-tracing"  # trace
+FIRST_HIT_FEATURES = "first-hit-features"  # aov-write
+LOCAL_ESTIMATE = "local-estimate"  # estimate sensors
+DIRECT_SIMULATION = "direct-simulation"  # estimate direct
+GATHER = "gather"  # estimate gather
+DOUBLE_LOCAL_ESTIMATE = "double-local-estimate"  # estimate image
+LIGHT_TRACING = "light-tracing"  # estimate image --light-tracing
+
+ESTIMATORS = (
+    PATH_TRACING,
+    FIRST_HIT_FEATURES,
+    LOCAL_ESTIMATE,
+    DIRECT_SIMULATION,
+    GATHER,
+    DOUBLE_LOCAL_ESTIMATE,
+    LIGHT_TRACING,
+)
+"""Every estimator name, in the order of Rust's `header::estimator::ALL`."""
+
+DENOISED_SUFFIX = "+denoise"  # evaluate's label of an image a luxest model denoised: <estimator>+denoise
+OIDN_SUFFIX = "+oidn"  # ... and of one Intel Open Image Denoise denoised: <estimator>+oidn
+
+
+def estimator_label(estimator, denoiser=None):
+    """How `evaluate images` labels an image of `estimator` denoised by `denoiser` (its
+    `luxest.denoiser`, None if not denoised): evaluate's `images::estimator_label`."""
+    if denoiser is None:
+        return estimator
+    return estimator + (OIDN_SUFFIX if denoiser.startswith(OIDN_DENOISER_PREFIX) else DENOISED_SUFFIX)
 
 
 class ContractError(ValueError):
@@ -165,6 +222,16 @@ def seed(header, path="<header>"):
     return header_value(header, SEED, path, required=True)
 
 
+# --- The denoiser model's ONNX graph (crates/denoise `model::tensor`) -------------------------
+
+INPUT_TENSOR = "input"  # float32 (N, 3 x features, H, W): the raw linear features of CHANNELS
+EXPOSURE_TENSOR = "exposure"  # float32 (N,): the autoexposure of each whole image (`exposure`)
+OUTPUT_TENSOR = "output"  # float32 (N, 3, H, W): the denoised linear radiance
+
+TENSORS = (INPUT_TENSOR, EXPOSURE_TENSOR, OUTPUT_TENSOR)
+"""The graph's tensor names: its inputs, then its output (Rust's `model::tensor::ALL`)."""
+
+
 # --- EXR I/O -----------------------------------------------------------------------------------
 
 
@@ -189,8 +256,11 @@ def read(path):
     try:
         with OpenEXR.File(path) as f:
             # Copied inside the block: the header is the open file's and is emptied on close.
-            header = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.header().items()
-                      if isinstance(v, (str, bytes))}
+            header = {
+                k: (v.decode() if isinstance(v, bytes) else v)
+                for k, v in f.header().items()
+                if isinstance(v, (str, bytes))
+            }
             channels = f.channels()
             if "RGB" in channels:
                 px = np.asarray(channels["RGB"].pixels)
@@ -239,15 +309,18 @@ def write(path, pixels, header=None):
 # --- Exposure ----------------------------------------------------------------------------------
 
 EXPOSURE_KEY_VALUE = 0.18  # middle grey (Reinhard et al. 2002, "Photographic Tone Reproduction")
-EXPOSURE_EPS = 1e-4        # keeps ln finite on black pixels
+EXPOSURE_EPS = 1e-4  # keeps ln finite on black pixels
 LUMA = (0.2126, 0.7152, 0.0722)  # Rec. 709 / sRGB luminance weights (ITU-R BT.709-6)
 
 
 def luminance(rgb):
     """The Rec. 709 luminance Y of (..., 3) pixels, in float64 (the Y of `exposure`)."""
     a = np.asarray(rgb)
-    return a[..., 0].astype(np.float64) * LUMA[0] + a[..., 1].astype(np.float64) * LUMA[1] \
+    return (
+        a[..., 0].astype(np.float64) * LUMA[0]
+        + a[..., 1].astype(np.float64) * LUMA[1]
         + a[..., 2].astype(np.float64) * LUMA[2]
+    )
 
 
 def exposure(hdr, scale=1.0):
@@ -281,7 +354,7 @@ def dim_exponent(hdr, emi=None):
     if not mean > 0.0 or mean >= DIM_LUMINANCE:
         return 0
     e = 0  # the least e with mean 2**e >= DIM_LUMINANCE
-    while mean * 2.0 ** e < DIM_LUMINANCE:
+    while mean * 2.0**e < DIM_LUMINANCE:
         e += 1
     return e
 
@@ -345,7 +418,7 @@ def _unit(path, row, prefix):
     """The unit of a `<prefix><unit>` column (value_lx -> lx)."""
     for k in row:
         if k.startswith(prefix):
-            return k[len(prefix):]
+            return k[len(prefix) :]
     raise ContractError(f"{path}: no {prefix}<unit> column")
 
 
@@ -369,8 +442,19 @@ def read_sensors_csv(path):
     return _floats(path, rows, ("value", "standard_error")), unit
 
 
-IMAGE_REPORT_NUMBERS = ("samples", "render_seconds", "feature_seconds", "denoise_seconds", "total_seconds",
-                        "psnr_db", "ssim", "ms_ssim", "flip", "rel_mse", "smape")
+IMAGE_REPORT_NUMBERS = (
+    "samples",
+    "render_seconds",
+    "feature_seconds",
+    "denoise_seconds",
+    "total_seconds",
+    "psnr_db",
+    "ssim",
+    "ms_ssim",
+    "flip",
+    "rel_mse",
+    "smape",
+)
 """The numeric columns of `evaluate images`' CSV report (one row per test image)."""
 
 
@@ -385,5 +469,9 @@ def read_sensor_report(path):
     rows = _read_csv(path)
     unit = _unit(path, rows[0], "exact_")
     for r in rows:
-        r["exact"], r["estimate"], r["standard_error"] = r[f"exact_{unit}"], r[f"estimate_{unit}"], r[f"standard_error_{unit}"]
+        r["exact"], r["estimate"], r["standard_error"] = (
+            r[f"exact_{unit}"],
+            r[f"estimate_{unit}"],
+            r[f"standard_error_{unit}"],
+        )
     return _floats(path, rows, ("exact", "estimate", "standard_error", "z", "relative_error")), unit

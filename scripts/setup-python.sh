@@ -12,7 +12,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 venv=.venv
-stamp="$venv/.luxest-setup-3"
+stamp="$venv/.luxest-setup-4"
 if [ -f "$stamp" ]; then
     exit 0
 fi

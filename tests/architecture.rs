@@ -280,3 +280,196 @@ fn every_test_file_is_compiled_into_its_one_test_binary() {
     }
     assert!(checked >= 10, "only {checked} test files found");
 }
+
+/// The `pub mod` names declared in a module file (`lib.rs` or `mod.rs`).
+fn public_modules(text: &str) -> Vec<String> {
+    text.lines()
+        .filter_map(|l| l.trim().strip_prefix("pub mod "))
+        .filter_map(|rest| rest.strip_suffix(';'))
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn every_public_module_is_in_its_crates_module_list() {
+    let root = repo_root();
+    let mut files: Vec<PathBuf> = workspace_rust_files()
+        .into_iter()
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n == "lib.rs" || n == "mod.rs")
+        })
+        .collect();
+    files.sort();
+    let mut missing = Vec::new();
+    let mut listed = 0;
+    for path in &files {
+        let text = std::fs::read_to_string(path).unwrap();
+        let doc: String = text
+            .lines()
+            .filter(|l| l.trim_start().starts_with("//!"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        for m in public_modules(&text) {
+            // Named in the doc as `m` (a rustdoc link [`m`] included).
+            if doc.contains(&format!("`{m}`")) {
+                listed += 1;
+            } else {
+                let rel = path.strip_prefix(&root).unwrap().display();
+                missing.push(format!("{rel}: pub mod {m}"));
+            }
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "public modules missing from their crate's //! module list (name each as [`module`]):\n{}",
+        missing.join("\n")
+    );
+    // The check can fail: the crates do declare public modules.
+    assert!(listed > 50, "only {listed} public modules found");
+}
+
+/// The top-level directories of the repository whose paths docs and comments name; paths under
+/// the generated ones (`build/`, `data/`, `runs/`, `target/`, the trained `models/`, the
+/// fuzzers' `fuzz/` corpora and logs) are not checked.
+const CHECKED_ROOTS: &[&str] = &[
+    "crates/",
+    "docs/",
+    "pipelines/",
+    "python/",
+    "scripts/",
+    "training/",
+    "data-gen/",
+    "tests/",
+    "scenes/",
+    ".ci/",
+];
+
+/// Repository paths named in `text`: tokens starting with one of [`CHECKED_ROOTS`] (at the
+/// start of a word), without trailing punctuation; tokens with a placeholder or pattern
+/// (`<name>`, `*`, `{a,b}`, `$(VAR)`, `%`) are left out.
+fn named_paths(text: &str) -> Vec<String> {
+    let is_path_char = |c: char| c.is_ascii_alphanumeric() || "_./-".contains(c);
+    let mut out = Vec::new();
+    let bytes: Vec<char> = text.chars().collect();
+    let mut i = 0;
+    while i < bytes.len() {
+        let at_word_start = i == 0 || !(is_path_char(bytes[i - 1]) || bytes[i - 1] == '\\');
+        if at_word_start {
+            let rest: String = bytes[i..bytes.len().min(i + 16)].iter().collect();
+            if CHECKED_ROOTS.iter().any(|r| rest.starts_with(r)) {
+                let mut j = i;
+                while j < bytes.len() && is_path_char(bytes[j]) {
+                    j += 1;
+                }
+                let next = bytes.get(j).copied().unwrap_or(' ');
+                let token: String = bytes[i..j].iter().collect();
+                let token = token.trim_end_matches(['.', '-']).to_string();
+                if !"<*{$%[".contains(next) && !token.contains("..") {
+                    out.push(token);
+                }
+                i = j;
+                continue;
+            }
+        }
+        i += 1;
+    }
+    out
+}
+
+/// Every file whose comments and text may name repository paths: the docs, the README, Rust
+/// and Python sources, Make fragments and scripts (not fixtures or generated reports).
+fn documented_files() -> Vec<PathBuf> {
+    let root = repo_root();
+    let mut files = workspace_rust_files();
+    for dir in [
+        "docs",
+        "training",
+        "pipelines",
+        "python",
+        "data-gen",
+        "scripts",
+        ".ci",
+    ] {
+        let mut stack = vec![root.join(dir)];
+        while let Some(d) = stack.pop() {
+            let Ok(entries) = std::fs::read_dir(&d) else {
+                continue;
+            };
+            for e in entries {
+                let p = e.unwrap().path();
+                let name = p.file_name().unwrap().to_string_lossy().to_string();
+                if p.is_dir() {
+                    if name != "__pycache__" && name != "fixtures" {
+                        stack.push(p);
+                    }
+                } else if [".md", ".py", ".mk", ".sh"]
+                    .iter()
+                    .any(|x| name.ends_with(x))
+                    || dir == ".ci"
+                {
+                    files.push(p);
+                }
+            }
+        }
+    }
+    files.push(root.join("README.md"));
+    files.push(root.join("Makefile"));
+    files.sort();
+    files
+}
+
+/// The lines of `path` that are prose: every line of Markdown, Make and shell files, the comment
+/// lines of Rust and Python sources (their string literals name test inputs, not the tree).
+fn prose_lines(path: &Path) -> Vec<(usize, String)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let ext = path.extension().map(|e| e.to_string_lossy().to_string());
+    let comment = match ext.as_deref() {
+        Some("rs") => Some("//"),
+        Some("py") => Some("#"),
+        _ => None,
+    };
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| comment.is_none_or(|c| l.trim_start().starts_with(c)))
+        .map(|(i, l)| (i + 1, l.to_string()))
+        .collect()
+}
+
+#[test]
+fn every_repository_path_named_in_docs_and_comments_exists() {
+    let root = repo_root();
+    let mut dangling = Vec::new();
+    let mut checked = 0;
+    for path in documented_files() {
+        for (n, line) in prose_lines(&path) {
+            for named in named_paths(&line) {
+                checked += 1;
+                // From the root, or from a folder the file is in (a crate names its own).
+                let exists = path
+                    .ancestors()
+                    .take_while(|a| a.starts_with(&root))
+                    .any(|a| a.join(&named).exists());
+                if !exists {
+                    let rel = path.strip_prefix(&root).unwrap().display();
+                    dangling.push(format!("{rel}:{n}: {named}"));
+                }
+            }
+        }
+    }
+    assert!(
+        dangling.is_empty(),
+        "paths named in docs and comments that do not exist:\n{}",
+        dangling.join("\n")
+    );
+    assert!(checked > 200, "only {checked} paths named");
+}
+
+#[test]
+fn named_paths_finds_paths_and_skips_patterns() {
+    let found = named_paths(
+        "see `crates/io/src/naming.rs`, docs/architecture.md. Not xcrates/a or \
+         crates/<name>/src, build/x, tests/fixtures/*.json or pipelines/$(X).mk",
+    );
+    assert_eq!(found, ["crates/io/src/naming.rs", "docs/architecture.md"]);
+}

@@ -5,13 +5,17 @@
 //! - `naming.json`: image file names with their parts (`name`, `spp`, `reference`, `unit`
 //!   `spp`|`le`, `kind`, `file`), composed by [`luxest_io::naming`];
 //! - `header.exr` + `header.json`: a 5×3 RGB f32 ZIP-compressed EXR from
-//!   [`luxest_io::exr_io::write_rgb`] with every image header key of [`luxest_io::header`] set,
+//!   [`luxest_io::exr::write_rgb`] with every image header key of [`luxest_io::header`] set,
 //!   and those values by key (numbers as JSON numbers);
 //! - `denoiser.json`: how `luxest.denoiser` names Intel Open Image Denoise, and the estimator
 //!   labels `evaluate` gives denoised images ([`evaluate::images::estimator_label`]);
+//! - `estimators.json`: every value of `luxest.estimator` ([`luxest_io::header::estimator`]) by
+//!   the name of its constant;
+//! - `tensors.json`: the names of the denoiser model graph's tensors
+//!   ([`denoise::model::tensor`]), which `training/export.py` gives the graph;
 //! - `exposure_input.exr` + `exposure.json`: a fixed image and its
 //!   [`RgbImage::autoexposure`], the denoiser's brightening of it scaled dim
-//!   ([`luxest_io::exr_io::dim_exponent`], with and without emission, the exposure the model then
+//!   ([`luxest_io::exposure::dim_exponent`], with and without emission, the exposure the model then
 //!   gets, and the evaluation's, `evaluate::metrics::autoexposure`), and
 //!   the evaluation tonemap of a few values (`evaluate::metrics::tonemap`) at its exposure.
 //!
@@ -22,8 +26,12 @@
 //! compressed bytes).
 
 use crate::util::{repo_root, TempDir};
-use luxest_io::exr_io::{dim_exponent, write_rgb, RgbImage, DIM_LUMINANCE};
+use denoise::model::tensor;
+use luxest_io::exposure::{dim_exponent, DIM_LUMINANCE};
+use luxest_io::exr::write_rgb;
 use luxest_io::header;
+use luxest_io::header::estimator;
+use luxest_io::image::RgbImage;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{ImageName, Kind, Level};
 use std::path::Path;
@@ -106,6 +114,43 @@ fn denoiser_json() -> String {
         json_str(header::OIDN_DENOISER_PREFIX),
         rows.join(",\n")
     )
+}
+
+/// A JSON object of (key, string value) pairs, one per line, in the order given.
+fn json_names(pairs: &[(&str, &str)]) -> String {
+    let rows: Vec<String> = pairs
+        .iter()
+        .map(|&(k, v)| format!("  {}: {}", json_str(k), json_str(v)))
+        .collect();
+    format!("{{\n{}\n}}\n", rows.join(",\n"))
+}
+
+/// `estimators.json`: every estimator name by its constant's name, in `estimator::ALL`'s order.
+fn estimators_json() -> String {
+    let names = [
+        ("PATH_TRACING", estimator::PATH_TRACING),
+        ("FIRST_HIT_FEATURES", estimator::FIRST_HIT_FEATURES),
+        ("LOCAL_ESTIMATE", estimator::LOCAL_ESTIMATE),
+        ("DIRECT_SIMULATION", estimator::DIRECT_SIMULATION),
+        ("GATHER", estimator::GATHER),
+        ("DOUBLE_LOCAL_ESTIMATE", estimator::DOUBLE_LOCAL_ESTIMATE),
+        ("LIGHT_TRACING", estimator::LIGHT_TRACING),
+    ];
+    // Every name once: an estimator added to ALL must be added here too.
+    assert_eq!(names.map(|(_, v)| v), estimator::ALL);
+    json_names(&names)
+}
+
+/// `tensors.json`: the model graph's tensor names by their constant's name, in `tensor::ALL`'s
+/// order.
+fn tensors_json() -> String {
+    let names = [
+        ("INPUT", tensor::INPUT),
+        ("EXPOSURE", tensor::EXPOSURE),
+        ("OUTPUT", tensor::OUTPUT),
+    ];
+    assert_eq!(names.map(|(_, v)| v), tensor::ALL);
+    json_names(&names)
 }
 
 /// Writes `header.exr` and returns `header.json`'s text.
@@ -242,6 +287,8 @@ fn contract_fixtures_are_what_luxest_io_writes() {
     let header_json = write_header_fixture(tmp.path());
     std::fs::write(tmp.path().join("header.json"), header_json).unwrap();
     std::fs::write(tmp.path().join("denoiser.json"), denoiser_json()).unwrap();
+    std::fs::write(tmp.path().join("estimators.json"), estimators_json()).unwrap();
+    std::fs::write(tmp.path().join("tensors.json"), tensors_json()).unwrap();
     let exposure_json = write_exposure_fixture(tmp.path());
     std::fs::write(tmp.path().join("exposure.json"), exposure_json).unwrap();
 
@@ -253,6 +300,8 @@ fn contract_fixtures_are_what_luxest_io_writes() {
         "header.exr",
         "header.json",
         "denoiser.json",
+        "estimators.json",
+        "tensors.json",
         "exposure_input.exr",
         "exposure.json",
     ] {

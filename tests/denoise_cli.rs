@@ -2,8 +2,9 @@
 //! tests/fixtures/denoise/generate.py), tiling, and its errors on bad input.
 
 use crate::util::{denoise, repo_root, StageResult, TempDir};
-use luxest_io::exr_io::{read_rgb, write_rgb, RgbImage};
+use luxest_io::exr::{read_rgb, write_rgb};
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> PathBuf {

@@ -329,8 +329,8 @@ fn double_local_estimate_image_matches_the_exact_luminance() {
         "16",
     ])
     .unwrap();
-    let img = luxest_io::exr_io::read_rgb(&out).unwrap();
-    let se = luxest_io::exr_io::read_rgb(&se_out).unwrap();
+    let img = luxest_io::exr::read_rgb(&out).unwrap();
+    let se = luxest_io::exr::read_rgb(&se_out).unwrap();
     assert_eq!((img.width, img.height), (12, 10));
     assert_eq!(
         img.attribute(header::ESTIMATOR),
@@ -378,8 +378,8 @@ fn light_tracing_image_matches_the_exact_box_filtered_luminance() {
         ])
     };
     run("250000").unwrap();
-    let img = luxest_io::exr_io::read_rgb(&out).unwrap();
-    let se = luxest_io::exr_io::read_rgb(&se_out).unwrap();
+    let img = luxest_io::exr::read_rgb(&out).unwrap();
+    let se = luxest_io::exr::read_rgb(&se_out).unwrap();
     assert_eq!(img.attribute(header::ESTIMATOR), Some("light-tracing"));
     assert_eq!(img.attribute(header::SAMPLES), Some("250000"));
     assert_eq!(img.attribute(header::PIXEL_SAMPLES), None);

@@ -2,7 +2,8 @@
 //! expectation and compares with a tolerance from the estimator's own standard error.
 
 use crate::util::repo_root;
-use estimate::local::{self, Detector, LocalConfig, LocalResult, NearField, Singularity};
+use estimate::local_estimate::{self as local, LocalConfig, NearField, Singularity};
+use estimate::sensor_batches::{Batches, SensorEstimates};
 use luxest_exact::solutions::{self, Sobolev};
 use luxest_render::scene::SensorPoint;
 use luxest_render::world::World;
@@ -21,19 +22,21 @@ fn sensors(world: &World) -> Vec<SensorPoint> {
 
 fn config(paths: u64, seed: u64, threads: usize, world: &World) -> LocalConfig {
     LocalConfig {
-        paths,
-        batches: 32,
-        seed,
-        threads,
-        detector: Detector::LocalEstimate(Singularity::Ball {
+        batches: Batches {
+            paths,
+            batches: 32,
+            seed,
+            threads,
+        },
+        singularity: Singularity::Ball {
             eps: 1e-3 * world.room_scale,
-        }),
+        },
         max_depth: 100_000,
         near_field: None,
     }
 }
 
-fn run(world: &World, paths: u64) -> (Vec<SensorPoint>, LocalResult) {
+fn run(world: &World, paths: u64) -> (Vec<SensorPoint>, SensorEstimates) {
     let s = sensors(world);
     let near = vec![0.0; s.len()];
     let r = local::estimate(world, &s, &near, &config(paths, 1, 2, world));
@@ -80,7 +83,7 @@ fn sobolev_text(scale: f64, i: f64, h1: f64, h2: f64, rho: f64) -> String {
 fn check_sobolev(
     world: &World,
     s: &[SensorPoint],
-    r: &LocalResult,
+    r: &SensorEstimates,
     exact: &Sobolev,
     k: f64,
     rel: f64,
@@ -125,7 +128,7 @@ fn sobolev_matches_the_exact_solution() {
     };
     check_sobolev(&w, &s, &r, &exact, 4.0, 0.0);
     // The point-source direct term is exact and included.
-    assert!((r.direct_point[0] - 100.0).abs() < 1e-9);
+    assert!((r.delta_light[0] - 100.0).abs() < 1e-9);
     // The direct part is exact (no variance); the indirect part is the exact solution minus
     // it, within its own standard error; the parts add up to the value.
     let mut worst: f64 = 0.0;
@@ -507,10 +510,10 @@ fn render_floor_edge(paths: u64) -> (estimate::image::ImageResult, Vec<(f64, f64
         luxest_render::world::Traversal::Robust,
     )
     .unwrap();
-    let r = estimate::image::render(
+    let r = estimate::double_local_estimate::render(
         &world,
         &cam,
-        &estimate::image::ImageConfig {
+        &estimate::double_local_estimate::ImageConfig {
             paths,
             pixel_samples: 1,
             seed: 3,
@@ -598,10 +601,10 @@ fn double_local_estimate_is_unbiased_at_an_edge_where_the_clamped_kernel_is_not(
         luxest_render::world::Traversal::Robust,
     )
     .unwrap();
-    let reference = estimate::light_trace::render(
+    let reference = estimate::light_tracing::render(
         &world,
         &cam,
-        &estimate::light_trace::LightTraceConfig {
+        &estimate::light_tracing::LightTraceConfig {
             paths: 3_000_000,
             seed: 5,
             threads: 2,
@@ -609,10 +612,10 @@ fn double_local_estimate_is_unbiased_at_an_edge_where_the_clamped_kernel_is_not(
         },
     );
     let dle = |mis_paths| {
-        estimate::image::render(
+        estimate::double_local_estimate::render(
             &world,
             &cam,
-            &estimate::image::ImageConfig {
+            &estimate::double_local_estimate::ImageConfig {
                 paths: 4000,
                 pixel_samples: 1,
                 seed: 6,
@@ -661,10 +664,10 @@ fn images_are_bit_identical_at_any_thread_count() {
     )
     .unwrap();
     let dle = |threads| {
-        estimate::image::render(
+        estimate::double_local_estimate::render(
             &world,
             &cam,
-            &estimate::image::ImageConfig {
+            &estimate::double_local_estimate::ImageConfig {
                 paths: 400,
                 pixel_samples: 2,
                 seed: 11,
@@ -676,10 +679,10 @@ fn images_are_bit_identical_at_any_thread_count() {
         )
     };
     let lt = |threads| {
-        estimate::light_trace::render(
+        estimate::light_tracing::render(
             &world,
             &cam,
-            &estimate::light_trace::LightTraceConfig {
+            &estimate::light_tracing::LightTraceConfig {
                 paths: 20_000,
                 seed: 11,
                 threads,

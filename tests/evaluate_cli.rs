@@ -3,8 +3,9 @@
 //! closed-form exact value, and errors on bad input.
 
 use crate::util::{evaluate, repo_root, TempDir};
-use luxest_io::exr_io::{read_rgb, write_rgb, RgbImage};
+use luxest_io::exr::{read_rgb, write_rgb};
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 use luxest_io::math::Vec3;
 use luxest_io::meta::RunInfo;
 use luxest_io::sensors::{SensorResults, SensorSetResult, SensorValue};

@@ -1,4 +1,4 @@
-//! The `report` stage (issue 14): figures, tables and plots of calculation surfaces from sensor
+//! The `report` stage: figures, tables and plots of calculation surfaces from sensor
 //! results, checked against numbers computed here independently — on constructed results with
 //! known batches (jackknife standard errors by hand), on bad input (one-line errors, no partial
 //! outputs), against a peer, and end to end on a cos³ luminaire over a black floor, where the
@@ -523,10 +523,7 @@ fn cos3_luminaire_over_a_black_floor_gives_the_closed_form_work_plane() {
     .unwrap();
     // The header as `scene-compile --info` prints it (the same function).
     let scene = luxest_render::compiled::CompiledScene::load(&lxs).unwrap();
-    let info = dir.write(
-        "scene.info.ron",
-        luxest_io::fsio::to_ron_string(&scene.header),
-    );
+    let info = dir.write("scene.info.ron", scene_compile::cli::info_text(&scene));
     let out = dir.path().join("report");
     report(&[
         res.to_str().unwrap(),

@@ -7,7 +7,8 @@
 //! malformed files.
 
 use crate::util::{repo_root, scene_compile, TempDir};
-use estimate::local::{self, Detector, LocalConfig, LocalResult, Singularity};
+use estimate::local_estimate::{self as local, LocalConfig, Singularity};
+use estimate::sensor_batches::{Batches, SensorEstimates};
 use luxest_io::math::Vec3;
 use luxest_render::compiled::{CompiledScene, Emitter};
 use luxest_render::scene::SensorPoint;
@@ -33,19 +34,21 @@ fn world_from(text: &str) -> World {
 
 fn config(paths: u64, world: &World) -> LocalConfig {
     LocalConfig {
-        paths,
-        batches: 32,
-        seed: 7,
-        threads: 2,
-        detector: Detector::LocalEstimate(Singularity::Ball {
+        batches: Batches {
+            paths,
+            batches: 32,
+            seed: 7,
+            threads: 2,
+        },
+        singularity: Singularity::Ball {
             eps: 1e-3 * world.room_scale,
-        }),
+        },
         max_depth: 100_000,
         near_field: None,
     }
 }
 
-fn run(world: &World, paths: u64) -> (Vec<SensorPoint>, LocalResult) {
+fn run(world: &World, paths: u64) -> (Vec<SensorPoint>, SensorEstimates) {
     let s = estimate::all_sensors(world);
     let near = vec![0.0; s.len()];
     let r = local::estimate(world, &s, &near, &config(paths, world));
@@ -113,7 +116,7 @@ fn cos2_luminaire_over_a_black_plane_gives_the_closed_form_exactly() {
             r.value[i]
         );
         assert_eq!(r.standard_error[i], 0.0);
-        assert!((r.direct_point[i] - exact).abs() <= 1e-9 * exact);
+        assert!((r.delta_light[i] - exact).abs() <= 1e-9 * exact);
     }
 }
 
@@ -280,11 +283,11 @@ fn two_reflecting_planes_direct_part_exact_and_local_estimate_matches_gathering(
         let cos = (d.dot(p.normal) / d.length()).max(0.0);
         let exact = cos2(d.y / d.length()) * cos / d.length_squared();
         assert!(
-            (r.direct_point[i] - exact).abs() <= 1e-9 * exact.max(1e-300),
+            (r.delta_light[i] - exact).abs() <= 1e-9 * exact.max(1e-300),
             "sensor {i}: direct {} vs {exact}",
-            r.direct_point[i]
+            r.delta_light[i]
         );
-        assert!(r.value[i] > r.direct_point[i] && r.standard_error[i] > 0.0);
+        assert!(r.value[i] > r.delta_light[i] && r.standard_error[i] > 0.0);
     }
     let gather = estimate::gather::estimate(
         &world,
@@ -344,7 +347,7 @@ fn integrating_sphere_indirect_depends_only_on_the_flux() {
     let exact = luxest_exact::solutions::integrating_sphere_indirect(flux / (4.0 * PI), 1.0, rho);
     let (_, r) = run(&world, 40_000);
     for i in 0..r.value.len() {
-        let indirect = r.value[i] - r.direct_point[i];
+        let indirect = r.value[i] - r.delta_light[i];
         let z = (indirect - exact) / r.standard_error[i];
         assert!(
             (indirect - exact).abs() <= 4.0 * r.standard_error[i] + 1e-3 * exact,
@@ -663,10 +666,10 @@ fn double_local_estimate_image_sees_the_luminaire_distribution() {
         luxest_render::world::Traversal::Robust,
     )
     .unwrap();
-    let r = estimate::image::render(
+    let r = estimate::double_local_estimate::render(
         &world,
         &cam,
-        &estimate::image::ImageConfig {
+        &estimate::double_local_estimate::ImageConfig {
             paths: 2000,
             pixel_samples: 64,
             seed: 1,
@@ -765,7 +768,7 @@ fn area_opening_conserves_the_flux_in_the_integrating_sphere() {
     let exact = luxest_exact::solutions::integrating_sphere_indirect(flux / (4.0 * PI), 1.0, rho);
     let (_, r) = run(&world, 40_000);
     for i in 0..r.value.len() {
-        let indirect = r.value[i] - r.direct_point[i];
+        let indirect = r.value[i] - r.delta_light[i];
         assert!(
             (indirect - exact).abs() <= 4.0 * r.standard_error[i] + 1e-3 * exact,
             "sensor {i}: indirect {indirect} ± {} vs {exact}",
@@ -1000,9 +1003,9 @@ fn luminaire_estimates_do_not_depend_on_the_thread_count() {
     let s = estimate::all_sensors(&world);
     let near = vec![0.0; s.len()];
     let mut cfg = config(3000, &world);
-    cfg.threads = 1;
+    cfg.batches.threads = 1;
     let a = local::estimate(&world, &s, &near, &cfg);
-    cfg.threads = 2;
+    cfg.batches.threads = 2;
     let b = local::estimate(&world, &s, &near, &cfg);
     assert_eq!(a.value, b.value);
     assert_eq!(a.standard_error, b.standard_error);

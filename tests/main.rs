@@ -11,6 +11,7 @@ mod lighting;
 mod luminaires;
 mod metrics_parity;
 mod reliability;
+mod reliability_processes;
 mod scene_compile_errors;
 mod scene_compile_scenes;
 mod trace_exact;

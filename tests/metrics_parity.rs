@@ -7,7 +7,8 @@ use evaluate::metrics::{
     autoexposure, flip, ms_ssim, ms_ssim_levels, psnr, rel_mse, smape, ssim, tonemap, Display,
     FLIP_PIXELS_PER_DEGREE,
 };
-use luxest_io::exr_io::{read_rgb, RgbImage};
+use luxest_io::exr::read_rgb;
+use luxest_io::image::RgbImage;
 use std::collections::{BTreeMap, HashMap};
 use std::path::PathBuf;
 

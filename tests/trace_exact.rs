@@ -211,7 +211,7 @@ fn cli_writes_snapshots_references_and_features() {
     .unwrap();
     for spp in ["000001", "000002", "000004"] {
         let img =
-            luxest_io::exr_io::read_rgb(&dir.path().join(format!("img_{spp}spp.hdr.exr"))).unwrap();
+            luxest_io::exr::read_rgb(&dir.path().join(format!("img_{spp}spp.hdr.exr"))).unwrap();
         assert_eq!((img.width, img.height), (16, 12));
         assert_eq!(
             img.attribute(header::SAMPLES),
@@ -280,7 +280,7 @@ fn cli_writes_snapshots_references_and_features() {
     ] {
         assert!(dir.path().join(format!("img_{f}.exr")).is_file(), "{f}");
     }
-    let nrm = luxest_io::exr_io::read_rgb(&dir.path().join("img_000004spp.nrm.exr")).unwrap();
+    let nrm = luxest_io::exr::read_rgb(&dir.path().join("img_000004spp.nrm.exr")).unwrap();
     for p in &nrm.pixels {
         // Unit where a surface is seen, zero where the ray leaves the open box.
         let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
@@ -290,7 +290,7 @@ fn cli_writes_snapshots_references_and_features() {
         );
     }
     // The back wall's albedo and normal, at the image centre column, top half.
-    let alb = luxest_io::exr_io::read_rgb(&dir.path().join("img_000004spp.alb.exr")).unwrap();
+    let alb = luxest_io::exr::read_rgb(&dir.path().join("img_000004spp.alb.exr")).unwrap();
     let c = alb.pixels[3 * 16 + 8];
     assert!(
         (c[0] - 0.725).abs() < 1e-6 && (c[1] - 0.71).abs() < 1e-6,
@@ -389,7 +389,7 @@ fn features_average_at_least_min_samples_and_the_emission_its_own() {
         &["--spp", "4", "--snapshots", "1,2", "--min-samples", "3"],
     );
     run("b", &["--spp", "4", "--snapshots", "1,2,3"]);
-    let read = |name: &str| luxest_io::exr_io::read_rgb(&dir.path().join(name)).unwrap();
+    let read = |name: &str| luxest_io::exr::read_rgb(&dir.path().join(name)).unwrap();
     let samples = |name: &str| {
         read(name)
             .attribute(header::SAMPLES)
@@ -437,7 +437,7 @@ fn features_average_at_least_min_samples_and_the_emission_its_own() {
     // three-sample one mixes materials at edges.
     let one = read("b_000001spp.alb.exr");
     let three = read("a_000001spp.alb.exr");
-    let mixed = |img: &luxest_io::exr_io::RgbImage| {
+    let mixed = |img: &luxest_io::image::RgbImage| {
         img.pixels
             .iter()
             .filter(|p| !one.pixels.iter().any(|q| q == *p))
@@ -542,7 +542,7 @@ fn trace_and_features(
     lxs: &std::path::Path,
     spp: u32,
     seed: u64,
-) -> impl Fn(&str) -> luxest_io::exr_io::RgbImage {
+) -> impl Fn(&str) -> luxest_io::image::RgbImage {
     let prefix = dir.path().join("img");
     let (spp_arg, seed_arg) = (spp.to_string(), seed.to_string());
     let args = [
@@ -569,6 +569,6 @@ fn trace_and_features(
         use luxest_io::naming::{image_path, Kind, Level};
         let kind = Kind::from_tag(kind).unwrap();
         let path = image_path(&prefix, Level::Spp(spp.into()), kind);
-        luxest_io::exr_io::read_rgb(&path).unwrap()
+        luxest_io::exr::read_rgb(&path).unwrap()
     }
 }

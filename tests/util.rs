@@ -102,3 +102,89 @@ pub fn denoise(args: &[&str]) -> StageResult {
 pub fn evaluate(args: &[&str]) -> StageResult {
     run_stage("evaluate", args, evaluate::cli::run)
 }
+
+/// A stage run as a process of its own, for the tests that kill it, limit its resources or read
+/// its stderr: this test binary run again on the ignored test [`stage_child`], which runs
+/// `stage` (`estimate`, `scene-compile`, `denoise`, `report`, ...) on `args` as the stage's
+/// binary does (`luxest_io::cli::exit_status`: the same process setup, messages and exit
+/// status), or a test helper named `slow-writer` (see [`stage_child`]).
+pub fn stage_process(stage: &str, args: &[&str]) -> std::process::Command {
+    limited_stage_process("", stage, args)
+}
+
+/// [`stage_process`] under the shell's resource limits `limits` (`-f 4`: files of at most four
+/// blocks; `-v 4194304`: 4 GiB of address space), set in the child before it starts.
+pub fn limited_stage_process(limits: &str, stage: &str, args: &[&str]) -> std::process::Command {
+    let exe = std::env::current_exe().unwrap();
+    let harness = [
+        "--exact",
+        "util::stage_child",
+        "--ignored",
+        "--nocapture",
+        "--test-threads",
+        "1",
+        "--quiet",
+    ];
+    let mut c = if limits.is_empty() {
+        let mut c = std::process::Command::new(exe);
+        c.args(harness);
+        c
+    } else {
+        let mut c = std::process::Command::new("sh");
+        c.arg("-c")
+            .arg(format!("ulimit {limits} && exec \"$0\" \"$@\""))
+            .arg(exe)
+            .args(harness);
+        c
+    };
+    c.env("LUXEST_TEST_STAGE", stage)
+        .env("LUXEST_TEST_ARGS", args.join("\u{1f}"))
+        .stdout(std::process::Stdio::null());
+    c
+}
+
+/// The child of [`stage_process`] (does nothing when run otherwise). `slow-writer OUT MARKER`
+/// writes the first bytes of OUT through an output plan, creates MARKER and sleeps a minute
+/// before finishing: a process caught mid-write, for the tests that kill it there.
+#[test]
+#[ignore = "run by util::stage_process in a process of its own"]
+fn stage_child() {
+    let Ok(stage) = std::env::var("LUXEST_TEST_STAGE") else {
+        return;
+    };
+    let args = std::env::var("LUXEST_TEST_ARGS").unwrap_or_default();
+    let args: Vec<&str> = args.split('\u{1f}').filter(|a| !a.is_empty()).collect();
+    let argv = std::iter::once(stage.as_str()).chain(args.iter().copied());
+    use luxest_io::cli::exit_status;
+    let code = match stage.as_str() {
+        "estimate" => exit_status(argv, estimate::run),
+        "scene-compile" => exit_status(argv, scene_compile::run),
+        "denoise" => exit_status(argv, denoise::cli::run),
+        "report" => exit_status(argv, report::cli::run),
+        "evaluate" => exit_status(argv, evaluate::cli::run),
+        "trace" => exit_status(argv, trace::run),
+        "aov-write" => exit_status(argv, aov_write::run),
+        "slow-writer" => {
+            let (out, marker) = (Path::new(args[0]), Path::new(args[1]));
+            let mut plan =
+                luxest_io::outputs::OutputPlan::new(Vec::<PathBuf>::new(), [out]).unwrap();
+            plan.write(out, |w| {
+                w.write_all(b"the first half").unwrap();
+                w.flush().unwrap();
+                std::fs::write(marker, "writing").unwrap();
+                std::thread::sleep(std::time::Duration::from_secs(60));
+                Ok(())
+            })
+            .unwrap();
+            plan.commit().unwrap();
+            0
+        }
+        other => panic!("no stage {other}"),
+    };
+    std::process::exit(code.into());
+}
+
+/// Runs `report` in-process.
+pub fn report(args: &[&str]) -> StageResult {
+    run_stage("report", args, report::cli::run)
+}

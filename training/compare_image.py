@@ -8,6 +8,7 @@ level and per scene. With --oidn, Intel Open Image Denoise (pipelines/oidn_denoi
 `make eval`: hdr + albedo + normal) denoises the same inputs into --work-dir/oidn, is scored the
 same way, and each level shows luxest's margin over it: the held-out comparison of `make eval` on
 any split (a validation split to choose a model, a larger test split to measure one)."""
+
 import argparse
 import json
 import subprocess
@@ -59,7 +60,9 @@ def compare(model, split_dir, work_dir, evaluate, spp_levels, oidn=False):
     refs = {name: levels[None]["hdr"] for name, levels in scan.items() if None in levels and "hdr" in levels[None]}
     missing = sorted(set(scan) - set(refs))
     if missing:
-        raise contract.ContractError(f"{split_dir}: {', '.join(missing)} without a reference image (<scene>_ref.hdr.exr)")
+        raise contract.ContractError(
+            f"{split_dir}: {', '.join(missing)} without a reference image (<scene>_ref.hdr.exr)"
+        )
     done = infer.denoise_split(model, split_dir, work, spp_levels, scan)
     peer = oidn_split(done, scan, work) if oidn else {}
     keys = KEYS if oidn else KEYS[:4]
@@ -109,15 +112,19 @@ def main(argv=None):
     head = f"{'spp':>5} {'scenes':>6} {'PSNR noisy':>11} {'PSNR denoised':>14} {'gain dB':>8} {'SSIM noisy':>11} {'SSIM denoised':>14}"
     print(head + (f" {'PSNR OIDN':>10} {'vs OIDN dB':>11} {'SSIM OIDN':>10}" if args.oidn else ""))
     for spp, m in summary.items():
-        line = (f"{spp:>5} {m['scenes']:>6} {m['psnr_noisy']:>11.2f} {m['psnr_denoised']:>14.2f} "
-                f"{m['psnr_denoised'] - m['psnr_noisy']:>8.2f} {m['ssim_noisy']:>11.4f} {m['ssim_denoised']:>14.4f}")
+        line = (
+            f"{spp:>5} {m['scenes']:>6} {m['psnr_noisy']:>11.2f} {m['psnr_denoised']:>14.2f} "
+            f"{m['psnr_denoised'] - m['psnr_noisy']:>8.2f} {m['ssim_noisy']:>11.4f} {m['ssim_denoised']:>14.4f}"
+        )
         if args.oidn:
             line += f" {m['psnr_oidn']:>10.2f} {m['psnr_denoised'] - m['psnr_oidn']:>+11.2f} {m['ssim_oidn']:>10.4f}"
         print(line)
     if args.json:
-        out = {"metrics": "evaluate images (crates/evaluate): tonemapped PSNR dB and SSIM, means over the split's scenes",
-               "levels": {str(k): v for k, v in summary.items()},
-               "scenes": {name: {str(k): v for k, v in levels.items()} for name, levels in per_scene.items()}}
+        out = {
+            "metrics": "evaluate images (crates/evaluate): tonemapped PSNR dB and SSIM, means over the split's scenes",
+            "levels": {str(k): v for k, v in summary.items()},
+            "scenes": {name: {str(k): v for k, v in levels.items()} for name, levels in per_scene.items()},
+        }
         Path(args.json).write_text(json.dumps(out, indent=2) + "\n")
 
 

@@ -1,10 +1,72 @@
 """All options of the training toolkit in one place (as in OIDN's toolkit); every run saves
-its config next to its checkpoints."""
+its config next to its checkpoints. The options that are preset values (the noisy levels, the
+local-estimate light paths, the extra noise realizations, the training steps, minutes, schedule
+and loss) default to pipelines/presets.mk's, read from that file, so that `python train.py` trains
+as `make train` does."""
+
 import argparse
+import functools
 import json
+import os
+import re
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
 import luxest_contract as contract
+
+PRESETS_MK = Path(__file__).resolve().parent.parent / "pipelines" / "presets.mk"
+"""The one home of the preset values (make includes it)."""
+
+_PRESET_LINE = re.compile(r"^\$\(eval \$\(call lx_preset,(\w+),([^,]*),([^,]*)\)\)$")
+_ASSIGNMENT = re.compile(r"^(\w+)\s*(\?=|:=)\s*(.*?)\s*$")
+
+
+def presets(preset=None, path=PRESETS_MK, environ=None):
+    """{NAME: value text} of presets.mk's variables as make reads them for `preset` (quick or full;
+    None: the PRESET environment variable, else presets.mk's own default): its
+    `$(eval $(call lx_preset,NAME,QUICK,FULL))` lines and plain `NAME ?= value` and `NAME := value`
+    lines. As in make, an environment variable replaces a `?=` value (the presets are `?=` too)."""
+    environ = os.environ if environ is None else environ
+    lines = Path(path).read_text().splitlines()
+    values = {}
+    for line in lines:
+        m = _ASSIGNMENT.match(line)
+        if m:
+            name, op, value = m.groups()
+            values[name] = environ.get(name, value) if op == "?=" else value
+    preset = preset or values.get("PRESET")
+    if preset not in ("quick", "full"):
+        raise SystemExit(f"config: PRESET={preset}: expected quick or full ({path})")
+    values["PRESET"] = preset
+    for line in lines:
+        m = _PRESET_LINE.match(line)
+        if m:
+            name, quick, full = m.groups()
+            values[name] = environ.get(name, full if preset == "full" else quick)
+    return values
+
+
+@functools.cache
+def _presets():
+    return presets()
+
+
+def preset_text(name):
+    """The value of presets.mk's variable `name` for this process's preset (`presets`)."""
+    return _presets()[name]
+
+
+def preset_ints(name):
+    """A list-valued preset (`NOISY_LEVELS`: "1 2 4 ...") as integers."""
+    return [int(v) for v in preset_text(name).split()]
+
+
+def preset_extra_spp():
+    """The levels of the extra noise realizations as make passes them: those of
+    NOISY_EXTRA_LEVELS among NOISY_LEVELS, in NOISY_LEVELS' order (pipelines/dataset.mk's
+    NOISY_EXTRA)."""
+    extra = set(preset_ints("NOISY_EXTRA_LEVELS"))
+    return [n for n in preset_ints("NOISY_LEVELS") if n in extra]
 
 
 NETWORK = ("base_width", "head", "features", "detail_gate", "scales")
@@ -14,33 +76,43 @@ model's record matches its metadata, only when these agree."""
 
 @dataclass
 class Config:
-    data_dir: str = "data/quick"        # data/<dataset> with train/ valid/ test/
-    prep_dir: str = "build/train/quick"  # preprocessed .npy arrays
-    run_dir: str = "runs/quick"          # checkpoints, config.json, log
+    data_dir: str = field(
+        default_factory=lambda: f"data/{preset_text('PRESET')}"
+    )  # data/<dataset>: train/ valid/ test/
+    prep_dir: str = field(default_factory=lambda: f"build/train/{preset_text('PRESET')}")  # preprocessed .npy arrays
+    run_dir: str = field(default_factory=lambda: f"runs/{preset_text('PRESET')}")  # checkpoints, config.json, log
     features: list = field(default_factory=lambda: list(contract.FEATURES))  # model.FEATURE_SETS
-    noisy_spp: list = field(default_factory=lambda: [1, 2, 4, 8, 16, 32, 64, 256, 1024])
-    dle_paths: list = field(default_factory=lambda: [100, 300, 1000])  # local-estimate inputs
-    extra_seeds: list = field(default_factory=list)  # seeds of the extra noise realizations (<split>/seed<k>/) to use
-    extra_spp: list = field(default_factory=lambda: [1, 2, 4, 8, 16, 32])  # their levels (make's NOISY_EXTRA_LEVELS)
-    crop: int = 64                       # training crop side (multiple of 16)
+    noisy_spp: list = field(default_factory=lambda: preset_ints("NOISY_LEVELS"))
+    dle_paths: list = field(default_factory=lambda: preset_ints("DATASET_DLE"))  # local-estimate inputs
+    extra_seeds: list = field(
+        default_factory=lambda: preset_ints("NOISY_EXTRA_SEEDS")
+    )  # extra noise realizations (<split>/seed<k>/)
+    extra_spp: list = field(default_factory=preset_extra_spp)  # their levels
+    crop: int = 64  # training crop side (multiple of 16)
     batch: int = 16
-    base_width: int = 24                 # U-Net channels of the first level
-    head: str = "kpn"                    # output: kpn (kernel-predicting) or direct (model.py)
-    scales: int = 4                      # kpn: filtering scales, 4 (1 to 1/8: the decoder levels) or 5 (and 1/16: the bottleneck)
-    detail_gate: bool = True             # kpn: each finer scale predicts how much of its detail to keep (model.py; --no-detail-gate)
-    lr: float = 2e-3                     # peak learning rate of the one-cycle schedule
-    minutes: float = 18.0                # training time budget
-    steps: int = 3000                    # schedule length (stops earlier if out of time)
-    schedule: str = "steps"              # the one cycle spans `steps` (steps) or `minutes` (time; steps a cap)
-    ms_ssim_weight: float = 0.2          # loss = (1 - w) L1 + w (1 - MS-SSIM)
-    loss: str = "l1"                     # l1: the line above; psnr: minus the evaluation's PSNR per crop (loss.py)
+    base_width: int = 24  # U-Net channels of the first level
+    head: str = "kpn"  # output: kpn (kernel-predicting) or direct (model.py)
+    scales: int = 4  # kpn: filtering scales, 4 (1 to 1/8: the decoder levels) or 5 (and 1/16: the bottleneck)
+    detail_gate: bool = (
+        True  # kpn: each finer scale predicts how much of its detail to keep (model.py; --no-detail-gate)
+    )
+    lr: float = 2e-3  # peak learning rate of the one-cycle schedule
+    minutes: float = field(default_factory=lambda: float(preset_text("TRAIN_MINUTES")))  # training time budget
+    steps: int = field(default_factory=lambda: int(preset_text("TRAIN_STEPS")))  # schedule length (or cap)
+    schedule: str = field(
+        default_factory=lambda: preset_text("TRAIN_SCHEDULE")
+    )  # the one cycle spans `steps` (steps) or `minutes` (time; steps a cap)
+    ms_ssim_weight: float = 0.2  # loss = (1 - w) L1 + w (1 - MS-SSIM)
+    loss: str = field(
+        default_factory=lambda: preset_text("TRAIN_LOSS")
+    )  # l1: the line above; psnr: minus the evaluation's PSNR per crop (loss.py)
     seed: int = 1
     threads: int = 2
-    workers: int = -1                    # DataLoader worker processes (-1: none on CPU, 8 on a GPU)
-    cropper: str = "auto"                # where crops are cut: loader (DataLoader), device (the split in GPU memory), auto
-    precision: str = "auto"              # autocast: bf16 | fp32 | auto (train.autocast_dtype)
+    workers: int = -1  # DataLoader worker processes (-1: none on CPU, 8 on a GPU)
+    cropper: str = "auto"  # where crops are cut: loader (DataLoader), device (the split in GPU memory), auto
+    precision: str = "auto"  # autocast: bf16 | fp32 | auto (train.autocast_dtype)
     resume: bool = False
-    init_from: str = ""                  # start from this model's weights (an exported .onnx or a run's checkpoint.pt); a new schedule
+    init_from: str = ""  # start from this model's weights (an exported .onnx or a run's checkpoint.pt); a new schedule
 
     def save(self, path):
         with open(path, "w") as f:

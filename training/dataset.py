@@ -10,6 +10,7 @@ and of its reference) and the whole-image exposure under each of the six RGB cha
 transferred with the exposure its whole image has at inference. Extra noise realizations of a
 split's noisy levels (`<split>/seed<k>/`, make noisy's NOISY_EXTRA_SEEDS) are preprocessed into
 `<prep_dir>/<split>/seed<k>/` beside them and share their scene's reference."""
+
 import itertools
 import json
 from pathlib import Path
@@ -53,8 +54,9 @@ def pairs(prep_split_dir, noisy_spp=None, dle_paths=None, extra_seeds=(), extra_
     out = []
     d = Path(prep_split_dir)
     realizations = [d / contract.REALIZATION_DIR.format(seed=k) for k in sorted(set(extra_seeds))]
-    for meta_path in (sorted(list(d.glob("*spp.json")) + list(d.glob("*le.json")))
-                      + [m for r in realizations for m in sorted(r.glob("*spp.json"))]):
+    for meta_path in sorted(list(d.glob("*spp.json")) + list(d.glob("*le.json"))) + [
+        m for r in realizations for m in sorted(r.glob("*spp.json"))
+    ]:
         meta = json.loads(meta_path.read_text())
         if not wanted(meta.get("unit", "spp"), meta["samples"], noisy_spp, dle_paths):
             continue
@@ -81,8 +83,9 @@ class Crops(torch.utils.data.Dataset):
     the input under that permutation (the network's transfer), the reference exposure that of
     the whole reference (the evaluation's tonemap, loss.display)."""
 
-    def __init__(self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None, extra_seeds=(),
-                 extra_spp=None):
+    def __init__(
+        self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None, extra_seeds=(), extra_spp=None
+    ):
         refs = {}  # a scene's inputs share its reference array (DeviceCrops holds it once)
         self.pairs = []
         found = pairs(prep_split_dir, noisy_spp, dle_paths, extra_seeds, extra_spp)
@@ -118,8 +121,8 @@ class Crops(torch.utils.data.Dataset):
         p, y, x, flip_x, flip_y, swap, k = self.draw(i)
         inp, ref, exposures, ref_exposures = self.pairs[p]
         c = self.crop
-        a = np.array(inp[y:y + c, x:x + c], dtype=np.float32)
-        b = np.array(ref[y:y + c, x:x + c], dtype=np.float32)
+        a = np.array(inp[y : y + c, x : x + c], dtype=np.float32)
+        b = np.array(ref[y : y + c, x : x + c], dtype=np.float32)
         if flip_x:
             a, b = a[:, ::-1], b[:, ::-1]
         if flip_y:
@@ -129,8 +132,12 @@ class Crops(torch.utils.data.Dataset):
         order = channel_order(k, a.shape[-1])
         a, b = a[..., order], b[..., order[:3]]
         to = lambda t: torch.from_numpy(np.ascontiguousarray(t.transpose(2, 0, 1)))
-        return (to(a), to(b), torch.tensor(exposures[k], dtype=torch.float32),
-                torch.tensor(ref_exposures[k], dtype=torch.float32))
+        return (
+            to(a),
+            to(b),
+            torch.tensor(exposures[k], dtype=torch.float32),
+            torch.tensor(ref_exposures[k], dtype=torch.float32),
+        )
 
 
 def channel_order(k, channels):
@@ -172,8 +179,9 @@ class DeviceCrops:
         # Allocated once on the device and filled array by array: the host holds one copy at a time.
         self.inputs = torch.empty((n, channels.pop()), dtype=torch.float32, device=self.device)
         self.refs = torch.empty((m, 3), dtype=torch.float32, device=self.device)
-        fill = lambda dst, at, arr: dst[at:at + arr.shape[0] * arr.shape[1]].copy_(
-            torch.from_numpy(np.array(arr, dtype=np.float32)).reshape(-1, arr.shape[-1]))
+        fill = lambda dst, at, arr: dst[at : at + arr.shape[0] * arr.shape[1]].copy_(
+            torch.from_numpy(np.array(arr, dtype=np.float32)).reshape(-1, arr.shape[-1])
+        )
         for (inp, *_), at in zip(crops.pairs, starts):
             fill(self.inputs, at, inp)
         for at, ref in refs.values():

@@ -2,8 +2,9 @@
 """Exports a trained run to ONNX: inputs `input` (N, 3 x features, H, W) = raw linear hdr + alb +
 nrm (+ emi [+ ema]: the run's `features`, listed in the metadata `luxest.channels`) and
 `exposure` (N,) = transfer.exposure of each whole image, output `output` (N, 3, H, W) linear
-radiance, dynamic H and W; the log1p transfer and the padding to multiples of 16 are inside the
+radiance (the names: luxest_contract.TENSORS), dynamic H and W; the log1p transfer and the padding to multiples of 16 are inside the
 graph (transfer.py), the exposure formula is recorded in the metadata."""
+
 import argparse
 import json
 import tempfile
@@ -23,21 +24,26 @@ def outputs(head, scales=model.SCALES):
     """What the graph's output is for `head` (model.py), in the metadata's transfer description."""
     if head == "direct":
         return "output: the network's transferred radiance, inverted in graph (expm1(out) / exposure)"
-    return (f"output: predicted {model.KERNEL}x{model.KERNEL} kernels applied in graph to the linear "
-            f"irradiance max(hdr, 0) / max(alb, {model.ALBEDO_FLOOR}) at {scales} scales (1 to "
-            f"1/{2 ** (scales - 1)}), combined by predicted blend weights, times max(alb, "
-            f"{model.ALBEDO_FLOOR})")
+    return (
+        f"output: predicted {model.KERNEL}x{model.KERNEL} kernels applied in graph to the linear "
+        f"irradiance max(hdr, 0) / max(alb, {model.ALBEDO_FLOOR}) at {scales} scales (1 to "
+        f"1/{2 ** (scales - 1)}), combined by predicted blend weights, times max(alb, "
+        f"{model.ALBEDO_FLOOR})"
+    )
 
 
-DETAIL_GATE = ("; with the detail gate: each finer scale keeps a predicted fraction sigmoid(logit) "
-               "of its filtered detail f - U(D(f)) (U(D(f)): f's 2x2 means, bilinearly upsampled) "
-               "before the blend")
+DETAIL_GATE = (
+    "; with the detail gate: each finer scale keeps a predicted fraction sigmoid(logit) "
+    "of its filtered detail f - U(D(f)) (U(D(f)): f's 2x2 means, bilinearly upsampled) "
+    "before the blend"
+)
 """The metadata's addition for `kpn` models with detail gates (model.py)."""
-EMISSION = ("; with the emi feature: the network filters max(hdr - emi, 0) in place of hdr (and "
-            "sees log1p(emi * exposure) as 3 more channels), and max(emi, 0) is added to its output")
+EMISSION = (
+    "; with the emi feature: the network filters max(hdr - emi, 0) in place of hdr (and "
+    "sees log1p(emi * exposure) as 3 more channels), and max(emi, 0) is added to its output"
+)
 """The metadata's addition for models that take the emission (model.py)."""
-EMISSION_AA = ("; with the ema feature (the emission antialiased): max(ema, 0) is added in place of "
-               "max(emi, 0)")
+EMISSION_AA = "; with the ema feature (the emission antialiased): max(ema, 0) is added in place of max(emi, 0)"
 """The metadata's addition for models that add back the antialiased emission."""
 
 
@@ -114,15 +120,24 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
     e = torch.tensor([0.5])
     h, w = torch.export.Dim("h", min=1, max=16384), torch.export.Dim("w", min=1, max=16384)
     tmp = temp_of(out_path)
-    torch.onnx.export(net, (x, e), str(tmp), input_names=["input", "exposure"],
-                      output_names=["output"], dynamic_shapes={"x": {2: h, 3: w}, "exposure": None},
-                      external_data=False)
+    torch.onnx.export(
+        net,
+        (x, e),
+        str(tmp),
+        input_names=[contract.INPUT_TENSOR, contract.EXPOSURE_TENSOR],
+        output_names=[contract.OUTPUT_TENSOR],
+        dynamic_shapes={"x": {2: h, 3: w}, "exposure": None},
+        external_data=False,
+    )
     proto = onnx.load(str(tmp))
     meta = {
         contract.CHANNELS: ",".join(net.features),
         contract.MODEL_TRANSFER: "log1p(max(hdr, 0) * exposure) in graph; input exposure (N,) = 0.18 / "
         "exp(mean over the whole image of log(max(Y, 0) + 1e-4)), Y = Rec. 709 luminance of hdr; "
-        + outputs(cfg.head, net.scales) + (DETAIL_GATE if net.detail_gate else "") + (EMISSION if net.emission else "") + (EMISSION_AA if "ema" in net.features else ""),
+        + outputs(cfg.head, net.scales)
+        + (DETAIL_GATE if net.detail_gate else "")
+        + (EMISSION if net.emission else "")
+        + (EMISSION_AA if "ema" in net.features else ""),
         contract.MODEL_PADDING: "replicate to multiples of 16; in graph",
         contract.MODEL_CONFIG: json.dumps(asdict(cfg)),
     }
@@ -142,10 +157,15 @@ def main(argv=None):
     src.add_argument("--run-dir", help="the training run (config.json, checkpoint.pt)")
     src.add_argument("--from-onnx", help="a model exported by this script: its configuration and weights")
     ap.add_argument("--out", required=True)
-    ap.add_argument("--antialiased-emission", action="store_true",
-                    help="export a run trained with the emi feature as a model that adds back ema (same weights)")
+    ap.add_argument(
+        "--antialiased-emission",
+        action="store_true",
+        help="export a run trained with the emi feature as a model that adds back ema (same weights)",
+    )
     args = ap.parse_args(argv)
-    needed = [Path(args.from_onnx)] if args.from_onnx else [Path(args.run_dir) / f for f in ("config.json", "checkpoint.pt")]
+    needed = (
+        [Path(args.from_onnx)] if args.from_onnx else [Path(args.run_dir) / f for f in ("config.json", "checkpoint.pt")]
+    )
     for f in needed:
         if not f.is_file():
             raise SystemExit(f"export: {f}: not found" + ("" if args.from_onnx else " (train.py writes it)"))

@@ -2,6 +2,7 @@
 """Denoises images of a dataset split with an exported ONNX model (onnxruntime), writing
 <out_dir>/<name>_<spp>spp.dn.exr with the noisy image's header plus luxest.denoiser (names and
 keys from luxest_contract; spp from the headers)."""
+
 import argparse
 from pathlib import Path
 
@@ -24,13 +25,15 @@ def denoise(session, hdr, *features):
     names = channels(session)
     images = [hdr, *features]
     e = contract.dim_exponent(hdr, images[names.index("emi")] if "emi" in names else None)
-    s = 2.0 ** e
+    s = 2.0**e
     if e:
-        images = [(np.asarray(im, dtype=np.float64) * s).astype(np.float32) if n in contract.RADIANCE_FEATURES else im
-                  for n, im in zip(names, images)]
+        images = [
+            (np.asarray(im, dtype=np.float64) * s).astype(np.float32) if n in contract.RADIANCE_FEATURES else im
+            for n, im in zip(names, images)
+        ]
     x = np.concatenate(images, axis=-1).transpose(2, 0, 1)[None].astype(np.float32)
-    feed = {"input": x, "exposure": transfer.exposure_np(hdr, s)}
-    out = session.run(None, feed)[0][0].transpose(1, 2, 0)
+    feed = {contract.INPUT_TENSOR: x, contract.EXPOSURE_TENSOR: transfer.exposure_np(hdr, s)}
+    out = session.run([contract.OUTPUT_TENSOR], feed)[0][0].transpose(1, 2, 0)
     return (out.astype(np.float64) / s).astype(np.float32) if e else out
 
 

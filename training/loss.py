@@ -9,6 +9,7 @@ squared error of the evaluation's tonemap (`display`, with the reference's whole
 in decibels. L1 is minimised by a median of what the input leaves uncertain (an edge under 1 spp,
 a firefly), the squared error by its mean; the log of each crop's error weighs each crop's
 relative improvement alike, as the per-image PSNR averaged over images and noise levels does."""
+
 import math
 
 import torch
@@ -19,23 +20,23 @@ WEIGHTS = WEIGHTS / WEIGHTS.sum()
 
 
 def _window(channels, size=11, sigma=1.5):
-    g = torch.exp(-((torch.arange(size) - size // 2) ** 2) / (2 * sigma ** 2))
+    g = torch.exp(-((torch.arange(size) - size // 2) ** 2) / (2 * sigma**2))
     g = (g / g.sum()).float()
     w = g[:, None] * g[None, :]
     return w.expand(channels, 1, size, size).contiguous()
 
 
-def _ssim_parts(a, b, win, c1=0.01 ** 2, c2=0.03 ** 2):
+def _ssim_parts(a, b, win, c1=0.01**2, c2=0.03**2):
     ch = a.shape[1]
     pad = win.shape[-1] // 2
     mu_a = F.conv2d(F.pad(a, (pad,) * 4, mode="reflect"), win, groups=ch)
     mu_b = F.conv2d(F.pad(b, (pad,) * 4, mode="reflect"), win, groups=ch)
     f = lambda t: F.conv2d(F.pad(t, (pad,) * 4, mode="reflect"), win, groups=ch)
-    s_aa = f(a * a) - mu_a ** 2
-    s_bb = f(b * b) - mu_b ** 2
+    s_aa = f(a * a) - mu_a**2
+    s_bb = f(b * b) - mu_b**2
     s_ab = f(a * b) - mu_a * mu_b
     cs = (2 * s_ab + c2) / (s_aa + s_bb + c2)
-    lum = (2 * mu_a * mu_b + c1) / (mu_a ** 2 + mu_b ** 2 + c1)
+    lum = (2 * mu_a * mu_b + c1) / (mu_a**2 + mu_b**2 + c1)
     return lum.mean(dim=(1, 2, 3)), cs.clamp(min=1e-6).mean(dim=(1, 2, 3))
 
 
@@ -67,7 +68,9 @@ def display(x, k):
     """`evaluate images`' tonemap (`evaluate::metrics::tonemap`, crates/evaluate/src/metrics/mod.rs;
     tied by tests/fixtures/contract/exposure.json) of linear (N, 3, H, W) radiance with exposures
     k (N,): max(x, 0) k, Reinhard x / (1 + x), sRGB OETF, clamped to [0, 1]."""
-    v = (x.clamp(min=0) * k.view(-1, 1, 1, 1)).clamp(max=1e30)  # inf (a direct head's expm1 overflow) maps to 1, not NaN
+    v = (x.clamp(min=0) * k.view(-1, 1, 1, 1)).clamp(
+        max=1e30
+    )  # inf (a direct head's expm1 overflow) maps to 1, not NaN
     t = v / (1 + v)
     return torch.where(t <= SRGB_KNEE, 12.92 * t, 1.055 * t.clamp(min=SRGB_KNEE) ** (1 / 2.4) - 0.055).clamp(0, 1)
 

@@ -1,53 +1,46 @@
 """The denoiser: an OIDN-style U-Net (4 levels of 3x3 convolutions + ReLU, max-pool down,
-nearest up-sampling, skip connections) on the transferred hdr + albedo + normal (9 channels),
-with one of two outputs (`Config.head`):
+nearest up-sampling, skip connections) on the transferred features, with one of two outputs
+(`Config.head`):
 
-- `kpn` (the default): a multi-scale kernel-predicting output (Bako et al. 2017, "Kernel-
-  Predicting Convolutional Networks for Denoising Monte Carlo Renderings"; Vogels et al. 2018,
-  "Denoising with Kernel Prediction and Asymmetric Loss Functions"). The noisy radiance is
-  demodulated by the albedo (irradiance = hdr / max(albedo, ALBEDO_FLOOR)), averaged down to
-  1/2, 1/4 and 1/8 of the image side (and 1/16 with `Config.scales` 5, its kernels predicted
-  from the bottleneck), and at every scale each pixel is replaced by a weighted
-  mean of its KERNEL x KERNEL neighbours, the weights a softmax of what the decoder level of that
-  scale predicts (so they are positive and sum to one). From the coarsest scale up, a predicted
-  per-pixel blend alpha replaces the finer scale's low frequencies by the coarser result:
-  o_s = f_s + alpha_s (U(o_{s+1}) - U(D(f_s))). The result is remodulated by the same albedo.
-  At every scale the filtered image is a local weighted mean of the input's irradiance (the
-  blend of the scales is not a convex combination; the output is clamped at zero); a noiseless
-  image of uniform irradiance comes back unchanged whatever the weights, and the identity kernel
-  with alpha 0 returns any input unchanged, which is what a clean input needs.
-  With `detail_gate` (`Config.detail_gate`) each finer scale also predicts how much of its own
-  filtered detail to keep, beta_s = sigmoid(one more logit) in [0, 1]:
-  o_s = U(D(f_s)) + beta_s (f_s - U(D(f_s))) + alpha_s (U(o_{s+1}) - U(D(f_s))). Without it
+- `kpn` (the default): multi-scale kernel prediction (Bako et al. 2017, "Kernel-Predicting
+  Convolutional Networks for Denoising Monte Carlo Renderings"; Vogels et al. 2018, "Denoising
+  with Kernel Prediction and Asymmetric Loss Functions"). The noisy radiance is demodulated by
+  the albedo (irradiance = hdr / max(albedo, ALBEDO_FLOOR)), averaged down to 1/2, 1/4 and 1/8
+  of the image side (and 1/16 with `Config.scales` 5, its kernels predicted from the
+  bottleneck), and at every scale each pixel is replaced by a weighted mean of its KERNEL x
+  KERNEL neighbours, the weights a softmax of what the decoder level of that scale predicts.
+  From the coarsest scale up, a predicted per-pixel blend alpha replaces the finer scale's low
+  frequencies by the coarser result: o_s = f_s + alpha_s (U(o_{s+1}) - U(D(f_s))). With
+  `detail_gate` (`Config.detail_gate`) each finer scale also predicts how much of its own
+  filtered detail to keep, beta_s in [0, 1]:
+  o_s = U(D(f_s)) + beta_s (f_s - U(D(f_s))) + alpha_s (U(o_{s+1}) - U(D(f_s))); without it
   (beta = 1) the detail band of a 5x5 weighted mean of the noisy irradiance is always kept, a
   floor on the noise left on flat surfaces at low spp (docs/measurements.md, *A fourth GPU
-  run*); with beta 0 and alpha 1 a pixel takes the coarser result alone (bilinear). A uniform
-  image and the identity (beta 1, alpha 0, identity kernel) still come back unchanged.
-- `direct`: the U-Net predicts the transferred radiance itself (the first models).
+  run*); with beta 0 and alpha 1 a pixel takes the coarser result alone (bilinear). The result
+  is remodulated by the same albedo and clamped at zero (the blend is not a convex
+  combination). Whatever the weights, a noiseless image of uniform irradiance comes back
+  unchanged; the identity kernel with alpha 0 (and beta 1) returns any input unchanged, which is
+  what a clean input needs.
+- `direct`: the U-Net predicts the transferred radiance itself.
 
-With the `emi` feature (aov-write's emitted radiance seen directly, the fourth input, `Config.
-features`), the network filters only what the emitters do not emit straight at the camera: its
-radiance input is hdr - emi (clamped at zero), and the emission is added back unfiltered, so the
-light sources, many times brighter than what they light, keep their radiance and colour (the
-models without the feature lost 2-3 % of the image's mean at the light). The network also sees
-the transferred emi as three more channels (where the emitters are). Only the `kpn` head takes
-it. (Tried and dropped, 2026-11-24: filtering the emission by a kernel of its own from one more
-1x1 head, to antialias the emitter's edge at low spp; step-matched on the quick dataset it
-scored 0.1-0.9 dB below adding it back unfiltered at 1-64 spp on the Cornell box, 2.2 dB at 1024
-spp.) With the `ema` feature as well (the fifth input: the emission over at least aov-write's
---min-samples, antialiased like the albedo), that is what is added back, while emi, the image's
-own samples, is still what is subtracted: at 1 spp an emitter's edge pixel has either all or none
-of the emitter's radiance in hdr and emi, and the fraction it covers in ema.
+With the `emi` feature (aov-write's emitted radiance seen directly; `kpn` only) the network
+filters only what the emitters do not emit straight at the camera: its radiance input is
+max(hdr - emi, 0), it sees the transferred emi as three more channels, and the emission is added
+back unfiltered, so the light sources keep their radiance, colour and edge. With the `ema`
+feature as well (the emission over at least aov-write's --min-samples, antialiased like the
+albedo), ema is what is added back while emi, the image's own samples, is still what is
+subtracted: at 1 spp an emitter's edge pixel has all or none of its radiance in hdr and emi, and
+the fraction it covers in ema.
 
-Both heads are scale-equivariant through the exposure input: hdr times s with the exposure over
-s gives the network the same input and the result times s (denoise's rescaling near the f32
-limit relies on it). The autoexposure is not, near its 1e-4 floor: callers brighten a dim image
-first (luxest_contract.dim_exponent). `Denoiser` wraps either with the transfer of transfer.py and the padding to
-multiples of 16, so
-the exported graph takes raw linear features of any H, W, plus the exposure of the whole image
-(computed by the caller over the whole image, so that tiles of one image share it:
-luxest_contract.exposure). Training passes the stored whole-image exposure of each crop's image
-(preprocess.py), so the network is trained on exactly the inputs it sees at inference."""
+`Denoiser` wraps either head with the transfer of transfer.py and the padding to multiples of
+16, so the exported graph takes raw linear features of any H, W, plus the exposure of the whole
+image (computed by the caller, so that tiles of one image share it: luxest_contract.exposure);
+training passes each crop's whole-image exposure (preprocess.py), the inputs the network sees at
+inference. Both heads are scale-equivariant through the exposure input: hdr times s with the
+exposure over s gives the result times s (denoise's rescaling near the f32 limit relies on it).
+Near the autoexposure's 1e-4 floor they are not: callers brighten a dim image first
+(luxest_contract.dim_exponent). Growing a model into a larger network is grow.py's."""
+
 import torch
 import torch.nn as nn
 import torch.nn.functional as F
@@ -61,10 +54,6 @@ KERNEL = 5
 SCALES = 4
 """Scales of the `kpn` head by default: 1, 1/2, 1/4, 1/8 (the U-Net's decoder levels); a network
 of `scales` 5 (Config.scales) filters at 1/16 too (the bottleneck's level)."""
-DETAIL_GATE_INIT = 5.0
-"""The bias of a detail gate's logit added to a model trained without gates (`add_detail_gates`):
-beta = sigmoid(5) = 0.993, so the fine-tuning starts within 0.7 % of the detail band of the
-model it starts from."""
 ALBEDO_FLOOR = 0.01
 """Demodulation divides by max(albedo, ALBEDO_FLOOR) and remodulates by the same value, so a
 black albedo (background, black materials) neither divides by zero nor changes the result when
@@ -96,15 +85,15 @@ class UNet(nn.Module):
         self.joins = None  # split_joins (export)
 
     def decoder(self, x):
-        e0 = self.enc0(x)                      # H
-        e1 = self.enc1(F.max_pool2d(e0, 2))    # H/2
-        e2 = self.enc2(F.max_pool2d(e1, 2))    # H/4
-        e3 = self.enc3(F.max_pool2d(e2, 2))    # H/8
+        e0 = self.enc0(x)  # H
+        e1 = self.enc1(F.max_pool2d(e0, 2))  # H/2
+        e2 = self.enc2(F.max_pool2d(e1, 2))  # H/4
+        e3 = self.enc3(F.max_pool2d(e2, 2))  # H/8
         b = self.bottleneck(F.max_pool2d(e3, 2))  # H/16
-        d3 = self.join("dec3", b, e3)    # H/8
-        d2 = self.join("dec2", d3, e2)   # H/4
-        d1 = self.join("dec1", d2, e1)   # H/2
-        d0 = self.join("dec0", d1, e0)   # H
+        d3 = self.join("dec3", b, e3)  # H/8
+        d2 = self.join("dec2", d3, e2)  # H/4
+        d1 = self.join("dec1", d2, e1)  # H/2
+        d0 = self.join("dec0", d1, e0)  # H
         return [d0, d1, d2, d3, b]
 
     def join(self, name, coarse, skip):
@@ -115,8 +104,9 @@ class UNet(nn.Module):
         if self.joins is None:
             return block(torch.cat([up, skip], 1))
         conv = block[0][0]
-        y = (F.conv2d(up, self.joins[name + "_up"], conv.bias, padding=1)
-             + F.conv2d(skip, self.joins[name + "_skip"], None, padding=1))
+        y = F.conv2d(up, self.joins[name + "_up"], conv.bias, padding=1) + F.conv2d(
+            skip, self.joins[name + "_skip"], None, padding=1
+        )
         return block[1:](F.relu(y))
 
     def split_joins(self):
@@ -156,7 +146,7 @@ def apply_kernels(img, logits, gather="unfold"):
         num = None
         for i in range(KERNEL * KERNEL):
             dy, dx = divmod(i, KERNEL)
-            term = e[:, i:i + 1] * p[:, :, dy:dy + h, dx:dx + wd]
+            term = e[:, i : i + 1] * p[:, :, dy : dy + h, dx : dx + wd]
             num = term if num is None else num + term
     return num / e.sum(1, keepdim=True)
 
@@ -177,10 +167,10 @@ def reconstruct(hdr, albedo, heads, gather="unfold", detail_gate=False):
         for s in range(len(heads) - 2, -1, -1):
             pred = heads[s].float()
             f = apply_kernels(irr[s], pred[:, :k2], gather)
-            alpha = torch.sigmoid(pred[:, k2:k2 + 1])
+            alpha = torch.sigmoid(pred[:, k2 : k2 + 1])
             low = up(F.avg_pool2d(f, 2))
             if detail_gate:  # beta f + (1 - beta) U(D(f)): exactly f where beta is 1
-                beta = torch.sigmoid(pred[:, k2 + 1:k2 + 2])
+                beta = torch.sigmoid(pred[:, k2 + 1 : k2 + 2])
                 f = beta * f + (1 - beta) * low
             out = f + alpha * (up(out) - low)
         # The blend is not a convex combination (a dark pixel beside a firefly can go below
@@ -202,109 +192,11 @@ def head_outputs(scale, detail_gate, scales=SCALES):
     return KERNEL * KERNEL + ((2 if detail_gate else 1) if scale < scales - 1 else 0)
 
 
-def scales_of(state):
-    """The `kpn` scales of a state dict (its heads)."""
-    return sum(1 for k in state if k.startswith("heads.") and k.endswith(".weight"))
-
-
-def has_detail_gates(state):
-    """Whether a `kpn` state dict's heads predict detail gates (their first head's outputs)."""
-    w = state.get("heads.0.weight")
-    return w is not None and w.shape[0] == head_outputs(0, True)
-
-
-def add_detail_gates(state):
-    """A `kpn` state dict without detail gates with them added: one more output of every finer
-    scale's 1x1 head, weights 0 and bias DETAIL_GATE_INIT (beta = 0.993 everywhere), the rest
-    unchanged, for a fine-tuning with `detail_gate` that starts from a model without it."""
-    state = dict(state)
-    scales = scales_of(state)
-    for s in range(scales - 1):
-        w, b = state[f"heads.{s}.weight"], state[f"heads.{s}.bias"]
-        if w.shape[0] != head_outputs(s, False, scales):
-            raise ValueError(f"heads.{s}: {w.shape[0]} outputs, expected {head_outputs(s, False, scales)} (no detail gate)")
-        state[f"heads.{s}.weight"] = torch.cat([w, torch.zeros_like(w[:1])])
-        state[f"heads.{s}.bias"] = torch.cat([b, torch.full_like(b[:1], DETAIL_GATE_INIT)])
-    return state
-
-
-def widen(state, cfg, to_width, seed=0):
-    """A `kpn` state dict of the network of `cfg` (config.Config) as one of U-Net width
-    `to_width` computing the same function (Net2Net-style, Chen et al. 2016, with zero fan-out
-    instead of splitting): every level's old channels keep their weights and come first; each
-    new channel gets the default initialisation of a fresh convolution (seeded) for its inputs
-    and bias, and weight zero wherever it feeds an old channel or a head, so the output is
-    unchanged until training moves those zeros (their gradients are not zero: the new channels
-    are active). For a fine-tuning with more capacity, at the wider network's inference cost."""
-    if cfg.head != "kpn":
-        raise ValueError(f"widen: a {cfg.head} model (only kpn)")
-    if to_width < cfg.base_width:
-        raise ValueError(f"widen: cannot narrow a width-{cfg.base_width} network to {to_width}")
-    old = denoiser(cfg).unet.channels
-    torch.manual_seed(seed)
-    net = Denoiser(width=to_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate, scales=cfg.scales)
-    new = net.unet.channels
-    fresh = net.state_dict()
-    c1, c2, c3, c4, c5 = range(5)
-    # The input channel groups of each convolution (levels; None: the network's input), in the
-    # order they are concatenated (UNet.join: the upsampled coarse level first, then the skip).
-    inputs = {"enc0.0": [None], "enc0.1": [c1], "enc1": [c1], "enc2": [c2], "enc3": [c3],
-              "bottleneck": [c4], "dec3.0": [c5, c4], "dec3.1": [c4], "dec2.0": [c4, c3],
-              "dec2.1": [c3], "dec1.0": [c3, c2], "dec1.1": [c2], "dec0.0": [c2, c1], "dec0.1": [c1]}
-    inputs.update({f"heads.{s}": [s] for s in range(cfg.scales)})
-    out = {}
-    for key, w in fresh.items():
-        if key not in state:
-            raise ValueError(f"widen: the weights lack {key}")
-        src = state[key]
-        if key.startswith("heads."):
-            name = key.rsplit(".", 1)[0]
-        else:
-            name = key.removeprefix("unet.").rsplit(".", 1)[0].removesuffix(".0")
-        w = w.clone()
-        n_out = src.shape[0]
-        if key.endswith("bias"):
-            w[:n_out] = src
-        else:
-            w[:n_out] = 0  # an old output: its old weights, zero from every new input
-            o_new = o_old = 0
-            for level in inputs[name]:
-                # The network's input (its channels, not widened) or a level's channels.
-                n_old, n_new = (src.shape[1],) * 2 if level is None else (old[level], new[level])
-                w[:n_out, o_new:o_new + n_old] = src[:, o_old:o_old + n_old]
-                o_new, o_old = o_new + n_new, o_old + n_old
-            if o_old != src.shape[1] or o_new != w.shape[1]:
-                raise ValueError(f"widen: {key}: {src.shape[1]} inputs, expected {o_old}")
-        out[key] = w
-    return out
-
-
-def add_coarsest_scale(state, detail_gate):
-    """A 4-scale `kpn` state dict as a 5-scale one (Config.scales): the 1/8 head gains a blend
-    logit (weights 0, bias -DETAIL_GATE_INIT: alpha = 0.007 everywhere) and, with detail gates, a
-    gate logit (weights 0, bias DETAIL_GATE_INIT: beta = 0.993), and a new 1/16 head on the
-    bottleneck predicts zero logits (a uniform 5x5 mean). The output starts within 0.7 % of the
-    1/8 scale's detail and coarse bands of the 4-scale model's, and the new logits learn from the
-    first step (the sigmoids' slopes there are 0.007, not zero)."""
-    if scales_of(state) != 4:
-        raise ValueError(f"add_coarsest_scale: a model of {scales_of(state)} scales (expected 4)")
-    state = dict(state)
-    w, b = state["heads.3.weight"], state["heads.3.bias"]
-    if w.shape[0] != head_outputs(3, detail_gate, 4):
-        raise ValueError(f"heads.3: {w.shape[0]} outputs, expected {head_outputs(3, detail_gate, 4)}")
-    extra = [-DETAIL_GATE_INIT] + ([DETAIL_GATE_INIT] if detail_gate else [])
-    state["heads.3.weight"] = torch.cat([w, torch.zeros_like(w[:1]).repeat(len(extra), 1, 1, 1)])
-    state["heads.3.bias"] = torch.cat([b, torch.tensor(extra, dtype=b.dtype)])
-    c5 = state["unet.bottleneck.0.weight"].shape[0]
-    state["heads.4.weight"] = torch.zeros(head_outputs(4, detail_gate, 5), c5, 1, 1, dtype=w.dtype)
-    state["heads.4.bias"] = torch.zeros(head_outputs(4, detail_gate, 5), dtype=b.dtype)
-    return state
-
-
 def denoiser(cfg):
     """The Denoiser of a configuration (config.Config): width, head, features, detail gate."""
-    return Denoiser(width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate,
-                    scales=cfg.scales)
+    return Denoiser(
+        width=cfg.base_width, head=cfg.head, features=cfg.features, detail_gate=cfg.detail_gate, scales=cfg.scales
+    )
 
 
 class Denoiser(nn.Module):
@@ -322,8 +214,9 @@ class Denoiser(nn.Module):
             raise ValueError(f"head {head!r}: expected one of {', '.join(HEADS)}")
         features = tuple(features)
         if features not in FEATURE_SETS:
-            raise ValueError(f"features {', '.join(features)}: expected one of "
-                             + "; ".join(", ".join(f) for f in FEATURE_SETS))
+            raise ValueError(
+                f"features {', '.join(features)}: expected one of " + "; ".join(", ".join(f) for f in FEATURE_SETS)
+            )
         self.emission = "emi" in features
         if self.emission and head != "kpn":
             raise ValueError("the emi feature needs the kpn head")
@@ -341,8 +234,10 @@ class Denoiser(nn.Module):
             self.unet = UNet(in_channels=network_channels, width=width)
         else:
             self.unet = UNet(in_channels=network_channels, width=width, out_channels=0)
-            self.heads = nn.ModuleList(nn.Conv2d(c, head_outputs(s, self.detail_gate, scales), 1)
-                                       for s, c in enumerate(self.unet.channels[:scales]))
+            self.heads = nn.ModuleList(
+                nn.Conv2d(c, head_outputs(s, self.detail_gate, scales), 1)
+                for s, c in enumerate(self.unet.channels[:scales])
+            )
 
     def forward(self, x, exposure=None):
         """`exposure` (N,) float: the exposure of each whole image; if None, x must hold whole
@@ -350,7 +245,7 @@ class Denoiser(nn.Module):
         h, w = x.shape[2], x.shape[3]
         if exposure is None:
             exposure = transfer.exposure_of(x[:, 0:3]).to(x.device)
-        ph, pw = (16 - h % 16) % 16, (16 - w % 16) % 16
+        ph, pw = (h + 15) // 16 * 16 - h, (w + 15) // 16 * 16 - w
         x = F.pad(x, (0, pw, 0, ph), mode="replicate")
         out, exp = self.transferred(x, exposure)
         out = out[:, :, :h, :w]
@@ -380,7 +275,7 @@ class Denoiser(nn.Module):
             out = reconstruct(hdr, x[:, 3:6], heads, self.kernel_gather, self.detail_gate)
             if self.emission:
                 a = self.added_emission
-                out = out + x[:, a:a + 3].float().clamp(min=0)
+                out = out + x[:, a : a + 3].float().clamp(min=0)
         return out, exp
 
     def linear(self, out, exp):

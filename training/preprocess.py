@@ -8,6 +8,7 @@ Samples and seeds come from the EXR headers (luxest_contract), not from file nam
 reference has the noisy image's seed is refused: a sample depends only on (seed, pixel, sample
 index), so such a reference would contain the input's samples and the target would be
 correlated with its input."""
+
 import functools
 import json
 import sys
@@ -26,14 +27,17 @@ def check_pair(ref, noisy):
     if r == n:
         raise contract.ContractError(
             f"{ref.path} and {noisy.path}: reference and noisy image share {contract.SEED} = {r} "
-            "(the reference must be rendered with an independent seed)")
+            "(the reference must be rendered with an independent seed)"
+        )
 
 
 def samples_of(image, expected):
     """The image's samples from its header; an error if the file name says otherwise."""
     spp = image.value(contract.SAMPLES, required=True)
     if expected is not None and spp != expected:
-        raise contract.ContractError(f"{image.path}: header {contract.SAMPLES} = {spp} but the file name says {expected}")
+        raise contract.ContractError(
+            f"{image.path}: header {contract.SAMPLES} = {spp} but the file name says {expected}"
+        )
     return spp
 
 
@@ -64,8 +68,19 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATUR
                 raise contract.ContractError(f"{kinds['hdr']}: {name} has no noisy level whose features it could use")
             inputs.append((kinds["hdr"], inputs[-1][1], paths, "le"))
         for hdr_path, feats, count_in_name, unit in inputs:
-            n += _write_input(dst, name, ref, levels[None]["hdr"], hdr_path, feats, count_in_name, unit,
-                              noisy_spp, dle_paths, features)
+            n += _write_input(
+                dst,
+                name,
+                ref,
+                levels[None]["hdr"],
+                hdr_path,
+                feats,
+                count_in_name,
+                unit,
+                noisy_spp,
+                dle_paths,
+                features,
+            )
         # The scene's extra noise realizations: its own reference, into <dst>/seed<k>/.
         for k, (sub, found) in realized.items():
             for count, feats in sorted((c, v) for c, v in found.get(name, {}).items() if c is not None):
@@ -73,8 +88,20 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATUR
                     continue
                 _require_features(sub, name, count, feats, features)
                 check = functools.partial(_check_realization, seed=k, twin=levels.get(count, {}).get("hdr"))
-                n += _write_input(dst / sub.name, name, ref, levels[None]["hdr"], feats["hdr"], feats, count, "spp",
-                                  noisy_spp, (), features, check)
+                n += _write_input(
+                    dst / sub.name,
+                    name,
+                    ref,
+                    levels[None]["hdr"],
+                    feats["hdr"],
+                    feats,
+                    count,
+                    "spp",
+                    noisy_spp,
+                    (),
+                    features,
+                    check,
+                )
         if not ref_out.exists() or ref_out.stat().st_mtime < levels[None]["hdr"].stat().st_mtime:
             if not np.isfinite(ref.pixels).all():
                 raise contract.ContractError(f"{ref.path}: non-finite values")
@@ -89,7 +116,8 @@ def _require_features(where, name, count, feats, features):
     if missing:
         raise contract.ContractError(
             f"{where}: {name} at {count} spp lacks {', '.join(missing)} (aov-write writes the "
-            "features; re-render the dataset with make noisy reference)")
+            "features; re-render the dataset with make noisy reference)"
+        )
 
 
 def _realizations(src, scenes, extra_seeds):
@@ -101,7 +129,9 @@ def _realizations(src, scenes, extra_seeds):
     for k in sorted(set(extra_seeds)):
         sub = src / contract.REALIZATION_DIR.format(seed=k)
         if not sub.is_dir():
-            raise contract.ContractError(f"{sub}: no such directory (the extra noise realization of seed {k}: make noisy renders it)")
+            raise contract.ContractError(
+                f"{sub}: no such directory (the extra noise realization of seed {k}: make noisy renders it)"
+            )
         out[k] = (sub, contract.scan(sub))
         for name in out[k][1]:
             if "hdr" not in scenes.get(name, {}).get(None, {}):
@@ -117,11 +147,13 @@ def _check_realization(noisy, seed, twin):
         raise contract.ContractError(f"{noisy.path}: {contract.SEED} = {found} in a directory of seed {seed}")
     if twin is not None and contract.read(twin).value(contract.SEED) == seed:
         raise contract.ContractError(
-            f"{noisy.path} and {twin}: the same {contract.SEED} = {seed} (a realization must have a seed of its own)")
+            f"{noisy.path} and {twin}: the same {contract.SEED} = {seed} (a realization must have a seed of its own)"
+        )
 
 
-def _write_input(dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit, noisy_spp, dle_paths, features,
-                 check=None):
+def _write_input(
+    dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit, noisy_spp, dle_paths, features, check=None
+):
     """Writes one input array and its JSON unless unwanted or up to date; returns 1 if written.
     `check(noisy)` runs on the input before it is written."""
     if not dataset.wanted(unit, count_in_name, noisy_spp, dle_paths):
@@ -131,8 +163,12 @@ def _write_input(dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit,
     meta_out = out.with_suffix(".json")
     paths = [hdr_path] + [feats[f] for f in features[1:]]
     newest = max(p.stat().st_mtime for p in paths + [ref_path])
-    if (meta_out.exists() and meta_out.stat().st_mtime >= newest and out.exists()
-            and json.loads(meta_out.read_text()).get("channels") == list(features)):
+    if (
+        meta_out.exists()
+        and meta_out.stat().st_mtime >= newest
+        and out.exists()
+        and json.loads(meta_out.read_text()).get("channels") == list(features)
+    ):
         return 0
     noisy = contract.read(hdr_path)
     if check:
@@ -142,20 +178,30 @@ def _write_input(dst, name, ref, ref_path, hdr_path, feats, count_in_name, unit,
     if unit == "spp" and count > ref.value(contract.SAMPLES, required=True):
         raise contract.ContractError(
             f"{ref.path}: {ref.value(contract.SAMPLES)} samples per pixel, fewer than its input {hdr_path} "
-            f"({count}); re-render the references (make reference)")
+            f"({count}); re-render the references (make reference)"
+        )
     planes = [noisy.pixels] + [contract.read_rgb(p) for p in paths[1:]]
     for path, plane in zip(paths, planes):
         if plane.shape != ref.pixels.shape:
             raise contract.ContractError(
                 f"{path}: {plane.shape[1]}x{plane.shape[0]} pixels, its reference {Path(ref.path).name} "
-                f"{ref.pixels.shape[1]}x{ref.pixels.shape[0]}")
+                f"{ref.pixels.shape[1]}x{ref.pixels.shape[0]}"
+            )
     arr = np.concatenate(planes, axis=-1)
     if not np.isfinite(arr).all():
         raise contract.ContractError(f"{hdr_path}: non-finite values")
-    meta = {"name": name, "samples": count, "unit": unit, "estimator": noisy.value(contract.ESTIMATOR),
-            "seed": noisy.value(contract.SEED), "features": feats["alb"].name, "channels": list(features),
-            "reference_seed": ref.value(contract.SEED), "reference_samples": ref.value(contract.SAMPLES),
-            "exposures": dataset.whole_image_exposures(noisy.pixels)}
+    meta = {
+        "name": name,
+        "samples": count,
+        "unit": unit,
+        "estimator": noisy.value(contract.ESTIMATOR),
+        "seed": noisy.value(contract.SEED),
+        "features": feats["alb"].name,
+        "channels": list(features),
+        "reference_seed": ref.value(contract.SEED),
+        "reference_samples": ref.value(contract.SAMPLES),
+        "exposures": dataset.whole_image_exposures(noisy.pixels),
+    }
     _save(out, arr)
     tmp = meta_out.with_name(meta_out.name + ".tmp")
     tmp.write_text(json.dumps(meta, indent=1))
@@ -176,13 +222,22 @@ def main(argv=None):
     cfg = config.parse(argv, __doc__.split("\n\n")[0])
     data = Path(cfg.data_dir)
     if not any(any((data / split).glob("*.exr")) for split in SPLITS if (data / split).is_dir()):
-        sys.exit(f"preprocess: error: {data}: no images in train/, valid/ or test/ (make reference noisy renders a dataset)")
+        sys.exit(
+            f"preprocess: error: {data}: no images in train/, valid/ or test/ (make reference noisy renders a dataset)"
+        )
     n = 0
     try:
         for split in SPLITS:
             # Extra noise realizations are training data (make noisy renders them for train only).
-            n += preprocess_split(data / split, Path(cfg.prep_dir) / split, cfg.noisy_spp,
-                                  cfg.dle_paths, cfg.features, cfg.extra_seeds if split == "train" else (), cfg.extra_spp)
+            n += preprocess_split(
+                data / split,
+                Path(cfg.prep_dir) / split,
+                cfg.noisy_spp,
+                cfg.dle_paths,
+                cfg.features,
+                cfg.extra_seeds if split == "train" else (),
+                cfg.extra_spp,
+            )
     except contract.ContractError as e:
         print(f"preprocess: error: {e}", file=sys.stderr)
         sys.exit(1)

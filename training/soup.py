@@ -7,6 +7,7 @@ their weights often denoises better than each of them, at the inference cost of 
 (width, head, features, detail gates). Writes a run directory (config.json: the first
 ingredient's, with run_dir this one; checkpoint.pt; soup.json: the ingredients, their SHA-256 and
 weights) that export.py exports; --out exports it at once."""
+
 import argparse
 import hashlib
 import json
@@ -78,7 +79,9 @@ def soup(ingredients, weights=None):
     if len(weights) != len(ingredients):
         raise SystemExit(f"soup: {len(weights)} weights for {len(ingredients)} ingredients")
     if not all(math.isfinite(w) and w >= 0 for w in weights) or sum(weights) <= 0:
-        raise SystemExit(f"soup: --weights {' '.join(map(str, weights))}: must be finite, non-negative and not all zero")
+        raise SystemExit(
+            f"soup: --weights {' '.join(map(str, weights))}: must be finite, non-negative and not all zero"
+        )
     loaded = [load(p) for p in ingredients]
     cfg0, state0, path0 = loaded[0]
     for cfg, state, path in loaded[1:]:

@@ -6,6 +6,7 @@ checkpoints and the run's config in <run_dir>, resumable (--resume), channels_la
 autocast where it pays (--precision). Stops at the step count or the time budget; with
 `--schedule time` the one cycle spans the time budget (all resumed runs together), so that a
 run on a machine of unknown speed anneals when its time is up."""
+
 import json
 import math
 import sys
@@ -17,6 +18,7 @@ import torch
 
 import config
 import dataset
+import grow
 import luxest_contract as contract
 import loss as losses
 import model
@@ -28,7 +30,7 @@ def autocast_dtype(device, precision, cpu_capability=None):
 
     `auto` takes bf16 on CUDA and on CPUs whose PyTorch kernels use AVX-512 (oneDNN's bf16
     paths), float32 elsewhere: on an AVX2-only CPU PyTorch emulates bf16, and a training step
-    took 2.2 s instead of 0.28 s in float32 (AMD EPYC, 2 threads, 2026-11-25)."""
+    took 2.2 s instead of 0.28 s in float32 (AMD EPYC, 2 threads)."""
     if precision not in ("auto", "bf16", "fp32"):
         raise SystemExit(f"train: --precision {precision!r}: expected auto, bf16 or fp32")
     if precision == "auto":
@@ -132,8 +134,10 @@ def cropper(choice, device, need=0, free=None, split="the split"):
         raise SystemExit(f"train: --cropper {choice!r}: expected auto, device or loader")
     where = ("loader" if device.type == "cpu" else "device") if choice == "auto" else choice
     if where == "device" and free is not None and need > DEVICE_SHARE * free:
-        why = (f"{split}: its arrays take {need / 2**30:.2f} GiB, more than {DEVICE_SHARE:.0%} of the "
-               f"{free / 2**30:.2f} GiB free on {device}")
+        why = (
+            f"{split}: its arrays take {need / 2**30:.2f} GiB, more than {DEVICE_SHARE:.0%} of the "
+            f"{free / 2**30:.2f} GiB free on {device}"
+        )
         if choice == "device":
             raise SystemExit(f"train: --cropper device: {why} (--cropper loader cuts crops from the files)")
         print(f"train: {why}: crops are cut by a DataLoader instead", file=sys.stderr)
@@ -149,8 +153,14 @@ def batches(data, cfg, device):
     if where == "device":
         cut = dataset.DeviceCrops(data, device)
         return (cut.batch(range(j, min(j + cfg.batch, len(data)))) for j in range(0, len(data), cfg.batch))
-    return iter(torch.utils.data.DataLoader(data, batch_size=cfg.batch, num_workers=loader_workers(cfg.workers, device),
-                                            pin_memory=device.type == "cuda"))
+    return iter(
+        torch.utils.data.DataLoader(
+            data,
+            batch_size=cfg.batch,
+            num_workers=loader_workers(cfg.workers, device),
+            pin_memory=device.type == "cuda",
+        )
+    )
 
 
 LOSSES = ("l1", "psnr")
@@ -182,8 +192,8 @@ def validation_loss(net, prep_dir, cfg):
             h, w = ref.shape[:2]
             c = min(h, w) // 16 * 16
             y0, x0 = (h - c) // 2, (w - c) // 2
-            a = to(np.load(inp_path)[y0:y0 + c, x0:x0 + c])
-            b = to(ref[y0:y0 + c, x0:x0 + c])
+            a = to(np.load(inp_path)[y0 : y0 + c, x0 : x0 + c])
+            b = to(ref[y0 : y0 + c, x0 : x0 + c])
             pred, exp = net.transferred(a, torch.tensor([meta["exposures"][0]]))
             total += float(objective(net, pred, exp, b, torch.tensor([ref_exposures[ref_path]]), cfg))
             n += 1
@@ -217,9 +227,11 @@ def main(argv=None):
     step, earlier_seconds, resumed_at = 0, 0.0, []
     if cfg.init_from and not (cfg.resume and ckpt.exists()):
         try:
-            net.load_state_dict(initial_weights(cfg.init_from, cfg))
+            net.load_state_dict(grow.initial_weights(cfg.init_from, cfg))
         except RuntimeError as e:
-            raise SystemExit(f"train: --init-from {cfg.init_from}: weights of another network ({str(e).splitlines()[0]})")
+            raise SystemExit(
+                f"train: --init-from {cfg.init_from}: weights of another network ({str(e).splitlines()[0]})"
+            )
         print(f"weights from {cfg.init_from}")
     if cfg.resume and ckpt.exists():
         saved = config.Config.load(run / "config.json") if (run / "config.json").exists() else cfg
@@ -228,8 +240,12 @@ def main(argv=None):
         if saved.loss != cfg.loss:  # Adam's moments and the record would belong to the other objective
             raise SystemExit(f"train: --resume {run}: the run's loss is {saved.loss!r}, not {cfg.loss!r}")
         if any(getattr(saved, k) != getattr(cfg, k) for k in config.NETWORK):  # its weights would not load
-            raise SystemExit(f"train: --resume {run}: the run trains " + ", ".join(f"{k} {getattr(saved, k)}" for k in config.NETWORK)
-                             + "; this one " + ", ".join(f"{k} {getattr(cfg, k)}" for k in config.NETWORK))
+            raise SystemExit(
+                f"train: --resume {run}: the run trains "
+                + ", ".join(f"{k} {getattr(saved, k)}" for k in config.NETWORK)
+                + "; this one "
+                + ", ".join(f"{k} {getattr(cfg, k)}" for k in config.NETWORK)
+            )
         state = torch.load(ckpt, weights_only=False, map_location=device)
         net.load_state_dict(state["model"])
         opt.load_state_dict(state["optimizer"])
@@ -240,10 +256,16 @@ def main(argv=None):
     # As many crops as the remaining steps take (a fixed length once ended runs of more than
     # 100 000 / batch steps early, before the schedule had annealed).
     try:
-        data = dataset.Crops(Path(cfg.prep_dir) / "train", cfg.crop, cfg.seed + step,
-                             length=max(cfg.steps - step, 0) * cfg.batch,
-                             noisy_spp=cfg.noisy_spp, dle_paths=cfg.dle_paths, extra_seeds=cfg.extra_seeds,
-                             extra_spp=cfg.extra_spp)
+        data = dataset.Crops(
+            Path(cfg.prep_dir) / "train",
+            cfg.crop,
+            cfg.seed + step,
+            length=max(cfg.steps - step, 0) * cfg.batch,
+            noisy_spp=cfg.noisy_spp,
+            dle_paths=cfg.dle_paths,
+            extra_seeds=cfg.extra_seeds,
+            extra_spp=cfg.extra_spp,
+        )
     except FileNotFoundError as e:  # before the run directory is written
         raise SystemExit(f"train: {e}")
     run.mkdir(parents=True, exist_ok=True)
@@ -272,7 +294,12 @@ def main(argv=None):
             sched.step()
         step += 1
         if step % 50 == 0 or step == 1:
-            rec = {"step": step, "loss": float(value.detach()), "lr": sched.get_last_lr()[0], "seconds": time.time() - start}
+            rec = {
+                "step": step,
+                "loss": float(value.detach()),
+                "lr": sched.get_last_lr()[0],
+                "seconds": time.time() - start,
+            }
             log.write(json.dumps(rec) + "\n")
             log.flush()
             print(f"step {step:5d}  loss {rec['loss']:.4f}  lr {rec['lr']:.2e}  {rec['seconds']:.0f} s", flush=True)
@@ -281,64 +308,34 @@ def main(argv=None):
     save(net, opt, sched, step, earlier_seconds + time.time() - start, resumed_at, ckpt)
     net.eval()
     v = validation_loss(net.cpu(), cfg.prep_dir, cfg)
-    summary = {"steps": step, "seconds": earlier_seconds + time.time() - start, "resumed_at": resumed_at,
-               "valid_loss": v, "device": device.type,
-               "autocast": "bf16" if dtype is not None else "fp32"}
+    summary = {
+        "steps": step,
+        "seconds": earlier_seconds + time.time() - start,
+        "resumed_at": resumed_at,
+        "valid_loss": v,
+        "device": device.type,
+        "autocast": "bf16" if dtype is not None else "fp32",
+    }
     (run / "summary.json").write_text(json.dumps(summary, indent=2))
     # What models/<dataset>.config.json records: the configuration and how the run went.
     (run / "run.json").write_text(json.dumps({**asdict(cfg), "run": summary}, indent=2))
     print(f"train: {step} steps in {summary['seconds']:.0f} s of training, validation loss {v:.4f}")
 
 
-def initial_weights(path, cfg):
-    """The state dict of `path` (a model exported by export.py, or a run's checkpoint.pt) for a
-    run of `cfg`: a fine-tuning starts from it with its own schedule. A `kpn` model may grow into
-    the run's network: without detail gates it gets them (model.add_detail_gates), with 4 scales a
-    fifth (model.add_coarsest_scale), and an exported one of smaller width is widened (model.widen,
-    the same function). Any other difference of network is refused in one line."""
-    import export
-
-    path = Path(path)
-    if not path.is_file():
-        raise SystemExit(f"train: --init-from {path}: no such file")
-    if path.suffix == ".onnx":
-        src, state = export.load_onnx(path)
-    else:
-        src = None
-        state = torch.load(path, weights_only=False, map_location="cpu")["model"]
-    if src is not None:
-        grows = src.head == cfg.head == "kpn" and src.base_width <= cfg.base_width and src.scales <= cfg.scales
-        if (src.head, list(src.features)) != (cfg.head, list(cfg.features)) or (
-                (src.base_width, src.scales) != (cfg.base_width, cfg.scales) and not grows):
-            raise SystemExit(f"train: --init-from {path}: a width-{src.base_width} {src.head} model of {src.scales} scales "
-                             f"on {','.join(src.features)}, this run trains width {cfg.base_width} {cfg.head} of "
-                             f"{cfg.scales} scales on {','.join(cfg.features)}")
-    if cfg.head == "kpn" and "heads.0.weight" in state:
-        gated = model.has_detail_gates(state)
-        if gated and not cfg.detail_gate:
-            raise SystemExit(f"train: --init-from {path}: a model with detail gates, this run trains one without (--detail-gate)")
-        if cfg.detail_gate and not gated:
-            try:
-                state = model.add_detail_gates(state)
-            except ValueError as e:
-                raise SystemExit(f"train: --init-from {path}: weights of another network ({e})")
-            print(f"detail gates added to the weights of {path} (bias {model.DETAIL_GATE_INIT})")
-        if model.scales_of(state) < cfg.scales:
-            state = model.add_coarsest_scale(state, cfg.detail_gate)
-            print(f"a fifth scale (1/16) added to the weights of {path} (blend bias -{model.DETAIL_GATE_INIT})")
-        if src is not None and src.base_width < cfg.base_width:
-            grown = config.Config.from_values({**asdict(src), "detail_gate": cfg.detail_gate, "scales": cfg.scales})
-            state = model.widen(state, grown, cfg.base_width, seed=0)  # one init for all runs: soupable
-            print(f"widened the width-{src.base_width} weights of {path} to width {cfg.base_width} "
-                  "(same function: new channels feed nothing until trained; model.widen)")
-    return state
-
-
 def save(net, opt, sched, step, seconds, resumed_at, path):
     """A checkpoint: weights, optimiser and schedule state, the step, the training seconds of all
     runs so far and the steps at which it was resumed."""
-    torch.save({"model": net.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(),
-                "step": step, "seconds": seconds, "resumed_at": resumed_at}, path)
+    torch.save(
+        {
+            "model": net.state_dict(),
+            "optimizer": opt.state_dict(),
+            "scheduler": sched.state_dict(),
+            "step": step,
+            "seconds": seconds,
+            "resumed_at": resumed_at,
+        },
+        path,
+    )
 
 
 if __name__ == "__main__":

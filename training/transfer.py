@@ -9,6 +9,7 @@ forward and inverse transfer are inside the exported ONNX graph, with the paddin
 multiples of 16, so Rust feeds raw linear hdr/alb/nrm plus the exposure and gets linear radiance
 back; a large image denoised in tiles uses one exposure, not one per tile. Training uses the
 exposure preprocess.py stored for each whole image, never one computed from a crop."""
+
 import numpy as np
 import torch
 

@@ -1,5 +1,6 @@
 """training/compare_image.py: a model and, with --oidn, Intel Open Image Denoise scored on a split
 by the evaluate stage, per level and per scene, with luxest's margin over OIDN."""
+
 import json
 import math
 import sys
@@ -50,8 +51,7 @@ def make_split(root, rng):
     for name in ("a", "b"):
         clean = np.full((48, 64, 3), 0.4, np.float32)
         clean[:, 32:] = 0.8
-        contract.write(split / contract.image_name(name, "hdr"), clean,
-                       {contract.SAMPLES: 1024, contract.SEED: 2})
+        contract.write(split / contract.image_name(name, "hdr"), clean, {contract.SAMPLES: 1024, contract.SEED: 2})
         for spp in (1, 4):
             head = {contract.SAMPLES: spp, contract.SEED: 1, contract.ESTIMATOR: "path-tracing", contract.SECONDS: 0.1}
             noisy = clean * rng.gamma(4.0 * spp, 1 / (4.0 * spp), clean.shape).astype(np.float32)
@@ -71,8 +71,24 @@ def test_model_and_oidn_scored_per_level_and_scene(tmp_path):
     fake.chmod(0o755)
     work = tmp_path / "work"
     out_json = tmp_path / "m.json"
-    compare_image.main(["--model", str(TINY), "--split-dir", str(split), "--work-dir", str(work),
-                        "--evaluate", str(fake), "--spp", "1", "4", "--oidn", "--json", str(out_json)])
+    compare_image.main(
+        [
+            "--model",
+            str(TINY),
+            "--split-dir",
+            str(split),
+            "--work-dir",
+            str(work),
+            "--evaluate",
+            str(fake),
+            "--spp",
+            "1",
+            "4",
+            "--oidn",
+            "--json",
+            str(out_json),
+        ]
+    )
     m = json.loads(out_json.read_text())
     for spp in (1, 4):
         level = m["levels"][str(spp)]
@@ -99,6 +115,18 @@ def test_a_split_without_references_is_one_line(tmp_path, capsys):
     (split / contract.image_name("a", "hdr")).unlink()
     (split / contract.image_name("b", "hdr")).unlink()
     with pytest.raises(SystemExit) as e:
-        compare_image.main(["--model", str(TINY), "--split-dir", str(split), "--work-dir", str(tmp_path / "w"),
-                            "--evaluate", "/bin/false", "--spp", "1"])
+        compare_image.main(
+            [
+                "--model",
+                str(TINY),
+                "--split-dir",
+                str(split),
+                "--work-dir",
+                str(tmp_path / "w"),
+                "--evaluate",
+                "/bin/false",
+                "--spp",
+                "1",
+            ]
+        )
     assert "compare_image: error:" in str(e.value) and "reference" in str(e.value)

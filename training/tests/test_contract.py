@@ -1,9 +1,11 @@
 """The Python side of the stage contracts (python/luxest_contract.py) against Rust.
 
 The fixtures in tests/fixtures/contract/ are written by Rust (luxest-io's naming and header
-modules, `RgbImage::autoexposure`); here Python must compose and parse the same names, read the
-ZIP-compressed EXR Rust wrote to the header values Rust recorded, and compute the same exposure.
+modules, `RgbImage::autoexposure`, crates/denoise's model tensor names); here Python must compose
+and parse the same names, read the ZIP-compressed EXR Rust wrote to the header values Rust
+recorded, use the same estimator and tensor names, and compute the same exposure.
 The Makefile's naming function (pipelines/naming.mk) is checked against the same names."""
+
 import json
 import math
 import subprocess
@@ -34,11 +36,21 @@ def test_names_compose_and_parse():
     assert contract.image_name("cb", "hdr", 1000, unit="le") == "cb_001000le.hdr.exr"
     assert contract.image_name("a", "dn", 1234567) == "a_1234567spp.dn.exr"
     assert contract.parse_image_name("gen0001_000004spp.hdr.exr") == contract.ImageName("gen0001", 4, False, "hdr")
-    assert contract.parse_image_name("data/x/cornell_box_ref.nrm.exr") == contract.ImageName("cornell_box", None, True, "nrm")
+    assert contract.parse_image_name("data/x/cornell_box_ref.nrm.exr") == contract.ImageName(
+        "cornell_box", None, True, "nrm"
+    )
     assert contract.parse_image_name("cb_001000le.dn.exr") == contract.ImageName("cb", 1000, False, "dn", "le")
     assert contract.parse_image_name("x_000001spp.z.exr") == contract.ImageName("x", 1, False, "z")
-    for bad in ("notes.txt", "a_ref.exr", "a_4spp.hdr.exr", "a_000004spp.foo.exr", "a_000004spp.hdr.png",
-                "_ref.hdr.exr", "aref.hdr.exr", "a_00000xspp.hdr.exr"):
+    for bad in (
+        "notes.txt",
+        "a_ref.exr",
+        "a_4spp.hdr.exr",
+        "a_000004spp.foo.exr",
+        "a_000004spp.hdr.png",
+        "_ref.hdr.exr",
+        "aref.hdr.exr",
+        "a_00000xspp.hdr.exr",
+    ):
         assert contract.parse_image_name(bad) is None, bad
     with pytest.raises(ValueError):
         contract.image_name("a", "hdr", 2.5)
@@ -67,7 +79,7 @@ def test_bad_input_is_one_line_naming_the_file(tmp_path):
     assert str(garbage) in str(e.value) and "\n" not in str(e.value)
     with pytest.raises(contract.ContractError, match="missing header attribute luxest.seed"):
         contract.seed({}, "f.exr")
-    with pytest.raises(contract.ContractError, match="luxest.samples = `x` is not a valid int"):
+    with pytest.raises(contract.ContractError, match=f"{contract.SAMPLES} = `x` is not a valid int"):
         contract.samples({contract.SAMPLES: "x"}, "f.exr")
 
 
@@ -87,14 +99,22 @@ def test_exposure_against_closed_forms():
 def test_sensor_run_metadata(tmp_path):
     # The layout luxest-io's write_ron gives SensorResults (pretty RON, struct names).
     path = contract.sensors_name(tmp_path, "sobolev")
-    path.write_text('SensorResults(\n    scene: "sobolev",\n    run: RunInfo(\n        samples: 8000,\n        seed: 1,\n'
-                    '        seconds: 0.061184665,\n        estimator: "local-estimate",\n        scene_hash: "ea59",\n'
-                    '        program_version: "0.1.0",\n    ),\n    unit: "lx",\n    sets: [],\n)\n')
+    path.write_text(
+        'SensorResults(\n    scene: "sobolev",\n    run: RunInfo(\n        samples: 8000,\n        seed: 1,\n'
+        '        seconds: 0.061184665,\n        estimator: "local-estimate",\n        scene_hash: "ea59",\n'
+        '        program_version: "0.1.0",\n    ),\n    unit: "lx",\n    sets: [],\n)\n'
+    )
     assert path.name == "sobolev.sensors.ron"
     run = contract.read_sensor_run(path)
-    assert run == {"samples": 8000, "seed": 1, "seconds": 0.061184665, "estimator": "local-estimate",
-                   "scene_hash": "ea59", "program_version": "0.1.0"}
-    path.write_text("SensorResults(scene: \"x\")")
+    assert run == {
+        "samples": 8000,
+        "seed": 1,
+        "seconds": 0.061184665,
+        "estimator": "local-estimate",
+        "scene_hash": "ea59",
+        "program_version": "0.1.0",
+    }
+    path.write_text('SensorResults(scene: "x")')
     with pytest.raises(contract.ContractError, match="no run metadata"):
         contract.read_sensor_run(path)
 
@@ -102,20 +122,25 @@ def test_sensor_run_metadata(tmp_path):
 def test_report_csvs_read_as_written(tmp_path):
     # Headers as luxest-io (SensorResults::write_csv) and evaluate write them.
     sensors = tmp_path / "x.sensors.csv"
-    sensors.write_text("set,index,x,y,z,nx,ny,nz,value_lx,standard_error_lx,r,g,b\n"
-                       "floor,0,0,0,0,0,1,0,1.5e2,2.5e0,1.5e2,1.5e2,1.5e2\n")
+    sensors.write_text(
+        "set,index,x,y,z,nx,ny,nz,value_lx,standard_error_lx,r,g,b\nfloor,0,0,0,0,0,1,0,1.5e2,2.5e0,1.5e2,1.5e2,1.5e2\n"
+    )
     rows, unit = contract.read_sensors_csv(sensors)
     assert unit == "lx" and (rows[0]["set"], rows[0]["value"], rows[0]["standard_error"]) == ("floor", 150.0, 2.5)
     report = tmp_path / "s.csv"
-    report.write_text("results,case,point,exact_lx,estimate_lx,standard_error_lx,z,relative_error\n"
-                      'r.sensors.ron,"sphere:I=100","wall (0, 1, 0)",2e2,2.02e2,1e0,2,1e-2\n')
+    report.write_text(
+        "results,case,point,exact_lx,estimate_lx,standard_error_lx,z,relative_error\n"
+        'r.sensors.ron,"sphere:I=100","wall (0, 1, 0)",2e2,2.02e2,1e0,2,1e-2\n'
+    )
     rows, unit = contract.read_sensor_report(report)
     assert unit == "lx" and rows[0]["point"] == "wall (0, 1, 0)" and rows[0]["case"] == "sphere:I=100"
     assert (rows[0]["exact"], rows[0]["estimate"], rows[0]["z"], rows[0]["relative_error"]) == (200.0, 202.0, 2.0, 0.01)
     images = tmp_path / "i.csv"
-    images.write_text("image,reference,estimator,samples,render_seconds,feature_seconds,denoise_seconds,total_seconds,"
-                      "psnr_db,ssim,ms_ssim,flip,rel_mse,smape\n"
-                      "a_000004spp.dn.exr,a_ref.hdr.exr,path-tracing+denoise,4,1e-1,0e0,5e-2,1.5e-1,3e1,9e-1,,1e-1,1e-3,2e-2\n")
+    images.write_text(
+        "image,reference,estimator,samples,render_seconds,feature_seconds,denoise_seconds,total_seconds,"
+        "psnr_db,ssim,ms_ssim,flip,rel_mse,smape\n"
+        "a_000004spp.dn.exr,a_ref.hdr.exr,path-tracing+denoise,4,1e-1,0e0,5e-2,1.5e-1,3e1,9e-1,,1e-1,1e-3,2e-2\n"
+    )
     [row] = contract.read_image_report(images)
     assert row["samples"] == 4.0 and row["psnr_db"] == 30.0 and math.isnan(row["ms_ssim"])
     images.write_text("image,psnr_db\nx,abc\n")
@@ -139,16 +164,30 @@ def test_every_rust_name_composes_and_parses_alike():
         assert contract.image_name(c["name"], c["kind"], spp, unit=unit) == c["file"], c
         parsed = contract.parse_image_name(c["file"])
         assert parsed is not None, c
-        assert (parsed.name, parsed.spp, parsed.reference, parsed.kind) == (c["name"], spp, c["reference"], c["kind"]), c
+        assert (parsed.name, parsed.spp, parsed.reference, parsed.kind) == (
+            c["name"],
+            spp,
+            c["reference"],
+            c["kind"],
+        ), c
 
 
 def test_make_composes_the_same_names():
     """pipelines/naming.mk's functions give Rust's names (the Makefile composes dataset targets)."""
     cases = [c for c in naming_cases() if c.get("unit", "spp") == "spp"]
-    calls = " ".join(f"$(info $(call {'lx_ref' if c['reference'] else 'lx_image'},{c['name']},"
-                     + (f"{c['kind']}" if c["reference"] else f"{c['spp']},{c['kind']}") + "))" for c in cases)
-    out = subprocess.run(["make", "--no-print-directory", "-f", str(ROOT / "pipelines/naming.mk"), "-f", "-",
-                          "all"], input=f"{calls}\nall: ;@:\n", capture_output=True, text=True, check=True).stdout
+    calls = " ".join(
+        f"$(info $(call {'lx_ref' if c['reference'] else 'lx_image'},{c['name']},"
+        + (f"{c['kind']}" if c["reference"] else f"{c['spp']},{c['kind']}")
+        + "))"
+        for c in cases
+    )
+    out = subprocess.run(
+        ["make", "--no-print-directory", "-f", str(ROOT / "pipelines/naming.mk"), "-f", "-", "all"],
+        input=f"{calls}\nall: ;@:\n",
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
     assert out.split() == [c["file"] for c in cases]
 
 
@@ -156,8 +195,13 @@ def test_make_lists_the_same_features():
     """pipelines/naming.mk's LX_FEATURES (the feature images make's rules depend on) are the
     contract's features beside hdr, in the same order; lx_features names each image."""
     calls = "$(info $(LX_FEATURES))$(info $(call lx_features,p,4))"
-    out = subprocess.run(["make", "--no-print-directory", "-f", str(ROOT / "pipelines/naming.mk"), "-f", "-",
-                          "all"], input=f"{calls}\nall: ;@:\n", capture_output=True, text=True, check=True).stdout
+    out = subprocess.run(
+        ["make", "--no-print-directory", "-f", str(ROOT / "pipelines/naming.mk"), "-f", "-", "all"],
+        input=f"{calls}\nall: ;@:\n",
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
     features, flags = out.splitlines()
     assert ["hdr"] + features.split() == list(contract.FEATURES)
     assert flags.split() == [contract.image_name("p", f, 4) for f in contract.FEATURES[1:]]
@@ -198,7 +242,7 @@ def test_python_dim_exponent_equals_rusts():
         emi = scaled * np.float32(0.5) if case["emission"] == "half" else None
         e = contract.dim_exponent(scaled, emi)
         assert e == case["exponent"], case
-        assert math.isclose(contract.exposure(scaled, 2.0 ** e), case["exposure"], rel_tol=1e-12), case
+        assert math.isclose(contract.exposure(scaled, 2.0**e), case["exposure"], rel_tol=1e-12), case
         assert math.isclose(contract.evaluation_exposure(scaled), case["evaluation_exposure"], rel_tol=1e-12), case
         exponents.add(e)
     assert 0 in exponents and max(exponents) > 60  # the fixture covers the bright and the very dim
@@ -207,11 +251,11 @@ def test_python_dim_exponent_equals_rusts():
 def test_dim_exponent_against_closed_forms():
     # A uniform image of luminance Y < 1/32 is brightened by the least 2^e with 2^e Y >= 1/32.
     grey = np.full((4, 5, 3), 1e-3)
-    assert contract.dim_exponent(grey) == 5          # 1e-3 * 32 = 0.032 >= 0.03125 > 1e-3 * 16
+    assert contract.dim_exponent(grey) == 5  # 1e-3 * 32 = 0.032 >= 0.03125 > 1e-3 * 16
     assert contract.dim_exponent(np.full((2, 2, 3), 1 / 32)) == 0
     assert contract.dim_exponent(np.full((2, 2, 3), 1 / 64)) == 1
-    assert contract.dim_exponent(np.zeros((3, 3, 3))) == 0      # black: nothing to brighten
-    assert contract.dim_exponent(-grey) == 0                     # negative radiance counts as 0
+    assert contract.dim_exponent(np.zeros((3, 3, 3))) == 0  # black: nothing to brighten
+    assert contract.dim_exponent(-grey) == 0  # negative radiance counts as 0
     # Emission is not what a model denoises: an emitter beside a dim wall does not hide the wall.
     hdr = np.full((2, 2, 3), 1e-6)
     hdr[0, 0] = 100.0
@@ -231,3 +275,27 @@ def test_oidn_denoiser_name_and_labels_match_rust():
     labels = {(c["estimator"], c["denoiser"]): c["label"] for c in expected["labels"]}
     assert labels[("double-local-estimate", contract.OIDN_DENOISER_PREFIX + "1.4.3")] == "double-local-estimate+oidn"
     assert labels[("path-tracing", "default.onnx")] == "path-tracing+denoise"
+    # luxest_contract.estimator_label (pipelines/eval.py's labels) gives every one of Rust's.
+    for (estimator, denoiser), label in labels.items():
+        assert contract.estimator_label(estimator, denoiser) == label
+
+
+def test_estimator_names_match_rust():
+    # Every value of `luxest.estimator` the stages write (luxest-io's header::estimator), by the
+    # name of its constant: the same names and order as luxest_contract.ESTIMATORS.
+    expected = json.loads(fixture("estimators.json").read_text())
+    assert len(expected) >= 7
+    for name, value in expected.items():
+        assert getattr(contract, name) == value, name
+    assert contract.ESTIMATORS == tuple(expected.values())
+
+
+def test_model_tensor_names_match_rust():
+    # The names crates/denoise looks up in a model's graph (model::tensor) are those export.py
+    # gives it and infer.py feeds (luxest_contract.TENSORS); test_training's export tests check
+    # an exported graph has exactly these.
+    expected = json.loads(fixture("tensors.json").read_text())
+    assert list(expected) == ["INPUT", "EXPOSURE", "OUTPUT"]
+    for role, value in expected.items():
+        assert getattr(contract, f"{role}_TENSOR") == value, role
+    assert contract.TENSORS == tuple(expected.values())

@@ -1,4 +1,5 @@
 """The arithmetic of pipelines/eval.py (make eval): Pareto fronts and threshold crossing times."""
+
 import math
 import sys
 from pathlib import Path
@@ -27,7 +28,7 @@ def test_crossing_time_interpolates_in_log_time():
 
 def test_extrapolation_follows_a_power_law_and_refuses_plateaus():
     # 1 - SSIM = 0.1 * t^-0.5: reaches 0.02 at t = 25.
-    rows = [{"total_seconds": t, "ssim": 1 - 0.1 * t ** -0.5} for t in (1.0, 2.0, 4.0, 8.0)]
+    rows = [{"total_seconds": t, "ssim": 1 - 0.1 * t**-0.5} for t in (1.0, 2.0, 4.0, 8.0)]
     t, slope = ev.extrapolated_time(rows, 0.98)
     assert math.isclose(slope, -0.5, rel_tol=1e-9) and math.isclose(t, 25.0, rel_tol=1e-9)
     flat = [{"total_seconds": t, "ssim": 0.9 + 1e-4 * t} for t in (1.0, 2.0, 4.0, 8.0)]
@@ -55,11 +56,17 @@ def test_the_held_out_gap_is_paired_scene_by_scene():
     rng = np.random.default_rng(7)
     scenes, levels = ["a", "b", "c", "d", "e"], [4, 1, 16]
     ours, theirs = rng.normal(33, 2, (3, 5)), rng.normal(32, 2, (3, 5))
-    rows = [{"estimator": e, "samples": n, "scene": s, "psnr_db": v[i, j]}
-            for e, v in (("path-tracing+denoise", ours), ("path-tracing+oidn", theirs))
-            for i, n in enumerate(levels) for j, s in enumerate(scenes) if not (n == 16 and s == "c" and e.endswith("oidn"))]
+    rows = [
+        {"estimator": e, "samples": n, "scene": s, "psnr_db": v[i, j]}
+        for e, v in (("path-tracing+denoise", ours), ("path-tracing+oidn", theirs))
+        for i, n in enumerate(levels)
+        for j, s in enumerate(scenes)
+        if not (n == 16 and s == "c" and e.endswith("oidn"))
+    ]
     rows.append({"estimator": "path-tracing+oidn", "samples": 64, "scene": "a", "psnr_db": 1.0})  # no luxest row
-    rows.append({"estimator": "path-tracing", "samples": 1, "scene": "a", "psnr_db": 9.0})  # the noisy input: not a denoiser
+    rows.append(
+        {"estimator": "path-tracing", "samples": 1, "scene": "a", "psnr_db": 9.0}
+    )  # the noisy input: not a denoiser
     rows = [rows[k] for k in rng.permutation(len(rows))]
     gaps = ev.paired_gaps(rows, "path-tracing")
     assert [n for n, *_ in gaps] == [1, 4, 16]  # increasing; 64 has no pair
@@ -78,8 +85,14 @@ def test_the_held_out_gap_is_paired_scene_by_scene():
     d1 = ours[1] - theirs[1]  # level 1
     row = next(line for line in lines if line.startswith("| 1 |"))
     cells = [c.strip() for c in row.strip("|").split("|")]
-    assert cells == ["1", f"{d1.mean():+.2f} ± {d1.std(ddof=1) / math.sqrt(5):.2f}", f"{d1.min():+.2f} … {d1.max():+.2f}",
-                     f"{int((d1 > 0).sum())} of 5", "yes" if d1.mean() >= 1 else "no", " / ".join(f"{x:+.2f}" for x in d1)]
+    assert cells == [
+        "1",
+        f"{d1.mean():+.2f} ± {d1.std(ddof=1) / math.sqrt(5):.2f}",
+        f"{d1.min():+.2f} … {d1.max():+.2f}",
+        f"{int((d1 > 0).sum())} of 5",
+        "yes" if d1.mean() >= 1 else "no",
+        " / ".join(f"{x:+.2f}" for x in d1),
+    ]
     assert "- 16 spp: without c (scored by one denoiser only, or not finite)" in lines
     assert not any("double-local-estimate" in line for line in lines)  # no such rows
     # A non-finite difference (both images identical to the reference) leaves the scene out.
@@ -94,15 +107,29 @@ def test_peer_table_shows_both_denoisers_inference_seconds_per_megapixel(tmp_pat
     import luxest_contract as contract
 
     paths = {}
-    for name, wall, cpu in (("noisy", None, None), ("ours", 0.004, 0.006), ("oidn", 0.005, 0.009), ("swapped", 0.002, None)):
-        head = {k: v for k, v in ((contract.DENOISE_SECONDS, wall), (contract.DENOISE_CPU_SECONDS, cpu)) if v is not None}
+    for name, wall, cpu in (
+        ("noisy", None, None),
+        ("ours", 0.004, 0.006),
+        ("oidn", 0.005, 0.009),
+        ("swapped", 0.002, None),
+    ):
+        head = {
+            k: v for k, v in ((contract.DENOISE_SECONDS, wall), (contract.DENOISE_CPU_SECONDS, cpu)) if v is not None
+        }
         paths[name] = tmp_path / f"{name}.exr"
         contract.write(paths[name], np.full((50, 40, 3), 0.5, np.float32), head)  # 2000 pixels
     assert ev.denoise_costs(str(paths["ours"])) == (0.004 / 0.002, 0.006 / 0.002)
     assert ev.denoise_costs(str(paths["swapped"])) == (1.0, None)
     assert ev.denoise_costs(str(tmp_path / "gone.exr")) == (None, None)
-    row = lambda est, image: {"estimator": est, "samples": 4, "image": str(paths[image]), "psnr_db": 30.0, "ssim": 0.9,
-                              "flip": 0.1, "reference": str(paths["noisy"])}
+    row = lambda est, image: {
+        "estimator": est,
+        "samples": 4,
+        "image": str(paths[image]),
+        "psnr_db": 30.0,
+        "ssim": 0.9,
+        "flip": 0.1,
+        "reference": str(paths["noisy"]),
+    }
     rows = [row("path-tracing", "noisy"), row("path-tracing+denoise", "ours"), row("path-tracing+oidn", "oidn")]
     line = next(x for x in "\n".join(ev.peer_table(rows, "Cornell box 256²")).splitlines() if x.startswith("| 4 |"))
     cells = [c.strip() for c in line.strip("|").split("|")]
@@ -111,9 +138,22 @@ def test_peer_table_shows_both_denoisers_inference_seconds_per_megapixel(tmp_pat
     line = next(x for x in "\n".join(ev.peer_table(rows, "Cornell box 256²")).splitlines() if x.startswith("| 4 |"))
     assert [c.strip() for c in line.strip("|").split("|")][4:6] == ["1000 / 2500", "— / 4.50"]
     # Held-out rows are means over scenes with the costs stored (a scene without them: None).
-    mean = lambda est, costs: {"estimator": est, "samples": 4, "psnr_db": 30.0, "ssim": 0.9, "flip": 0.1,
-                               "colour_shift": 0.01, "denoise_costs": costs}
-    rows = [mean("path-tracing", (None, None)), mean("path-tracing+denoise", (0.25, 0.5)), mean("path-tracing+oidn", (None, 0.75))]
-    line = next(x for x in "\n".join(ev.peer_table(rows, "held-out scenes, mean over 2")).splitlines() if x.startswith("| 4 |"))
+    mean = lambda est, costs: {
+        "estimator": est,
+        "samples": 4,
+        "psnr_db": 30.0,
+        "ssim": 0.9,
+        "flip": 0.1,
+        "colour_shift": 0.01,
+        "denoise_costs": costs,
+    }
+    rows = [
+        mean("path-tracing", (None, None)),
+        mean("path-tracing+denoise", (0.25, 0.5)),
+        mean("path-tracing+oidn", (None, 0.75)),
+    ]
+    line = next(
+        x for x in "\n".join(ev.peer_table(rows, "held-out scenes, mean over 2")).splitlines() if x.startswith("| 4 |")
+    )
     assert [c.strip() for c in line.strip("|").split("|")][4:6] == ["250 / —", "0.50 / 0.75"]
     assert ev.mean_or_none([1.0, 3.0]) == 2.0 and ev.mean_or_none([1.0, None]) is None and ev.mean_or_none([]) is None

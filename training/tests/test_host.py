@@ -1,5 +1,6 @@
 """pipelines/host.py: the peer benchmarks (bench_pt, bench_sensors, bench_denoise) name the host's
 CPU and vector width in their reports: the peers' speed depends on it."""
+
 import os
 import sys
 from pathlib import Path

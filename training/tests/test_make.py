@@ -1,6 +1,8 @@
 """The Make rules' data flow (`make -n`, nothing is run): seeds of the dataset and of make eval,
 the noisy target following NOISY_MAX, and every stage called through its variable; and one real
 make run with a stand-in denoiser (make eval's model stamp)."""
+
+import functools
 import os
 import re
 import shlex
@@ -13,8 +15,10 @@ import luxest_contract as contract
 ROOT = Path(__file__).resolve().parents[2]
 # Stand-in stage programs: files make sees as up-to-date prerequisites (no cargo build planned).
 _STAGE_DIR = Path(tempfile.mkdtemp(prefix="luxest-stages-"))
-STAGES = {v: str(_STAGE_DIR / v.lower())
-          for v in ("SCENE_COMPILE", "TRACE", "AOV_WRITE", "ESTIMATE", "DENOISE", "EVALUATE", "OIDN_DENOISE")}
+STAGES = {
+    v: str(_STAGE_DIR / v.lower())
+    for v in ("SCENE_COMPILE", "TRACE", "AOV_WRITE", "ESTIMATE", "DENOISE", "EVALUATE", "OIDN_DENOISE")
+}
 for _p in STAGES.values():
     Path(_p).touch()
 
@@ -22,10 +26,21 @@ for _p in STAGES.values():
 def make(*args, **variables):
     """make with every stage replaced by a path that does not exist as a make target (so no cargo
     build is planned), a dataset that does not exist and make eval's directory in a temporary one
-    (make eval writes its model stamp even in a dry run); `variables` override these."""
+    (make eval writes its model stamp even in a dry run); `variables` override these. A dry run
+    (`-n`) is made once per session for each command line (every make reads all the pipeline's
+    makefiles, a second or two: several tests ask for the same plan)."""
     v = {**STAGES, "DATASET": "pytest-dry-run", "EVAL_DIR": str(_STAGE_DIR / "eval"), **variables}
-    return subprocess.run(["make", "--no-print-directory", *args] + [f"{k}={val}" for k, val in v.items()],
-                          cwd=ROOT, capture_output=True, text=True)
+    command = ("make", "--no-print-directory", *args, *(f"{k}={val}" for k, val in v.items()))
+    return _dry_run(command) if "-n" in args else _run(command)
+
+
+def _run(command):
+    return subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
+
+
+@functools.cache
+def _dry_run(command):
+    return _run(command)
 
 
 def dry_run(*targets, **variables):
@@ -86,7 +101,9 @@ def test_local_estimate_family_renders_train_and_valid_scenes_with_the_noisy_see
     r = make("-n", "-W", "training/train.py", "models/pytest-dry-run.onnx", DATASET_DLE="100 1000")
     lines = r.stdout.replace("\\\n", " ").splitlines()
     runs = [shlex.split(line.split("&&", 1)[1]) for line in lines if "preprocess.py" in line or "train.py" in line]
-    assert len(runs) == 2 and all(c[c.index("--dle-paths") + 1:c.index("--dle-paths") + 3] == ["100", "1000"] for c in runs)
+    assert len(runs) == 2 and all(
+        c[c.index("--dle-paths") + 1 : c.index("--dle-paths") + 3] == ["100", "1000"] for c in runs
+    )
     # And which loss (TRAIN_LOSS, l1 unless set).
     assert [c[c.index("--loss") + 1] for c in runs if "train.py" in c] == ["l1"]
     r = make("-n", "-W", "training/train.py", "models/pytest-dry-run.onnx", TRAIN_LOSS="psnr")
@@ -117,12 +134,20 @@ def test_scenes_follow_dataset_side():
 
 
 def test_generator_writes_the_side_it_is_given(tmp_path):
-    subprocess.run(["python3", "data-gen/generate.py", "--preset", "quick", "--side", "72", "--out", str(tmp_path)],
-                   cwd=ROOT, check=True, capture_output=True)
+    subprocess.run(
+        ["python3", "data-gen/generate.py", "--preset", "quick", "--side", "72", "--out", str(tmp_path)],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+    )
     scenes = sorted(tmp_path.glob("*/gen*.ron"))
     assert len(scenes) == 24 and all("resolution: (72, 72)" in p.read_text() for p in scenes)
-    r = subprocess.run(["python3", "data-gen/generate.py", "--preset", "quick", "--out", str(tmp_path)],
-                       cwd=ROOT, capture_output=True, text=True)
+    r = subprocess.run(
+        ["python3", "data-gen/generate.py", "--preset", "quick", "--out", str(tmp_path)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
     assert r.returncode != 0 and "--side" in r.stderr
 
 
@@ -133,16 +158,22 @@ def test_dataset_count_adds_scenes_and_keeps_the_smaller_datasets(tmp_path):
     assert len(traced) == 30 and "data/pytest-dry-run/test/gen0029" in traced
     assert len({flag(c, "-o") for c in dry_run("reference") if c[0] == STAGES["TRACE"]}) == 24
     for n in (24, 30):
-        subprocess.run(["python3", "data-gen/generate.py", "--scenes", str(n), "--side", "32", "--out",
-                        str(tmp_path / str(n))], cwd=ROOT, check=True, capture_output=True)
+        subprocess.run(
+            ["python3", "data-gen/generate.py", "--scenes", str(n), "--side", "32", "--out", str(tmp_path / str(n))],
+            cwd=ROOT,
+            check=True,
+            capture_output=True,
+        )
     small = sorted(p.relative_to(tmp_path / "24") for p in (tmp_path / "24").glob("*/*.ron"))
     large = sorted(p.relative_to(tmp_path / "30") for p in (tmp_path / "30").glob("*/*.ron"))
     assert len(small) == 24 and len(large) == 30 and set(small) < set(large)
     assert all((tmp_path / "24" / p).read_text() == (tmp_path / "30" / p).read_text() for p in small)
     assert sorted(p.stem for p in (tmp_path / "30" / "test").glob("*.ron")) == [
-        f"gen{i:04d}" for i in range(30) if i % 6 == 5]
-    r = subprocess.run(["python3", "data-gen/generate.py", "--scenes", "5", "--list"], cwd=ROOT,
-                       capture_output=True, text=True)
+        f"gen{i:04d}" for i in range(30) if i % 6 == 5
+    ]
+    r = subprocess.run(
+        ["python3", "data-gen/generate.py", "--scenes", "5", "--list"], cwd=ROOT, capture_output=True, text=True
+    )
     assert r.returncode != 0 and "--scenes 5" in r.stderr
 
 
@@ -160,7 +191,9 @@ def test_eval_scores_the_trained_model_by_default():
     # expanded it before it was defined and ran `denoise --model` with no model).
     cmds = dry_run("eval")
     denoised = [c for c in cmds if c[0] == STAGES["DENOISE"]]
-    assert any("/dataset/" in flag(c, "-o") for c in denoised) and any("/cornell-box/" in flag(c, "-o") for c in denoised)
+    assert any("/dataset/" in flag(c, "-o") for c in denoised) and any(
+        "/cornell-box/" in flag(c, "-o") for c in denoised
+    )
     assert {flag(c, "--model") for c in denoised} == {"models/pytest-dry-run.onnx"}
 
 
@@ -207,9 +240,21 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     assert [c for c in cmds if c[0] == STAGES["EVALUATE"] and c[1] == "images"]
     # Every program run is a stage variable or the summary: no stage runs behind make's back.
     r = make("-n", "eval", EVAL_MODEL="models/default.onnx")
-    others = [line for line in r.stdout.splitlines()
-              if line.strip() and not line.startswith((str(_STAGE_DIR), "mkdir", "python3 data-gen", "python3 pipelines/validate.py scene",
-                                                       ".venv/bin/python pipelines/eval.py", "\t"))]
+    others = [
+        line
+        for line in r.stdout.splitlines()
+        if line.strip()
+        and not line.startswith(
+            (
+                str(_STAGE_DIR),
+                "mkdir",
+                "python3 data-gen",
+                "python3 pipelines/validate.py scene",
+                ".venv/bin/python pipelines/eval.py",
+                "\t",
+            )
+        )
+    ]
     assert others == [], others
 
 
@@ -220,10 +265,17 @@ def test_held_out_references_follow_eval_heldout_ref_spp():
     def plan(**v):
         cmds = dry_run("eval", EVAL_MODEL="models/default.onnx", **v)
         # (The dry-run dataset does not exist, so its own references are planned too: left out.)
-        refs = [c for c in cmds if c[0] == STAGES["TRACE"] and "--reference" in c
-                and not flag(c, "-o").startswith("data/") and "cornell-box" not in c[1]]
+        refs = [
+            c
+            for c in cmds
+            if c[0] == STAGES["TRACE"]
+            and "--reference" in c
+            and not flag(c, "-o").startswith("data/")
+            and "cornell-box" not in c[1]
+        ]
         scored = [c for c in cmds if c[0] == STAGES["EVALUATE"] and c[1] == "images" and "dataset-" in flag(c, "-o")]
         return refs, scored, cmds
+
     refs, scored, _ = plan()
     assert refs == [] and len(scored) == 4  # quick: 4 held-out scenes
     assert all(flag(c, "--reference").startswith("data/pytest-dry-run/test/") for c in scored)
@@ -255,15 +307,19 @@ def test_switching_eval_model_re_denoises_even_with_an_older_model(tmp_path):
     ev, scene = tmp_path / "eval", tmp_path / "scene.lxs"
     denoise = tmp_path / "denoise.sh"
     # Writes the --model it was given into its -o file.
-    denoise.write_text('#!/bin/sh\nwhile [ $# -gt 0 ]; do case "$1" in --model) m="$2";; -o) o="$2";; esac; shift; done\n'
-                       'echo "$m" > "$o"\n')
+    denoise.write_text(
+        '#!/bin/sh\nwhile [ $# -gt 0 ]; do case "$1" in --model) m="$2";; -o) o="$2";; esac; shift; done\n'
+        'echo "$m" > "$o"\n'
+    )
     denoise.chmod(0o755)
     a, b = tmp_path / "a.onnx", tmp_path / "b.onnx"
     old_cornell_box(ev, scene, denoise, a, b)
     target = ev / "cornell-box" / "cb_000001spp.dn.exr"
 
     def denoise_with(model, *flags):
-        return make(*flags, str(target), EVAL_DIR=ev, EVAL_CB_SCENE=scene, EVAL_PROG_SPP=2, EVAL_MODEL=model, DENOISE=denoise)
+        return make(
+            *flags, str(target), EVAL_DIR=ev, EVAL_CB_SCENE=scene, EVAL_PROG_SPP=2, EVAL_MODEL=model, DENOISE=denoise
+        )
 
     assert denoise_with(a).returncode == 0 and target.read_text().strip() == str(a)
     assert denoise_with(a, "-q").returncode == 0  # up to date
@@ -281,8 +337,14 @@ def test_changing_feature_spp_re_renders_the_features_and_not_the_radiance(tmp_p
     old_cornell_box(ev, scene)
 
     def question(kind, feature_spp):
-        return make("-q", str(ev / "cornell-box" / f"cb_000002spp.{kind}.exr"), EVAL_DIR=ev, EVAL_CB_SCENE=scene,
-                    EVAL_PROG_SPP=2, FEATURE_SPP=feature_spp).returncode
+        return make(
+            "-q",
+            str(ev / "cornell-box" / f"cb_000002spp.{kind}.exr"),
+            EVAL_DIR=ev,
+            EVAL_CB_SCENE=scene,
+            EVAL_PROG_SPP=2,
+            FEATURE_SPP=feature_spp,
+        ).returncode
 
     assert question("nrm", 16) == 0 and question("hdr", 16) == 0
     assert question("nrm", 32) == 1 and question("hdr", 32) == 0
@@ -304,26 +366,115 @@ def test_extra_noise_realizations_render_the_training_scenes_with_their_own_seed
         assert outs == {f"{d}/{name}" for name in train}
     assert all(flag(c, "--spp") == "4" and flag(c, "--snapshots") == "1,2,4" for c in extra)
     assert sorted(c[1:] for c in extra) == sorted([a for a in c[1:] if a not in ("--min-samples", "16")] for c in aovs)
-    # None by default, in either preset; levels 1-32 when seeds are given.
+    # None by default, in either preset; levels 1-32 when seeds are given. (The full preset's
+    # dataset cut to 12 scenes: every scene has the same rules, and make reads them all.)
     for preset in ("quick", "full"):
-        assert not [c for c in dry_run("noisy", PRESET=preset) if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"]
-    full = [c for c in dry_run("noisy", PRESET="full", NOISY_EXTRA_SEEDS="2 9") if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"]
-    assert {flag(c, "--seed") for c in full} == {"2", "9"} and {flag(c, "--snapshots") for c in full} == {"1,2,4,8,16,32"}
+        assert not [
+            c
+            for c in dry_run("noisy", PRESET=preset, DATASET_COUNT=12)
+            if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"
+        ]
+    full = [
+        c
+        for c in dry_run("noisy", PRESET="full", DATASET_COUNT=12, NOISY_EXTRA_SEEDS="2 9")
+        if c[0] == STAGES["TRACE"] and flag(c, "--seed") != "1"
+    ]
+    assert {flag(c, "-o").split("/")[2] for c in full} == {"train"}
+    assert {flag(c, "--seed") for c in full} == {"2", "9"} and {flag(c, "--snapshots") for c in full} == {
+        "1,2,4,8,16,32"
+    }
     # Only levels that are noisy levels, in their order.
-    few = [c for c in dry_run("noisy", NOISY_EXTRA_SEEDS="2", NOISY_LEVELS="1 4 64", NOISY_EXTRA_LEVELS="4 2 1")
-           if c[0] == STAGES["TRACE"] and flag(c, "--seed") == "2"]
+    few = [
+        c
+        for c in dry_run("noisy", NOISY_EXTRA_SEEDS="2", NOISY_LEVELS="1 4 64", NOISY_EXTRA_LEVELS="4 2 1")
+        if c[0] == STAGES["TRACE"] and flag(c, "--seed") == "2"
+    ]
     assert few and {(flag(c, "--spp"), flag(c, "--snapshots")) for c in few} == {("4", "1,4")}
     # A seed of the noisy levels or of the references is refused.
     for bad in ("2 1", "1000001"):
         r = make("-n", "noisy", NOISY_EXTRA_SEEDS=bad)
         assert r.returncode != 0 and "NOISY_EXTRA_SEEDS" in r.stderr and len(r.stderr.strip().splitlines()) == 1, bad
+
     # Preprocessing and training are told the seeds and levels; no seeds when no level is rendered.
     def told(**variables):
         r = make("-n", "-W", "training/train.py", "models/pytest-dry-run.onnx", **variables)
         lines = r.stdout.replace("\\\n", " ").splitlines()
         runs = [shlex.split(line.split("&&", 1)[1]) for line in lines if "preprocess.py" in line or "train.py" in line]
         assert len(runs) == 2
-        after = lambda c, f: c[c.index(f) + 1:next((i for i in range(c.index(f) + 1, len(c)) if c[i].startswith("--")), len(c))]
+        after = lambda c, f: c[
+            c.index(f) + 1 : next((i for i in range(c.index(f) + 1, len(c)) if c[i].startswith("--")), len(c))
+        ]
         return [(after(c, "--extra-seeds"), after(c, "--extra-spp")) for c in runs]
+
     assert told(NOISY_EXTRA_SEEDS="2 3") == [(["2", "3"], ["1", "2", "4", "8", "16", "32"])] * 2
     assert told(NOISY_EXTRA_SEEDS="2 3", NOISY_LEVELS="64 256 1024") == [([], [])] * 2
+
+
+def test_train_py_defaults_are_the_presets_make_train_passes(monkeypatch):
+    # `python train.py` without options trains as `make train` does: training/config.py's
+    # defaults are read from pipelines/presets.mk (config.presets, checked against make's own
+    # reading of every variable there), for the PRESET of the environment, which make reads too;
+    # an environment variable replaces a preset in both.
+    import sys
+
+    sys.path.insert(0, str(ROOT / "training"))
+    import config
+
+    names = [n for n in config.presets("quick", environ={}) if n != "PRESET"]
+    assert {"TRAIN_STEPS", "TRAIN_MINUTES", "TRAIN_SCHEDULE", "TRAIN_LOSS", "NOISY_LEVELS", "DATASET_DLE"} <= set(names)
+    for n in names + ["PRESET"]:  # this process's environment is that of each case alone
+        monkeypatch.delenv(n, raising=False)
+    clean = dict(os.environ)
+    for environ in (
+        {"PRESET": "quick"},
+        {"PRESET": "full"},
+        {"PRESET": "full", "TRAIN_STEPS": "123", "DATASET_DLE": "7 8"},
+    ):
+        env = {**clean, **environ}
+        calls = "".join(f"$(info {n}=$({n}))" for n in names)
+        out = subprocess.run(
+            ["make", "--no-print-directory", "-f", str(ROOT / "pipelines/presets.mk"), "-f", "-", "all"],
+            input=f"{calls}\nall: ;@:\n",
+            capture_output=True,
+            text=True,
+            check=True,
+            env=env,
+        ).stdout
+        assert dict(line.split("=", 1) for line in out.splitlines()) == {
+            n: config.presets(environ=environ)[n] for n in names
+        }
+        # make train's train.py command line against train.py's defaults in the same environment.
+        r = subprocess.run(
+            ["make", "--no-print-directory", "-n", "-W", "training/train.py", "models/pytest-dry-run.onnx"]
+            + [
+                f"{k}={v}"
+                for k, v in {
+                    **STAGES,
+                    "DATASET": "pytest-dry-run",
+                    "DATASET_COUNT": "12",
+                    "EVAL_DIR": str(_STAGE_DIR / "eval"),
+                }.items()
+            ],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            env=env,
+        )
+        assert r.returncode == 0, r.stderr
+        [train] = [
+            shlex.split(line.split("&&", 1)[1])
+            for line in r.stdout.replace("\\\n", " ").splitlines()
+            if "train.py" in line
+        ]
+        for k, v in environ.items():
+            monkeypatch.setenv(k, v)
+        config._presets.cache_clear()
+        try:
+            made, default = config.parse(train[train.index("train.py") + 1 :]), config.parse([])
+        finally:
+            for k in environ:
+                monkeypatch.delenv(k)
+            config._presets.cache_clear()
+        for key in ("noisy_spp", "dle_paths", "extra_seeds", "extra_spp", "steps", "minutes", "schedule", "loss"):
+            assert getattr(made, key) == getattr(default, key), (environ, key)
+    assert default.steps == 123 and default.dle_paths == [7, 8] and default.schedule == "time"

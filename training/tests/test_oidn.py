@@ -1,5 +1,6 @@
 """pipelines/oidn_denoise.py, the peer denoiser of `make eval`: Intel Open Image Denoise through
 PyPI `oidn`, writing luxest's header contract."""
+
 import os
 import subprocess
 import sys
@@ -22,14 +23,17 @@ def test_oidn_keeps_a_noiseless_image_and_records_the_contract(tmp_path):
     # within 1 % and every pixel 8 or more from the border within 2 % (its network is not the
     # identity; at the border it strays by up to 12 %), and the header says who denoised it, how
     # long it took and what the features cost.
-    noisy, alb, nrm, out = (tmp_path / n for n in ("w_000004spp.hdr.exr", "w_000004spp.alb.exr",
-                                                   "w_000004spp.nrm.exr", "w_000004spp.dn.exr"))
+    noisy, alb, nrm, out = (
+        tmp_path / n
+        for n in ("w_000004spp.hdr.exr", "w_000004spp.alb.exr", "w_000004spp.nrm.exr", "w_000004spp.dn.exr")
+    )
     head = {contract.ESTIMATOR: "path-tracing", contract.SAMPLES: 4, contract.SEED: 3, contract.SECONDS: 0.5}
     write(noisy, [0.5, 0.4, 0.3], head)
     write(alb, [0.7, 0.7, 0.7], {**head, contract.SECONDS: 0.25})
     write(nrm, [0.0, 0.0, 1.0], {**head, contract.SECONDS: 0.125})
-    subprocess.run([sys.executable, SCRIPT, noisy, "--alb", alb, "--nrm", nrm, "-o", out], check=True,
-                   capture_output=True)
+    subprocess.run(
+        [sys.executable, SCRIPT, noisy, "--alb", alb, "--nrm", nrm, "-o", out], check=True, capture_output=True
+    )
     img = contract.read(out)
     rel = img.pixels / np.array([0.5, 0.4, 0.3]) - 1
     assert np.abs(rel.mean(axis=(0, 1))).max() < 0.01, rel.mean(axis=(0, 1))
@@ -47,9 +51,13 @@ def test_oidn_refuses_mismatched_features_and_overwriting_an_input(tmp_path):
     write(noisy, 0.5, {contract.SECONDS: 1.0})
     contract.write(alb, np.zeros((8, 8, 3), np.float32), {contract.SECONDS: 1.0})  # the image is 64x48
     write(nrm, [0, 0, 1], {contract.SECONDS: 1.0})
-    r = subprocess.run([sys.executable, SCRIPT, noisy, "--alb", alb, "--nrm", nrm, "-o", tmp_path / "o.exr"],
-                       capture_output=True, text=True)
+    r = subprocess.run(
+        [sys.executable, SCRIPT, noisy, "--alb", alb, "--nrm", nrm, "-o", tmp_path / "o.exr"],
+        capture_output=True,
+        text=True,
+    )
     assert r.returncode == 1 and str(alb) in r.stderr and "8x8" in r.stderr and not (tmp_path / "o.exr").exists()
-    r = subprocess.run([sys.executable, SCRIPT, noisy, "--alb", nrm, "--nrm", nrm, "-o", noisy],
-                       capture_output=True, text=True)
+    r = subprocess.run(
+        [sys.executable, SCRIPT, noisy, "--alb", nrm, "--nrm", nrm, "-o", noisy], capture_output=True, text=True
+    )
     assert r.returncode == 1 and "one of the inputs" in r.stderr

@@ -1,5 +1,6 @@
-"""Data flow of preprocessing (issue 11): independent reference seeds, spp from headers, and the
+"""Data flow of preprocessing: independent reference seeds, spp from headers, and the
 whole-image exposure stored for training."""
+
 import math
 import subprocess
 import sys
@@ -21,7 +22,9 @@ def write_set(split_dir, name, spp, seed, rng, h=32, w=48, file_spp=None):
     """One noisy level (hdr, alb, nrm, emi, ema) with the headers trace / aov-write record."""
     header = {contract.SAMPLES: spp, contract.SEED: seed, contract.ESTIMATOR: "path-tracing"}
     # A bright left half, a dim right half: a crop's own exposure differs from the image's.
-    hdr = rng.random((h, w, 3)).astype(np.float32) * np.where(np.arange(w) < w // 2, 10.0, 0.1)[None, :, None].astype(np.float32)
+    hdr = rng.random((h, w, 3)).astype(np.float32) * np.where(np.arange(w) < w // 2, 10.0, 0.1)[None, :, None].astype(
+        np.float32
+    )
     contract.write(split_dir / contract.image_name(name, "hdr", file_spp or spp), hdr, header)
     for kind in ("alb", "nrm", "emi", "ema"):
         contract.write(split_dir / contract.image_name(name, kind, file_spp or spp), rng.random((h, w, 3)), header)
@@ -29,8 +32,11 @@ def write_set(split_dir, name, spp, seed, rng, h=32, w=48, file_spp=None):
 
 
 def write_ref(split_dir, name, seed, rng, h=32, w=48):
-    contract.write(split_dir / contract.image_name(name, "hdr"), rng.random((h, w, 3)),
-                   {contract.SAMPLES: 256, contract.SEED: seed})
+    contract.write(
+        split_dir / contract.image_name(name, "hdr"),
+        rng.random((h, w, 3)),
+        {contract.SAMPLES: 256, contract.SEED: seed},
+    )
 
 
 def test_refuses_a_reference_with_the_noisy_seed(tmp_path):
@@ -42,13 +48,25 @@ def test_refuses_a_reference_with_the_noisy_seed(tmp_path):
     with pytest.raises(contract.ContractError) as e:
         preprocess.preprocess_split(src, tmp_path / "prep", [4])
     msg = str(e.value)
-    assert "gen0000_ref.hdr.exr" in msg and "gen0000_000004spp.hdr.exr" in msg and "luxest.seed = 1" in msg
+    assert "gen0000_ref.hdr.exr" in msg and "gen0000_000004spp.hdr.exr" in msg and f"{contract.SEED} = 1" in msg
     assert "\n" not in msg
     # The command line: exit 1, one line on stderr naming both files.
     for split in ("valid", "test"):
         (tmp_path / "data" / split).mkdir()
-    r = subprocess.run([sys.executable, str(TRAINING / "preprocess.py"), "--data-dir", str(tmp_path / "data"),
-                        "--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4"], capture_output=True, text=True)
+    r = subprocess.run(
+        [
+            sys.executable,
+            str(TRAINING / "preprocess.py"),
+            "--data-dir",
+            str(tmp_path / "data"),
+            "--prep-dir",
+            str(tmp_path / "prep"),
+            "--noisy-spp",
+            "4",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1
     assert "gen0000_ref.hdr.exr" in r.stderr and "gen0000_000004spp.hdr.exr" in r.stderr
 
@@ -59,7 +77,7 @@ def test_spp_comes_from_the_header(tmp_path):
     src.mkdir()
     write_ref(src, "g", 1000001, rng)
     write_set(src, "g", 8, 1, rng, file_spp=4)  # the name says 4, the header 8
-    with pytest.raises(contract.ContractError, match="luxest.samples = 8 but the file name says 4"):
+    with pytest.raises(contract.ContractError, match=f"{contract.SAMPLES} = 8 but the file name says 4"):
         preprocess.preprocess_split(src, tmp_path / "prep", [4, 8])
 
 
@@ -113,8 +131,11 @@ def test_local_estimate_inputs_use_the_largest_noisy_levels_features(tmp_path):
     write_set(src, "g", 4, 1, rng)
     write_set(src, "g", 16, 1, rng)
     le = rng.random((32, 48, 3)).astype(np.float32)
-    contract.write(src / contract.image_name("g", "hdr", 100, unit="le"), le,
-                   {contract.SAMPLES: 100, contract.SEED: 1, contract.ESTIMATOR: "double-local-estimate"})
+    contract.write(
+        src / contract.image_name("g", "hdr", 100, unit="le"),
+        le,
+        {contract.SAMPLES: 100, contract.SEED: 1, contract.ESTIMATOR: "double-local-estimate"},
+    )
     # Levels not asked for are skipped: 4 spp and the local estimate at 100 paths are written.
     assert preprocess.preprocess_split(src, tmp_path / "prep", [4], [100]) == 3
     by_unit = {meta["unit"]: (inp, meta) for inp, _, meta in dataset.pairs(tmp_path / "prep")}
@@ -126,7 +147,9 @@ def test_local_estimate_inputs_use_the_largest_noisy_levels_features(tmp_path):
     np.testing.assert_array_equal(arr[..., 3:6], contract.read_rgb(src / "g_000016spp.alb.exr"))
     assert meta["exposures"][0] == pytest.approx(contract.exposure(le))
     # A local estimate with the reference's seed is refused like a noisy level.
-    contract.write(src / contract.image_name("g", "hdr", 300, unit="le"), le, {contract.SAMPLES: 300, contract.SEED: 1000001})
+    contract.write(
+        src / contract.image_name("g", "hdr", 300, unit="le"), le, {contract.SAMPLES: 300, contract.SEED: 1000001}
+    )
     with pytest.raises(contract.ContractError, match="g_000300le.hdr.exr"):
         preprocess.preprocess_split(src, tmp_path / "prep", [4], [100, 300])
 
@@ -143,7 +166,9 @@ def test_refuses_a_reference_with_fewer_samples_than_its_input_and_mismatched_si
     src2.mkdir()
     write_ref(src2, "g", 1000001, rng)
     write_set(src2, "g", 4, 1, rng, h=32, w=40)
-    with pytest.raises(contract.ContractError, match=r"g_000004spp.hdr.exr: 40x32 pixels, its reference g_ref.hdr.exr 48x32"):
+    with pytest.raises(
+        contract.ContractError, match=r"g_000004spp.hdr.exr: 40x32 pixels, its reference g_ref.hdr.exr 48x32"
+    ):
         preprocess.preprocess_split(src2, tmp_path / "prep2", [4])
 
 
@@ -155,8 +180,11 @@ def test_training_pairs_follow_the_configured_levels(tmp_path):
     write_ref(src, "g", 1000001, rng)
     for spp in (4, 16):
         write_set(src, "g", spp, 1, rng)
-    contract.write(src / contract.image_name("g", "hdr", 100, unit="le"), rng.random((32, 48, 3)),
-                   {contract.SAMPLES: 100, contract.SEED: 1})
+    contract.write(
+        src / contract.image_name("g", "hdr", 100, unit="le"),
+        rng.random((32, 48, 3)),
+        {contract.SAMPLES: 100, contract.SEED: 1},
+    )
     preprocess.preprocess_split(src, tmp_path / "prep", [4, 16], [100])
     tags = lambda ps: sorted(p[0].name for p in ps)
     assert tags(dataset.pairs(tmp_path / "prep")) == ["g_000004spp.npy", "g_000016spp.npy", "g_000100le.npy"]
@@ -179,8 +207,9 @@ def test_features_follow_the_configuration(tmp_path):
     assert preprocess.preprocess_split(src, tmp_path / "prep", [4], features=contract.FEATURES[:3]) == 2
     [(inp, _, meta)] = dataset.pairs(tmp_path / "prep")
     assert np.load(inp).shape[-1] == 9 and meta["channels"] == ["hdr", "alb", "nrm"]
-    contract.write(src / contract.image_name("g", "emi", 4), rng.random((32, 48, 3)),
-                   {contract.SAMPLES: 4, contract.SEED: 1})
+    contract.write(
+        src / contract.image_name("g", "emi", 4), rng.random((32, 48, 3)), {contract.SAMPLES: 4, contract.SEED: 1}
+    )
     assert preprocess.preprocess_split(src, tmp_path / "prep", [4], features=contract.FEATURES[:4]) == 1
     [(inp, _, meta)] = dataset.pairs(tmp_path / "prep")
     assert np.load(inp).shape[-1] == 12 and meta["channels"] == list(contract.FEATURES[:4])
@@ -213,8 +242,14 @@ def test_extra_noise_realizations_pair_with_their_scenes_reference(tmp_path):
     assert preprocess.preprocess_split(src, prep, [1, 4], extra_seeds=[2, 3], extra_spp=[1]) == 1
     found = dataset.pairs(prep, [1, 4], extra_seeds=[2, 3])
     rel = lambda p: str(p.relative_to(prep))
-    assert [rel(i) for i, _, _ in found] == ["a_000001spp.npy", "a_000004spp.npy", "b_000001spp.npy", "b_000004spp.npy",
-                                             "seed2/a_000001spp.npy", "seed3/a_000001spp.npy"]
+    assert [rel(i) for i, _, _ in found] == [
+        "a_000001spp.npy",
+        "a_000004spp.npy",
+        "b_000001spp.npy",
+        "b_000004spp.npy",
+        "seed2/a_000001spp.npy",
+        "seed3/a_000001spp.npy",
+    ]
     assert all(rel(r) == f"{m['name']}_ref.npy" for _, r, m in found)
     for i, _, m in found[4:]:
         k = int(i.parent.name[4:])
@@ -226,8 +261,9 @@ def test_extra_noise_realizations_pair_with_their_scenes_reference(tmp_path):
     assert len(dataset.pairs(prep, [1, 4])) == 4
     assert len(dataset.pairs(prep, [1, 4], extra_seeds=[2, 3], extra_spp=[4])) == 4
     assert preprocess.preprocess_split(src, prep, [1, 4], extra_seeds=[2], extra_spp=[4]) == 1
-    assert [str(i.relative_to(prep)) for i, _, _ in dataset.pairs(prep, [1, 4], extra_seeds=[2, 3], extra_spp=[4])][4:] == [
-        "seed2/a_000004spp.npy"]
+    assert [str(i.relative_to(prep)) for i, _, _ in dataset.pairs(prep, [1, 4], extra_seeds=[2, 3], extra_spp=[4])][
+        4:
+    ] == ["seed2/a_000004spp.npy"]
     assert dataset.groups([m for *_, m in found]) == [[0, 4, 5], [1], [2], [3]]
 
 
@@ -244,7 +280,9 @@ def test_refuses_a_realization_without_a_seed_of_its_own(tmp_path):
     with pytest.raises(contract.ContractError, match=r"a_000001spp.hdr.exr: luxest.seed = 5 in a directory of seed 2"):
         preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[2])
     write_realization(src, "a", 1, 1, rng)
-    with pytest.raises(contract.ContractError, match=r"the same luxest.seed = 1 \(a realization must have a seed of its own\)"):
+    with pytest.raises(
+        contract.ContractError, match=r"the same luxest.seed = 1 \(a realization must have a seed of its own\)"
+    ):
         preprocess.preprocess_split(src, tmp_path / "prep", [1], extra_seeds=[1])
     write_realization(src, "a", 1, 1000001, rng)
     with pytest.raises(contract.ContractError, match=r"reference and noisy image share luxest.seed = 1000001"):

@@ -1,4 +1,5 @@
 """Tests of the training toolkit: shapes, the transfer, learning, export parity, config."""
+
 import json
 import sys
 from dataclasses import asdict
@@ -11,9 +12,12 @@ import torch
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 import config  # noqa: E402
+import grow  # noqa: E402
 import loss as losses  # noqa: E402
+import luxest_contract as contract  # noqa: E402
 import model  # noqa: E402
 import transfer  # noqa: E402
+from conftest import tiny_split  # noqa: E402
 from model import Denoiser, UNet  # noqa: E402
 
 
@@ -105,7 +109,9 @@ def test_antialiased_emission_is_added_back_in_place_of_the_images_own():
             b = net5(torch.cat([x, emi, ema], 1))
         assert net5.in_channels == 15
         assert torch.allclose(b - a, ema - emi, rtol=1e-5, atol=1e-4), float((b - a - (ema - emi)).abs().max())
-        assert torch.allclose(b[:, :, 30, 10:40], _uniform_irradiance()[:, 0:3, 30, 10:40] + 0.5 * light[:, :, 0], rtol=1e-5)
+        assert torch.allclose(
+            b[:, :, 30, 10:40], _uniform_irradiance()[:, 0:3, 30, 10:40] + 0.5 * light[:, :, 0], rtol=1e-5
+        )
 
 
 @pytest.mark.parametrize("gate", [False, True])
@@ -136,7 +142,7 @@ def test_kernel_gathers_agree():
     # Training gathers the neighbours with unfold, the exported graph with slices.
     torch.manual_seed(6)
     img = torch.rand(2, 3, 20, 28) * 5
-    logits = torch.randn(2, model.KERNEL ** 2, 20, 28) * 4
+    logits = torch.randn(2, model.KERNEL**2, 20, 28) * 4
     a = model.apply_kernels(img, logits, "unfold")
     b = model.apply_kernels(img, logits, "slices")
     assert torch.allclose(a, b, rtol=1e-5, atol=1e-6)
@@ -159,12 +165,13 @@ def test_multi_scale_blend_against_a_hand_written_pyramid(gate):
     hdr = torch.rand(n, 3, h, w) * 4
     alb = torch.rand(n, 3, h, w)
     extra = 2 if gate else 1
-    heads = [torch.randn(n, k * k + (extra if s < model.SCALES - 1 else 0), h >> s, w >> s) * 2
-             for s in range(model.SCALES)]
+    heads = [
+        torch.randn(n, k * k + (extra if s < model.SCALES - 1 else 0), h >> s, w >> s) * 2 for s in range(model.SCALES)
+    ]
     got = model.reconstruct(hdr, alb, heads, detail_gate=gate)
 
     def filt(img, logits):
-        wgt = torch.softmax(logits[:, :k * k], 1)
+        wgt = torch.softmax(logits[:, : k * k], 1)
         p = torch.nn.functional.pad(img, (k // 2,) * 4, mode="replicate")
         out = torch.zeros_like(img)
         for y in range(img.shape[2]):
@@ -186,8 +193,8 @@ def test_multi_scale_blend_against_a_hand_written_pyramid(gate):
     o = filt(irr[-1], heads[-1])
     for s in range(model.SCALES - 2, -1, -1):
         f = filt(irr[s], heads[s])
-        alpha = torch.sigmoid(heads[s][:, k * k:k * k + 1])
-        beta = torch.sigmoid(heads[s][:, k * k + 1:k * k + 2]) if gate else 1.0
+        alpha = torch.sigmoid(heads[s][:, k * k : k * k + 1])
+        beta = torch.sigmoid(heads[s][:, k * k + 1 : k * k + 2]) if gate else 1.0
         o = up(down(f)) + beta * (f - up(down(f))) + alpha * (up(o) - up(down(f)))
     want = (o * a).clamp(min=0)
     assert torch.allclose(got, want, rtol=1e-4, atol=1e-5)
@@ -270,7 +277,11 @@ def test_psnr_loss_is_minus_the_evaluations_psnr():
     import luxest_contract as contract
 
     d = ROOT / "tests" / "fixtures" / "metrics"
-    values = dict(line.split(" ", 1) for line in (d / "expected.txt").read_text().splitlines() if line and not line.startswith("#"))
+    values = dict(
+        line.split(" ", 1)
+        for line in (d / "expected.txt").read_text().splitlines()
+        if line and not line.startswith("#")
+    )
     to = lambda a: torch.from_numpy(np.asarray(a, dtype=np.float64)).permute(2, 0, 1)[None]
     ref = contract.read(d / "hdr_ref.exr").pixels[..., :3]
     test = contract.read(d / "hdr_test.exr").pixels[..., :3]
@@ -279,19 +290,30 @@ def test_psnr_loss_is_minus_the_evaluations_psnr():
     psnr = float(values["hdr.tm.psnr"])
     got = float(losses.psnr_loss(to(test), to(ref), torch.tensor([k], dtype=torch.float64)))
     assert got == pytest.approx(10 * np.log10(10 ** (-psnr / 10) + losses.PSNR_FLOOR), abs=1e-9)
+
     # Per crop with its own exposure, then averaged: a batch of the pair and of the pair halved
     # in error at another exposure, against a numpy transcription of the tonemap's definition.
     def tonemap(v, e):
         x = np.maximum(np.asarray(v, dtype=np.float64), 0) * e
         t = x / (1 + x)
-        return np.clip(np.where(t <= 0.0031308, 12.92 * t, 1.055 * np.power(np.maximum(t, 0.0031308), 1 / 2.4) - 0.055), 0, 1)
+        return np.clip(
+            np.where(t <= 0.0031308, 12.92 * t, 1.055 * np.power(np.maximum(t, 0.0031308), 1 / 2.4) - 0.055), 0, 1
+        )
 
     half = ref + 0.5 * (test - ref)
     mse_half = float(((tonemap(half, 3 * k) - tonemap(ref, 3 * k)) ** 2).mean())
-    both = float(losses.psnr_loss(torch.cat([to(test), to(half)]), torch.cat([to(ref), to(ref)]), torch.tensor([k, 3 * k], dtype=torch.float64)))
+    both = float(
+        losses.psnr_loss(
+            torch.cat([to(test), to(half)]),
+            torch.cat([to(ref), to(ref)]),
+            torch.tensor([k, 3 * k], dtype=torch.float64),
+        )
+    )
     assert both == pytest.approx((got + 10 * np.log10(mse_half + losses.PSNR_FLOOR)) / 2, abs=1e-9)
     # Overflowing radiance tonemaps to white, not NaN.
-    assert float(losses.display(torch.full((1, 3, 1, 1), float("inf")), torch.tensor([1.0]))[0, 0, 0, 0]) == pytest.approx(1.0, abs=1e-6)
+    assert float(
+        losses.display(torch.full((1, 3, 1, 1), float("inf")), torch.tensor([1.0]))[0, 0, 0, 0]
+    ) == pytest.approx(1.0, abs=1e-6)
 
 
 @pytest.mark.parametrize("head", model.HEADS)
@@ -320,7 +342,9 @@ def test_one_psnr_step_raises_the_psnr(head):
         _, exp = net.transferred(inp, transfer.exposure_of(noisy))  # as the network shapes it
         perfect = ref if head == "kpn" else transfer.forward(ref, exp)
         floor = 10 * np.log10(losses.PSNR_FLOOR)
-        assert float(train.objective(net, perfect, exp, ref, transfer.exposure_of(ref), cfg)) == pytest.approx(floor, abs=1e-3)
+        assert float(train.objective(net, perfect, exp, ref, transfer.exposure_of(ref), cfg)) == pytest.approx(
+            floor, abs=1e-3
+        )
 
 
 def test_ms_ssim_is_one_for_identical_images_and_less_otherwise():
@@ -345,80 +369,99 @@ def test_split_joins_compute_the_same_decoder():
     assert float(a[0].abs().max()) > 0
 
 
-@pytest.mark.parametrize("head,features,gate", [(h, model.FEATURE_SETS[0], False) for h in model.HEADS]
-                         + [("kpn", model.FEATURE_SETS[1], False), ("kpn", model.FEATURE_SETS[2], False),
-                            ("kpn", model.FEATURE_SETS[2], True), ("kpn", model.FEATURE_SETS[2], "5 scales")])
-def test_export_matches_onnxruntime(tmp_path, head, features, gate):
+# The network of each shared model (conftest.MODELS): head, features, detail gate, scales. `ema`
+# is the `emi` run exported to add back the antialiased emission: the same weights, all five
+# features; `five` the `gated` run grown to five scales.
+EXPORTED = {
+    "kpn": ("kpn", model.FEATURE_SETS[0], False, 4),
+    "direct": ("direct", model.FEATURE_SETS[0], False, 4),
+    "emi": ("kpn", model.FEATURE_SETS[1], False, 4),
+    "ema": ("kpn", model.FEATURE_SETS[2], False, 4),
+    "gated": ("kpn", model.FEATURE_SETS[2], True, 4),
+    "five": ("kpn", model.FEATURE_SETS[2], True, 5),
+}
+
+
+def exported_network(models, name):
+    """(the torch network of shared model `name` with its run's weights, in eval mode; its ONNX path)."""
+    head, features, gate, scales = EXPORTED[name]
+    net = Denoiser(width=8, head=head, features=features, detail_gate=gate, scales=scales)
+    net.load_state_dict(torch.load(models[name]["run"] / "checkpoint.pt", weights_only=False)["model"])
+    return net.eval(), models[name]["onnx"]
+
+
+@pytest.mark.parametrize("name", list(EXPORTED))
+def test_export_matches_onnxruntime(models, name):
+    # Every network shape the exporter writes: each head, feature set, with and without detail
+    # gates, 4 and 5 scales (shared exports: conftest.py).
     ort = pytest.importorskip("onnxruntime")
     import export
 
-    torch.manual_seed(2)
-    scales = 5 if gate == "5 scales" else 4
-    gate = bool(gate)
-    cfg = config.Config(base_width=8, head=head, features=list(features), detail_gate=gate, scales=scales)
-    cfg.save(tmp_path / "config.json")
-    net = Denoiser(width=8, head=head, features=features, detail_gate=gate, scales=scales)
-    c = 3 * len(features)
-    torch.save({"model": net.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
-    onnx_path = tmp_path / "m.onnx"
-    export.export(tmp_path, onnx_path)
+    head, features, gate, scales = EXPORTED[name]
+    net, onnx_path = exported_network(models, name)
     session = ort.InferenceSession(str(onnx_path), providers=["CPUExecutionProvider"])
-    net.eval()
+    assert [i.name for i in session.get_inputs()] + [o.name for o in session.get_outputs()] == list(contract.TENSORS)
+    c = 3 * len(features)
+    torch.manual_seed(2)
     for h, w in [(40, 56), (33, 17)]:
         x = torch.rand(1, c, h, w) * torch.tensor([5.0] * 3 + [1.0] * 6 + [2.0] * (c - 9)).view(1, c, 1, 1)
         if c >= 12:
             x[:, 9:c, : h // 2] = 0.0  # emission in the lower half only
-        a = net(x).detach().numpy()
+        with torch.no_grad():
+            a = net(x).numpy()
         e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
         assert abs(float(e[0]) - float(transfer.exposure_of(x[:, 0:3])[0])) <= 1e-6 * float(e[0])
-        b = session.run(None, {"input": x.numpy(), "exposure": e})[0]
+        b = session.run([contract.OUTPUT_TENSOR], {contract.INPUT_TENSOR: x.numpy(), contract.EXPOSURE_TENSOR: e})[0]
         assert a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-4 * max(1.0, float(np.abs(a).max()))
     graph = __import__("onnx").load(str(onnx_path)).graph
     # The decoder joins are exported without Concat (model.UNet.split_joins): no Concat takes
     # an upsampled map.
     producer = {o: n.op_type for n in graph.node for o in n.output}
-    joins = [n.name for n in graph.node if n.op_type == "Concat"
-             and any(producer.get(i) in ("Resize", "Upsample") for i in n.input)]
+    joins = [
+        n.name
+        for n in graph.node
+        if n.op_type == "Concat" and any(producer.get(i) in ("Resize", "Upsample") for i in n.input)
+    ]
     assert not joins and any(n.op_type == "Resize" for n in graph.node)
     meta = {p.key: p.value for p in __import__("onnx").load(str(onnx_path)).metadata_props}
-    assert meta["luxest.channels"] == ",".join(features)
-    assert (export.EMISSION in meta["luxest.transfer"]) == ("emi" in features)
-    assert (export.EMISSION_AA in meta["luxest.transfer"]) == ("ema" in features)
-    assert json.loads(meta["luxest.config"])["base_width"] == 8
-    assert json.loads(meta["luxest.config"])["head"] == head
-    assert export.outputs(head, scales) in meta["luxest.transfer"]
-    assert (export.DETAIL_GATE in meta["luxest.transfer"]) == gate
+    assert meta[contract.CHANNELS] == ",".join(features)
+    assert (export.EMISSION in meta[contract.MODEL_TRANSFER]) == ("emi" in features)
+    assert (export.EMISSION_AA in meta[contract.MODEL_TRANSFER]) == ("ema" in features)
+    assert json.loads(meta[contract.MODEL_CONFIG])["base_width"] == 8
+    assert json.loads(meta[contract.MODEL_CONFIG])["head"] == head
+    assert export.outputs(head, scales) in meta[contract.MODEL_TRANSFER]
+    assert (export.DETAIL_GATE in meta[contract.MODEL_TRANSFER]) == gate
     back, state = export.load_onnx(onnx_path)
     assert back.detail_gate == gate and back.scales == scales
     assert all(torch.equal(state[k], v) for k, v in net.state_dict().items())
 
 
-def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(tmp_path):
+def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(models, tmp_path):
+    # The shared `ema` model: the `emi` run (hdr, alb, nrm, emi) exported with
+    # antialiased_emission: it takes ema too and adds it back in place of emi.
     ort = pytest.importorskip("onnxruntime")
     import export
 
-    torch.manual_seed(5)
-    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[1]), detail_gate=False)
-    cfg.save(tmp_path / "config.json")
     net4 = Denoiser(width=8, head="kpn", features=model.FEATURE_SETS[1]).eval()
-    torch.save({"model": net4.state_dict(), "step": 0}, tmp_path / "checkpoint.pt")
-    export.export(tmp_path, tmp_path / "m.onnx", antialiased_emission=True)
-    session = ort.InferenceSession(str(tmp_path / "m.onnx"), providers=["CPUExecutionProvider"])
-    meta = {p.key: p.value for p in __import__("onnx").load(str(tmp_path / "m.onnx")).metadata_props}
-    assert meta["luxest.channels"] == "hdr,alb,nrm,emi,ema" and export.EMISSION_AA in meta["luxest.transfer"]
+    net4.load_state_dict(torch.load(models["emi"]["run"] / "checkpoint.pt", weights_only=False)["model"])
+    assert json.loads((models["emi"]["run"] / "config.json").read_text())["features"] == list(model.FEATURE_SETS[1])
+    session = ort.InferenceSession(str(models["ema"]["onnx"]), providers=["CPUExecutionProvider"])
+    meta = {p.key: p.value for p in __import__("onnx").load(str(models["ema"]["onnx"])).metadata_props}
+    assert meta[contract.CHANNELS] == "hdr,alb,nrm,emi,ema" and export.EMISSION_AA in meta[contract.MODEL_TRANSFER]
+    torch.manual_seed(5)
     x = torch.rand(1, 12, 32, 48) * 3.0
     ema = torch.rand(1, 3, 32, 48) * 7.0
     e = transfer.exposure_np(x[0, 0:3].permute(1, 2, 0).numpy())
-    b = session.run(None, {"input": torch.cat([x, ema], 1).numpy(), "exposure": e})[0]
+    b = session.run(None, {contract.INPUT_TENSOR: torch.cat([x, ema], 1).numpy(), contract.EXPOSURE_TENSOR: e})[0]
     with torch.no_grad():
         a = net4(x, torch.from_numpy(e)).numpy()
     added = (ema - x[:, 9:12]).numpy()
     assert np.max(np.abs(b - a - added)) <= 1e-4 * max(1.0, float(np.abs(b).max()))
-    cfg = config.Config(base_width=8, head="kpn", features=list(model.FEATURE_SETS[0]), detail_gate=False)
-    cfg.save(tmp_path / "config.json")
+    # A run without the emission cannot (refused before anything is exported).
     with pytest.raises(ValueError, match="emi"):
-        export.export(tmp_path, tmp_path / "n.onnx", antialiased_emission=True)
+        export.export(models["kpn"]["run"], tmp_path / "n.onnx", antialiased_emission=True)
+    assert not (tmp_path / "n.onnx").exists()
 
 
 def test_config_round_trip(tmp_path):
@@ -435,8 +478,10 @@ def test_config_round_trip(tmp_path):
     # ... and one saved before extra noise realizations had none.
     del old["extra_seeds"], old["extra_spp"]
     (tmp_path / "old.json").write_text(json.dumps(old))
-    assert (config.Config.load(tmp_path / "old.json").extra_seeds, config.Config.load(tmp_path / "old.json").extra_spp) == (
-        [], [1, 2, 4, 8, 16, 32])
+    assert (
+        config.Config.load(tmp_path / "old.json").extra_seeds,
+        config.Config.load(tmp_path / "old.json").extra_spp,
+    ) == ([], [1, 2, 4, 8, 16, 32])
     # ... and one saved before the detail gate (on by default since) had none; a key of no
     # current option (a model's metadata written by a later version) is dropped; a flag turns
     # the detail gate on and off.
@@ -450,29 +495,6 @@ def test_config_round_trip(tmp_path):
     assert config.parse(["--no-detail-gate"]).detail_gate is False
 
 
-def tiny_split(d, side, rng):
-    """A rendered split of one scene `g` in directory `d` (created): a 64-spp reference (seed 2)
-    and a 4-spp level (seed 1) with every feature, side x side random pixels drawn from `rng`."""
-    import luxest_contract as contract
-
-    d.mkdir(parents=True)
-    contract.write(d / contract.image_name("g", "hdr"), rng.random((side, side, 3)), {contract.SAMPLES: 64, contract.SEED: 2})
-    for kind in contract.FEATURES:
-        contract.write(d / contract.image_name("g", kind, 4), rng.random((side, side, 3)), {contract.SAMPLES: 4, contract.SEED: 1})
-    return d
-
-
-def tiny_prep(tmp_path, seed):
-    """tiny_split's scene (pixels from `seed`) preprocessed at 4 spp without local-estimate images
-    into tmp_path/prep, and train.py's arguments for it: 32² crops, batches of 2, one thread."""
-    import preprocess
-
-    d = tiny_split(tmp_path / "data" / "train", 32, np.random.default_rng(seed))
-    preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4], [])
-    return ["--prep-dir", str(tmp_path / "prep"), "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2",
-            "--threads", "1"]
-
-
 def test_training_runs_its_steps_and_resumes(tmp_path):
     # A tiny preprocessed split; a run stopped by its time budget, then resumed to its 5 steps:
     # the run record counts them and where it was resumed.
@@ -483,8 +505,25 @@ def test_training_runs_its_steps_and_resumes(tmp_path):
     for split in ("train", "valid"):
         tiny_split(tmp_path / "data" / split, 32, rng)
     (tmp_path / "data" / "test").mkdir()
-    args = ["--data-dir", str(tmp_path / "data"), "--prep-dir", str(tmp_path / "prep"), "--run-dir", str(tmp_path / "run"),
-            "--noisy-spp", "4", "--dle-paths", "--crop", "32", "--batch", "2", "--base-width", "8", "--threads", "1"]
+    args = [
+        "--data-dir",
+        str(tmp_path / "data"),
+        "--prep-dir",
+        str(tmp_path / "prep"),
+        "--run-dir",
+        str(tmp_path / "run"),
+        "--noisy-spp",
+        "4",
+        "--dle-paths",
+        "--crop",
+        "32",
+        "--batch",
+        "2",
+        "--base-width",
+        "8",
+        "--threads",
+        "1",
+    ]
     preprocess.main(args)
     train.main(args + ["--steps", "5", "--minutes", "0"])  # out of time at once: a checkpoint at step 0
     first = json.loads((tmp_path / "run" / "summary.json").read_text())
@@ -558,14 +597,23 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path, capsys, monkeypatch):
     d = tmp_path / "data" / "train"
     d.mkdir(parents=True)
     for name, (h, w) in (("g", (40, 56)), ("k", (48, 36))):
-        contract.write(d / contract.image_name(name, "hdr"), rng.random((h, w, 3)) * 4, {contract.SAMPLES: 64, contract.SEED: 2})
+        contract.write(
+            d / contract.image_name(name, "hdr"), rng.random((h, w, 3)) * 4, {contract.SAMPLES: 64, contract.SEED: 2}
+        )
         for spp in (4, 16):
             for kind in contract.FEATURES:
-                contract.write(d / contract.image_name(name, kind, spp), rng.random((h, w, 3)), {contract.SAMPLES: spp, contract.SEED: 1})
+                contract.write(
+                    d / contract.image_name(name, kind, spp),
+                    rng.random((h, w, 3)),
+                    {contract.SAMPLES: spp, contract.SEED: 1},
+                )
     (d / contract.REALIZATION_DIR.format(seed=5)).mkdir()
     for kind in contract.FEATURES:
-        contract.write(d / contract.REALIZATION_DIR.format(seed=5) / contract.image_name("k", kind, 4), rng.random((48, 36, 3)),
-                       {contract.SAMPLES: 4, contract.SEED: 5})
+        contract.write(
+            d / contract.REALIZATION_DIR.format(seed=5) / contract.image_name("k", kind, 4),
+            rng.random((48, 36, 3)),
+            {contract.SAMPLES: 4, contract.SEED: 5},
+        )
     preprocess.preprocess_split(d, tmp_path / "prep" / "train", [4, 16], extra_seeds=[5])
     data = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=96, extra_seeds=[5])
     assert len(data.pairs) == 5 and len({id(r) for _, r, *_ in data.pairs}) == 2 and len(data.groups) == 4
@@ -602,22 +650,26 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path, capsys, monkeypatch):
     assert train.cropper("auto", gpu, need + 1, need / 0.75, "prep/train") == "loader"
     assert "prep/train: its arrays take" in capsys.readouterr().err
     assert train.cropper("loader", gpu, need + 1, 0) == "loader" and train.cropper("auto", cpu, need, 0) == "loader"
-    with pytest.raises(SystemExit, match=r"^train: --cropper device: .*prep[/\\]train: its arrays take .* GiB free on cpu"):
+    with pytest.raises(
+        SystemExit, match=r"^train: --cropper device: .*prep[/\\]train: its arrays take .* GiB free on cpu"
+    ):
         monkeypatch.setattr(train, "free_memory", lambda device: need)
         next(train.batches(data, cfg, cpu))
 
 
-def test_a_run_starts_from_an_exported_models_weights(tmp_path):
+def test_a_run_starts_from_an_exported_models_weights(models, tiny_prep, tmp_path):
     # --init-from: a fine-tuning starts from the weights of an exported model (or a checkpoint)
-    # with its own schedule; a network of another width is refused in one line.
-    import export
+    # with its own schedule; a network of another width is refused in one line. The model: the
+    # shared `ema` export (all five features, no detail gates) of the `emi` run's weights.
     import train
 
-    args = tiny_prep(tmp_path, 4) + ["--steps", "2", "--no-detail-gate"]
-    train.main(args + ["--run-dir", str(tmp_path / "first"), "--base-width", "8"])
-    export.export(tmp_path / "first", tmp_path / "first.onnx")
-    train.main(args + ["--run-dir", str(tmp_path / "second"), "--base-width", "8", "--minutes", "0", "--init-from", str(tmp_path / "first.onnx")])
-    first = torch.load(tmp_path / "first" / "checkpoint.pt", weights_only=False)["model"]
+    args = tiny_prep + ["--steps", "2", "--no-detail-gate"]
+    first_onnx, first_pt = models["ema"]["onnx"], models["emi"]["run"] / "checkpoint.pt"
+    train.main(
+        args
+        + ["--run-dir", str(tmp_path / "second"), "--base-width", "8", "--minutes", "0", "--init-from", str(first_onnx)]
+    )
+    first = torch.load(first_pt, weights_only=False)["model"]
     second = torch.load(tmp_path / "second" / "checkpoint.pt", weights_only=False)["model"]
     assert first.keys() == second.keys() and all(torch.equal(first[k], second[k]) for k in first)
     # Not the initialisation it would have had otherwise.
@@ -625,30 +677,66 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
     fresh = torch.load(tmp_path / "fresh" / "checkpoint.pt", weights_only=False)["model"]
     assert not all(torch.equal(first[k], fresh[k]) for k in first)
     with pytest.raises(SystemExit, match="a width-8 kpn model .* this run trains width 4"):
-        train.main(args + ["--base-width", "4", "--minutes", "0", "--run-dir", str(tmp_path / "third"),
-                           "--init-from", str(tmp_path / "first.onnx")])
+        train.main(
+            args
+            + [
+                "--base-width",
+                "4",
+                "--minutes",
+                "0",
+                "--run-dir",
+                str(tmp_path / "third"),
+                "--init-from",
+                str(first_onnx),
+            ]
+        )
     with pytest.raises(SystemExit, match="weights of another network"):
-        train.main(args + ["--base-width", "16", "--minutes", "0", "--run-dir", str(tmp_path / "fourth"),
-                           "--init-from", str(tmp_path / "first" / "checkpoint.pt")])
+        train.main(
+            args
+            + [
+                "--base-width",
+                "16",
+                "--minutes",
+                "0",
+                "--run-dir",
+                str(tmp_path / "fourth"),
+                "--init-from",
+                str(first_pt),
+            ]
+        )
     # A run with detail gates from a model without them: its weights, and gates that keep 0.993
     # of the detail, so the output starts within that fraction of the detail band of the model's.
-    k2 = model.KERNEL ** 2
+    k2 = model.KERNEL**2
     a = model.denoiser(config.Config(base_width=8, detail_gate=False)).eval()
     a.load_state_dict(first)
     x = torch.rand(1, a.in_channels, 32, 32) * 2
     x[:, 9:] = 0.0  # no emission
-    for src in (tmp_path / "first.onnx", tmp_path / "first" / "checkpoint.pt"):
+    for src in (first_onnx, first_pt):
         gated_dir = tmp_path / f"gated-{src.suffix[1:]}"
-        train.main(args + ["--run-dir", str(gated_dir), "--base-width", "8", "--minutes", "0", "--detail-gate",
-                           "--init-from", str(src)])
+        train.main(
+            args
+            + [
+                "--run-dir",
+                str(gated_dir),
+                "--base-width",
+                "8",
+                "--minutes",
+                "0",
+                "--detail-gate",
+                "--init-from",
+                str(src),
+            ]
+        )
         gated = torch.load(gated_dir / "checkpoint.pt", weights_only=False)["model"]
-        assert model.has_detail_gates(gated) and not model.has_detail_gates(first)
+        assert grow.has_detail_gates(gated) and not grow.has_detail_gates(first)
         assert all(torch.equal(first[k], gated[k]) for k in first if not k.startswith("heads."))
         for s in range(model.SCALES):
             w, b = gated[f"heads.{s}.weight"], gated[f"heads.{s}.bias"]
-            assert torch.equal(w[:k2 + 1], first[f"heads.{s}.weight"]) and torch.equal(b[:k2 + 1], first[f"heads.{s}.bias"])
+            assert torch.equal(w[: k2 + 1], first[f"heads.{s}.weight"]) and torch.equal(
+                b[: k2 + 1], first[f"heads.{s}.bias"]
+            )
             if s < model.SCALES - 1:  # a gate of weights 0 and bias DETAIL_GATE_INIT
-                assert w.shape[0] == k2 + 2 and not w[k2 + 1].any() and float(b[k2 + 1]) == model.DETAIL_GATE_INIT
+                assert w.shape[0] == k2 + 2 and not w[k2 + 1].any() and float(b[k2 + 1]) == grow.DETAIL_GATE_INIT
             else:
                 assert w.shape[0] == k2
         # The same network with those gate logits written out: beta = sigmoid(5) everywhere.
@@ -656,45 +744,75 @@ def test_a_run_starts_from_an_exported_models_weights(tmp_path):
         b.load_state_dict(gated)
         with torch.no_grad():
             yb = b(x)
-            feats = a.unet.decoder(torch.cat([transfer.forward(x[:, 0:3], transfer.exposure_of(x[:, 0:3]).view(-1, 1, 1, 1)),
-                                              x[:, 3:9], transfer.forward(x[:, 9:12], transfer.exposure_of(x[:, 0:3]).view(-1, 1, 1, 1))], 1))
+            feats = a.unet.decoder(
+                torch.cat(
+                    [
+                        transfer.forward(x[:, 0:3], transfer.exposure_of(x[:, 0:3]).view(-1, 1, 1, 1)),
+                        x[:, 3:9],
+                        transfer.forward(x[:, 9:12], transfer.exposure_of(x[:, 0:3]).view(-1, 1, 1, 1)),
+                    ],
+                    1,
+                )
+            )
             heads = [h(f) for h, f in zip(a.heads, feats)]
-            heads = [torch.cat([h, torch.full_like(h[:, :1], model.DETAIL_GATE_INIT)], 1) if s < model.SCALES - 1 else h
-                     for s, h in enumerate(heads)]
+            heads = [
+                torch.cat([h, torch.full_like(h[:, :1], grow.DETAIL_GATE_INIT)], 1) if s < model.SCALES - 1 else h
+                for s, h in enumerate(heads)
+            ]
             want = model.reconstruct(x[:, 0:3], x[:, 3:6], heads, detail_gate=True) + x[:, 12:15]
             ya = a(x)
         assert torch.allclose(yb, want, rtol=1e-4, atol=1e-5), float((yb - want).abs().max())
         assert float((ya - yb).abs().max()) > 0  # the gates start a little below 1
-    export.export(gated_dir, tmp_path / "gated.onnx")
-    for src in (gated_dir / "checkpoint.pt", tmp_path / "gated.onnx"):
+    # A gated checkpoint, and a gated model's export (the shared `gated` one), for a run without.
+    for src in (gated_dir / "checkpoint.pt", models["gated"]["onnx"]):
         with pytest.raises(SystemExit, match="a model with detail gates"):
-            train.main(args + ["--base-width", "8", "--minutes", "0", "--run-dir", str(tmp_path / "fifth"),
-                               "--init-from", str(src)])
+            train.main(
+                args
+                + ["--base-width", "8", "--minutes", "0", "--run-dir", str(tmp_path / "fifth"), "--init-from", str(src)]
+            )
     # Resuming a run with another network (here: without its gates) is refused in one line.
     with pytest.raises(SystemExit, match="the run trains .*detail_gate True, scales 4; this one .*detail_gate False"):
         train.main(args + ["--run-dir", str(gated_dir), "--base-width", "8", "--steps", "3", "--resume"])
     with pytest.raises(SystemExit, match="the detail gate needs the kpn head"):
-        train.main(args + ["--run-dir", str(tmp_path / "sixth"), "--base-width", "8", "--head", "direct", "--detail-gate",
-                           "--features", "hdr", "alb", "nrm"])
+        train.main(
+            args
+            + [
+                "--run-dir",
+                str(tmp_path / "sixth"),
+                "--base-width",
+                "8",
+                "--head",
+                "direct",
+                "--detail-gate",
+                "--features",
+                "hdr",
+                "alb",
+                "nrm",
+            ]
+        )
 
 
-def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_path):
-    # --init-from a narrower kpn model widens it (model.widen): the same outputs, old weights in
+def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(models, tiny_prep, tmp_path):
+    # --init-from a narrower kpn model widens it (grow.widen): the same outputs, old weights in
     # place, new channels feeding nothing, the same new channels whatever the run's seed (so
-    # that fine-tunings of one widened model can be souped), and a step moves the zeros.
-    import export
+    # that fine-tunings of one widened model can be souped), and a step moves the zeros. The
+    # narrow model: the shared `gated` one (width 8, trained 3 steps).
     import train
 
-    args = tiny_prep(tmp_path, 5) + ["--detail-gate"]
-    train.main(args + ["--run-dir", str(tmp_path / "narrow"), "--base-width", "8", "--steps", "3"])
-    export.export(tmp_path / "narrow", tmp_path / "narrow.onnx")
+    args = tiny_prep + ["--detail-gate"]
     runs = {}
-    for name, extra in (("a", ["--seed", "1", "--minutes", "0"]), ("b", ["--seed", "7", "--minutes", "0"]),
-                        ("stepped", ["--seed", "1", "--steps", "2", "--lr", "1e-2"])):
-        train.main(args + extra + ["--run-dir", str(tmp_path / name), "--base-width", "16",
-                                   "--init-from", str(tmp_path / "narrow.onnx")])
+    for name, extra in (
+        ("a", ["--seed", "1", "--minutes", "0"]),
+        ("b", ["--seed", "7", "--minutes", "0"]),
+        ("stepped", ["--seed", "1", "--steps", "2", "--lr", "1e-2"]),
+    ):
+        train.main(
+            args
+            + extra
+            + ["--run-dir", str(tmp_path / name), "--base-width", "16", "--init-from", str(models["gated"]["onnx"])]
+        )
         runs[name] = torch.load(tmp_path / name / "checkpoint.pt", weights_only=False)["model"]
-    narrow = torch.load(tmp_path / "narrow" / "checkpoint.pt", weights_only=False)["model"]
+    narrow = torch.load(models["gated"]["run"] / "checkpoint.pt", weights_only=False)["model"]
     wide = runs["a"]
     assert all(torch.equal(wide[k], runs["b"][k]) for k in wide)
     assert wide["unet.enc1.0.weight"].shape == (24, 16, 3, 3) and narrow["unet.enc1.0.weight"].shape == (12, 8, 3, 3)
@@ -706,7 +824,7 @@ def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_pat
     assert torch.equal(w[:8, :12], v[:, :12]) and torch.equal(w[:8, 24:32], v[:, 12:20])
     assert not w[:8, 12:24].any() and not w[:8, 32:].any()
     for s in range(model.SCALES):
-        assert not wide[f"heads.{s}.weight"][:, narrow[f"heads.{s}.weight"].shape[1]:].any()
+        assert not wide[f"heads.{s}.weight"][:, narrow[f"heads.{s}.weight"].shape[1] :].any()
     cfg8, cfg16 = (config.Config(base_width=b, detail_gate=True) for b in (8, 16))
     a, b = model.denoiser(cfg8).eval(), model.denoiser(cfg16).eval()
     a.load_state_dict(narrow)
@@ -719,24 +837,25 @@ def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(tmp_pat
     moved = runs["stepped"]["unet.enc1.0.weight"][:12, 8:]
     assert moved.abs().sum() > 0  # the new channels' fan-out learns
     with pytest.raises(ValueError, match="cannot narrow"):
-        model.widen(wide, cfg16, 8)
+        grow.widen(wide, cfg16, 8)
 
 
-def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(tmp_path):
-    # --scales 5 --init-from a 4-scale model (model.add_coarsest_scale): the weights in place, a
+def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(models, tiny_prep, tmp_path):
+    # --scales 5 --init-from a 4-scale model (grow.add_coarsest_scale): the weights in place, a
     # blend logit of bias -5 at 1/8 (alpha 0.0067) and a zero 1/16 head, so the output moves
     # from the 4-scale model's by 0.0067 of the 1/8 scale's coarse band at most; hand-computed.
+    # The 4-scale model: the shared `gated` one (trained 3 steps).
     import export
     import train
 
-    args = tiny_prep(tmp_path, 6) + ["--detail-gate", "--base-width", "8"]
-    train.main(args + ["--run-dir", str(tmp_path / "four"), "--steps", "3"])
-    export.export(tmp_path / "four", tmp_path / "four.onnx")
-    train.main(args + ["--run-dir", str(tmp_path / "five"), "--scales", "5", "--minutes", "0",
-                       "--init-from", str(tmp_path / "four.onnx")])
-    four = torch.load(tmp_path / "four" / "checkpoint.pt", weights_only=False)["model"]
+    args = tiny_prep + ["--detail-gate", "--base-width", "8"]
+    four_onnx = models["gated"]["onnx"]
+    train.main(
+        args + ["--run-dir", str(tmp_path / "five"), "--scales", "5", "--minutes", "0", "--init-from", str(four_onnx)]
+    )
+    four = torch.load(models["gated"]["run"] / "checkpoint.pt", weights_only=False)["model"]
     five = torch.load(tmp_path / "five" / "checkpoint.pt", weights_only=False)["model"]
-    k2 = model.KERNEL ** 2
+    k2 = model.KERNEL**2
     assert all(torch.equal(four[k], five[k]) for k in four if k not in ("heads.3.weight", "heads.3.bias"))
     assert torch.equal(five["heads.3.weight"][:k2], four["heads.3.weight"])
     assert not five["heads.3.weight"][k2:].any() and five["heads.3.bias"][k2:].tolist() == [-5.0, 5.0]
@@ -760,20 +879,39 @@ def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(tmp_path):
     assert torch.allclose(yb, want, rtol=1e-4, atol=1e-5)
     rel = float((ya - yb).abs().mean() / ya.abs().mean())
     assert 0 < rel < 0.01, rel
-    train.main(args + ["--run-dir", str(tmp_path / "stepped"), "--scales", "5", "--steps", "2", "--lr", "1e-2",
-                       "--init-from", str(tmp_path / "four.onnx")])
+    train.main(
+        args
+        + [
+            "--run-dir",
+            str(tmp_path / "stepped"),
+            "--scales",
+            "5",
+            "--steps",
+            "2",
+            "--lr",
+            "1e-2",
+            "--init-from",
+            str(four_onnx),
+        ]
+    )
     stepped = torch.load(tmp_path / "stepped" / "checkpoint.pt", weights_only=False)["model"]
     assert stepped["heads.4.weight"].abs().sum() > 0 and stepped["heads.3.weight"][k2:].abs().sum() > 0
-    # Exported and read back whole, the zero 1/16 head included (the exporter's optimiser may drop
-    # a Conv's zero bias; export.load_onnx restores it).
-    export.export(tmp_path / "five", tmp_path / "f.onnx")
-    back, state = export.load_onnx(tmp_path / "f.onnx")
-    assert back.scales == 5 and state.keys() == five.keys() and all(torch.equal(state[k], five[k]) for k in five)
+    # Exported and read back whole, the zero bias of the 1/16 head included (the exporter's
+    # optimiser may drop a Conv's zero bias; export.load_onnx restores it): the shared `five`
+    # model, this grown model with random weights in its 1/16 head.
+    grown = torch.load(models["five"]["run"] / "checkpoint.pt", weights_only=False)["model"]
+    assert (
+        all(torch.equal(grown[k], five[k]) for k in five if k != "heads.4.weight") and not grown["heads.4.bias"].any()
+    )
+    back, state = export.load_onnx(models["five"]["onnx"])
+    assert back.scales == 5 and state.keys() == grown.keys() and all(torch.equal(state[k], grown[k]) for k in grown)
     with pytest.raises(SystemExit, match="of 5 scales .* this run trains width 8 kpn of 4 scales"):
-        train.main(args + ["--run-dir", str(tmp_path / "back"), "--minutes", "0", "--init-from", str(tmp_path / "f.onnx")])
+        train.main(
+            args + ["--run-dir", str(tmp_path / "back"), "--minutes", "0", "--init-from", str(models["five"]["onnx"])]
+        )
 
 
-def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
+def test_time_schedule_is_torchs_one_cycle_over_the_budget(tiny_prep, tmp_path):
     # --schedule time: the rates of torch's OneCycleLR at the same fraction of the cycle,
     # the fraction being the larger of steps / cap and seconds / budget; a run ends its cycle
     # at the cap (or the budget) and a resumed one goes on from its step.
@@ -799,7 +937,7 @@ def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
         assert abs(opt.param_groups[0]["lr"] - lr) < 1e-6
     assert sched.done(0, 600.0) and sched.done(n - 1, 0.0) and not sched.done(10, 10.0)
 
-    args = tiny_prep(tmp_path, 6) + ["--run-dir", str(tmp_path / "run"), "--base-width", "8", "--schedule", "time"]
+    args = tiny_prep + ["--run-dir", str(tmp_path / "run"), "--base-width", "8", "--schedule", "time"]
     train.main(args + ["--steps", "3", "--minutes", "5"])
     assert json.loads((tmp_path / "run" / "summary.json").read_text())["steps"] == 3
     train.main(args + ["--steps", "5", "--minutes", "5", "--resume"])
@@ -807,7 +945,7 @@ def test_time_schedule_is_torchs_one_cycle_over_the_budget(tmp_path):
     assert record["run"]["steps"] == 5 and record["run"]["resumed_at"] == [3] and record["schedule"] == "time"
     with pytest.raises(SystemExit, match="--schedule 'epochs'"):
         train.main(args + ["--schedule", "epochs"])
-    steps_args = [a for a in args if a not in ("--schedule", "time")]
+    steps_args = [a for a in args if a not in ("--schedule", "time")] + ["--schedule", "steps"]
     with pytest.raises(SystemExit, match="the run's schedule is 'time', not 'steps'"):
         train.main(steps_args + ["--steps", "8", "--resume"])
 

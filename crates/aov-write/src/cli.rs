@@ -4,8 +4,9 @@
 use crate::features::FeatureFilm;
 use clap::Parser;
 use luxest_io::cli::CommonArgs;
-use luxest_io::exr_io::{write_rgb_to, RgbImage};
+use luxest_io::exr::write_rgb_to;
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{image_path, Kind, Level};
 use luxest_io::num::Count;
@@ -15,7 +16,7 @@ use luxest_render::world::{load_with_camera, Traversal};
 use std::path::PathBuf;
 
 /// The estimator name recorded in the features' headers.
-pub const ESTIMATOR: &str = "first-hit-features";
+pub const ESTIMATOR: &str = header::estimator::FIRST_HIT_FEATURES;
 
 /// Write albedo / normal / emission (/ depth) feature images with trace's pixel sampling.
 #[derive(Parser, Debug)]
@@ -85,6 +86,13 @@ pub fn run(args: Args) -> Result<()> {
     counts.dedup();
     let start = std::time::Instant::now();
     let threads = args.common.thread_count();
+    luxest_io::limits::check_image(
+        "feature film",
+        cam.width.into(),
+        cam.height.into(),
+        crate::features::BYTES_PER_PIXEL,
+    )
+    .map_err(Error::Usage)?;
     let mut film = FeatureFilm::new(cam.width as usize, cam.height as usize);
     let final_level = if args.reference {
         Level::Reference
@@ -132,6 +140,9 @@ pub fn run(args: Args) -> Result<()> {
         .collect();
     checkpoints.sort_unstable();
     checkpoints.dedup();
+    if let Some(&last) = checkpoints.last() {
+        film.plan(&world, &cam, threads, last).announce();
+    }
     for &samples in &checkpoints {
         film.advance(&world, &cam, args.common.seed, threads, samples);
         let info = RunInfo::new(

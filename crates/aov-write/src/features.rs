@@ -133,6 +133,11 @@ fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> 
     }
 }
 
+/// Bytes per pixel the feature film keeps (albedo, normal, emission sums and depth in f64), with
+/// an output image (f32 RGB) and its encoding: checked against the memory available before
+/// the film is allocated.
+pub const BYTES_PER_PIXEL: u64 = 3 * 24 + 8 + 2 * 12;
+
 /// Feature sums per pixel over samples `0..samples`.
 pub struct FeatureFilm {
     pub width: usize,
@@ -154,6 +159,37 @@ impl FeatureFilm {
             depth: vec![0.0; width * height],
             emission: vec![[0.0; 3]; width * height],
             samples: 0,
+        }
+    }
+
+    /// The plan of a run to `samples` samples per pixel (the resource rule): first hits of
+    /// camera rays spread over the image, timed.
+    pub fn plan(
+        &self,
+        world: &World,
+        cam: &PinholeCamera,
+        threads: usize,
+        samples: u32,
+    ) -> luxest_io::limits::WorkPlan {
+        let (w, h) = (self.width as u64, self.height as u64);
+        let pixels = w * h;
+        let (per_sample, spent) = luxest_io::limits::seconds_per_unit(|k| {
+            let pixel = (k * 7919) % pixels;
+            let (u, v) = pixel_jitter(0x00ca_11b2_a7e2, pixel, k);
+            let dir = cam.direction((pixel % w) as f64 + u, (pixel / w) as f64 + v);
+            first_hit(world, cam.position, dir);
+        });
+        let total = (pixels * samples as u64) as f64;
+        let threads = threads.min(self.height).max(1);
+        luxest_io::limits::WorkPlan {
+            stage: "aov-write".into(),
+            work: format!("{w}x{h} pixels x {samples} first hits"),
+            units: total,
+            seconds: total * per_sample / threads as f64,
+            threads,
+            memory_bytes: pixels as u128 * BYTES_PER_PIXEL as u128,
+            calibration_seconds: spent,
+            levers: "--spp, --min-samples, --resolution and --threads".into(),
         }
     }
 

@@ -6,7 +6,7 @@
 //! comparison with the peer is `make bench-denoise`.
 
 use denoise::{Denoiser, Feature, Tiling};
-use luxest_io::exr_io::RgbImage;
+use luxest_io::image::RgbImage;
 use std::path::Path;
 use std::time::Instant;
 

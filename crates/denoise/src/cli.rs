@@ -5,10 +5,12 @@ use crate::feature::names;
 use crate::{feature_path, output_path, Denoiser, Feature, Tiling};
 use clap::Parser;
 use luxest_io::cli::CommonArgs;
-use luxest_io::exr_io::{read_rgb_finite, write_preview_png_auto_to, write_rgb_to, RgbImage};
+use luxest_io::exr::{read_rgb_finite, write_rgb_to};
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 use luxest_io::naming::preview_path;
 use luxest_io::outputs::{Format, OutputPlan};
+use luxest_io::png::write_preview_png_auto_to;
 use luxest_io::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -180,13 +182,28 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &args.out {
         Format::Exr.check(out, "-o/--out")?;
     }
-    for job in &jobs {
+    // What each image's line will say, printed once every output is in place: a line per
+    // image as it was denoised announced outputs that a later image's failure then withheld.
+    let mut done = Vec::new();
+    for (n, job) in jobs.iter().enumerate() {
         let images = job
             .features
             .iter()
             .map(|p| read_checked(p))
             .collect::<Result<Vec<RgbImage>>>()?;
         let (w, h) = (images[0].width, images[0].height);
+        tiling.check_memory(w, h)?;
+        if n == 0 {
+            // The resource rule: the run's plan, its images taken to be the first one's size.
+            work_plan(
+                &mut denoiser,
+                tiling,
+                (w, h),
+                jobs.len(),
+                args.common.thread_count(),
+            )?
+            .announce();
+        }
         for (image, path) in images.iter().zip(&job.features).skip(1) {
             if (image.width, image.height) != (w, h) {
                 return Err(Error::input(
@@ -225,14 +242,41 @@ pub fn run(args: Args) -> Result<()> {
         if let Some(p) = &job.preview {
             write_preview_png_auto_to(&mut plan, p, &result)?;
         }
-        eprintln!(
+        done.push(format!(
             "denoise: {} ({w}x{h}, {:.1} ms/megapixel)",
             job.out.display(),
             1e3 * seconds / (w * h) as f64 * 1e6
-        );
+        ));
     }
     // All outputs of the run appear together, or none (a later failure leaves nothing).
-    plan.commit()
+    plan.commit()?;
+    for line in done {
+        eprintln!("{line}");
+    }
+    Ok(())
+}
+
+/// The plan of denoising `images` images of `w` x `h` pixels (the first image's size).
+fn work_plan(
+    denoiser: &mut Denoiser,
+    tiling: Tiling,
+    (w, h): (usize, usize),
+    images: usize,
+    threads: usize,
+) -> Result<luxest_io::limits::WorkPlan> {
+    let start = Instant::now();
+    let per_pixel = denoiser.seconds_per_pixel(tiling)?;
+    let pixels = (w * h * images) as f64;
+    Ok(luxest_io::limits::WorkPlan {
+        stage: "denoise".into(),
+        work: format!("{images} image(s) of {w}x{h} pixels (the first one's size)"),
+        units: pixels,
+        seconds: pixels * per_pixel,
+        threads,
+        memory_bytes: tiling.memory(w, h),
+        calibration_seconds: start.elapsed().as_secs_f64(),
+        levers: "the images given and --tile".into(),
+    })
 }
 
 /// The CPU seconds (user + system, all threads) this process has used so far, from the clock

@@ -1,8 +1,9 @@
 //! The ONNX model through ONNX Runtime: loading it (once per process, the library found at run
 //! time), checking it against the model contract, and running it over an image in tiles.
 
-use luxest_io::exr_io::{dim_exponent, RgbImage};
+use luxest_io::exposure::dim_exponent;
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 
 use luxest_io::{Error, Result};
 use ort::environment::Environment;
@@ -47,6 +48,21 @@ fn environment() -> Result<&'static Environment> {
     .map_err(|m| Error::input(&path, m.clone()))
 }
 
+/// The names of the model graph's tensors (`training/export.py` names them through
+/// `luxest_contract`'s `INPUT_TENSOR`, `EXPOSURE_TENSOR`, `OUTPUT_TENSOR`; tied by
+/// `tests/fixtures/contract/tensors.json`).
+pub mod tensor {
+    /// Input: float32 NCHW, the raw linear features named in `luxest.channels`.
+    pub const INPUT: &str = "input";
+    /// Input: float32 (N,), the autoexposure of each whole image.
+    pub const EXPOSURE: &str = "exposure";
+    /// Output: float32 N×3×H×W, the denoised linear radiance.
+    pub const OUTPUT: &str = "output";
+
+    /// Every tensor name: the inputs, then the output.
+    pub const ALL: [&str; 3] = [INPUT, EXPOSURE, OUTPUT];
+}
+
 /// A loaded denoising model.
 pub struct Denoiser {
     session: Session,
@@ -84,33 +100,39 @@ impl Denoiser {
             .commit_from_memory(&bytes)
             .map_err(|e| load_error(model, &bytes, &e.to_string()))?;
 
-        let input = session.inputs().iter().find(|o| o.name() == "input");
+        let input = session.inputs().iter().find(|o| o.name() == tensor::INPUT);
         let input_shape = input
             .and_then(|o| tensor_shape(o.dtype()))
             .filter(|s| s.len() == 4)
             .ok_or_else(|| {
                 Error::input(
                     model,
-                    "model has no float32 NCHW input named `input` (see models/README.md)",
+                    format!(
+                        "model has no float32 NCHW input named `{}` (see models/README.md)",
+                        tensor::INPUT
+                    ),
                 )
             })?;
         let exposure_ok = session
             .inputs()
             .iter()
-            .find(|o| o.name() == "exposure")
+            .find(|o| o.name() == tensor::EXPOSURE)
             .and_then(|o| tensor_shape(o.dtype()))
             .is_some_and(|s| s.len() == 1);
         if !exposure_ok {
             return Err(Error::input(
                 model,
-                "model has no float32 (N,) input named `exposure` (exported before the \
-                 whole-image exposure contract? re-export it with training/export.py)",
+                format!(
+                    "model has no float32 (N,) input named `{}` (exported before the \
+                     whole-image exposure contract? re-export it with training/export.py)",
+                    tensor::EXPOSURE
+                ),
             ));
         }
         if let Some(extra) = session
             .inputs()
             .iter()
-            .find(|o| o.name() != "input" && o.name() != "exposure")
+            .find(|o| o.name() != tensor::INPUT && o.name() != tensor::EXPOSURE)
         {
             return Err(Error::input(
                 model,
@@ -120,13 +142,16 @@ impl Denoiser {
         let output_ok = session
             .outputs()
             .iter()
-            .find(|o| o.name() == "output")
+            .find(|o| o.name() == tensor::OUTPUT)
             .and_then(|o| tensor_shape(o.dtype()))
             .is_some_and(|s| s.len() == 4 && (s[1] == 3 || s[1] < 0));
         if !output_ok {
             return Err(Error::input(
                 model,
-                "model has no float32 N×3×H×W output named `output`",
+                format!(
+                    "model has no float32 N×3×H×W output named `{}`",
+                    tensor::OUTPUT
+                ),
             ));
         }
 
@@ -191,6 +216,32 @@ impl Denoiser {
         &self.features
     }
 
+    /// Seconds per pixel of [`Denoiser::denoise`] on this machine and model, timed on a
+    /// synthetic 128² image (a grey wall, facing the camera, no emitter): the calibration of a
+    /// denoise run's plan. Small images pay the graph's fixed costs per pixel, so the figure
+    /// errs on the long side.
+    pub fn seconds_per_pixel(&mut self, tiling: Tiling) -> Result<f64> {
+        let side = 128;
+        let image = |v: [f32; 3]| {
+            let mut img = RgbImage::new(side, side);
+            img.pixels.iter_mut().for_each(|p| *p = v);
+            img
+        };
+        let inputs: Vec<RgbImage> = self
+            .features
+            .iter()
+            .map(|f| match f {
+                Feature::Hdr | Feature::Alb => image([0.5; 3]),
+                Feature::Nrm => image([0.0, 0.0, 1.0]),
+                Feature::Emi | Feature::Ema => image([0.0; 3]),
+            })
+            .collect();
+        let refs: Vec<&RgbImage> = inputs.iter().collect();
+        let start = std::time::Instant::now();
+        self.denoise(&refs, tiling)?;
+        Ok(start.elapsed().as_secs_f64() / (side * side) as f64)
+    }
+
     /// Denoises one image. `inputs` holds one image per feature of [`Denoiser::features`], in
     /// that order, all of the same size and finite (the caller checks and names the files).
     pub fn denoise(&mut self, inputs: &[&RgbImage], tiling: Tiling) -> Result<RgbImage> {
@@ -215,7 +266,7 @@ impl Denoiser {
         };
         // A dim image (mean luminance below DIM_LUMINANCE) is brightened by a power of two
         // instead, with the exposure of the brightened image: the autoexposure's 1e-4 would
-        // otherwise make the model's input depend on the radiance's unit (luxest_io::exr_io::
+        // otherwise make the model's input depend on the radiance's unit (luxest_io::exposure::
         // dim_exponent). Exclusive with the above: a dim image's peak is far from the limit.
         let (hdr_scale, exposure) = if k > 0 {
             let s = 2f64.powi(-k);
@@ -315,9 +366,9 @@ impl Denoiser {
         let exposure = Tensor::from_array(([1usize], vec![exposure])).map_err(|e| err(&e))?;
         let outputs = self
             .session
-            .run(ort::inputs!["input" => input, "exposure" => exposure])
+            .run(ort::inputs![tensor::INPUT => input, tensor::EXPOSURE => exposure])
             .map_err(|e| err(&e))?;
-        let (shape, values) = outputs["output"]
+        let (shape, values) = outputs[tensor::OUTPUT]
             .try_extract_tensor::<f32>()
             .map_err(|e| err(&e))?;
         if **shape != [1, 3, h as i64, w as i64] {

@@ -24,7 +24,38 @@ impl Default for Tiling {
     }
 }
 
+/// Bytes of activations per pixel of a tile (its core and context): 1.6 GB for the default
+/// model's largest tile of 1216² (above).
+pub const ACTIVATION_BYTES_PER_PIXEL: u128 = 1100;
+
 impl Tiling {
+    /// Checks the largest tile an image of `width` x `height` is cut into against the memory
+    /// available (the resource rule): `--tile 16384` would need hundreds of GB of activations.
+    pub fn check_memory(&self, width: usize, height: usize) -> Result<()> {
+        let (w, h) = self.largest_tile(width, height);
+        luxest_io::limits::check_allocation(
+            &format!(
+                "a {w}x{h} tile of the model's activations (--tile {} with --overlap {})",
+                self.tile, self.overlap
+            ),
+            w * h,
+            ACTIVATION_BYTES_PER_PIXEL,
+        )
+        .map_err(Error::Usage)
+    }
+
+    /// The largest tile (core and context) of an image of `width` x `height`.
+    pub fn largest_tile(&self, width: usize, height: usize) -> (u128, u128) {
+        let side = |n: usize| (n.min(self.tile) + 2 * self.overlap).min(n) as u128;
+        (side(width), side(height))
+    }
+
+    /// The activations of the largest tile of an image of `width` x `height`, bytes.
+    pub fn memory(&self, width: usize, height: usize) -> u128 {
+        let (w, h) = self.largest_tile(width, height);
+        w * h * ACTIVATION_BYTES_PER_PIXEL
+    }
+
     pub fn validate(&self) -> Result<()> {
         if self.tile == 0 || !self.tile.is_multiple_of(16) || !self.overlap.is_multiple_of(16) {
             return Err(Error::Usage(format!(
@@ -46,6 +77,26 @@ pub(crate) fn spans(n: usize, size: usize) -> Vec<(usize, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_tile_is_sized_before_the_model_runs() {
+        let default = Tiling::default();
+        // The default model's largest tile: 1216² pixels, about 1.6 GB.
+        assert_eq!(default.largest_tile(4000, 3000), (1216, 1216));
+        assert_eq!(default.largest_tile(300, 200), (300, 200));
+        if luxest_io::limits::available_memory().is_some_and(|a| a > 2_000_000_000) {
+            assert!(default.check_memory(4000, 3000).is_ok());
+        }
+        let huge = Tiling {
+            tile: 1 << 16,
+            overlap: 96,
+        };
+        let e = huge.check_memory(100_000, 100_000).unwrap_err().to_string();
+        assert!(
+            e.contains("a 65728x65728 tile of the model's activations (--tile 65536 with --overlap 96) needs 4.8 TB of memory"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn spans_cover_without_overlap() {

@@ -6,7 +6,9 @@
 //!    equal (statistical) error.
 //! 3. The double local estimate image of `cornell-box` at 256²: shadow rays/s.
 
-use estimate::local::{self, Detector, LocalConfig, Singularity};
+use estimate::direct_simulation::{self, DirectSimulationConfig};
+use estimate::local_estimate::{self as local, LocalConfig, Singularity};
+use estimate::sensor_batches::{Batches, SensorEstimates};
 use luxest_render::compiled::CompiledScene;
 use luxest_render::scene::SensorPoint;
 use luxest_render::world::World;
@@ -29,15 +31,42 @@ fn sensors(w: &World) -> Vec<SensorPoint> {
         .collect()
 }
 
-fn cfg(paths: u64, detector: Detector) -> LocalConfig {
-    LocalConfig {
+fn batches(paths: u64) -> Batches {
+    Batches {
         paths,
         batches: 32,
         seed: 1,
         threads: luxest_io::cli::thread_count(None),
-        detector,
-        max_depth: 100_000,
-        near_field: None,
+    }
+}
+
+/// The forward estimators compared: the local estimate with a kernel treatment, or direct
+/// simulation with a counting-disk radius.
+#[derive(Clone, Copy)]
+enum Method {
+    LocalEstimate(Singularity),
+    DirectSimulation { radius: f64 },
+}
+
+fn run(w: &World, s: &[SensorPoint], method: Method, paths: u64) -> SensorEstimates {
+    match method {
+        Method::LocalEstimate(singularity) => {
+            let cfg = LocalConfig {
+                batches: batches(paths),
+                singularity,
+                max_depth: 100_000,
+                near_field: None,
+            };
+            local::estimate(w, s, &vec![0.0; s.len()], &cfg)
+        }
+        Method::DirectSimulation { radius } => {
+            let cfg = DirectSimulationConfig {
+                batches: batches(paths),
+                radius,
+                max_depth: 100_000,
+            };
+            direct_simulation::estimate(w, s, &cfg)
+        }
     }
 }
 
@@ -46,11 +75,11 @@ fn cfg(paths: u64, detector: Detector) -> LocalConfig {
 fn time_to_error(
     w: &World,
     s: &[SensorPoint],
-    d: Detector,
+    method: Method,
     pilot: u64,
     target: f64,
 ) -> (u64, f64, f64) {
-    let r = local::estimate(w, s, &vec![0.0; s.len()], &cfg(pilot, d));
+    let r = run(w, s, method, pilot);
     let worst = (0..s.len())
         .map(|i| r.standard_error[i] / r.value[i])
         .fold(0.0, f64::max);
@@ -60,7 +89,7 @@ fn time_to_error(
 }
 
 fn main() {
-    let le = Detector::LocalEstimate(Singularity::Ball { eps: 1e-3 });
+    let le = Method::LocalEstimate(Singularity::Ball { eps: 1e-3 });
     println!(
         "estimate benchmark ({} threads)",
         luxest_io::cli::thread_count(None)
@@ -69,7 +98,7 @@ fn main() {
     for (name, paths) in [("sobolev", 1_000_000u64), ("cie171-5.8", 50_000)] {
         let w = world(name);
         let s = sensors(&w);
-        let r = local::estimate(&w, &s, &vec![0.0; s.len()], &cfg(paths, le));
+        let r = run(&w, &s, le, paths);
         println!(
             "local estimate, {name}: {} sensors x {paths} paths in {:.2} s = {:.3e} sensor-paths/s, {:.1} M shadow rays/s, {:.2} collisions/path",
             s.len(),
@@ -84,7 +113,7 @@ fn main() {
     let s = sensors(&w);
     let (n_le, t_le, _) = time_to_error(&w, &s, le, 200_000, 0.01);
     // Check the extrapolation with a real run.
-    let check = local::estimate(&w, &s, &vec![0.0; s.len()], &cfg(n_le, le));
+    let check = run(&w, &s, le, n_le);
     let achieved = (0..s.len())
         .map(|i| check.standard_error[i] / check.value[i])
         .fold(0.0, f64::max);
@@ -92,7 +121,13 @@ fn main() {
         "time to 1% standard error on every sobolev sensor: local estimate {n_le} paths, {:.2} s predicted, {:.2} s measured (max relative SE {:.4})",
         t_le, check.seconds, achieved
     );
-    let (n_d, t_d, _) = time_to_error(&w, &s, Detector::Bins { radius: 0.1 }, 2_000_000, 0.01);
+    let (n_d, t_d, _) = time_to_error(
+        &w,
+        &s,
+        Method::DirectSimulation { radius: 0.1 },
+        2_000_000,
+        0.01,
+    );
     println!(
         "time to 1% standard error on every sobolev sensor: direct simulation (bins r = 0.1 m) {n_d} paths, {t_d:.1} s (extrapolated)"
     );
@@ -105,7 +140,7 @@ fn main() {
     let mut camera = w.scene.header.camera.clone().unwrap();
     camera.resolution = (256, 256);
     let cam = luxest_render::camera::PinholeCamera::new(&camera).unwrap();
-    let icfg = estimate::image::ImageConfig {
+    let icfg = estimate::double_local_estimate::ImageConfig {
         paths: 300,
         pixel_samples: 1,
         seed: 1,
@@ -116,7 +151,7 @@ fn main() {
         max_depth: 100_000,
         mis_paths: estimate::cli::DEFAULT_MIS_PATHS,
     };
-    let r = estimate::image::render(&w, &cam, &icfg);
+    let r = estimate::double_local_estimate::render(&w, &cam, &icfg);
     println!(
         "double local estimate, cornell-box 256x256, {} paths + {} light-tracing paths each: {:.2} s, {} collisions, {} shadow rays (connections and light tracing), {:.1} M shadow rays/s",
         icfg.paths,

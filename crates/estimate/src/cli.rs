@@ -1,23 +1,29 @@
 //! The `estimate` command line: its arguments, and each subcommand's run from arguments to
-//! output files. The estimators themselves are [`crate::local`], [`crate::gather`] and
-//! [`crate::image`].
+//! output files. The estimators themselves are [`crate::local_estimate`],
+//! [`crate::direct_simulation`], [`crate::gather`], [`crate::double_local_estimate`] and
+//! [`crate::light_tracing`].
 
-use crate::image::{self, ImageConfig, ImageResult};
-use crate::light_trace::{self, LightTraceConfig};
-use crate::local::{self, Detector, LocalConfig, LocalResult, NearField};
+use crate::direct_simulation::{self, DirectSimulationConfig};
+use crate::double_local_estimate::{self, ImageConfig};
+use crate::image::{self, ImageResult};
+use crate::light_tracing::{self, LightTraceConfig};
+use crate::local_estimate::{self, LocalConfig, NearField};
+use crate::sensor_batches::{Batches, SensorEstimates};
 use crate::sensors::{
     all_sensors, evaluation_points, load_world, record_evaluation_points, results, Estimate,
 };
 use crate::singularity::Singularity;
-use crate::{exact_table, gather};
+use crate::{exact_table, gather, work};
 use clap::{Parser, Subcommand, ValueEnum};
 use luxest_io::cli::CommonArgs;
-use luxest_io::exr_io::{write_preview_png_auto_to, write_rgb_to, RgbImage};
+use luxest_io::exr::write_rgb_to;
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{self, image_path, Kind, Level};
 use luxest_io::num::{Count, Real};
 use luxest_io::outputs::{Format, OutputPlan};
+use luxest_io::png::write_preview_png_auto_to;
 use luxest_io::sensors::SensorResults;
 use luxest_io::{Error, Result};
 use luxest_render::world::{load_with_camera, Traversal, World};
@@ -58,21 +64,13 @@ pub struct RunArgs {
 }
 
 impl RunArgs {
-    /// The forward estimator's settings for `paths` light paths scored by `detector`.
-    fn local_config(
-        &self,
-        paths: u64,
-        detector: Detector,
-        near_field: Option<NearField>,
-    ) -> LocalConfig {
-        LocalConfig {
+    /// How a forward estimator's `paths` light paths are split, seeded and run.
+    fn batches(&self, paths: u64) -> Batches {
+        Batches {
             paths,
             batches: self.batches,
             seed: self.common.seed,
             threads: self.common.thread_count(),
-            detector,
-            max_depth: self.max_depth,
-            near_field,
         }
     }
     /// Loads the scene and checks that every batch's sums for every sensor point fit in the
@@ -89,10 +87,19 @@ impl RunArgs {
         luxest_io::limits::check_allocation(
             &format!("--batches {} over {points} sensor points", self.batches),
             self.batches as u128 * points as u128,
-            BYTES_PER_BATCH_POINT,
+            crate::sensor_batches::BYTES_PER_BATCH_POINT,
         )
         .map_err(Error::Usage)?;
         Ok(world)
+    }
+    /// What a work plan needs of the run: seed, --max-depth, threads and batches.
+    fn plan_terms(&self) -> (u64, u32, usize, usize) {
+        (
+            self.common.seed,
+            self.max_depth,
+            self.common.thread_count(),
+            self.batches.max(2),
+        )
     }
     /// `count` (`--paths` or `--samples`, named `what`) must fill every batch.
     fn check(&self, what: &str, count: u64) -> Result<()> {
@@ -158,10 +165,6 @@ impl RunArgs {
     }
 }
 
-/// Bytes the sensor estimators keep per batch and sensor point until the batches are combined
-/// (RGB sums and their direct part in f64, the batch's Y; measured 56).
-const BYTES_PER_BATCH_POINT: u128 = 64;
-
 /// Path-length bound of every estimator: 0 would give nothing but the direct light, or black.
 pub const MAX_DEPTH: Count<u32> = Count::range(1, 1 << 20, "bounces");
 
@@ -181,6 +184,12 @@ pub const DEFAULT_IMAGE_EPS_FRACTION: f64 = 1e-2;
 /// 6.2e-3; 1000 × 3 000: 7.1e-3, 5.7e-3 (light tracing alone 1.9e-2, 1.8e-2; the plain
 /// estimate, 300 paths: 9.6e-2, 4.9e-2).
 pub const DEFAULT_MIS_PATHS: u32 = 10_000;
+
+/// Most backward samples per near-field sensor by default (the default is --paths, at most
+/// this). A fixed 20 000 made the near field's work independent of --paths: in a closed room of
+/// reflectance 1, where every walk runs to --max-depth, 64 light paths took seconds and their
+/// near field hours.
+pub const DEFAULT_NEAR_SAMPLES: u64 = 20_000;
 
 /// Default near-field radius, as a fraction of the room scale. Chosen by measurement on the
 /// Cornell box's 88 lit sensors (docs/measurements.md): 1e-2 left sensors just beyond it (8 mm
@@ -242,65 +251,18 @@ pub enum Command {
         /// --near-samples 0 turns the split off].
         #[arg(long, value_parser = LENGTH)]
         near_radius: Option<f64>,
-        /// Backward samples per near-field sensor (0 disables the split).
-        #[arg(long, default_value_t = 20_000)]
-        near_samples: u64,
+        /// Backward samples per near-field sensor (0 disables the split) [default: --paths, at
+        /// most 20 000, so that the near field's work grows with the light paths' and never
+        /// exceeds about twice theirs].
+        #[arg(long)]
+        near_samples: Option<u64>,
         /// Also write every batch's estimate per point (`batches[b][k]` of each set), from
         /// which statistics over several points (a grid's Emin, U0) get their uncertainty.
         #[arg(long)]
         batch_values: bool,
     },
     /// Double local estimate: a luminance image from the scene's camera (EXR, like trace's).
-    Image {
-        /// Compiled scene (build/<name>/scene.lxs).
-        scene: PathBuf,
-        /// Output [default: <scene dir>/<name>_<paths, 6 digits>le.hdr.exr].
-        #[arg(short, long)]
-        out: Option<PathBuf>,
-        /// Also write the per-pixel standard error of Y as an EXR (R = G = B).
-        #[arg(long)]
-        stderr_out: Option<PathBuf>,
-        /// Also write an sRGB PNG preview (exposure: 1 / the 99th percentile of Y).
-        #[arg(long)]
-        preview: Option<PathBuf>,
-        /// Number of light paths connected to the pixels' points (light tracing adds
-        /// --mis-paths per path).
-        #[arg(long, default_value_t = 300, value_parser = PATHS)]
-        paths: u64,
-        /// Camera samples per pixel (box filter), at least 1, drawn anew for every 32 light
-        /// paths (the rounds' points together stratify the pixel).
-        #[arg(long, default_value_t = 1, value_parser = Count::<u32>::range(1, u32::MAX as u64, "samples per pixel"))]
-        pixel_samples: u32,
-        /// Override the camera resolution, WIDTHxHEIGHT.
-        #[arg(long)]
-        resolution: Option<String>,
-        /// The kernel singularity's treatment where light tracing cannot take over: at points
-        /// seen through mirrors or glass, and everywhere with --mis-paths 0 [default: clamp]
-        /// (with --mis-paths above 0 in a scene without mirrors or glass it has no effect and
-        /// is refused, as is --eps).
-        #[arg(long, value_enum)]
-        singularity: Option<SingularityMode>,
-        /// Regularisation radius in m [default: 1e-2 of the room scale].
-        #[arg(long, value_parser = LENGTH)]
-        eps: Option<f64>,
-        #[command(flatten)]
-        common: CommonArgs,
-        /// Safety bound on path length, 1 to 2^20.
-        #[arg(long, default_value_t = 100_000, value_parser = MAX_DEPTH)]
-        max_depth: u32,
-        /// Light-tracing paths per light path, combined with the connections by multiple
-        /// importance sampling at the points the camera sees directly (unbiased at edges and
-        /// corners); 0: the plain double local estimate, --singularity everywhere (biased
-        /// near edges and corners).
-        #[arg(long, default_value_t = DEFAULT_MIS_PATHS, value_parser = Count::<u32>::range(0, 1 << 20, "light-tracing paths per light path"))]
-        mis_paths: u32,
-        /// Light tracing instead (a baseline): every light-path vertex is connected to the
-        /// camera itself, not to the points the pixels see (the local estimate at the camera);
-        /// --mis-paths, --pixel-samples, --singularity and --eps do not apply (refused). Scenes
-        /// whose camera would see mirrors or glass are refused.
-        #[arg(long, conflicts_with_all = ["mis_paths", "pixel_samples", "singularity", "eps"])]
-        light_tracing: bool,
-    },
+    Image(ImageArgs),
     /// Direct simulation baseline: photons counted in disks around the sensor points.
     Direct {
         #[command(flatten)]
@@ -368,11 +330,64 @@ pub enum ExactCase {
 
 /// Estimator names recorded in the results' run metadata.
 pub mod estimator {
-    pub const LOCAL_ESTIMATE: &str = "local-estimate";
-    pub const DIRECT_SIMULATION: &str = "direct-simulation";
-    pub const GATHER: &str = "gather";
-    pub const DOUBLE_LOCAL_ESTIMATE: &str = "double-local-estimate";
-    pub const LIGHT_TRACING: &str = "light-tracing";
+    pub const LOCAL_ESTIMATE: &str = luxest_io::header::estimator::LOCAL_ESTIMATE;
+    pub const DIRECT_SIMULATION: &str = luxest_io::header::estimator::DIRECT_SIMULATION;
+    pub const GATHER: &str = luxest_io::header::estimator::GATHER;
+    pub const DOUBLE_LOCAL_ESTIMATE: &str = luxest_io::header::estimator::DOUBLE_LOCAL_ESTIMATE;
+    pub const LIGHT_TRACING: &str = luxest_io::header::estimator::LIGHT_TRACING;
+}
+
+/// `estimate image`: the double local estimate (or light tracing) of the camera's image.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ImageArgs {
+    /// Compiled scene (build/<name>/scene.lxs).
+    pub scene: PathBuf,
+    /// Output [default: <scene dir>/<name>_<paths, 6 digits>le.hdr.exr].
+    #[arg(short, long)]
+    pub out: Option<PathBuf>,
+    /// Also write the per-pixel standard error of Y as an EXR (R = G = B).
+    #[arg(long)]
+    pub stderr_out: Option<PathBuf>,
+    /// Also write an sRGB PNG preview (exposure: 1 / the 99th percentile of Y).
+    #[arg(long)]
+    pub preview: Option<PathBuf>,
+    /// Number of light paths connected to the pixels' points (light tracing adds
+    /// --mis-paths per path).
+    #[arg(long, default_value_t = 300, value_parser = PATHS)]
+    pub paths: u64,
+    /// Camera samples per pixel (box filter), at least 1, drawn anew for every 32 light
+    /// paths (the rounds' points together stratify the pixel).
+    #[arg(long, default_value_t = 1, value_parser = Count::<u32>::range(1, u32::MAX as u64, "samples per pixel"))]
+    pub pixel_samples: u32,
+    /// Override the camera resolution, WIDTHxHEIGHT.
+    #[arg(long)]
+    pub resolution: Option<String>,
+    /// The kernel singularity's treatment where light tracing cannot take over: at points
+    /// seen through mirrors or glass, and everywhere with --mis-paths 0 [default: clamp]
+    /// (with --mis-paths above 0 in a scene without mirrors or glass it has no effect and
+    /// is refused, as is --eps).
+    #[arg(long, value_enum)]
+    pub singularity: Option<SingularityMode>,
+    /// Regularisation radius in m [default: 1e-2 of the room scale].
+    #[arg(long, value_parser = LENGTH)]
+    pub eps: Option<f64>,
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Safety bound on path length, 1 to 2^20.
+    #[arg(long, default_value_t = 100_000, value_parser = MAX_DEPTH)]
+    pub max_depth: u32,
+    /// Light-tracing paths per light path, combined with the connections by multiple
+    /// importance sampling at the points the camera sees directly (unbiased at edges and
+    /// corners); 0: the plain double local estimate, --singularity everywhere (biased
+    /// near edges and corners).
+    #[arg(long, default_value_t = DEFAULT_MIS_PATHS, value_parser = Count::<u32>::range(0, 1 << 20, "light-tracing paths per light path"))]
+    pub mis_paths: u32,
+    /// Light tracing instead (a baseline): every light-path vertex is connected to the
+    /// camera itself, not to the points the pixels see (the local estimate at the camera);
+    /// --mis-paths, --pixel-samples, --singularity and --eps do not apply (refused). Scenes
+    /// whose camera would see mirrors or glass are refused.
+    #[arg(long, conflicts_with_all = ["mis_paths", "pixel_samples", "singularity", "eps"])]
+    pub light_tracing: bool,
 }
 
 /// Runs the command line.
@@ -400,111 +415,118 @@ pub fn run(args: Args) -> Result<()> {
             bin_radius,
         } => direct(&run, paths, bin_radius),
         Command::Gather { run, samples } => gather(&run, samples),
-        Command::Image {
-            scene,
-            out,
-            stderr_out,
-            preview,
-            paths,
-            pixel_samples,
-            resolution,
-            singularity,
-            eps,
-            common,
-            max_depth,
-            mis_paths,
-            light_tracing,
-        } => {
-            let explicit = singularity.is_some() || eps.is_some();
-            let singularity = singularity.unwrap_or(SingularityMode::Clamp);
-            check_eps(singularity, eps)?;
-            let (world, cam) = load_with_camera(&scene, resolution.as_deref(), Traversal::Robust)?;
-            if explicit && mis_paths > 0 && !world.scene.header.features.specular_paths {
-                return Err(no_effect(
-                    "--singularity/--eps",
-                    &format!(
-                        "with --mis-paths above 0 in {}: it has no mirrors or glass, so light \
-                         tracing takes over at every point the camera sees (--mis-paths 0 gives \
-                         the plain estimate that uses them)",
-                        scene.display()
-                    ),
-                ));
-            }
-            luxest_io::limits::check_image(
-                "image film",
-                cam.width.into(),
-                cam.height.into(),
-                image::BYTES_PER_PIXEL,
-            )
-            .map_err(Error::Usage)?;
-            let eps = eps.unwrap_or(DEFAULT_IMAGE_EPS_FRACTION * world.room_scale);
-            let cfg = ImageConfig {
-                paths,
-                pixel_samples,
-                seed: common.seed,
-                threads: common.thread_count(),
-                singularity: singularity.with_eps(eps)?,
-                max_depth,
-                mis_paths,
-            };
-            let prefix = scene.with_file_name(&world.scene.header.name);
-            let out =
-                out.unwrap_or_else(|| image_path(&prefix, Level::LightPaths(paths), Kind::Hdr));
-            // All outputs, checked against the scene and each other before the render.
-            let outputs = std::iter::once(&out).chain(&stderr_out).chain(&preview);
-            let mut plan = OutputPlan::new([&scene], outputs)?;
-            for (path, format, option) in [
-                (Some(&out), Format::Exr, "-o/--out"),
-                (stderr_out.as_ref(), Format::Exr, "--stderr-out"),
-                (preview.as_ref(), Format::Png, "--preview"),
-            ] {
-                if let Some(path) = path {
-                    format.check(path, option)?;
-                }
-            }
-            let outputs = ImageOutputs {
-                out: &out,
-                stderr_out: stderr_out.as_deref(),
-                preview: preview.as_deref(),
-            };
-            let info = |estimator: &str, seconds: f64| {
-                RunInfo::new(
-                    estimator,
-                    paths,
-                    common.seed,
-                    seconds,
-                    &world.scene.content_hash,
-                )
-            };
-            if light_tracing {
-                if world.scene.header.features.specular_paths {
-                    return Err(Error::input(
-                        &scene,
-                        "light tracing cannot connect mirrors or glass to a pinhole camera (use trace or estimate image without --light-tracing)",
-                    ));
-                }
-                if paths < image::BATCHES as u64 {
-                    return Err(Error::Usage(format!(
-                        "--paths must be at least {} for --light-tracing (one per batch)",
-                        image::BATCHES
-                    )));
-                }
-                let lt = LightTraceConfig {
-                    paths,
-                    seed: common.seed,
-                    threads: common.thread_count(),
-                    max_depth,
-                };
-                let r = light_trace::render(&world, &cam, &lt);
-                let info = info(estimator::LIGHT_TRACING, r.seconds);
-                write_image(&mut plan, &scene, &r, info, None, outputs)
-            } else {
-                let r = image::render(&world, &cam, &cfg);
-                let info = info(estimator::DOUBLE_LOCAL_ESTIMATE, r.seconds);
-                write_image(&mut plan, &scene, &r, info, Some(&cfg), outputs)
-            }
-        }
+        Command::Image(image) => image_run(image),
         Command::Exact { case } => exact_table::print(case),
+    }
+}
+
+/// `estimate image`: the double local estimate of the camera's image, or light tracing.
+fn image_run(args: ImageArgs) -> Result<()> {
+    let ImageArgs {
+        scene,
+        out,
+        stderr_out,
+        preview,
+        paths,
+        pixel_samples,
+        resolution,
+        singularity,
+        eps,
+        common,
+        max_depth,
+        mis_paths,
+        light_tracing,
+    } = args;
+    let explicit = singularity.is_some() || eps.is_some();
+    let singularity = singularity.unwrap_or(SingularityMode::Clamp);
+    check_eps(singularity, eps)?;
+    let (world, cam) = load_with_camera(&scene, resolution.as_deref(), Traversal::Robust)?;
+    if explicit && mis_paths > 0 && !world.scene.header.features.specular_paths {
+        return Err(no_effect(
+            "--singularity/--eps",
+            &format!(
+                "with --mis-paths above 0 in {}: it has no mirrors or glass, so light \
+                 tracing takes over at every point the camera sees (--mis-paths 0 gives \
+                 the plain estimate that uses them)",
+                scene.display()
+            ),
+        ));
+    }
+    luxest_io::limits::check_image(
+        "image film",
+        cam.width.into(),
+        cam.height.into(),
+        image::BYTES_PER_PIXEL,
+    )
+    .map_err(Error::Usage)?;
+    let eps = eps.unwrap_or(DEFAULT_IMAGE_EPS_FRACTION * world.room_scale);
+    let cfg = ImageConfig {
+        paths,
+        pixel_samples,
+        seed: common.seed,
+        threads: common.thread_count(),
+        singularity: singularity.with_eps(eps)?,
+        max_depth,
+        mis_paths,
+    };
+    let prefix = scene.with_file_name(&world.scene.header.name);
+    let out = out.unwrap_or_else(|| image_path(&prefix, Level::LightPaths(paths), Kind::Hdr));
+    // All outputs, checked against the scene and each other before the render.
+    let outputs = std::iter::once(&out).chain(&stderr_out).chain(&preview);
+    let mut plan = OutputPlan::new([&scene], outputs)?;
+    for (path, format, option) in [
+        (Some(&out), Format::Exr, "-o/--out"),
+        (stderr_out.as_ref(), Format::Exr, "--stderr-out"),
+        (preview.as_ref(), Format::Png, "--preview"),
+    ] {
+        if let Some(path) = path {
+            format.check(path, option)?;
+        }
+    }
+    let outputs = ImageOutputs {
+        out: &out,
+        stderr_out: stderr_out.as_deref(),
+        preview: preview.as_deref(),
+    };
+    let info = |estimator: &str, seconds: f64| {
+        RunInfo::new(
+            estimator,
+            paths,
+            common.seed,
+            seconds,
+            &world.scene.content_hash,
+        )
+    };
+    if light_tracing {
+        if world.scene.header.features.specular_paths {
+            return Err(Error::input(
+                &scene,
+                "light tracing cannot connect mirrors or glass to a pinhole camera (use trace or estimate image without --light-tracing)",
+            ));
+        }
+        if paths < image::BATCHES as u64 {
+            return Err(Error::Usage(format!(
+                "--paths must be at least {} for --light-tracing (one per batch)",
+                image::BATCHES
+            )));
+        }
+        let lt = LightTraceConfig {
+            paths,
+            seed: common.seed,
+            threads: common.thread_count(),
+            max_depth,
+        };
+        work::light_tracing_plan(&world, &cam, paths, (lt.seed, max_depth, lt.threads)).announce();
+        let r = light_tracing::render(&world, &cam, &lt);
+        let info = info(estimator::LIGHT_TRACING, r.seconds);
+        write_image(&mut plan, &scene, &r, info, None, outputs)
+    } else {
+        work::image_plan(&world, &cam, &cfg)
+            .map_err(Error::Usage)?
+            .announce();
+        let r = double_local_estimate::render(&world, &cam, &cfg);
+        let info = info(estimator::DOUBLE_LOCAL_ESTIMATE, r.seconds);
+        write_image(&mut plan, &scene, &r, info, Some(&cfg), outputs)
     }
 }
 
@@ -529,7 +551,7 @@ fn check_eps(singularity: SingularityMode, eps: Option<f64>) -> Result<()> {
 /// A warning on stderr when light paths reached --max-depth still carrying light: the light
 /// they would have added is missing from the results (e.g. a closed scene of reflectance 1,
 /// where paths never end by themselves).
-fn warn_truncated(r: &LocalResult, paths: u64, max_depth: u32) {
+fn warn_truncated(r: &SensorEstimates, paths: u64, max_depth: u32) {
     if r.truncated > 0 {
         eprintln!(
             "warning: {} of {paths} light paths reached --max-depth {max_depth} still carrying \
@@ -546,11 +568,12 @@ fn sensors(
     paths: u64,
     singularity: SingularityMode,
     eps: Option<f64>,
-    (near_radius, near_samples): (Option<f64>, u64),
+    (near_radius, near_samples): (Option<f64>, Option<u64>),
     batch_values: bool,
 ) -> Result<()> {
     run.check("--paths", paths)?;
     check_eps(singularity, eps)?;
+    let near_samples = near_samples.unwrap_or(paths.min(DEFAULT_NEAR_SAMPLES));
     if near_samples == 0 && near_radius.is_some() {
         return Err(no_effect(
             "--near-radius",
@@ -565,8 +588,27 @@ fn sensors(
     let near_field = (near_samples > 0).then_some(NearField {
         samples: near_samples,
     });
-    let cfg = run.local_config(paths, Detector::LocalEstimate(sing), near_field);
-    let r = local::estimate(&world, &placed.points, &placed.near_radius, &cfg);
+    let cfg = LocalConfig {
+        batches: run.batches(paths),
+        singularity: sing,
+        max_depth: run.max_depth,
+        near_field,
+    };
+    // Each batch takes at least one near-field sample per sensor.
+    let near_total = match cfg.near_field {
+        Some(nf) => (nf.samples / cfg.batches.count() as u64).max(1) * cfg.batches.count() as u64,
+        None => 0,
+    };
+    work::sensors_plan(
+        &world,
+        &placed.points,
+        &placed.near_radius,
+        paths,
+        near_total,
+        run.plan_terms(),
+    )
+    .announce();
+    let r = local_estimate::estimate(&world, &placed.points, &placed.near_radius, &cfg);
     warn_truncated(&r, paths, run.max_depth);
     let info = run.info(&world, estimator::LOCAL_ESTIMATE, paths, r.seconds);
     let batches = batch_values.then_some(r.batch_values.as_slice());
@@ -598,8 +640,13 @@ fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
     crate::sensors::require_planar(&run.scene, &world, "estimate direct")?;
     let (out, mut plan) = run.plan(&world)?;
     let sensors = all_sensors(&world);
-    let cfg = run.local_config(paths, Detector::Bins { radius: bin_radius }, None);
-    let r = local::estimate(&world, &sensors, &vec![0.0; sensors.len()], &cfg);
+    let cfg = DirectSimulationConfig {
+        batches: run.batches(paths),
+        radius: bin_radius,
+        max_depth: run.max_depth,
+    };
+    work::direct_plan(&world, sensors.len(), paths, run.plan_terms()).announce();
+    let r = direct_simulation::estimate(&world, &sensors, &cfg);
     warn_truncated(&r, paths, run.max_depth);
     let info = run.info(&world, estimator::DIRECT_SIMULATION, paths, r.seconds);
     let singularity = format!("bins(radius={bin_radius:e} m)");
@@ -635,6 +682,8 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
         threads: run.common.thread_count(),
         max_depth: run.max_depth,
     };
+    let per_sensor = (samples / cfg.batches.max(2) as u64).max(1) * cfg.batches.max(2) as u64;
+    work::gather_plan(&world, &sensors, per_sensor, run.plan_terms()).announce();
     let start = std::time::Instant::now();
     let mut values: Vec<Estimate> = gather::estimate(&world, &sensors, &cfg)
         .into_iter()
@@ -704,7 +753,10 @@ fn write_image(
     img.pixels = r.rgb.iter().map(|c| c.0.map(|v| v as f32)).collect();
     img.attributes = info.to_attributes();
     if let Some(cfg) = cfg {
-        img.set_attribute(header::SINGULARITY, image::singularity_header(cfg));
+        img.set_attribute(
+            header::SINGULARITY,
+            double_local_estimate::singularity_header(cfg),
+        );
         img.set_attribute(header::PIXEL_SAMPLES, cfg.pixel_samples);
     }
     write_rgb_to(plan, out, &img)?;

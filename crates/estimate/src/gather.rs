@@ -8,7 +8,7 @@
 //! the estimator needs a scene without specular paths, and is unbiased with bounded variance
 //! wherever the sensor is.
 
-use crate::transport::{point_source_direct, scatter};
+use crate::transport::{delta_light_illuminance, scatter};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
@@ -68,6 +68,35 @@ fn next_event(
     l.emitted * r * (geometric / l.pdf)
 }
 
+/// The backward walk from the surface point `first`, reached along `dir`: at most `max_depth`
+/// vertices, analog Russian roulette; `at_vertex(sp, dir, beta, rng)` is called at each vertex
+/// before the walk scatters from it. Returns the vertices visited.
+fn backward_walk(
+    world: &World,
+    first: SurfacePoint,
+    dir: Vec3,
+    rng: &mut Rng,
+    max_depth: u32,
+    mut at_vertex: impl FnMut(&SurfacePoint, Vec3, Rgb, &mut Rng),
+) -> u32 {
+    let mut beta = Rgb::WHITE;
+    let mut sp = first;
+    let mut dir = dir;
+    for depth in 0..max_depth {
+        at_vertex(&sp, dir, beta, rng);
+        let Some(s) = scatter(world, &sp, dir, beta, Transport::Radiance, rng) else {
+            return depth + 1;
+        };
+        beta = s.beta;
+        dir = s.dir;
+        match world.intersect(s.origin, dir) {
+            Some(next) => sp = next,
+            None => return depth + 1,
+        }
+    }
+    max_depth
+}
+
 /// Reflected radiance leaving the surface point `sp` towards `-dir` (emission at `sp`
 /// excluded), by a path with next-event estimation at every vertex.
 fn reflected_radiance(
@@ -78,10 +107,7 @@ fn reflected_radiance(
     max_depth: u32,
 ) -> Rgb {
     let mut l = Rgb::BLACK;
-    let mut beta = Rgb::WHITE;
-    let mut sp = first;
-    let mut dir = dir;
-    for _ in 0..max_depth {
+    backward_walk(world, first, dir, rng, max_depth, |sp, dir, beta, rng| {
         let m = world.material(sp.triangle);
         let wo = -dir;
         let ng = bsdf::facing_normal(wo, sp.ng);
@@ -94,17 +120,25 @@ fn reflected_radiance(
             false,
         );
         l = l + beta * radiance;
-        let Some(s) = scatter(world, &sp, dir, beta, Transport::Radiance, rng) else {
-            break;
-        };
-        beta = s.beta;
-        dir = s.dir;
-        match world.intersect(s.origin, dir) {
-            Some(next) => sp = next,
-            None => break,
-        }
-    }
+    });
     l
+}
+
+/// The vertices of one backward path from sensor `s` as [`sample_once`] (`radius` infinite)
+/// and [`near_field_sample`] (its near-field radius) make it, without their next-event
+/// estimates: what such a sample costs, for the work estimate (`crate::work`).
+pub fn backward_path_length(
+    world: &World,
+    s: &SensorPoint,
+    radius: f64,
+    rng: &mut Rng,
+    max_depth: u32,
+) -> u32 {
+    let (origin, dir) = sensor_ray(world, s, rng);
+    match world.intersect_from_sensor(origin, dir, radius) {
+        Some(sp) => backward_walk(world, sp, dir, rng, max_depth, |_, _, _, _| {}),
+        None => 0,
+    }
 }
 
 /// A cosine-distributed direction about `n` and the ray origin just off the sensor.
@@ -206,7 +240,7 @@ pub fn estimate(
     sensors: &[SensorPoint],
     cfg: &GatherConfig,
 ) -> Vec<(Rgb, f64, f64)> {
-    let direct = point_source_direct(world, sensors);
+    let direct = delta_light_illuminance(world, sensors);
     let batches = cfg.batches.max(2);
     let per_batch = (cfg.samples / batches as u64).max(1);
     let results = run_batches(batches, cfg.threads, "gather", |b| {

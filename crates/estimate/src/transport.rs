@@ -54,6 +54,23 @@ pub struct Scattered {
     pub pdf: f64,
 }
 
+/// How a light path ended: its collisions (specular ones included) and whether it reached
+/// `max_depth` still carrying light (what it would have added is missing: the estimate is
+/// biased low, e.g. in a closed scene of reflectance 1).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PathEnd {
+    pub collisions: u64,
+    pub truncated: bool,
+}
+
+/// A vertex of a light path as the walk meets it: a connection vertex, or a collision on a
+/// specular surface (where no connection can start: a delta BSDF has no value towards a given
+/// point).
+enum Step {
+    Vertex(LightVertex),
+    Specular { sp: SurfacePoint, dir: Vec3 },
+}
+
 /// Traces one light path from an emitter chosen by flux (at most `max_depth` collisions) and
 /// calls `visit(vertex, q)` at every vertex a connection can start from — the emission point of
 /// an area emitter, and every collision on a non-specular surface — with the flux weight `q`
@@ -63,17 +80,43 @@ pub fn walk_light_path(
     rng: &mut Rng,
     max_depth: u32,
     mut visit: impl FnMut(LightVertex, Rgb),
-) {
+) -> PathEnd {
+    walk(world, rng, max_depth, |step, q| {
+        if let Step::Vertex(v) = step {
+            visit(v, q);
+        }
+    })
+}
+
+/// The same walk (the same random numbers) as [`walk_light_path`], calling `land(sp, dir, q)`
+/// at every collision, specular ones included, with the direction `dir` the light arrived
+/// along: where a photon lands, for direct simulation.
+pub fn walk_photon(
+    world: &World,
+    rng: &mut Rng,
+    max_depth: u32,
+    mut land: impl FnMut(&SurfacePoint, Vec3, Rgb),
+) -> PathEnd {
+    walk(world, rng, max_depth, |step, q| match step {
+        Step::Vertex(LightVertex::Collision { sp, dir, .. }) | Step::Specular { sp, dir } => {
+            land(&sp, dir, q)
+        }
+        Step::Vertex(LightVertex::Emission { .. }) => {}
+    })
+}
+
+/// The light-path walk behind [`walk_light_path`] and [`walk_photon`].
+fn walk(world: &World, rng: &mut Rng, max_depth: u32, mut visit: impl FnMut(Step, Rgb)) -> PathEnd {
     let e = world.sample_emission(rng);
     let mut q = e.flux;
     let mut origin = e.position;
     let mut arrival = Arrival::DeltaLight;
     if let Some(n) = e.normal {
         visit(
-            LightVertex::Emission {
+            Step::Vertex(LightVertex::Emission {
                 position: e.position,
                 normal: n,
-            },
+            }),
             q,
         );
         origin = world.offset(e.position, n, e.direction);
@@ -86,6 +129,7 @@ pub fn walk_light_path(
     let mut dir = e.direction;
     // A point light or luminaire source may sit on a surface: its first ray starts beyond.
     let mut from_source = e.normal.is_none();
+    let mut end = PathEnd::default();
     for depth in 0..max_depth {
         let hit = if from_source {
             world.intersect_from_source(origin, dir)
@@ -94,22 +138,23 @@ pub fn walk_light_path(
         };
         from_source = false;
         let Some(sp) = hit else {
-            break;
+            return end;
         };
+        end.collisions += 1;
         let delta = bsdf::is_delta(world.material(sp.triangle));
-        if !delta {
-            visit(
-                LightVertex::Collision {
-                    sp,
-                    dir,
-                    arrival,
-                    depth,
-                },
-                q,
-            );
-        }
+        let step = if delta {
+            Step::Specular { sp, dir }
+        } else {
+            Step::Vertex(LightVertex::Collision {
+                sp,
+                dir,
+                arrival,
+                depth,
+            })
+        };
+        visit(step, q);
         let Some(s) = scatter(world, &sp, dir, q, Transport::Flux, rng) else {
-            break;
+            return end;
         };
         arrival = if delta {
             Arrival::Specular
@@ -121,6 +166,8 @@ pub fn walk_light_path(
         };
         (q, origin, dir) = (s.beta, s.origin, s.dir);
     }
+    end.truncated = true;
+    end
 }
 
 /// One step of a random walk: samples the BSDF (with geometric normals) at `sp` for a path
@@ -166,7 +213,7 @@ fn response_toward(s: &SensorPoint, v: Vec3, d: f64) -> f64 {
 
 /// Exact direct illuminance from the delta lights (point sources, luminaires), RGB, with
 /// visibility.
-pub fn point_source_direct(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
+pub fn delta_light_illuminance(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
     let emitters = world.scene.header.emitters.len();
     sensors
         .iter()
@@ -193,7 +240,7 @@ pub fn point_source_direct(world: &World, sensors: &[SensorPoint]) -> Vec<Rgb> {
 
 /// Exact delta-light (point source, luminaire) luminance towards the camera at view points
 /// given as (position, geometric normal, direction to the camera, triangle, weight).
-pub fn point_source_direct_to(world: &World, points: &[(Vec3, Vec3, Vec3, u32, Rgb)]) -> Vec<Rgb> {
+pub fn delta_light_reflected(world: &World, points: &[(Vec3, Vec3, Vec3, u32, Rgb)]) -> Vec<Rgb> {
     let emitters = world.scene.header.emitters.len();
     points
         .iter()

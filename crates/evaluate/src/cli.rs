@@ -4,10 +4,11 @@ use crate::images::score_images;
 use crate::sensors::score_sensors;
 use clap::{Parser, Subcommand};
 use luxest_io::cli::CommonArgs;
-use luxest_io::exr_io::{write_preview_png_to, write_rgb_to};
+use luxest_io::exr::write_rgb_to;
 use luxest_io::naming::{flip_map_path, preview_path};
 use luxest_io::num::Real;
 use luxest_io::outputs::{Format, OutputPlan};
+use luxest_io::png::write_preview_png_to;
 use luxest_io::{Error, Result};
 use std::path::PathBuf;
 

@@ -2,9 +2,10 @@
 //! with each image's cost read from its header; written as CSV and RON.
 
 use crate::metrics;
-use luxest_io::exr_io::{read_rgb_finite, RgbImage};
+use luxest_io::exr::read_rgb_finite;
 use luxest_io::fsio::write_ron_to;
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 use luxest_io::outputs::OutputPlan;
 use luxest_io::{Error, Result};
 use serde::{Deserialize, Serialize};

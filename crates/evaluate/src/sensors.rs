@@ -78,6 +78,8 @@ pub fn score_sensors(
         }
         results.sets.retain(|s| sets.contains(&s.name));
     }
+    case.check_geometry(&results)
+        .map_err(|(place, problem)| Error::at(path, place, problem))?;
     let rows: Vec<SensorRow> = case
         .rows(&results)
         .into_iter()

@@ -261,6 +261,87 @@ impl Case {
         Ok(case)
     }
 
+    /// Refuses results with a point that does not lie on the case's geometry, facing the way
+    /// its surface does: results of another scene, compared with the case, gave a max |z| of
+    /// 18 373 and, without --max-z, exit 0. Points may lie within 1 % of the case's size off
+    /// its surfaces (a scene's sensors sit on its own planes or just inside its sphere).
+    /// Returns the first such point's place (`sets["wall"].points[1]`) and the problem.
+    pub fn check_geometry(
+        &self,
+        results: &SensorResults,
+    ) -> std::result::Result<(), (String, String)> {
+        let show = |v: Vec3| {
+            format!(
+                "({}, {}, {})",
+                luxest_io::num::show(v.x),
+                luxest_io::num::show(v.y),
+                luxest_io::num::show(v.z)
+            )
+        };
+        for set in &results.sets {
+            for (i, p) in set.points.iter().enumerate() {
+                let (x, n) = (p.position, p.normal);
+                let problem = match self {
+                    Case::Sobolev(Sobolev { h1, h2, .. }, _)
+                    | Case::CosnSobolev(CosnSobolev { h1, h2, .. }, _) => {
+                        let tol = 1e-2 * (h1 + h2);
+                        let (plane, y, up) = if x.y < 0.0 {
+                            (1, -h1, 1.0)
+                        } else {
+                            (2, *h2, -1.0)
+                        };
+                        ((x.y - y).abs() > tol || n.y * up < 0.99).then(|| {
+                            format!(
+                                "is not on plane {plan} of the case (y = {}, facing {}y)",
+                                luxest_io::num::show(y),
+                                if up > 0.0 { "+" } else { "-" },
+                                plan = plane
+                            )
+                        })
+                    }
+                    Case::Sphere { radius, .. } | Case::CosnSphere { radius, .. } => {
+                        let r = x.length();
+                        let inward = if r > 0.0 { -n.dot(x) / r } else { 0.0 };
+                        ((r - radius).abs() > 1e-2 * radius || inward < 0.99).then(|| {
+                            format!(
+                                "is not on the case's sphere wall (radius {} about the origin, \
+                                 facing in)",
+                                luxest_io::num::show(*radius)
+                            )
+                        })
+                    }
+                    Case::Cie171Room {
+                        area_m2, source, ..
+                    } => {
+                        // The room is a cube of this total area; no point of it is farther
+                        // from a source inside than its diagonal.
+                        let diagonal = (3.0 * area_m2 / 6.0).sqrt();
+                        ((x - *source).length() > diagonal * 1.01).then(|| {
+                            format!(
+                                "is {} m from the source, farther than the diagonal ({} m) of \
+                                 the case's room of {} m²",
+                                luxest_io::num::show((x - *source).length()),
+                                luxest_io::num::show(diagonal),
+                                luxest_io::num::show(*area_m2)
+                            )
+                        })
+                    }
+                };
+                if let Some(problem) = problem {
+                    return Err((
+                        format!("sets[\"{}\"].points[{i}]", set.name),
+                        format!(
+                            "the point {} {problem}: results of another scene? (--scene \
+                             S.lxs checks the results' scene hash)",
+                            show(x)
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The rows to compare for `results`.
     pub fn rows(&self, results: &SensorResults) -> Vec<Row> {
         let points = results

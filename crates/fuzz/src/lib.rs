@@ -17,7 +17,7 @@ const NOWHERE: &str = "/nonexistent-luxest-fuzz";
 pub type Target = fn(&[u8]);
 
 /// The targets by name, as `fuzz/fuzz_targets/<name>.rs` and the smoke run know them.
-pub const TARGETS: [(&str, Target); 7] = [
+pub const TARGETS: [(&str, Target); 10] = [
     ("scene", scene),
     ("obj", obj),
     ("gltf", gltf),
@@ -25,6 +25,9 @@ pub const TARGETS: [(&str, Target); 7] = [
     ("exr", exr),
     ("ies", ies),
     ("ldt", ldt),
+    ("sensors", sensors),
+    ("scene_info", scene_info),
+    ("peer", peer),
 ];
 
 /// A scene file: RON parsing, validation and, for scenes whose tessellation is small, the whole
@@ -84,22 +87,76 @@ pub fn compiled(data: &[u8]) {
 
 /// An OpenEXR image as the stages read it.
 pub fn exr(data: &[u8]) {
-    let _ = luxest_io::exr_io::read_rgb_bytes(&Path::new(NOWHERE).join("i.exr"), data.to_vec());
+    let _ = luxest_io::exr::read_rgb_bytes(&Path::new(NOWHERE).join("i.exr"), data.to_vec());
 }
 
-/// An IES LM-63 photometric file, then what the compiler asks of it.
+/// An IES LM-63 photometric file as the compiler reads it (text, or refused as binary), then
+/// what the compiler asks of it.
 pub fn ies(data: &[u8]) {
-    let text = String::from_utf8_lossy(data);
+    let Ok(text) = luxest_photometry::text_of("f.ies", data.to_vec()) else {
+        return;
+    };
     if let Ok(p) = luxest_photometry::ies::parse_ies_str("f.ies", &text) {
         use_photometry(&p);
     }
 }
 
-/// A EULUMDAT photometric file, then what the compiler asks of it.
+/// A EULUMDAT photometric file as the compiler reads it, then what the compiler asks of it.
 pub fn ldt(data: &[u8]) {
-    let text = String::from_utf8_lossy(data);
+    let Ok(text) = luxest_photometry::text_of("f.ldt", data.to_vec()) else {
+        return;
+    };
     if let Ok(p) = luxest_photometry::ldt::parse_ldt_str("f.ldt", &text) {
         use_photometry(&p);
+    }
+}
+
+/// Sensor results (`.sensors.ron`), then what `report` and `evaluate sensors` do with them:
+/// the calculation surfaces' figures (jackknife over the batches) and each kind of exact case's
+/// geometry check and rows.
+pub fn sensors(data: &[u8]) {
+    let path = Path::new(NOWHERE).join("results.ron");
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(results) = luxest_io::fsio::parse_ron::<luxest_io::sensors::SensorResults>(&path, text)
+    else {
+        return;
+    };
+    if let Ok(surfaces) = report::input::surfaces(&path, &results) {
+        for s in &surfaces {
+            let _ = s.stats(&path);
+        }
+    }
+    for spec in [
+        "sphere:I=100,R=1,rho=0.5",
+        "sobolev:I=100,h1=1,h2=1,rho1=0.5,rho2=0.5,bin=0.1",
+        "cie171-5.8:flux=1e4,area=96,rho=0.5,x=2,y=2,z=2",
+    ] {
+        let case = luxest_exact::cases::Case::parse(spec).expect("a valid case");
+        if case.check_geometry(&results).is_ok() {
+            let _ = case.rows(&results);
+        }
+    }
+}
+
+/// A compiled scene's header as `scene-compile --info` prints it, as `report --scene-info`
+/// reads it: the header's partial view, its content-hash line, the luminaire groups.
+pub fn scene_info(data: &[u8]) {
+    let path = Path::new(NOWHERE).join("scene.info.ron");
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok((header, _hash)) = report::scene_info::parse(&path, text) {
+        let _ = report::scene_info::light_sources(&path, &header);
+    }
+}
+
+/// A peer program's illuminances (`report --peer`, CSV), then the check of its sets.
+pub fn peer(data: &[u8]) {
+    let path = Path::new(NOWHERE).join("peer.csv");
+    if let Ok(p) = report::peer::parse(&path, data) {
+        let _ = report::peer::check_sets(&path, &p, &["work-plane"], &path);
     }
 }
 

@@ -49,6 +49,9 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
             files("crates/photometry/tests/fixtures", &[".ldt"]),
         ]
         .concat(),
+        "sensors" => sensors_seeds(),
+        "scene_info" => scene_info_seeds(),
+        "peer" => files("reports/lighting/office", &["radiance.csv"]),
         _ => unreachable!("unknown target {target}"),
     };
     s.extend(files(&format!("crates/fuzz/regressions/{target}"), &[""]));
@@ -61,6 +64,94 @@ fn compiled_seed() -> Vec<u8> {
     let (mut scene, _) =
         scene_compile::compile_file(&root().join("scenes/cornell-box.ron")).expect("compiles");
     scene.encode()
+}
+
+/// Sensor results as `estimate sensors` writes them: points on an integrating sphere's wall,
+/// and a 3 x 2 calculation surface with its batch values (what `report` reads).
+fn sensors_seeds() -> Vec<Vec<u8>> {
+    use luxest_io::color::Rgb;
+    use luxest_io::math::Vec3;
+    use luxest_io::sensors::{SensorGrid, SensorResults, SensorSetResult, SensorValue};
+    let run = luxest_io::meta::RunInfo::new("local-estimate", 1000, 1, 0.5, "0123abcd");
+    let point = |p: Vec3, n: Vec3, v: f64| SensorValue::new(p, n, v, 1.0, Rgb::splat(v));
+    let wall = SensorSetResult {
+        name: "wall".into(),
+        grid: None,
+        kind: None,
+        points: vec![
+            point(
+                Vec3::new(0.0, -0.9999, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                200.0,
+            ),
+            point(
+                Vec3::new(0.9999, 0.0, 0.0),
+                Vec3::new(-1.0, 0.0, 0.0),
+                201.0,
+            ),
+        ],
+        batches: Vec::new(),
+    };
+    let up = Vec3::new(0.0, 1.0, 0.0);
+    let points: Vec<SensorValue> = (0..6)
+        .map(|k| {
+            let p = Vec3::new(1.0 + (k % 3) as f64, 0.75, 2.0 - (k / 3) as f64);
+            point(p, up, 100.0 + k as f64)
+        })
+        .collect();
+    let batches: Vec<Vec<f64>> = [-1.0, 1.0]
+        .iter()
+        .map(|d| points.iter().map(|p| p.value + d).collect())
+        .collect();
+    let plane = SensorSetResult {
+        name: "work-plane".into(),
+        grid: Some(SensorGrid {
+            nu: 3,
+            nv: 2,
+            origin: Vec3::new(0.0, 0.75, 3.0),
+            u: Vec3::new(4.0, 0.0, 0.0),
+            v: Vec3::new(0.0, 0.0, -3.0),
+            margin_m: 0.5,
+        }),
+        kind: None,
+        points,
+        batches,
+    };
+    [vec![wall], vec![plane]]
+        .into_iter()
+        .map(|sets| {
+            let results = SensorResults {
+                scene: "seed".into(),
+                run: run.clone(),
+                unit: "lx".into(),
+                singularity: "ball".into(),
+                sets,
+            };
+            luxest_io::fsio::to_ron_string(&results).into_bytes()
+        })
+        .collect()
+}
+
+/// Compiled headers as `scene-compile --info` prints them: the Cornell box (area light), and a
+/// floor under the office's two luminaire files, one of them twice (luminaire groups).
+fn scene_info_seeds() -> Vec<Vec<u8>> {
+    let (cornell, _) =
+        scene_compile::compile_file(&root().join("scenes/cornell-box.ron")).expect("compiles");
+    let text = r#"Scene(name: "lamps",
+        materials: { "w": Lambertian(reflectance: (0.5, 0.5, 0.5)) },
+        objects: [(name: "floor", shape: Quad(corner: (0.0, 0.0, 0.0), u: (0.0, 0.0, 2.0), v: (2.0, 0.0, 0.0)), material: "w")],
+        luminaires: [
+            (name: "a", file: "photometry/troffer-600-led.ies", position: (0.5, 2.0, 0.5)),
+            (name: "b", file: "photometry/troffer-600-led.ies", position: (1.5, 2.0, 0.5), multiplier: 0.8),
+            (name: "c", file: "photometry/pendant-linear-4000.ldt", position: (1.0, 2.0, 1.5)),
+        ])"#;
+    let path = root().join("scenes/lamps.ron");
+    let scene = luxest_io::fsio::parse_ron(&path, text).expect("parses");
+    let (lamps, _) = scene_compile::compile(&scene, &path).expect("compiles");
+    [cornell, lamps]
+        .iter()
+        .map(|s| scene_compile::cli::info_text(s).into_bytes())
+        .collect()
 }
 
 /// xorshift64*: deterministic mutations, the same on every machine.

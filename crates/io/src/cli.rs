@@ -24,19 +24,68 @@ pub fn parse<A: Parser>(
 
 /// The whole `main` of a stage binary: parse the process arguments, run, report.
 pub fn main<A: Parser>(run: impl FnOnce(A) -> Result<(), Error>) -> ExitCode {
-    let result = parse::<A>(std::env::args_os()).and_then(|a| match a {
+    main_from(std::env::args_os(), run)
+}
+
+/// [`main`] over `argv` (the program name first), returning the exit status: what a stage
+/// binary does, also for the tests that run a stage as a process of its own (to kill it, limit
+/// it, or read its stderr).
+pub fn main_from<A: Parser>(
+    argv: impl IntoIterator<Item = impl Into<OsString> + Clone>,
+    run: impl FnOnce(A) -> Result<(), Error>,
+) -> ExitCode {
+    ExitCode::from(exit_status(argv, run))
+}
+
+/// The exit status of [`main_from`] as a number (0, 1 or 2).
+pub fn exit_status<A: Parser>(
+    argv: impl IntoIterator<Item = impl Into<OsString> + Clone>,
+    run: impl FnOnce(A) -> Result<(), Error>,
+) -> u8 {
+    prepare_process();
+    let result = parse::<A>(argv).and_then(|a| match a {
         Some(a) => run(a),
         None => Ok(()),
     });
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(()) => 0,
         Err(Error::Usage(m)) => {
             eprintln!("{}", usage_message(&m));
-            ExitCode::from(2)
+            2
         }
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::from(e.exit_code())
+            e.exit_code()
+        }
+    }
+}
+
+/// Makes an exceeded file-size limit (`ulimit -f`) an error of the write that exceeds it: by
+/// default SIGXFSZ ends the process on the spot, which left the output's temporary
+/// `.NAME.tmp-…` behind; ignored, the write fails with EFBIG ("File too large"), and the run
+/// reports it in one line naming the file and removes its temporaries like any failed write.
+fn prepare_process() {
+    #[cfg(all(
+        target_os = "linux",
+        any(
+            target_arch = "x86_64",
+            target_arch = "x86",
+            target_arch = "aarch64",
+            target_arch = "arm",
+            target_arch = "riscv64"
+        )
+    ))]
+    {
+        extern "C" {
+            fn signal(signum: std::os::raw::c_int, handler: usize) -> usize;
+        }
+        // Linux's signal.h on these architectures: SIGXFSZ 25; SIG_IGN is the handler 1.
+        const SIGXFSZ: std::os::raw::c_int = 25;
+        const SIG_IGN: usize = 1;
+        // SAFETY: setting a signal's disposition to "ignore" installs no handler code; it is
+        // done before the stage starts any thread.
+        unsafe {
+            signal(SIGXFSZ, SIG_IGN);
         }
     }
 }

@@ -1,4 +1,5 @@
-//! Linear RGB triples (Rec. 709 primaries) and the photometric luminance Y.
+//! Linear RGB triples (Rec. 709 primaries), the photometric luminance Y, and the sRGB transfer
+//! function that encodes linear values for display.
 //!
 //! In photometric scenes the Y of an RGB value *is* the photometric quantity (cd, lm, lx,
 //! cd/m²); the RGB split only tints it.
@@ -72,6 +73,16 @@ impl Add for Rgb {
     type Output = Rgb;
     fn add(self, o: Rgb) -> Rgb {
         Rgb([self.0[0] + o.0[0], self.0[1] + o.0[1], self.0[2] + o.0[2]])
+    }
+}
+
+/// sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
+pub fn srgb_encode(v: f64) -> f64 {
+    let v = v.clamp(0.0, 1.0);
+    if v <= 0.0031308 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
     }
 }
 

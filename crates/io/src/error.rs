@@ -1,7 +1,7 @@
 //! The one error type of every stage.
 //!
 //! Every failure a user can cause is reported as one line that names the file and, where known,
-//! the place in it (`scenes/a.ron:12:5`, `materials["white"].reflectance`, `vertex 17`). Stages
+//! the place in it (`scenes/office.ron:12:5`, `materials["white"].reflectance`, `vertex 17`). Stages
 //! map [`Error::Usage`] to exit code 2 and everything else to exit code 1, and never panic on
 //! bad input.
 

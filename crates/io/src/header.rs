@@ -64,6 +64,38 @@ pub const ALL: [&str; 14] = [
     CHANNELS,
 ];
 
+/// The values of [`ESTIMATOR`]: which estimator made an image or sensor results (also
+/// `RunInfo::estimator` in sensor results). `evaluate` labels denoised images
+/// `<estimator>+denoise` or `<estimator>+oidn`. Python's `luxest_contract` has the same names,
+/// tied by `tests/fixtures/contract/estimators.json`.
+pub mod estimator {
+    /// `trace`: path tracing.
+    pub const PATH_TRACING: &str = "path-tracing";
+    /// `aov-write`: the first-hit features (albedo, normal, emission, depth).
+    pub const FIRST_HIT_FEATURES: &str = "first-hit-features";
+    /// `estimate sensors`: the local estimate.
+    pub const LOCAL_ESTIMATE: &str = "local-estimate";
+    /// `estimate direct`: the direct-simulation baseline.
+    pub const DIRECT_SIMULATION: &str = "direct-simulation";
+    /// `estimate gather`.
+    pub const GATHER: &str = "gather";
+    /// `estimate image`: the double local estimate.
+    pub const DOUBLE_LOCAL_ESTIMATE: &str = "double-local-estimate";
+    /// `estimate image --light-tracing`.
+    pub const LIGHT_TRACING: &str = "light-tracing";
+
+    /// Every estimator name above, in the order of this module.
+    pub const ALL: [&str; 7] = [
+        PATH_TRACING,
+        FIRST_HIT_FEATURES,
+        LOCAL_ESTIMATE,
+        DIRECT_SIMULATION,
+        GATHER,
+        DOUBLE_LOCAL_ESTIMATE,
+        LIGHT_TRACING,
+    ];
+}
+
 /// The value of `key` in a list of (name, value) attributes.
 pub fn get<'a>(attributes: &'a [(String, String)], key: &str) -> Option<&'a str> {
     attributes

@@ -9,27 +9,38 @@
 //! - [`naming`]: the file names stages exchange (`<name>_<spp>spp.<kind>.exr`, ...);
 //! - [`outputs`]: the output plan every stage makes before writing (no output over an input,
 //!   another output or a non-regular file; all outputs of a run committed together);
-//! - [`limits`]: image and mesh sizes checked against available memory before allocating;
+//! - [`limits`]: the resource rule: buffers sized against the memory available before
+//!   allocating, and the one-line plan of a long run;
 //! - [`num`]: validated numbers for command-line options (finite, in range, unit in messages);
-//! - [`exr_io`]: the RGB image type, EXR and PNG I/O, autoexposure;
+//! - [`image`]: the linear RGB image every stage exchanges, with its header attributes;
+//! - [`exposure`]: the exposure contract shared with Python (autoexposure, dim-image exponent);
+//! - [`exr`]: OpenEXR reading and writing (f32 RGB, ZIP scanlines, header attributes);
+//! - [`png`]: PNG previews of linear images, and the PNG encoder of 8-bit sRGB rasters;
 //! - [`sensors`]: sensor results (RON + CSV);
-//! - [`math`], [`color`]: f64 vectors and transforms, RGB and luminance.
+//! - [`math`], [`color`]: f64 vectors and transforms, RGB, luminance and the sRGB transfer
+//!   function;
+//! - [`chi2`]: a test utility, the chi-square test every sampling routine's tests call (no stage
+//!   uses it).
 //!
 //! Invariant: no stage depends on another stage's crate; whatever two stages exchange is read and
 //! written through this crate.
 
+pub mod chi2;
 pub mod cli;
 pub mod color;
 pub mod error;
-pub mod exr_io;
+pub mod exposure;
+pub mod exr;
 pub mod fsio;
 pub mod header;
+pub mod image;
 pub mod limits;
 pub mod math;
 pub mod meta;
 pub mod naming;
 pub mod num;
 pub mod outputs;
+pub mod png;
 pub mod sensors;
 
 pub use error::{Error, Result};

@@ -11,12 +11,15 @@
 //! - (with [`path_component`]) a default output name built from a scene's `name` that would
 //!   leave the output root (`"../../x"`, `"/tmp/x"`, `""`).
 //!
-//! How it writes: each output goes to a hidden temporary `.NAME.tmp-PID-N` beside its final path
-//! (the same file system, so the final rename is atomic). [`OutputPlan::commit`] renames them all
-//! only after every one of them was written, so a run whose second output fails leaves neither
-//! (the temporaries are removed, also when the plan is dropped uncommitted). A process killed
-//! mid-write (SIGKILL, `ulimit -f`) cannot clean up; the next plan writing into the same directory
-//! removes temporaries whose process (`/proc/PID`) no longer exists.
+//! How it writes: each output goes to a hidden temporary `.NAME.tmp-PID-N@HOST` beside its final
+//! path (the same file system, so the final rename is atomic). [`OutputPlan::commit`] renames
+//! them all only after every one of them was written, so a run whose second output fails leaves
+//! neither (the temporaries are removed, also when the plan is dropped uncommitted; a write
+//! beyond `ulimit -f` is such a failure, see `cli::main`). A process killed mid-write (SIGKILL)
+//! cannot clean up: every later plan reading from or writing into the same directory removes
+//! the temporaries of processes of this host that no longer exist (`/proc/PID`). A temporary of
+//! another host (a shared file system under a cluster's jobs) is never removed: whether its
+//! process lives cannot be told from here.
 
 use crate::error::{Error, Result};
 use std::io::Write;
@@ -279,6 +282,15 @@ impl OutputPlan {
             .into_iter()
             .map(|p| (p.as_ref().to_path_buf(), Identity::of(p.as_ref())))
             .collect();
+        // A run in a directory, reading or writing, clears the temporaries that runs killed
+        // there left behind (its output directories are cleared as they are planned).
+        let mut cleared: Vec<&Path> = Vec::new();
+        for dir in inputs.iter().filter_map(|(_, id)| id.normal.parent()) {
+            if !cleared.contains(&dir) {
+                remove_stale_temporaries(dir);
+                cleared.push(dir);
+            }
+        }
         let mut plan = OutputPlan {
             inputs,
             outputs: Vec::new(),
@@ -462,23 +474,62 @@ impl Drop for OutputPlan {
     }
 }
 
-/// The temporary `.NAME.tmp-PID-N` beside `dest`, unique within the process.
+/// The temporary `.NAME.tmp-PID-N@HOST` beside `dest`, unique within the process (and, with
+/// the host, among the hosts sharing a file system).
 fn temporary_for(dest: &Path) -> PathBuf {
     static N: AtomicUsize = AtomicUsize::new(0);
-    let name = dest
+    let mut name = dest
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
     let n = N.fetch_add(1, Ordering::Relaxed);
-    dest.with_file_name(format!(".{name}.tmp-{}-{n}", std::process::id()))
+    let tail = match this_host() {
+        Some(host) => format!(".tmp-{}-{n}@{host}", std::process::id()),
+        None => format!(".tmp-{}-{n}", std::process::id()),
+    };
+    // File names are at most 255 bytes: a long output name is shortened in its temporary.
+    while 1 + name.len() + tail.len() > 255 {
+        name.pop();
+    }
+    dest.with_file_name(format!(".{name}{tail}"))
 }
 
-/// The process id in a temporary's name `.NAME.tmp-PID` or `.NAME.tmp-PID-N`, if it is one.
+/// This host's name as temporaries carry it (`/proc/sys/kernel/hostname`, characters other
+/// than letters, digits, `.`, `_` and `-` replaced by `_`, at most 64), if it can be read.
+fn this_host() -> Option<&'static str> {
+    static HOST: std::sync::OnceLock<Option<String>> = std::sync::OnceLock::new();
+    HOST.get_or_init(|| {
+        let raw = std::fs::read_to_string("/proc/sys/kernel/hostname").ok()?;
+        let host: String = raw
+            .trim()
+            .chars()
+            .take(64)
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        (!host.is_empty()).then_some(host)
+    })
+    .as_deref()
+}
+
+/// The process id in a temporary's name `.NAME.tmp-PID`, `.NAME.tmp-PID-N` or
+/// `.NAME.tmp-PID-N@HOST`, if it is one of this host's (a name without a host is taken as this
+/// host's, as temporaries were named before hosts were added).
 fn temporary_owner(file_name: &str) -> Option<u32> {
     if !file_name.starts_with('.') {
         return None;
     }
     let (_, tail) = file_name.rsplit_once(".tmp-")?;
+    let tail = match tail.split_once('@') {
+        Some((t, host)) if Some(host) == this_host() => t,
+        Some(_) => return None,
+        None => tail,
+    };
     let pid = tail.split_once('-').map_or(tail, |(pid, n)| {
         if n.bytes().all(|b| b.is_ascii_digit()) && !n.is_empty() {
             pid
@@ -776,12 +827,34 @@ mod tests {
         let live = format!(".o.exr.tmp-{}-0", std::process::id());
         std::fs::write(d.0.join(&live), "mine").unwrap();
         std::fs::write(d.0.join("keep.tmp-1x"), "user file").unwrap();
+        // Another host's temporary on a shared file system: its process may well live.
+        let remote = ".o.exr.tmp-99999997-0@another-host".to_string();
+        std::fs::write(d.0.join(&remote), "theirs").unwrap();
         let _plan = OutputPlan::new(Vec::<PathBuf>::new(), [d.0.join("o.exr")]).unwrap();
-        assert_eq!(d.files(), vec![live, "keep.tmp-1x".to_string()]);
+        assert_eq!(
+            d.files(),
+            vec![live.clone(), remote.clone(), "keep.tmp-1x".to_string()]
+        );
+        // A run that only reads from a directory clears it too.
+        let host = this_host().unwrap();
+        let dead = format!(".r.ron.tmp-99999996-0@{host}");
+        std::fs::write(d.0.join(&dead), "old").unwrap();
+        let elsewhere = Dir::new("stale-out");
+        let _plan =
+            OutputPlan::new([d.0.join("keep.tmp-1x")], [elsewhere.0.join("o.ron")]).unwrap();
+        assert_eq!(d.files(), vec![live, remote, "keep.tmp-1x".to_string()]);
         assert_eq!(temporary_owner(".a.tmp-12"), Some(12));
         assert_eq!(temporary_owner(".a.tmp-12-7"), Some(12));
         assert_eq!(temporary_owner("a.tmp-12"), None);
         assert_eq!(temporary_owner(".a.tmp-12x"), None);
+        let host = this_host().unwrap();
+        assert_eq!(temporary_owner(&format!(".a.tmp-12-7@{host}")), Some(12));
+        assert_eq!(temporary_owner(".a.tmp-12-7@another-host"), None);
+        let t = temporary_for(&d.0.join("o.exr"));
+        let t = t.file_name().unwrap().to_str().unwrap();
+        assert_eq!(temporary_owner(t), Some(std::process::id()), "{t}");
+        let long = temporary_for(&d.0.join("x".repeat(255)));
+        assert!(long.file_name().unwrap().len() <= 255);
     }
 
     #[test]

@@ -45,17 +45,18 @@ impl Default for IsoluxOptions {
     }
 }
 
-/// An RGB8 image, row-major from the top.
+/// An 8-bit sRGB raster (display-referred: what the plot shows, 3 bytes a pixel), row-major from
+/// the top; not to be confused with the linear, scene-referred [`luxest_io::image::RgbImage`].
 #[derive(Debug, Clone, PartialEq)]
-pub struct RgbImage {
+pub struct SrgbRaster {
     pub width: u32,
     pub height: u32,
     pub data: Vec<u8>,
 }
 
-impl RgbImage {
+impl SrgbRaster {
     fn new(width: u32, height: u32, bg: [u8; 3]) -> Self {
-        RgbImage {
+        SrgbRaster {
             width,
             height,
             data: bg.repeat((width * height) as usize),
@@ -82,7 +83,7 @@ impl RgbImage {
     }
     /// The raster as PNG bytes.
     pub fn encode_png(&self) -> Result<Vec<u8>, String> {
-        luxest_io::exr_io::encode_png_rgb8(self.width, self.height, &self.data)
+        luxest_io::png::encode_png_rgb8(self.width, self.height, &self.data)
     }
 
     /// An anti-aliased line of width `w` px (coverage from the distance to the segment).
@@ -351,7 +352,7 @@ pub fn render_isolux(
     values_lx: &[f64],
     stats: Option<&GridStats>,
     opts: &IsoluxOptions,
-) -> Result<RgbImage, GridError> {
+) -> Result<SrgbRaster, GridError> {
     if values_lx.len() != grid.len() {
         return Err(GridError(format!(
             "isolux: {} values for a grid of {} points",
@@ -387,7 +388,7 @@ pub fn render_isolux(
     }
     let (left, top, right, bottom) = (56i64, 48i64, 150i64, 78i64);
     let (w, h) = (left + pw + right, top + ph.max(220) + bottom);
-    let mut img = RgbImage::new(w as u32, h as u32, WHITE);
+    let mut img = SrgbRaster::new(w as u32, h as u32, WHITE);
     let x_of = |s: f64| left as f64 + s * scale;
     let y_of = |t: f64| (top + ph) as f64 - t * scale;
 

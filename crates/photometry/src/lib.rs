@@ -12,6 +12,8 @@
 //! - [`grid`] lays out calculation grids (EN 12464-1 rule) and computes Eavg, Emin, Emax, U0, Ud
 //!   with Monte Carlo uncertainties propagated from the per-point estimates.
 //! - [`isolux`] renders a false-colour isolux PNG with contours, legend and outline.
+//! - [`photometry`] holds the distribution both parsers produce, [`error`] the crate's one error
+//!   type.
 //!
 //! Units: metres, degrees in files and in the (C, γ) API, radians nowhere in the public API except
 //! solid angles (steradians), candela, lumen, lux. All accumulation is in f64.
@@ -58,7 +60,7 @@ pub use error::PhotometryError;
 pub use frame::{c_gamma_from_direction, direction_from_c_gamma, Frame, Luminaire, Orientation};
 pub use grid::{CalcGrid, Estimate, GridError, GridSpec, GridStats, Spacing};
 pub use illuminance::{direct_illuminance_lx, direct_sensor_illuminance_lx, SensorKind};
-pub use isolux::{render_isolux, IsoluxOptions, RgbImage};
+pub use isolux::{render_isolux, IsoluxOptions, SrgbRaster};
 pub use photometry::{
     FluxCheck, LampFlux, LuminousOpening, OpeningShape, Photometry, SourceFormat, Symmetry,
 };
@@ -87,11 +89,35 @@ pub fn load(path: &Path) -> Result<Photometry, PhotometryError> {
     }
 }
 
-/// Reads a file as text: UTF-8 when valid, else Latin-1.
+/// Reads a file as text (see [`text_of`]).
 pub(crate) fn read_text(path: &Path) -> Result<String, PhotometryError> {
     let name = path.display().to_string();
     let bytes = std::fs::read(path)
         .map_err(|e| PhotometryError::new(&name, None, format!("cannot read: {e}")))?;
+    text_of(&name, bytes)
+}
+
+/// A photometric file's bytes as text: UTF-8 when valid, else Latin-1 (older files are). A
+/// file with a control character other than tabs, line and page ends (and a trailing DOS end
+/// mark, ^Z) is not text: a binary file (an image, a compiled scene given by mistake) is named
+/// as such with the first such byte, rather than as an IES file "missing TILT=".
+pub fn text_of(name: &str, bytes: Vec<u8>) -> Result<String, PhotometryError> {
+    let body = bytes.strip_suffix(b"\x1a").unwrap_or(&bytes);
+    if let Some(at) = body
+        .iter()
+        .position(|&b| (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0b | 0x0c)) || b == 0x7f)
+    {
+        let line = 1 + body[..at].iter().filter(|&&b| b == b'\n').count();
+        return Err(PhotometryError::new(
+            name,
+            Some(line),
+            format!(
+                "not a text file: byte {at} is 0x{:02x}, a control character (a binary file? \
+                 photometric files are text)",
+                body[at]
+            ),
+        ));
+    }
     Ok(match String::from_utf8(bytes) {
         Ok(s) => s,
         Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),

@@ -1,88 +1,96 @@
-//! The emission sampler against its own density (chi-square, as Mitsuba tests its samplers) and
-//! the Monte Carlo flux E[I/p] against the table integral and the closed form.
+//! The emission sampler and the luminous opening's point sampler against their own densities
+//! (the chi-square harness of `luxest_io::chi2`, as Mitsuba tests its samplers), and the Monte
+//! Carlo flux E[I/p] against the table integral and the closed form.
 
-use crate::common::{chi2_z, get, Rng};
-use luxest_photometry::{c_gamma_from_direction, IntensitySampler, Photometry};
-use std::f64::consts::PI;
+use crate::common::{get, Rng};
+use luxest_io::chi2::{ChiSquareTest, Rectangle, Sphere};
+use luxest_photometry::{c_gamma_from_direction, IntensitySampler, LuminousOpening, Photometry};
+use std::f64::consts::{PI, TAU};
 
-/// Chi-square test with bins = every table cell split 2 × 2 in (C, cos γ): the density is
-/// constant on each bin, so its expected count is N · pdf(bin centre) · bin solid angle exactly.
-fn chi_square(p: &Photometry, n: usize, seed: u64) -> f64 {
-    let s = IntensitySampler::new(p).unwrap();
-    let (c, g) = (p.c_angles_deg(), p.gamma_angles_deg());
-    let (nc, ng) = (c.len() - 1, g.len() - 1);
-    let mut counts = vec![0u64; nc * ng * 4];
-    let mut rng = Rng(seed);
-    for _ in 0..n {
-        let smp = s.sample(rng.uniform(), rng.uniform());
-        let (cd, gd) = c_gamma_from_direction(smp.dir);
-        let i = c
-            .partition_point(|&x| x <= cd)
-            .saturating_sub(1)
-            .min(nc - 1);
-        let j = g
-            .partition_point(|&x| x <= gd)
-            .saturating_sub(1)
-            .min(ng - 1);
-        let si = usize::from(cd >= 0.5 * (c[i] + c[i + 1]));
-        let mu = -smp.dir[2];
-        let (m0, m1) = (g[j].to_radians().cos(), g[j + 1].to_radians().cos());
-        let sj = usize::from(mu <= 0.5 * (m0 + m1));
-        counts[((i * ng + j) * 2 + si) * 2 + sj] += 1;
+/// `edges` with each interval split in two.
+fn halved(edges: &[f64]) -> Vec<f64> {
+    let mut out = vec![edges[0]];
+    for w in edges.windows(2) {
+        out.extend([0.5 * (w[0] + w[1]), w[1]]);
     }
-    let (mut chi2, mut dof, mut pool_e, mut pool_o, mut total_e) = (0.0, 0usize, 0.0, 0.0, 0.0);
-    for i in 0..nc {
-        for j in 0..ng {
-            let (m0, m1) = (g[j].to_radians().cos(), g[j + 1].to_radians().cos());
-            for si in 0..2 {
-                for sj in 0..2 {
-                    let cc = c[i] + (0.25 + 0.5 * si as f64) * (c[i + 1] - c[i]);
-                    let mu = m0 - (0.25 + 0.5 * sj as f64) * (m0 - m1);
-                    let sg = (1.0 - mu * mu).sqrt();
-                    let dir = [sg * cc.to_radians().cos(), sg * cc.to_radians().sin(), -mu];
-                    let area = 0.5 * (c[i + 1] - c[i]).to_radians() * 0.5 * (m0 - m1);
-                    let e = n as f64 * s.pdf(dir) * area;
-                    let o = counts[((i * ng + j) * 2 + si) * 2 + sj] as f64;
-                    total_e += e;
-                    if e < 5.0 {
-                        pool_e += e;
-                        pool_o += o;
-                    } else {
-                        chi2 += (o - e) * (o - e) / e;
-                        dof += 1;
-                    }
-                }
-            }
-        }
+    out
+}
+
+/// Bins on the table's cells split 2 × 2 in (cos θ = −cos γ, φ = C): the density is constant on
+/// each, so one pdf value per bin integrates it exactly. Beyond the table's γ range (one that
+/// starts after 0° or ends short of 180°) one more bin each side, where the density is zero.
+fn table_bins(p: &Photometry) -> (Vec<f64>, Vec<f64>) {
+    let z: Vec<f64> = p
+        .gamma_angles_deg()
+        .iter()
+        .map(|g| -g.to_radians().cos())
+        .collect();
+    let mut z = halved(&z);
+    if z[0] > -1.0 + 1e-12 {
+        z.insert(0, -1.0);
     }
-    // The density integrates to one: this checks the cell solid angles independently.
-    assert!(
-        (total_e / n as f64 - 1.0).abs() < 1e-9,
-        "{}",
-        total_e / n as f64
-    );
-    if pool_e > 0.0 {
-        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-        dof += 1;
+    if z[z.len() - 1] < 1.0 - 1e-12 {
+        z.push(1.0);
     }
-    let z = chi2_z(chi2, (dof - 1) as f64);
-    eprintln!(
-        "{}: chi2 {chi2:.1} with {} dof, z = {z:.2}",
-        p.name,
-        dof - 1
-    );
-    z
+    let n = z.len();
+    (z[0], z[n - 1]) = (-1.0, 1.0);
+    let c: Vec<f64> = p.c_angles_deg().iter().map(|c| c.to_radians()).collect();
+    let mut phi = halved(&c);
+    let n = phi.len();
+    (phi[0], phi[n - 1]) = (0.0, TAU);
+    (z, phi)
 }
 
 #[test]
 fn sampler_passes_chi_square_against_its_pdf() {
-    for (k, name) in ["quad.ies", "bilat90.ldt", "cos2.ies", "bilat-open.ies"]
-        .iter()
-        .enumerate()
-    {
-        let z = chi_square(&get(name), 400_000, 1000 + k as u64);
-        // z > 4 has probability 3e-5 under the null hypothesis.
-        assert!(z < 4.0, "{name}: z = {z}");
+    let names = ["quad.ies", "bilat90.ldt", "cos2.ies", "bilat-open.ies"];
+    for (k, name) in names.iter().enumerate() {
+        let p = get(name);
+        let s = IntensitySampler::new(&p).unwrap();
+        let (z, phi) = table_bins(&p);
+        let mut rng = Rng(1000 + k as u64);
+        let report = ChiSquareTest::new(Sphere)
+            .edges(z, phi)
+            .integration(1)
+            .samples(200_000)
+            .tests(names.len())
+            .run(
+                || Some(s.sample(rng.uniform(), rng.uniform()).dir.into()),
+                |w| s.pdf(w.into()),
+            )
+            .unwrap_or_else(|r| panic!("{name}: {r:?}"));
+        // The density integrates to one: this checks the cells' solid angles independently.
+        assert!((report.pdf_integral - 1.0).abs() < 1e-9, "{report:?}");
+    }
+}
+
+#[test]
+fn opening_points_are_uniform_over_the_opening() {
+    // Rectangle, disc and ellipse, binned on the rectangle around them; the round shapes'
+    // edges cut bins, so the density is integrated finely there.
+    let shapes = [(0.6, 1.2), (-0.4, -0.4), (-0.3, -0.8)];
+    for (k, (width, length)) in shapes.into_iter().enumerate() {
+        let opening = LuminousOpening::from_ies(width, length, 0.0);
+        let (a, b) = (0.5 * opening.length_m, 0.5 * opening.width_m);
+        let area = opening.flat_area_m2().unwrap();
+        let round = width < 0.0;
+        let inside = |p: [f64; 2]| !round || (p[0] / a).powi(2) + (p[1] / b).powi(2) <= 1.0;
+        let mut rng = Rng(2000 + k as u64);
+        ChiSquareTest::new(Rectangle {
+            x: [-a, a],
+            y: [-b, b],
+        })
+        .integration(32)
+        .tests(shapes.len())
+        .run(
+            || {
+                let p = opening.sample_flat_point(rng.uniform(), rng.uniform())?;
+                assert_eq!(p[2], 0.0);
+                Some([p[0], p[1]])
+            },
+            |p| if inside(p) { 1.0 / area } else { 0.0 },
+        )
+        .unwrap_or_else(|r| panic!("{width} x {length}: {r:?}"));
     }
 }
 

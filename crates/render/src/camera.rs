@@ -110,6 +110,9 @@ pub fn pixel_jitter(seed: u64, pixel: u64, sample: u64) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::Rng;
+    use luxest_io::chi2::{ChiSquareTest, Rectangle, Sphere};
+    use std::f64::consts::TAU;
 
     #[test]
     fn project_inverts_direction() {
@@ -161,16 +164,51 @@ mod tests {
     fn jitter_is_uniform_and_reproducible() {
         assert_eq!(pixel_jitter(1, 2, 3), pixel_jitter(1, 2, 3));
         assert_ne!(pixel_jitter(1, 2, 3), pixel_jitter(1, 2, 4));
-        let n = 64_000;
-        let mut counts = vec![0.0; 64];
-        for s in 0..n {
-            let (u, v) = pixel_jitter(7, s % 97, s);
-            counts[((u * 8.0) as usize) * 8 + (v * 8.0) as usize] += 1.0;
-        }
-        let (stat, dof) = crate::sampling::chi_square(&counts, &[n as f64 / 64.0; 64]);
-        assert!(
-            stat < dof as f64 + 5.0 * (2.0 * dof as f64).sqrt(),
-            "chi-square {stat}"
-        );
+        // Owen-scrambled Sobol points are more even than independent ones: the test cannot
+        // reject them for that, only for a wrong density.
+        let mut s = 0;
+        ChiSquareTest::new(Rectangle::UNIT)
+            .resolution(8, 8)
+            .samples(64_000)
+            .run(
+                || {
+                    s += 1;
+                    let (u, v) = pixel_jitter(7, s % 97, s);
+                    Some([u, v])
+                },
+                |_| 1.0,
+            )
+            .unwrap();
+    }
+
+    #[test]
+    fn rays_through_uniform_image_points_have_the_pinhole_density() {
+        // A point uniform over the image gives a ray direction of solid-angle density
+        // 1 / (A cos³ θ), A the image's area on the plane at unit distance ([`pixel_area`] times
+        // the pixel count; the plane's area element is dω / cos³ θ), and none outside the image.
+        let cam = PinholeCamera::new(&Camera {
+            position: Vec3::new(0.5, -1.0, 2.0),
+            look_at: Vec3::new(0.5, -1.0, 3.0),
+            up: Vec3::new(0.0, 1.0, 0.0),
+            vfov_deg: 100.0,
+            resolution: (40, 30),
+        })
+        .unwrap();
+        let area = cam.pixel_area() * 40.0 * 30.0;
+        // Bins on the image's cap (its corners are 63° off the axis, cos θ = 0.45), one below.
+        let cos_theta = std::iter::once(-1.0).chain((0..=16).map(|k| 0.4 + 0.6 * k as f64 / 16.0));
+        let phi = (0..=32).map(|k| TAU * k as f64 / 32.0);
+        let mut r = Rng::new(8, 0);
+        ChiSquareTest::new(Sphere)
+            .edges(cos_theta.collect(), phi.collect())
+            .integration(16)
+            .run(
+                || Some(cam.direction(40.0 * r.next_f64(), 30.0 * r.next_f64())),
+                |w| match cam.project(cam.position + w) {
+                    Some((_, _, cos)) => 1.0 / (area * cos.powi(3)),
+                    None => 0.0,
+                },
+            )
+            .unwrap();
     }
 }

@@ -244,6 +244,8 @@ impl GoniometricLight {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::Rng;
+    use luxest_io::chi2::{ChiSquareTest, Discrete, Sphere};
 
     fn close(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-12
@@ -288,6 +290,61 @@ mod tests {
         assert_eq!(q.c_angles_deg(), p.c_angles_deg());
         assert_eq!(q.gamma_angles_deg(), p.gamma_angles_deg());
         assert_eq!(table_from_photometry("t.ies", &q), t);
+    }
+
+    /// A luminaire of a smooth table (no cell without light), aimed off the vertical, tilted and
+    /// rotated, with `sources` point sources.
+    fn tilted_luminaire(sources: usize) -> GoniometricLight {
+        let c: Vec<f64> = (0..12).map(|k| k as f64 * 30.0).collect();
+        let g: Vec<f64> = (0..=18).map(|k| k as f64 * 10.0).collect();
+        let rows: Vec<Vec<f64>> = c
+            .iter()
+            .map(|cc| {
+                g.iter()
+                    .map(|gg| {
+                        100.0 + 60.0 * gg.to_radians().cos() * (1.0 + 0.3 * cc.to_radians().cos())
+                    })
+                    .collect()
+            })
+            .collect();
+        let p = Photometry::from_table("smooth.ies", &c, &g, &rows).unwrap();
+        let s = IntensitySampler::new(&p).unwrap();
+        let m = frame_in_world(Vec3::new(0.3, -1.0, 0.4), 20.0, 35.0).unwrap();
+        GoniometricLight {
+            position: Vec3::ZERO,
+            sources: (0..sources)
+                .map(|k| Vec3::new(k as f64, 0.0, 0.0))
+                .collect(),
+            share: 1.0 / sources as f64,
+            frame: Frame { m },
+            photometry: Arc::new(p),
+            sampler: Arc::new(s),
+            scale_rgb: Rgb::splat(2.0),
+        }
+    }
+
+    #[test]
+    fn emission_directions_follow_the_sampler_density_in_the_world() {
+        // The table's density, carried into the world by the luminaire's frame: a rotation
+        // keeps solid angles, so the world density is the local one at to_local(ω).
+        let light = tilted_luminaire(1);
+        let mut r = Rng::new(21, 0);
+        ChiSquareTest::new(Sphere)
+            .run(
+                || Some(light.sample_emission(r.next_f64(), r.next_f64()).0),
+                |w| light.sampler.pdf(light.frame.to_local(w.into())),
+            )
+            .unwrap();
+    }
+
+    #[test]
+    fn sources_of_an_opening_are_picked_uniformly() {
+        let light = tilted_luminaire(5);
+        let mut r = Rng::new(22, 0);
+        ChiSquareTest::new(Discrete(5))
+            .samples(20_000)
+            .run(|| Some(light.pick_source(r.next_f64()).x as usize), |_| 0.2)
+            .unwrap();
     }
 
     #[test]

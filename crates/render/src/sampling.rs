@@ -208,41 +208,10 @@ pub fn uniform_sphere(u1: f64, u2: f64) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
-/// Pearson's chi-square statistic of observed counts against expected counts, with the degrees
-/// of freedom (bins with tiny expectation are pooled, as usual).
-pub fn chi_square(observed: &[f64], expected: &[f64]) -> (f64, usize) {
-    let (mut stat, mut dof, mut po, mut pe) = (0.0, 0usize, 0.0, 0.0);
-    for (o, e) in observed.iter().zip(expected) {
-        if *e < 5.0 {
-            po += o;
-            pe += e;
-        } else {
-            stat += (o - e) * (o - e) / e;
-            dof += 1;
-        }
-    }
-    if pe > 0.0 {
-        stat += (po - pe) * (po - pe) / pe;
-        dof += 1;
-    }
-    (stat, dof.saturating_sub(1))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The chi-square statistic with k degrees of freedom has mean k and variance 2k; for the
-    /// bin counts used here the normal approximation holds, so 5 standard deviations is a
-    /// false-alarm rate below 1e-6 while any real density error of a few percent fails.
-    fn assert_chi_square_ok(observed: &[f64], expected: &[f64]) {
-        let (stat, dof) = chi_square(observed, expected);
-        let limit = dof as f64 + 5.0 * (2.0 * dof as f64).sqrt();
-        assert!(
-            stat < limit,
-            "chi-square {stat:.1} with {dof} dof exceeds {limit:.1}"
-        );
-    }
+    use luxest_io::chi2::{ChiSquareTest, Discrete, Hemisphere, Rectangle, Sphere};
 
     #[test]
     fn same_seed_same_sequence_and_streams_differ() {
@@ -260,58 +229,51 @@ mod tests {
     }
 
     #[test]
-    fn uniform_floats_have_right_moments() {
+    fn successive_uniform_floats_are_uniform_in_the_square() {
+        // Pairs of successive numbers: uniform each, and independent of the one before.
         let mut r = Rng::new(1, 0);
-        let n = 200_000;
-        let (mut s, mut s2) = (0.0, 0.0);
-        for _ in 0..n {
+        let mut next = || {
             let x = r.next_f64();
             assert!((0.0..1.0).contains(&x));
-            s += x;
-            s2 += x * x;
-        }
-        let mean = s / n as f64;
-        let var = s2 / n as f64 - mean * mean;
-        // Standard error of the mean is sqrt(1/12/n) ~ 6.5e-4.
-        assert!((mean - 0.5).abs() < 5.0 * (1.0 / 12.0 / n as f64).sqrt());
-        assert!((var - 1.0 / 12.0).abs() < 2e-3);
+            x
+        };
+        ChiSquareTest::new(Rectangle::UNIT)
+            .run(|| Some([next(), next()]), |_| 1.0)
+            .unwrap();
     }
 
     #[test]
     fn discrete_distribution_matches_weights() {
         let w = [1.0, 0.0, 3.0, 6.0, 0.5];
         let d = Distribution1D::new(&w).unwrap();
-        let n = 100_000;
-        let mut counts = vec![0.0; w.len()];
         let mut r = Rng::new(2, 0);
-        for _ in 0..n {
-            let (i, p) = d.sample(r.next_f64());
-            assert!(p > 0.0, "sampled a zero-weight entry");
-            counts[i] += 1.0;
-        }
-        let total: f64 = w.iter().sum();
-        let expected: Vec<f64> = w.iter().map(|x| n as f64 * x / total).collect();
-        assert_chi_square_ok(&counts, &expected);
+        ChiSquareTest::new(Discrete(w.len()))
+            .run(
+                || {
+                    let (i, p) = d.sample(r.next_f64());
+                    assert!(p > 0.0, "sampled a zero-weight entry");
+                    Some(i)
+                },
+                |i| w[i] / w.iter().sum::<f64>(),
+            )
+            .unwrap();
         assert!(Distribution1D::new(&[0.0, 0.0]).is_none());
         assert!(Distribution1D::new(&[1.0, f64::NAN]).is_none());
     }
 
     #[test]
     fn cosine_hemisphere_matches_its_density() {
-        // Bins equal in cos^2(theta) (each holds 1/nt of the cosine-weighted measure) times phi bins.
-        let (nt, np, n) = (10, 12, 240_000);
-        let mut counts = vec![0.0; nt * np];
         let mut r = Rng::new(3, 0);
-        for _ in 0..n {
-            let d = cosine_hemisphere(r.next_f64(), r.next_f64());
-            assert!(d.z >= 0.0 && (d.length() - 1.0).abs() < 1e-12);
-            let ti = (((1.0 - d.z * d.z) * nt as f64) as usize).min(nt - 1);
-            let phi = d.y.atan2(d.x).rem_euclid(2.0 * PI);
-            let pi = ((phi / (2.0 * PI) * np as f64) as usize).min(np - 1);
-            counts[ti * np + pi] += 1.0;
-        }
-        let expected = vec![n as f64 / (nt * np) as f64; nt * np];
-        assert_chi_square_ok(&counts, &expected);
+        ChiSquareTest::new(Hemisphere)
+            .run(
+                || {
+                    let d = cosine_hemisphere(r.next_f64(), r.next_f64());
+                    assert!((d.length() - 1.0).abs() < 1e-12);
+                    Some(d)
+                },
+                |d| d.z / PI,
+            )
+            .unwrap();
     }
 
     #[test]
@@ -327,32 +289,43 @@ mod tests {
     }
 
     #[test]
-    fn uniform_sphere_and_triangle_are_uniform() {
-        let (nz, np, n) = (8, 8, 128_000);
-        let mut counts = vec![0.0; nz * np];
-        let mut tri = [0.0; 4];
+    fn uniform_sphere_is_uniform() {
         let mut r = Rng::new(4, 0);
-        for _ in 0..n {
-            let d = uniform_sphere(r.next_f64(), r.next_f64());
-            let zi = (((d.z + 1.0) / 2.0 * nz as f64) as usize).min(nz - 1);
-            let pi = ((d.y.atan2(d.x).rem_euclid(2.0 * PI) / (2.0 * PI) * np as f64) as usize)
-                .min(np - 1);
-            counts[zi * np + pi] += 1.0;
-            // The midpoint subdivision of a triangle gives 4 sub-triangles of equal area.
-            let (b1, b2) = uniform_triangle(r.next_f64(), r.next_f64());
-            let b0 = 1.0 - b1 - b2;
-            let k = if b0 > 0.5 {
-                0
-            } else if b1 > 0.5 {
-                1
-            } else if b2 > 0.5 {
-                2
-            } else {
-                3
+        ChiSquareTest::new(Sphere)
+            .run(
+                || Some(uniform_sphere(r.next_f64(), r.next_f64())),
+                |_| 1.0 / (4.0 * PI),
+            )
+            .unwrap();
+    }
+
+    /// Which of the 4^levels congruent triangles of the midpoint subdivision, repeated `levels`
+    /// times, holds the point of barycentric coordinates (b0, b1, b2): all have equal area.
+    fn subtriangle(mut b: [f64; 3], levels: u32) -> usize {
+        let mut index = 0;
+        for _ in 0..levels {
+            // A corner triangle where one coordinate exceeds 1/2, else the middle (inverted) one.
+            let k = b.iter().position(|&x| x > 0.5).unwrap_or(3);
+            b = match k {
+                3 => b.map(|x| 1.0 - 2.0 * x),
+                _ => std::array::from_fn(|i| 2.0 * b[i] - f64::from(i == k)),
             };
-            tri[k] += 1.0;
+            index = 4 * index + k;
         }
-        assert_chi_square_ok(&counts, &vec![n as f64 / (nz * np) as f64; nz * np]);
-        assert_chi_square_ok(&tri, &[n as f64 / 4.0; 4]);
+        index
+    }
+
+    #[test]
+    fn uniform_triangle_is_uniform() {
+        let mut r = Rng::new(5, 0);
+        ChiSquareTest::new(Discrete(64))
+            .run(
+                || {
+                    let (b1, b2) = uniform_triangle(r.next_f64(), r.next_f64());
+                    Some(subtriangle([1.0 - b1 - b2, b1, b2], 3))
+                },
+                |_| 1.0 / 64.0,
+            )
+            .unwrap();
     }
 }

@@ -41,18 +41,8 @@ pub fn run(args: Args) -> Result<()> {
     let results = SensorResults::read_ron(&args.results)?;
     let sources = match &args.scene_info {
         Some(p) => {
-            let header = scene_info::read(p)?;
-            if header.name != results.scene {
-                return Err(luxest_io::Error::input(
-                    p,
-                    format!(
-                        "describes scene \"{}\" but {} holds results for scene \"{}\"",
-                        header.name,
-                        args.results.display(),
-                        results.scene
-                    ),
-                ));
-            }
+            let (header, hash) = scene_info::read(p)?;
+            scene_info::check_matches(p, &header, hash.as_deref(), &args.results, &results)?;
             Some(scene_info::light_sources(p, &header)?)
         }
         None => None,

@@ -22,6 +22,10 @@
 //! points that share light paths; otherwise they are propagated from the per-point standard
 //! errors with the points assumed independent (`from_independent`), and the report says so.
 //!
+//! Modules: [`cli`] (arguments and the run), [`input`] (the sensor results it reads),
+//! [`surface`] (a calculation surface's grid and values), [`tables`], [`plot`], [`markdown`],
+//! [`scene_info`], [`peer`].
+//!
 //! All outputs are planned before anything is written and committed together
 //! (`luxest_io::outputs::OutputPlan`): a run that fails leaves no partial report.
 

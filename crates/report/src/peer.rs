@@ -52,8 +52,12 @@ impl PeerResults {
 
 /// Reads a peer file.
 pub fn read(path: &Path) -> Result<PeerResults> {
-    let bytes = luxest_io::fsio::read_bytes(path)?;
-    let text = std::str::from_utf8(&bytes)
+    parse(path, &luxest_io::fsio::read_bytes(path)?)
+}
+
+/// [`read`] of the file's content `bytes`; `path` names it in errors.
+pub fn parse(path: &Path, bytes: &[u8]) -> Result<PeerResults> {
+    let text = std::str::from_utf8(bytes)
         .map_err(|e| Error::input(path, format!("not UTF-8 text: {e}")))?;
     let mut out = PeerResults::default();
     let mut header_seen = false;

@@ -100,10 +100,74 @@ impl LightSources {
     }
 }
 
-/// Reads the header printed by `scene-compile --info` (a trailing `// content hash` comment is
-/// RON's).
-pub fn read(path: &Path) -> Result<SceneHeader> {
-    luxest_io::fsio::read_ron(path)
+/// The line `scene-compile --info` ends the header with, a RON comment: `// content hash H`.
+pub const CONTENT_HASH_LINE: &str = "// content hash ";
+
+/// Reads the header printed by `scene-compile --info` and the content hash its last line
+/// states (`None` where the file has no such line).
+pub fn read(path: &Path) -> Result<(SceneHeader, Option<String>)> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &text)
+}
+
+/// [`read`] of the file's `text`; `path` names it in errors.
+pub fn parse(path: &Path, text: &str) -> Result<(SceneHeader, Option<String>)> {
+    let header = luxest_io::fsio::parse_ron(path, text)?;
+    let hash = text
+        .lines()
+        .rev()
+        .find_map(|l| l.trim().strip_prefix(CONTENT_HASH_LINE.trim_end()))
+        .map(|h| h.trim().to_string())
+        .filter(|h| !h.is_empty());
+    Ok((header, hash))
+}
+
+/// Refuses sensor results (`results`, read from `results_path`) that are not of the scene
+/// the header at `path` describes: another scene's name, or the same name with another content
+/// hash (another compile: the office with one luminaire fewer reported 4 luminaires beside
+/// results of 5). A header without its content-hash line cannot be matched and is refused.
+pub fn check_matches(
+    path: &Path,
+    header: &SceneHeader,
+    hash: Option<&str>,
+    results_path: &Path,
+    results: &luxest_io::sensors::SensorResults,
+) -> Result<()> {
+    if header.name != results.scene {
+        return Err(Error::input(
+            path,
+            format!(
+                "describes scene \"{}\" but {} holds results for scene \"{}\"",
+                header.name,
+                results_path.display(),
+                results.scene
+            ),
+        ));
+    }
+    let Some(hash) = hash else {
+        return Err(Error::input(
+            path,
+            format!(
+                "has no \"{}H\" line, so it cannot be matched to the results' scene hash; \
+                 write it with scene-compile --info SCENE.lxs",
+                CONTENT_HASH_LINE
+            ),
+        ));
+    };
+    if hash != results.run.scene_hash {
+        return Err(Error::input(
+            path,
+            format!(
+                "describes the compile of \"{}\" with content hash {hash}, but {} holds \
+                 results of content hash {}: another compile of the scene; re-run the \
+                 estimate or scene-compile --info on the scene it used",
+                header.name,
+                results_path.display(),
+                results.run.scene_hash
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The scene's luminaires grouped by file and multiplier; `path` names the file in errors.

@@ -34,15 +34,22 @@ pub struct Args {
     pub export_mitsuba: Option<PathBuf>,
 }
 
+/// What `--info` prints: the compiled scene's header as RON, then its content hash as the
+/// comment line `// content hash H`, by which `report --scene-info` matches the header to
+/// sensor results (their `run.scene_hash`).
+pub fn info_text(scene: &CompiledScene) -> String {
+    format!(
+        "{}\n// content hash {}\n",
+        to_ron_string(&scene.header),
+        scene.content_hash
+    )
+}
+
 /// Runs the command line.
 pub fn run(args: Args) -> Result<()> {
     if args.info {
         let scene = CompiledScene::load(&args.input)?;
-        return luxest_io::cli::print(&format!(
-            "{}\n// content hash {}\n",
-            to_ron_string(&scene.header),
-            scene.content_hash
-        ));
+        return luxest_io::cli::print(&info_text(&scene));
     }
     let authored: Scene = read_ron(&args.input)?;
     // The output, planned before the work: not the scene file, a mesh or a photometric file it

@@ -8,7 +8,7 @@
 //! expansion (with calculation surfaces, [`surfaces`]).
 //!
 //! Modules: [`cli`] (arguments and run), [`validate`], [`shapes`] (tessellation), [`meshes`]
-//! (OBJ and glTF), [`luminaires`], [`surfaces`]; this file assembles the world-space scene.
+//! (OBJ and glTF), [`luminaires`], [`surfaces`], [`mitsuba`] (export to Mitsuba 3); this file assembles the world-space scene.
 
 pub mod cli;
 pub mod luminaires;
@@ -171,11 +171,18 @@ fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMes
         let full = scene_path.parent().unwrap_or(Path::new(".")).join(p);
         if full.is_file() {
             Ok(full)
-        } else if full.is_dir() {
+        } else if let Some(kind) = luxest_io::fsio::non_file_kind(&full) {
+            // It exists (a directory, /dev/null, a FIFO): "not found" would send the user
+            // looking for a file that is there.
+            let what = if kind == "a directory" {
+                "a mesh file"
+            } else {
+                "a regular file, as a mesh must be"
+            };
             Err(Error::at(
                 scene_path,
                 format!("{place}.shape.path"),
-                format!("{} is a directory, not a mesh file", full.display()),
+                format!("{} is {kind}, not {what}", full.display()),
             ))
         } else {
             Err(Error::at(
@@ -411,7 +418,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             _ => 0.0,
         };
         if let Some(c) = (0..3).find(|&c| albedo(c) >= 1.0) {
-            // Choice (issue 15): reflectance 1 stays allowed (an ideal mirror or white is a
+            // Choice: reflectance 1 stays allowed (an ideal mirror or white is a
             // legitimate test), but its dependence on the path-depth cap is stated.
             report.warnings.push(format!(
                 "{}: materials[\"{}\"]: reflectance 1 in channel {c} absorbs no light; in a \

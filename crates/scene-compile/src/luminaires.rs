@@ -167,11 +167,14 @@ pub fn compile(scene_path: &Path, luminaires: &[Luminaire]) -> Result<CompiledLu
         let place = format!("luminaires[{i}]");
         let full = dir.join(&l.file);
         if !full.is_file() {
-            return Err(Error::at(
-                scene_path,
-                format!("{place}.file"),
-                format!("photometric file {} not found", full.display()),
-            ));
+            let problem = match luxest_io::fsio::non_file_kind(&full) {
+                Some(kind) => format!(
+                    "{} is {kind}, not a regular file, as a photometric file must be",
+                    full.display()
+                ),
+                None => format!("photometric file {} not found", full.display()),
+            };
+            return Err(Error::at(scene_path, format!("{place}.file"), problem));
         }
         let (index, file_length, file_width) = match by_file.get(&full) {
             Some(&k) => k,

@@ -355,6 +355,61 @@ fn check_glb_header(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// A glTF node as messages name it: `node 3 ("Cube")`, or `node 3` without a name.
+fn node_place(node: &gltf::Node) -> String {
+    match node.name() {
+        Some(name) => format!("node {} ({name:?})", node.index()),
+        None => format!("node {}", node.index()),
+    }
+}
+
+/// A node's own transform (its `matrix`, or its translation, rotation and scale), refused
+/// with the node and the property when an element is not finite: a NaN in a matrix was
+/// reported only after the object's transform, as a coordinate outside the world.
+fn node_transform(path: &Path, node: &gltf::Node) -> Result<Affine> {
+    let bad = |property: String, v: f32| {
+        Err(Error::at(
+            path,
+            node_place(node),
+            format!("{property} is {v}; a transform must be finite"),
+        ))
+    };
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => {
+            for (k, v) in matrix.iter().flatten().enumerate() {
+                if !v.is_finite() {
+                    return bad(format!("matrix[{k}]"), *v);
+                }
+            }
+        }
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => {
+            let parts: [(&str, &[f32]); 3] = [
+                ("translation", &translation),
+                ("rotation", &rotation),
+                ("scale", &scale),
+            ];
+            for (name, values) in parts {
+                if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                    return bad(format!("{name}[{i}]"), values[i]);
+                }
+            }
+        }
+    }
+    let local = Affine::from_cols4(node.transform().matrix());
+    if !local.m.iter().flatten().all(|v| v.is_finite()) || !local.t.is_finite() {
+        return Err(Error::at(
+            path,
+            node_place(node),
+            "its transform exceeds f64 (finite elements, an infinite product)",
+        ));
+    }
+    Ok(local)
+}
+
 /// Loads all triangle meshes of a glTF file's default scene, node transforms applied.
 pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
     let bytes = luxest_io::fsio::read_bytes(path)?;
@@ -394,6 +449,14 @@ pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
             }
             gltf::buffer::Source::Uri(uri) => {
                 let file = base.join(uri);
+                if let Some(kind) = luxest_io::fsio::non_file_kind(&file) {
+                    // A FIFO would block the read forever, a device give nonsense.
+                    return Err(Error::at(
+                        path,
+                        format!("buffer {}", buffer.index()),
+                        format!("{} is {kind}, not a regular file", file.display()),
+                    ));
+                }
                 std::fs::read(&file).map_err(|e| {
                     Error::at(
                         path,
@@ -439,7 +502,15 @@ pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
                 "is reached twice in the node hierarchy (a cycle, or a node with two parents)",
             ));
         }
-        let world = parent.compose(&Affine::from_cols4(node.transform().matrix()));
+        let world = parent.compose(&node_transform(path, &node)?);
+        if !world.m.iter().flatten().all(|v| v.is_finite()) || !world.t.is_finite() {
+            return Err(Error::at(
+                path,
+                node_place(&node),
+                "its transform composed with its parents' exceeds f64 (each is finite, their \
+                 product is not)",
+            ));
+        }
         for child in node.children() {
             stack.push((child, world));
         }
@@ -493,10 +564,17 @@ pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
             let normals = normals.filter(|n| n.len() == positions.len());
             // Node transform to the file's root frame; the object transform follows later.
             let det = world.determinant();
-            let positions = positions
+            let positions: Vec<Vec3> = positions
                 .into_iter()
                 .map(|p| world.apply_point(p))
                 .collect();
+            if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+                return Err(Error::at(
+                    path,
+                    format!("{place} vertex {i}"),
+                    format!("exceeds f64 after the transform of {}", node_place(&node)),
+                ));
+            }
             let normals = normals.map(|n| {
                 n.into_iter()
                     .map(|v| world.apply_normal(v) * det.signum())

@@ -62,7 +62,7 @@ pub const MAX_SECONDS: f64 = 1e6;
 pub const MAX_DEPTH: Count<u32> = Count::range(1, 1 << 20, "bounces");
 
 /// The estimator name recorded in image headers.
-pub const ESTIMATOR: &str = "path-tracing";
+pub const ESTIMATOR: &str = luxest_io::header::estimator::PATH_TRACING;
 
 /// Runs the command line.
 pub fn run(args: Args) -> Result<()> {
@@ -131,6 +131,10 @@ pub fn run(args: Args) -> Result<()> {
         args.common.thread_count(),
         args.max_depth,
     );
+    if let Some(spp) = args.spp {
+        // A --time run is as long as asked; a --spp run says first when it is long.
+        renderer.plan(spp).announce();
+    }
     let mut film = Film::new(camera.width as usize, camera.height as usize);
     let start = Instant::now();
     let info = |film: &Film| {
@@ -174,7 +178,7 @@ pub fn run(args: Args) -> Result<()> {
     } else if let Some(p) = &args.preview {
         // The final image is the last snapshot, already written; only its preview is left.
         let img = crate::output::mean_image(&final_path, &film, &info(&film))?;
-        luxest_io::exr_io::write_preview_png_auto_to(&mut plan, p, &img)?;
+        luxest_io::png::write_preview_png_auto_to(&mut plan, p, &img)?;
     }
     let unreached: Vec<String> = snapshots
         .iter()

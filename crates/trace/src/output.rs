@@ -2,11 +2,13 @@
 //! request the per-pixel standard error of Y (`.se.exr`, R = G = B) and a PNG preview.
 
 use crate::film::Film;
-use luxest_io::exr_io::{write_preview_png_auto_to, write_rgb_to, RgbImage};
+use luxest_io::exr::write_rgb_to;
 use luxest_io::header;
+use luxest_io::image::RgbImage;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{self, Kind};
 use luxest_io::outputs::OutputPlan;
+use luxest_io::png::write_preview_png_auto_to;
 use luxest_io::{Error, Result};
 use std::path::{Path, PathBuf};
 

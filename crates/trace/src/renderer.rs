@@ -6,10 +6,14 @@
 
 use crate::film::Film;
 use crate::integrator::{kernel_for, Kernel, RayLog};
+use luxest_io::limits::WorkPlan;
 use luxest_render::camera::PinholeCamera;
 use luxest_render::parallel::run_batches;
 use luxest_render::sobol::PixelSampler;
 use luxest_render::world::World;
+
+/// Salt of the calibration's samples (never a pixel sample of the run).
+const CALIBRATION_SALT: u64 = 0x00ca_11b2_a7e1;
 
 /// Side of the square tiles handed to worker threads.
 pub const TILE: usize = 16;
@@ -45,6 +49,46 @@ impl<'a> Renderer<'a> {
             threads,
             max_depth,
             kernel: kernel_for(world),
+        }
+    }
+
+    /// The plan of a run to `spp` samples per pixel (the resource rule): pixel samples of the
+    /// image spread over it, traced on streams of their own and timed, give the seconds per
+    /// sample and the rays of a path.
+    pub fn plan(&self, spp: u32) -> WorkPlan {
+        let (w, h) = (self.camera.width as u64, self.camera.height as u64);
+        let pixels = w * h;
+        let mut log = RayLog::default();
+        let (per_sample, spent) = luxest_io::limits::seconds_per_unit(|k| {
+            // A stride coprime with nearly every image size spreads the samples over it.
+            let pixel = (k * 7919) % pixels;
+            let mut rng = pixel_sampler(self.seed ^ CALIBRATION_SALT, pixel as usize, k as u32);
+            let (u, v) = rng.pixel_position();
+            let dir = self
+                .camera
+                .direction((pixel % w) as f64 + u, (pixel / w) as f64 + v);
+            (self.kernel)(
+                self.world,
+                self.camera.position,
+                dir,
+                &mut rng,
+                self.max_depth,
+                &mut log,
+            );
+        });
+        let samples = (pixels * spp as u64) as f64;
+        let rays_per_sample = (log.closest + log.shadow) as f64 / (spent / per_sample).max(1.0);
+        let tiles = (w as usize).div_ceil(TILE) * (h as usize).div_ceil(TILE);
+        let threads = self.threads.min(tiles).max(1);
+        WorkPlan {
+            stage: "trace".into(),
+            work: format!("{w}x{h} pixels x {spp} samples of ~{rays_per_sample:.1} rays"),
+            units: samples * rays_per_sample,
+            seconds: samples * per_sample / threads as f64,
+            threads,
+            memory_bytes: pixels as u128 * luxest_render::world::FILM_BYTES_PER_PIXEL as u128,
+            calibration_seconds: spent,
+            levers: "--spp, --resolution and --threads".into(),
         }
     }
 

@@ -6,7 +6,7 @@
 //!   ([`SMAPE_EPSILON`]).
 
 use super::check_sizes;
-use luxest_io::exr_io::RgbImage;
+use luxest_io::image::RgbImage;
 
 /// Epsilon in the denominator of [`rel_mse`].
 pub const REL_MSE_EPSILON: f64 = 0.01;

@@ -44,7 +44,9 @@ pub use ms_ssim::{ms_ssim, ms_ssim_levels, ms_ssim_weights, MS_SSIM_WEIGHTS};
 pub use psnr::psnr;
 pub use ssim::ssim;
 
-use luxest_io::exr_io::{dim_exponent, srgb_encode, RgbImage};
+use luxest_io::color::srgb_encode;
+use luxest_io::exposure::dim_exponent;
+use luxest_io::image::RgbImage;
 
 /// A display-referred image, values in [0, 1], row-major, f64.
 #[derive(Clone, Debug, PartialEq)]
@@ -110,7 +112,7 @@ fn check_sizes(reference: &impl Dims, test: &impl Dims) {
 /// `0.18 / exp(mean over pixels of ln(max(Y, 0) + 1e-4))`, `Y = 0.2126 R + 0.7152 G + 0.0722 B`,
 /// accumulated in f64; 1 for an empty image. The same exposure the denoiser uses
 /// ([`RgbImage::autoexposure`], shared with training/transfer.py). A dim reference (mean
-/// luminance below [`luxest_io::exr_io::DIM_LUMINANCE`]) is exposed as the denoiser brightens it: `2^e` times the
+/// luminance below [`luxest_io::exposure::DIM_LUMINANCE`]) is exposed as the denoiser brightens it: `2^e` times the
 /// autoexposure of the reference times `2^e` (`e` its [`dim_exponent`]), so that the tonemap and
 /// every metric on it are the same in any unit of radiance (the `1e-4` floor would otherwise
 /// make a dim reference and its test images all nearly black); `e` is 0 for every image `make
@@ -132,7 +134,7 @@ pub fn tonemap(image: &RgbImage, exposure: f64) -> Display {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use luxest_io::exr_io::DIM_LUMINANCE;
+    use luxest_io::exposure::DIM_LUMINANCE;
 
     /// A deterministic structured image with values in [0, 1].
     fn pattern(w: usize, h: usize, seed: u64) -> Display {

@@ -39,10 +39,3 @@ impl Rng {
         (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
     }
 }
-
-/// Wilson–Hilferty: the chi-square statistic `x` with `k` degrees of freedom as a standard
-/// normal deviate (accurate to ~1e-3 in z for k ≥ 30).
-pub fn chi2_z(x: f64, k: f64) -> f64 {
-    let a = 2.0 / (9.0 * k);
-    ((x / k).powf(1.0 / 3.0) - (1.0 - a)) / a.sqrt()
-}

@@ -1,121 +1,17 @@
 //! OpenEXR images as the pipeline exchanges them: one 3-channel feature per file (R, G, B as
-//! 32-bit float, linear), ZIP scanline compression, string attributes for run metadata.
+//! 32-bit float, linear), ZIP scanline compression, string attributes for run metadata; the
+//! reader refuses a header whose claims the file or the memory cannot hold.
 //!
 //! Half floats are never written: photometric values (1e5 cd/m² and more) overflow f16.
 
-use crate::color::Rgb;
 use crate::error::{Error, Result};
+use crate::image::RgbImage;
 use crate::outputs::OutputPlan;
-use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
-use exr::block::writer::ChunksWriter;
-use exr::image::write::layers::WritableLayers;
-use exr::prelude::*;
+use ::exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock};
+use ::exr::block::writer::ChunksWriter;
+use ::exr::image::write::layers::WritableLayers;
+use ::exr::prelude::*;
 use std::path::Path;
-
-/// A linear RGB image, row-major from the top-left, interleaved `[r, g, b]` per pixel.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RgbImage {
-    pub width: usize,
-    pub height: usize,
-    pub pixels: Vec<[f32; 3]>,
-    /// Header attributes (name, value) beyond the standard ones.
-    pub attributes: Vec<(String, String)>,
-}
-
-impl RgbImage {
-    pub fn new(width: usize, height: usize) -> RgbImage {
-        RgbImage {
-            width,
-            height,
-            pixels: vec![[0.0; 3]; width * height],
-            attributes: Vec::new(),
-        }
-    }
-    /// The header attribute `key` (one of [`crate::header`]'s keys), if present.
-    pub fn attribute(&self, key: &str) -> Option<&str> {
-        crate::header::get(&self.attributes, key)
-    }
-    /// Sets the header attribute `key`, replacing an earlier value.
-    pub fn set_attribute(&mut self, key: &str, value: impl std::fmt::Display) {
-        crate::header::set(&mut self.attributes, key, value)
-    }
-    /// The autoexposure shared by the denoiser and the evaluation tonemap (training/transfer.py):
-    /// `0.18 / exp(mean over pixels of ln(max(Y, 0) + 1e-4))`, Y the Rec. 709 luminance,
-    /// accumulated in f64. It maps the image's log-average luminance to middle grey.
-    pub fn autoexposure(&self) -> f64 {
-        self.autoexposure_scaled(1.0)
-    }
-    /// The [`RgbImage::autoexposure`] of the image's pixels times `scale` (each Y times `scale`
-    /// in f64; the image is not changed): what the denoiser gives a model fed the image scaled
-    /// (see [`dim_exponent`]).
-    pub fn autoexposure_scaled(&self, scale: f64) -> f64 {
-        const KEY: f64 = 0.18;
-        const EPS: f64 = 1e-4;
-        if self.pixels.is_empty() {
-            return 1.0;
-        }
-        let sum: f64 = self
-            .pixels
-            .iter()
-            .map(|p| (Rgb(p.map(f64::from)).luminance() * scale).max(0.0) + EPS)
-            .map(f64::ln)
-            .sum();
-        KEY / (sum / self.pixels.len() as f64).exp()
-    }
-    /// Position of the first non-finite pixel value, if any.
-    pub fn first_non_finite(&self) -> Option<(usize, usize)> {
-        self.pixels
-            .iter()
-            .position(|p| p.iter().any(|c| !c.is_finite()))
-            .map(|i| (i % self.width, i / self.width))
-    }
-}
-
-/// The mean luminance below which the denoiser brightens its input: 1/32, below the darkest
-/// training image of the committed models (mean luminance 0.6) by a factor of 19 and where the
-/// autoexposure's `1e-4` is still small against the image (docs/architecture.md, *Exposure and
-/// tonemap*).
-pub const DIM_LUMINANCE: f64 = 1.0 / 32.0;
-
-/// The power of two `e` by which the denoiser multiplies the radiance it gives a model (the
-/// output is divided by `2^e`): the least `e ≥ 0` with `2^e · L ≥ DIM_LUMINANCE`, `L` the mean
-/// over pixels of the Rec. 709 luminance of `max(hdr − emission, 0)` (per channel, f64: the
-/// radiance a model with the `emi` feature denoises; `max(hdr, 0)` without `emission`); 0 for an
-/// image that is black or not dim. The autoexposure's `1e-4` (a black pixel's floor) makes a
-/// model's input depend on the radiance's unit: an image 100 times dimmer than the Cornell box
-/// lost 10 dB at 256 spp before this, while a brighter one denoises alike (docs/measurements.md,
-/// *Dim images*). Powers of two are exact in f32, so images differing by one are denoised alike.
-pub fn dim_exponent(hdr: &RgbImage, emission: Option<&RgbImage>) -> i32 {
-    if hdr.pixels.is_empty() {
-        return 0;
-    }
-    let dimmed = |h: &[f32; 3], e: &[f32; 3]| {
-        Rgb(std::array::from_fn(|c| {
-            (h[c] as f64 - e[c] as f64).max(0.0)
-        }))
-        .luminance()
-    };
-    let sum: f64 = match emission {
-        Some(emi) => hdr
-            .pixels
-            .iter()
-            .zip(&emi.pixels)
-            .map(|(h, e)| dimmed(h, e))
-            .sum(),
-        None => hdr.pixels.iter().map(|h| dimmed(h, &[0.0; 3])).sum(),
-    };
-    let mean = sum / hdr.pixels.len() as f64;
-    if mean.is_nan() || mean <= 0.0 || mean >= DIM_LUMINANCE {
-        return 0;
-    }
-    // The least e with mean · 2^e ≥ DIM_LUMINANCE (below 200: a positive mean of f32 values is at
-    // least 2^-149 over the pixel count).
-    let mut e = 0;
-    while mean * 2f64.powi(e) < DIM_LUMINANCE {
-        e += 1;
-    }
-    e
-}
 
 /// Writes `image` as the planned output `path` of a stage's run (see [`crate::outputs`]).
 pub fn write_rgb_to(plan: &mut OutputPlan, path: &Path, image: &RgbImage) -> Result<()> {
@@ -176,7 +72,7 @@ pub fn encode_rgb(path: &Path, image: &RgbImage) -> Result<Vec<u8>> {
         .collect();
     let lines = headers[0].compression.scan_lines_per_block();
     let mut buffer = std::io::Cursor::new(Vec::new());
-    exr::block::write(&mut buffer, headers, true, |_, writer| {
+    ::exr::block::write(&mut buffer, headers, true, |_, writer| {
         for (index, y0) in (0..image.height).step_by(lines).enumerate() {
             let rows = &image.pixels[y0 * w..(y0 + lines).min(image.height) * w];
             let block = CompressedScanLineBlock {
@@ -278,97 +174,6 @@ fn sort_header_attributes(bytes: &mut [u8]) {
     bytes[8..end].copy_from_slice(&header);
 }
 
-/// sRGB transfer function (IEC 61966-2-1) of a linear value in [0, 1].
-pub fn srgb_encode(v: f64) -> f64 {
-    let v = v.clamp(0.0, 1.0);
-    if v <= 0.0031308 {
-        12.92 * v
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// Writes an 8-bit sRGB PNG preview as the planned output `path`: linear values times
-/// `exposure`, clipped, sRGB-encoded.
-pub fn write_preview_png_to(
-    plan: &mut OutputPlan,
-    path: &Path,
-    image: &RgbImage,
-    exposure: f64,
-) -> Result<()> {
-    let bytes = encode_preview_png(path, image, exposure)?;
-    plan.write_bytes(path, &bytes)
-}
-
-/// Writes a PNG preview alone, atomically (tools and tests; stages use [`write_preview_png_to`]).
-pub fn write_preview_png(path: &Path, image: &RgbImage, exposure: f64) -> Result<()> {
-    let bytes = encode_preview_png(path, image, exposure)?;
-    crate::fsio::write_bytes_atomically(path, &bytes)
-}
-
-/// Writes an auto-exposed PNG preview alone, atomically (tools and tests; stages use
-/// [`write_preview_png_auto_to`]).
-pub fn write_preview_png_auto(path: &Path, image: &RgbImage) -> Result<()> {
-    write_preview_png(path, image, preview_exposure(image))
-}
-
-/// The PNG bytes of [`write_preview_png_to`].
-pub fn encode_preview_png(path: &Path, image: &RgbImage, exposure: f64) -> Result<Vec<u8>> {
-    let data: Vec<u8> = image
-        .pixels
-        .iter()
-        .flat_map(|p| p.map(|v| (srgb_encode(v as f64 * exposure) * 255.0 + 0.5) as u8))
-        .collect();
-    encode_png_rgb8(image.width as u32, image.height as u32, &data)
-        .map_err(|e| Error::input(path, format!("cannot encode PNG: {e}")))
-}
-
-/// The PNG bytes of an 8-bit sRGB raster, `data` row by row from the top, 3 bytes a pixel.
-pub fn encode_png_rgb8(
-    width: u32,
-    height: u32,
-    data: &[u8],
-) -> std::result::Result<Vec<u8>, String> {
-    let mut bytes = Vec::new();
-    let mut encoder = png::Encoder::new(&mut bytes, width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header().map_err(|e| e.to_string())?;
-    writer.write_image_data(data).map_err(|e| e.to_string())?;
-    writer.finish().map_err(|e| e.to_string())?;
-    Ok(bytes)
-}
-
-/// Writes a PNG preview as the planned output `path`, exposed so that the 99th percentile of
-/// luminance maps to white.
-pub fn write_preview_png_auto_to(
-    plan: &mut OutputPlan,
-    path: &Path,
-    image: &RgbImage,
-) -> Result<()> {
-    write_preview_png_to(plan, path, image, preview_exposure(image))
-}
-
-/// The exposure of [`write_preview_png_auto_to`]: the 99th percentile of luminance maps to white.
-pub fn preview_exposure(image: &RgbImage) -> f64 {
-    let mut ys: Vec<f64> = image
-        .pixels
-        .iter()
-        .map(|p| crate::color::Rgb(p.map(|v| v as f64)).luminance())
-        .filter(|y| y.is_finite())
-        .collect();
-    ys.sort_by(f64::total_cmp);
-    let p99 = ys
-        .get((ys.len() * 99 / 100).min(ys.len().saturating_sub(1)))
-        .copied()
-        .unwrap_or(1.0);
-    if p99 > 0.0 && (1.0 / p99).is_finite() {
-        1.0 / p99
-    } else {
-        1.0
-    }
-}
-
 /// [`read_rgb`] for stage inputs that must be finite: a NaN or infinity is an error naming the
 /// file and the pixel.
 pub fn read_rgb_finite(path: &Path) -> Result<RgbImage> {
@@ -382,10 +187,6 @@ pub fn read_rgb_finite(path: &Path) -> Result<RgbImage> {
     Ok(image)
 }
 
-/// Checks an EXR's header before its pixels are read: the image it claims must fit in the memory
-/// available (with the RGB copy this reader makes), and the file must be long enough to hold at
-/// least the table of chunk offsets the header implies (8 bytes per chunk). A few hundred bytes
-/// claiming 100000² pixels are refused here instead of aborting in the allocator.
 /// Claims of sample data up to this size are read without the expansion bound below.
 const MIN_EXR_CLAIM: u128 = 16 << 20;
 
@@ -393,8 +194,8 @@ const MIN_EXR_CLAIM: u128 = 16 << 20;
 /// none 1; RLE 64 (two bytes for a run of 128); deflate (ZIP) about 1032, PXR24 4/3 of that;
 /// B44 stores a 4x4 block of halves in at least 3 bytes; PIZ's Huffman coding with runs of at
 /// most 255 codes stays below 500; the lossy DWA and HTJ2K are bounded at 5000.
-fn max_expansion(compression: exr::compression::Compression) -> u128 {
-    use exr::compression::Compression::*;
+fn max_expansion(compression: ::exr::compression::Compression) -> u128 {
+    use ::exr::compression::Compression::*;
     match compression {
         Uncompressed => 1,
         RLE => 64,
@@ -406,8 +207,12 @@ fn max_expansion(compression: exr::compression::Compression) -> u128 {
     }
 }
 
+/// Checks an EXR's header before its pixels are read: the image it claims must fit in the memory
+/// available (with the RGB copy this reader makes), and the file must be long enough to hold at
+/// least the table of chunk offsets the header implies (8 bytes per chunk). A few hundred bytes
+/// claiming 100000² pixels are refused here instead of aborting in the allocator.
 fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
-    let meta = exr::meta::MetaData::read_from_buffered(bytes, false)
+    let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)
         .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
     let mut chunks: u128 = 0;
     let mut samples_bytes: u128 = 0;
@@ -547,46 +352,6 @@ pub fn read_rgb_bytes(path: &Path, bytes: Vec<u8>) -> Result<RgbImage> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn uniform(w: usize, h: usize, v: f32) -> RgbImage {
-        let mut img = RgbImage::new(w, h);
-        img.pixels.fill([v; 3]);
-        img
-    }
-
-    #[test]
-    fn dim_exponent_is_the_least_power_of_two_reaching_the_threshold() {
-        // A uniform grey of luminance Y (the Rec. 709 weights sum to 1).
-        assert_eq!(dim_exponent(&uniform(4, 5, 1e-3), None), 5); // 0.016 < 1/32 <= 0.032
-        assert_eq!(dim_exponent(&uniform(2, 2, 1.0 / 32.0), None), 0);
-        assert_eq!(dim_exponent(&uniform(2, 2, 1.0 / 64.0), None), 1);
-        assert_eq!(dim_exponent(&uniform(2, 2, 1e-30), None), 95); // 2^95 1e-30 = 0.0396
-        assert_eq!(dim_exponent(&uniform(3, 3, 0.0), None), 0); // black: nothing to brighten
-        assert_eq!(dim_exponent(&uniform(3, 3, -1e-3), None), 0); // negative counts as 0
-        assert_eq!(dim_exponent(&RgbImage::new(0, 0), None), 0);
-        // An emitter beside a dim wall: without the emission the mean is bright; the model
-        // denoises hdr − emission, whose mean 0.75e-6 needs 2^16.
-        let mut hdr = uniform(2, 2, 1e-6);
-        hdr.pixels[0] = [100.0; 3];
-        let mut emi = RgbImage::new(2, 2);
-        emi.pixels[0] = [100.0; 3];
-        assert_eq!(dim_exponent(&hdr, None), 0);
-        assert_eq!(dim_exponent(&hdr, Some(&emi)), 16);
-    }
-
-    #[test]
-    fn autoexposure_scaled_is_that_of_the_scaled_image() {
-        let mut img = RgbImage::new(3, 2);
-        for (i, p) in img.pixels.iter_mut().enumerate() {
-            *p = [i as f32 * 1e-4, 0.0, 2e-3 * i as f32];
-        }
-        let mut scaled = img.clone();
-        for p in &mut scaled.pixels {
-            *p = p.map(|c| c * 1024.0);
-        }
-        assert_eq!(img.autoexposure_scaled(1024.0), scaled.autoexposure());
-        assert_eq!(img.autoexposure_scaled(1.0), img.autoexposure());
-    }
 
     #[test]
     fn round_trip_keeps_values_and_metadata() {
