@@ -3,9 +3,11 @@ denoiser runs the tests export to ONNX, with their exports.
 
 Exporting a kernel-predicting model takes tens of seconds on two cores (torch.onnx traces some
 600 nodes with dynamic shapes; a direct-head model a few seconds), and the tests need one export
-of each network shape they check. So each is exported once, in two worker processes started as soon as the tests are collected,
-while the other tests run; a test that needs one waits for it (`models[name]`). The models are
-read only: a test that trains or exports writes into its own tmp_path."""
+of each network shape they check. So each is exported once, in two worker processes started as
+soon as the tests are collected, while the other tests run: the models the selected tests name
+(`@pytest.mark.models(...)`, or the parity test's parameter). A test that needs one waits for it
+(`models[name]`). The models are read only: a test that trains or exports writes into its own
+tmp_path."""
 
 import concurrent.futures
 import contextlib
@@ -51,19 +53,7 @@ def make_tiny_prep(root):
 
     d = tiny_split(root / "data" / "train", 32, np.random.default_rng(4))
     preprocess.preprocess_split(d, root / "prep" / "train", [4], [])
-    return [
-        "--prep-dir",
-        str(root / "prep"),
-        "--noisy-spp",
-        "4",
-        "--dle-paths",
-        "--crop",
-        "32",
-        "--batch",
-        "2",
-        "--threads",
-        "1",
-    ]
+    return ["--prep-dir", str(root / "prep"), *"--noisy-spp 4 --dle-paths --crop 32 --batch 2 --threads 1".split()]
 
 
 # --- The models (built in worker processes) ---------------------------------------------------
@@ -126,22 +116,8 @@ def _build_model(name, root, prep_args, done):
         import export
         import train
 
-        train.main(
-            prep_args
-            + [
-                "--run-dir",
-                str(root / "five-grown"),
-                "--base-width",
-                str(WIDTH),
-                "--detail-gate",
-                "--scales",
-                "5",
-                "--minutes",
-                "0",
-                "--init-from",
-                str(done["gated"]["onnx"]),
-            ]
-        )
+        grown = ["--run-dir", str(root / "five-grown"), "--base-width", str(WIDTH), "--detail-gate", "--scales", "5"]
+        train.main(prep_args + grown + ["--minutes", "0", "--init-from", str(done["gated"]["onnx"])])
         state = torch.load(root / "five-grown" / "checkpoint.pt", weights_only=False)["model"]
         torch.manual_seed(5)
         state["heads.4.weight"] = torch.randn_like(state["heads.4.weight"])  # its bias stays zero
