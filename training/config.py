@@ -76,36 +76,32 @@ model's record matches its metadata, only when these agree."""
 
 @dataclass
 class Config:
-    data_dir: str = field(
-        default_factory=lambda: f"data/{preset_text('PRESET')}"
-    )  # data/<dataset>: train/ valid/ test/
-    prep_dir: str = field(default_factory=lambda: f"build/train/{preset_text('PRESET')}")  # preprocessed .npy arrays
-    run_dir: str = field(default_factory=lambda: f"runs/{preset_text('PRESET')}")  # checkpoints, config.json, log
+    # Paths: data/<dataset> with train/ valid/ test/; preprocessed .npy arrays; checkpoints,
+    # config.json and log.
+    data_dir: str = field(default_factory=lambda: f"data/{preset_text('PRESET')}")
+    prep_dir: str = field(default_factory=lambda: f"build/train/{preset_text('PRESET')}")
+    run_dir: str = field(default_factory=lambda: f"runs/{preset_text('PRESET')}")
     features: list = field(default_factory=lambda: list(contract.FEATURES))  # model.FEATURE_SETS
     noisy_spp: list = field(default_factory=lambda: preset_ints("NOISY_LEVELS"))
     dle_paths: list = field(default_factory=lambda: preset_ints("DATASET_DLE"))  # local-estimate inputs
-    extra_seeds: list = field(
-        default_factory=lambda: preset_ints("NOISY_EXTRA_SEEDS")
-    )  # extra noise realizations (<split>/seed<k>/)
-    extra_spp: list = field(default_factory=preset_extra_spp)  # their levels
+    # The extra noise realizations (<split>/seed<k>/) to use, and their levels.
+    extra_seeds: list = field(default_factory=lambda: preset_ints("NOISY_EXTRA_SEEDS"))
+    extra_spp: list = field(default_factory=preset_extra_spp)
     crop: int = 64  # training crop side (multiple of 16)
     batch: int = 16
     base_width: int = 24  # U-Net channels of the first level
     head: str = "kpn"  # output: kpn (kernel-predicting) or direct (model.py)
     scales: int = 4  # kpn: filtering scales, 4 (1 to 1/8: the decoder levels) or 5 (and 1/16: the bottleneck)
-    detail_gate: bool = (
-        True  # kpn: each finer scale predicts how much of its detail to keep (model.py; --no-detail-gate)
-    )
+    # kpn: each finer scale predicts how much of its detail to keep (model.py; --no-detail-gate).
+    detail_gate: bool = True
     lr: float = 2e-3  # peak learning rate of the one-cycle schedule
     minutes: float = field(default_factory=lambda: float(preset_text("TRAIN_MINUTES")))  # training time budget
     steps: int = field(default_factory=lambda: int(preset_text("TRAIN_STEPS")))  # schedule length (or cap)
-    schedule: str = field(
-        default_factory=lambda: preset_text("TRAIN_SCHEDULE")
-    )  # the one cycle spans `steps` (steps) or `minutes` (time; steps a cap)
+    # The one cycle spans `steps` (steps) or `minutes` (time; steps a cap).
+    schedule: str = field(default_factory=lambda: preset_text("TRAIN_SCHEDULE"))
     ms_ssim_weight: float = 0.2  # loss = (1 - w) L1 + w (1 - MS-SSIM)
-    loss: str = field(
-        default_factory=lambda: preset_text("TRAIN_LOSS")
-    )  # l1: the line above; psnr: minus the evaluation's PSNR per crop (loss.py)
+    # l1: the line above; psnr: minus the evaluation's PSNR per crop (loss.py).
+    loss: str = field(default_factory=lambda: preset_text("TRAIN_LOSS"))
     seed: int = 1
     threads: int = 2
     workers: int = -1  # DataLoader worker processes (-1: none on CPU, 8 on a GPU)

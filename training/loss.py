@@ -68,9 +68,8 @@ def display(x, k):
     """`evaluate images`' tonemap (`evaluate::metrics::tonemap`, crates/evaluate/src/metrics/mod.rs;
     tied by tests/fixtures/contract/exposure.json) of linear (N, 3, H, W) radiance with exposures
     k (N,): max(x, 0) k, Reinhard x / (1 + x), sRGB OETF, clamped to [0, 1]."""
-    v = (x.clamp(min=0) * k.view(-1, 1, 1, 1)).clamp(
-        max=1e30
-    )  # inf (a direct head's expm1 overflow) maps to 1, not NaN
+    # inf (a direct head's expm1 overflow) maps to 1, not NaN.
+    v = (x.clamp(min=0) * k.view(-1, 1, 1, 1)).clamp(max=1e30)
     t = v / (1 + v)
     return torch.where(t <= SRGB_KNEE, 12.92 * t, 1.055 * t.clamp(min=SRGB_KNEE) ** (1 / 2.4) - 0.055).clamp(0, 1)
 

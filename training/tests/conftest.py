@@ -3,11 +3,14 @@ denoiser runs the tests export to ONNX, with their exports.
 
 Exporting a kernel-predicting model takes tens of seconds on two cores (torch.onnx traces some
 600 nodes with dynamic shapes; a direct-head model a few seconds), and the tests need one export
-of each network shape they check. So each is exported once, in two worker processes started as soon as the tests are collected,
-while the other tests run; a test that needs one waits for it (`models[name]`). The models are
-read only: a test that trains or exports writes into its own tmp_path."""
+of each network shape they check. So each is exported once, in two worker processes started as
+soon as the tests are collected, while the other tests run: the models the selected tests name
+(`@pytest.mark.models(...)`, or the parity test's parameter). A test that needs one waits for it
+(`models[name]`). The models are read only: a test that trains or exports writes into its own
+tmp_path."""
 
 import concurrent.futures
+import contextlib
 import functools
 import multiprocessing
 import shutil
@@ -50,19 +53,7 @@ def make_tiny_prep(root):
 
     d = tiny_split(root / "data" / "train", 32, np.random.default_rng(4))
     preprocess.preprocess_split(d, root / "prep" / "train", [4], [])
-    return [
-        "--prep-dir",
-        str(root / "prep"),
-        "--noisy-spp",
-        "4",
-        "--dle-paths",
-        "--crop",
-        "32",
-        "--batch",
-        "2",
-        "--threads",
-        "1",
-    ]
+    return ["--prep-dir", str(root / "prep"), *"--noisy-spp 4 --dle-paths --crop 32 --batch 2 --threads 1".split()]
 
 
 # --- The models (built in worker processes) ---------------------------------------------------
@@ -90,12 +81,17 @@ def _export(run_dir, onnx, **options):
 
 
 def build_model(name, root, prep_args, done):
-    """Builds model `name` under `root` in a worker process; `done`: {name: result} of the
-    models it starts from. Returns {"run": run directory, "onnx": its export, ...}."""
+    """Builds model `name` under `root` in a worker process, its progress messages in
+    `root/<name>.log`; `done`: {name: result} of the models it starts from. Returns {"run": run
+    directory, "onnx": its export}."""
+    with open(Path(root) / f"{name}.log", "w") as log, contextlib.redirect_stdout(log), contextlib.redirect_stderr(log):
+        return _build_model(name, Path(root), prep_args, done)
+
+
+def _build_model(name, root, prep_args, done):
     import torch
 
     torch.set_num_threads(1)
-    root = Path(root)
     if name == "kpn":  # hdr, alb, nrm; no detail gates
         return _export(
             _random_run(root / name, 2, features=["hdr", "alb", "nrm"], detail_gate=False), root / f"{name}.onnx"
@@ -120,22 +116,8 @@ def build_model(name, root, prep_args, done):
         import export
         import train
 
-        train.main(
-            prep_args
-            + [
-                "--run-dir",
-                str(root / "five-grown"),
-                "--base-width",
-                str(WIDTH),
-                "--detail-gate",
-                "--scales",
-                "5",
-                "--minutes",
-                "0",
-                "--init-from",
-                str(done["gated"]["onnx"]),
-            ]
-        )
+        grown = ["--run-dir", str(root / "five-grown"), "--base-width", str(WIDTH), "--detail-gate", "--scales", "5"]
+        train.main(prep_args + grown + ["--minutes", "0", "--init-from", str(done["gated"]["onnx"])])
         state = torch.load(root / "five-grown" / "checkpoint.pt", weights_only=False)["model"]
         torch.manual_seed(5)
         state["heads.4.weight"] = torch.randn_like(state["heads.4.weight"])  # its bias stays zero
@@ -151,22 +133,28 @@ WORKERS = 2
 
 
 class Models:
-    """The shared models, built in the background: `models[name]` waits for model `name` and
-    returns {"run": Path, "onnx": Path}."""
+    """The shared models `wanted` (and those they start from), built in the background:
+    `models[name]` waits for model `name` and returns {"run": Path, "onnx": Path}."""
 
-    def __init__(self):
+    def __init__(self, wanted):
         self.root = Path(tempfile.mkdtemp(prefix="luxest-test-models-"))
         self.prep_args = make_tiny_prep(self.root / "tiny")
-        self.pool = concurrent.futures.ProcessPoolExecutor(WORKERS, mp_context=multiprocessing.get_context("spawn"))
-        self.futures = {name: concurrent.futures.Future() for name in MODELS}
-        self.started, self.running, self.lock = set(), 0, threading.RLock()
-        self._next()
+        while any(d not in wanted for n in wanted for d in MODELS[n]):
+            wanted = wanted | {d for n in wanted for d in MODELS[n]}
+        self.futures = {name: concurrent.futures.Future() for name in MODELS if name in wanted}
+        self.started, self.running, self.closed, self.lock = set(), 0, False, threading.RLock()
+        self.pool = None
+        if self.futures:
+            self.pool = concurrent.futures.ProcessPoolExecutor(WORKERS, mp_context=multiprocessing.get_context("spawn"))
+            self._next()
 
     def _next(self):
         """Gives the free workers the first models in MODELS' order whose sources are built."""
         with self.lock:
-            while self.running < WORKERS:
-                ready = [n for n in MODELS if n not in self.started and all(self.futures[d].done() for d in MODELS[n])]
+            while self.running < WORKERS and not self.closed:
+                ready = [
+                    n for n in self.futures if n not in self.started and all(self.futures[d].done() for d in MODELS[n])
+                ]
                 if not ready:
                     return
                 name = ready[0]
@@ -192,18 +180,44 @@ class Models:
         self._next()
 
     def __getitem__(self, name):
+        if name not in self.futures:
+            raise KeyError(f"test model {name!r} is not built: name it in the test's @pytest.mark.models(...)")
         return self.futures[name].result()
 
     def close(self):
-        self.pool.shutdown(wait=True, cancel_futures=True)
+        """Ends the workers (a model still being built is one no test asks for any more)."""
+        with self.lock:
+            self.closed = True
+        if self.pool is not None:
+            processes = list((self.pool._processes or {}).values())
+            self.pool.shutdown(wait=False, cancel_futures=True)
+            for process in processes:
+                process.terminate()
+                process.join()
         shutil.rmtree(self.root, ignore_errors=True)
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "models(*names): the shared models (conftest.MODELS) the test asks `models` for")
+
+
+def wanted_models(item):
+    """The shared models a collected test needs: those of its `models` marker, the `name` it is
+    parametrized with, or every one (a test that asks for `models` without saying which)."""
+    if "models" not in getattr(item, "fixturenames", ()):
+        return set()
+    marker = item.get_closest_marker("models")
+    if marker is not None:
+        return set(marker.args)
+    params = getattr(getattr(item, "callspec", None), "params", {})
+    return {params["name"]} if params.get("name") in MODELS else set(MODELS)
 
 
 @pytest.hookimpl(trylast=True)
 def pytest_collection_modifyitems(session, config, items):
-    # Start building the models as soon as a collected test is known to need them.
+    # Start building the models as soon as the selected tests are known.
     if any("models" in getattr(item, "fixturenames", ()) for item in items):
-        config.luxest_models = Models()
+        config.luxest_models = Models(set().union(*(wanted_models(item) for item in items)))
 
 
 def pytest_unconfigure(config):

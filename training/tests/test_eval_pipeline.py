@@ -64,9 +64,8 @@ def test_the_held_out_gap_is_paired_scene_by_scene():
         if not (n == 16 and s == "c" and e.endswith("oidn"))
     ]
     rows.append({"estimator": "path-tracing+oidn", "samples": 64, "scene": "a", "psnr_db": 1.0})  # no luxest row
-    rows.append(
-        {"estimator": "path-tracing", "samples": 1, "scene": "a", "psnr_db": 9.0}
-    )  # the noisy input: not a denoiser
+    # The noisy input: not a denoiser.
+    rows.append({"estimator": "path-tracing", "samples": 1, "scene": "a", "psnr_db": 9.0})
     rows = [rows[k] for k in rng.permutation(len(rows))]
     gaps = ev.paired_gaps(rows, "path-tracing")
     assert [n for n, *_ in gaps] == [1, 4, 16]  # increasing; 64 has no pair

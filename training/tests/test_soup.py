@@ -46,6 +46,7 @@ def runs(models, tmp_path_factory):
     return {"a": tmp / "a", "b": b_run, "b.onnx": b_onnx}, a, b
 
 
+@pytest.mark.models("direct")
 def test_soup_is_the_weighted_mean_of_the_ingredients(runs):
     src, a, b = runs
     # A run directory, a checkpoint and an exported model are the same kind of ingredient.
@@ -62,6 +63,7 @@ def test_soup_is_the_weighted_mean_of_the_ingredients(runs):
     assert torch.allclose(mean[k].double(), 0.75 * a[k].double() + 0.25 * b[k].double(), rtol=0, atol=1e-7)
 
 
+@pytest.mark.models("direct")
 def test_a_soup_of_one_model_is_that_model_and_exports(runs, tmp_path):
     ort = pytest.importorskip("onnxruntime")
     src, _, a = runs

@@ -437,6 +437,7 @@ def test_export_matches_onnxruntime(models, name):
     assert all(torch.equal(state[k], v) for k, v in net.state_dict().items())
 
 
+@pytest.mark.models("emi", "ema", "kpn")
 def test_a_run_with_the_emission_exports_adding_back_the_antialiased_one(models, tmp_path):
     # The shared `ema` model: the `emi` run (hdr, alb, nrm, emi) exported with
     # antialiased_emission: it takes ema too and adds it back in place of emi.
@@ -657,6 +658,7 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path, capsys, monkeypatch):
         next(train.batches(data, cfg, cpu))
 
 
+@pytest.mark.models("emi", "ema", "gated")
 def test_a_run_starts_from_an_exported_models_weights(models, tiny_prep, tmp_path):
     # --init-from: a fine-tuning starts from the weights of an exported model (or a checkpoint)
     # with its own schedule; a network of another width is refused in one line. The model: the
@@ -792,6 +794,7 @@ def test_a_run_starts_from_an_exported_models_weights(models, tiny_prep, tmp_pat
         )
 
 
+@pytest.mark.models("gated")
 def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(models, tiny_prep, tmp_path):
     # --init-from a narrower kpn model widens it (grow.widen): the same outputs, old weights in
     # place, new channels feeding nothing, the same new channels whatever the run's seed (so
@@ -840,6 +843,7 @@ def test_a_wider_run_starts_from_a_narrower_model_computing_its_function(models,
         grow.widen(wide, cfg16, 8)
 
 
+@pytest.mark.models("gated", "five")
 def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(models, tiny_prep, tmp_path):
     # --scales 5 --init-from a 4-scale model (grow.add_coarsest_scale): the weights in place, a
     # blend logit of bias -5 at 1/8 (alpha 0.0067) and a zero 1/16 head, so the output moves
@@ -911,6 +915,7 @@ def test_a_fifth_scale_starts_near_the_four_scale_model_and_learns(models, tiny_
         )
 
 
+@pytest.mark.models()  # the tiny dataset only
 def test_time_schedule_is_torchs_one_cycle_over_the_budget(tiny_prep, tmp_path):
     # --schedule time: the rates of torch's OneCycleLR at the same fraction of the cycle,
     # the fraction being the larger of steps / cap and seconds / budget; a run ends its cycle
