@@ -148,6 +148,8 @@ pytest: $(VENV)/$(VENV_STAMP)
 
 # The denoiser: preprocess the dataset, train (TRAIN_STEPS / TRAIN_MINUTES / TRAIN_SCHEDULE / TRAIN_LOSS), export ONNX, and
 # score it on the held-out test scenes with the evaluate stage (MODEL: defined before eval.mk).
+# A finished run (runs/<dataset>/summary.json written) is trained anew; an unfinished one (killed,
+# pre-empted, a requeued Slurm job's earlier try) goes on from its last checkpoint (--resume).
 
 train: $(MODEL)
 
@@ -160,10 +162,11 @@ $(MODEL): $(VENV)/$(VENV_STAMP) $(wildcard training/*.py) python/luxest_contract
 	cd training && $(LAUNCH) ../$(PYTHON) preprocess.py --data-dir ../$(DATA_DIR) --prep-dir ../build/train/$(DATASET) \
 		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) \
 		--extra-seeds $(if $(NOISY_EXTRA),$(NOISY_EXTRA_SEEDS)) --extra-spp $(NOISY_EXTRA)
+	@if [ -e runs/$(DATASET)/summary.json ]; then echo "rm -r runs/$(DATASET) (a finished run)"; rm -r runs/$(DATASET); fi
 	cd training && $(TRAIN_LAUNCH) ../$(PYTHON) train.py --prep-dir ../build/train/$(DATASET) --run-dir ../runs/$(DATASET) \
 		--noisy-spp $(NOISY_LEVELS) --dle-paths $(DATASET_DLE) --extra-seeds $(if $(NOISY_EXTRA),$(NOISY_EXTRA_SEEDS)) \
 		--extra-spp $(NOISY_EXTRA) --steps $(TRAIN_STEPS) --minutes $(TRAIN_MINUTES) \
-		--schedule $(TRAIN_SCHEDULE) --loss $(TRAIN_LOSS)
+		--schedule $(TRAIN_SCHEDULE) --loss $(TRAIN_LOSS) --resume
 	cd training && $(LAUNCH) ../$(PYTHON) export.py --run-dir ../runs/$(DATASET) --out ../$@
 	cd training && $(LAUNCH) ../$(PYTHON) compare_image.py --model ../$@ --split-dir ../$(DATA_DIR)/test \
 		--work-dir ../build/train/$(DATASET)/compare --evaluate $(if $(findstring /,$(EVALUATE)),$(abspath $(EVALUATE)),$(EVALUATE)) \

@@ -10,6 +10,7 @@
    (`luxest.seconds` × the CPUs that rendered it) by pixels, samples or paths, and rooms; the GPU
    time is the training budget `TRAIN_MINUTES` of the full preset.
 Writes a Markdown report."""
+
 import argparse
 import os
 import shutil
@@ -31,8 +32,13 @@ STAGES = {"SCENE_COMPILE": "scene-compile", "TRACE": "trace", "AOV_WRITE": "aov-
 
 def preset(name, variable):
     """A value of pipelines/presets.mk for PRESET=`name`, as make expands it."""
-    r = subprocess.run(["make", "-s", "--no-print-directory", f"PRESET={name}", f"lx-print-{variable}"],
-                       cwd=ROOT, capture_output=True, text=True, check=True)
+    r = subprocess.run(
+        ["make", "-s", "--no-print-directory", f"PRESET={name}", f"lx-print-{variable}"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     return r.stdout.strip()
 
 
@@ -67,8 +73,13 @@ def make_dataset(stages, name, jobs, env=None, launch=None, count=None):
     if launch:
         v["LAUNCH"] = launch
     start = time.perf_counter()
-    subprocess.run(["make", "--no-print-directory", f"-j{jobs}", "reference", "noisy"] + [f"{k}={x}" for k, x in v.items()],
-                   cwd=ROOT, check=True, capture_output=True, env=env)
+    subprocess.run(
+        ["make", "--no-print-directory", f"-j{jobs}", "reference", "noisy"] + [f"{k}={x}" for k, x in v.items()],
+        cwd=ROOT,
+        check=True,
+        capture_output=True,
+        env=env,
+    )
     return time.perf_counter() - start
 
 
@@ -100,7 +111,9 @@ def core_seconds(dataset, cpus):
             continue  # counted below, once per set
         if n.kind not in ("hdr", "nrm"):
             continue  # one feature file per aov-write run
-        per[family(p.name)] = per.get(family(p.name), 0.0) + contract.header_value(contract.read(p).header, contract.SECONDS) * cpus
+        per[family(p.name)] = (
+            per.get(family(p.name), 0.0) + contract.header_value(contract.read(p).header, contract.SECONDS) * cpus
+        )
     # Noisy sets: the last level of each (trace and aov-write write every snapshot of one run).
     levels = {}
     for p in (ROOT / "data" / dataset).rglob("*spp.*.exr"):
@@ -110,7 +123,9 @@ def core_seconds(dataset, cpus):
             if n.spp > levels.get(key, (0, None))[0]:
                 levels[key] = (n.spp, p)
     for spp, p in levels.values():
-        per[family(p.name)] = per.get(family(p.name), 0.0) + contract.header_value(contract.read(p).header, contract.SECONDS) * cpus
+        per[family(p.name)] = (
+            per.get(family(p.name), 0.0) + contract.header_value(contract.read(p).header, contract.SECONDS) * cpus
+        )
     return per
 
 
@@ -150,11 +165,13 @@ def main(argv=None):
     dle = {p: sum(int(x) for x in preset(p, "DATASET_DLE").split()) for p in ("quick", "full")}
     pixels = (side["full"] / side["quick"]) ** 2
     rooms = full_rooms / quick_rooms
-    scale = {"ref": pixels * rooms * ref_spp["full"] / ref_spp["quick"],
-             "ref features": pixels * rooms * ref_spp["full"] / ref_spp["quick"],
-             "noisy": pixels * rooms * noisy_max["full"] / noisy_max["quick"],
-             "noisy features": pixels * rooms * noisy_max["full"] / noisy_max["quick"],
-             "le": pixels * rooms * dle["full"] / dle["quick"]}
+    scale = {
+        "ref": pixels * rooms * ref_spp["full"] / ref_spp["quick"],
+        "ref features": pixels * rooms * ref_spp["full"] / ref_spp["quick"],
+        "noisy": pixels * rooms * noisy_max["full"] / noisy_max["quick"],
+        "noisy features": pixels * rooms * noisy_max["full"] / noisy_max["quick"],
+        "le": pixels * rooms * dle["full"] / dle["quick"],
+    }
     train_minutes = float(preset("full", "TRAIN_MINUTES"))
     lines = [
         "# The Make DAG through Slurm: overhead, and the cost of `PRESET=full`",
@@ -202,10 +219,14 @@ def main(argv=None):
         f = q * scale[fam] / 3600
         total += f
         lines.append(f"| {fam} | {q:.1f} | {scale[fam]:.0f} | {f:.1f} |")
-    lines += [f"| **all renders** | {sum(cost.values()):.1f} | | **{total:.0f}** |", "",
-              f"Training: the full preset's budget `TRAIN_MINUTES={train_minutes:.0f}`, i.e. "
-              f"**{train_minutes / 60:.0f} GPU-hours** on one GPU (`--schedule time` spends exactly the budget), "
-              "plus preprocessing on CPUs.", ""]
+    lines += [
+        f"| **all renders** | {sum(cost.values()):.1f} | | **{total:.0f}** |",
+        "",
+        f"Training: the full preset's budget `TRAIN_MINUTES={train_minutes:.0f}`, i.e. "
+        f"**{train_minutes / 60:.0f} GPU-hours** on one GPU (`--schedule time` spends exactly the budget), "
+        "plus preprocessing on CPUs.",
+        "",
+    ]
     Path(a.out).parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(a.out).with_suffix(".md.tmp")
     tmp.write_text("\n".join(lines))

@@ -19,17 +19,24 @@ cmd="$1"
 dir="$(mkdir -p "$2" && cd "$2" && pwd)"
 node="$(hostname -s)"
 
-stop_pid() { # stop the process whose pid is in file $1, if it is still running
-    local f="$1"
-    [ -f "$f" ] || return 0
-    local pid
-    pid="$(cat "$f")"
-    if [ -n "$pid" ] && kill -0 "$pid" 2>/dev/null; then
-        kill "$pid" 2>/dev/null || true
-        for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-        kill -9 "$pid" 2>/dev/null || true
-    fi
-    rm -f "$f"
+stop_pids() { # stop the processes whose pids are in files "$@" (those still running), together
+    local pids=() f pid
+    for f in "$@"; do
+        [ -f "$f" ] || continue
+        pid="$(cat "$f")"
+        if [ -n "$pid" ] && kill -0 "$pid" 2>/dev/null; then
+            kill "$pid" 2>/dev/null || true
+            pids+=("$pid")
+        fi
+        rm -f "$f"
+    done
+    for _ in $(seq 100); do
+        local alive=0
+        for pid in "${pids[@]}"; do kill -0 "$pid" 2>/dev/null && alive=1; done
+        [ "$alive" -eq 0 ] && return 0
+        sleep 0.05
+    done
+    for pid in "${pids[@]}"; do kill -9 "$pid" 2>/dev/null || true; done
 }
 
 case "$cmd" in
@@ -111,12 +118,14 @@ CONF
     ;;
 stop)
     if [ -f "$dir/slurm.conf" ] && [ -f "$dir/slurmctld.pid" ]; then
+        # Jobs first: their steps would outlive the daemons. Wait (at most 10 s) until none is left.
         SLURM_CONF="$dir/slurm.conf" scancel --full --quiet --user="$(id -un)" 2>/dev/null || true
-        sleep 0.5
+        for _ in $(seq 100); do
+            [ -z "$(SLURM_CONF="$dir/slurm.conf" squeue -h -o %i 2>/dev/null)" ] && break
+            sleep 0.1
+        done
     fi
-    stop_pid "$dir/slurmd.pid"
-    stop_pid "$dir/slurmctld.pid"
-    stop_pid "$dir/munged.pid"
+    stop_pids "$dir/slurmd.pid" "$dir/slurmctld.pid" "$dir/munged.pid"
     ;;
 *) usage ;;
 esac

@@ -108,6 +108,9 @@ class Config:
     cropper: str = "auto"  # where crops are cut: loader (DataLoader), device (the split in GPU memory), auto
     precision: str = "auto"  # autocast: bf16 | fp32 | auto (train.autocast_dtype)
     resume: bool = False
+    # Steps between checkpoints: a killed, pre-empted or requeued run (--resume) goes on from the
+    # last; with `--schedule steps` it then ends as the uninterrupted run would.
+    checkpoint_every: int = 200
     init_from: str = ""  # start from this model's weights (an exported .onnx or a run's checkpoint.pt); a new schedule
 
     def save(self, path):

@@ -84,7 +84,16 @@ class Crops(torch.utils.data.Dataset):
     the whole reference (the evaluation's tonemap, loss.display)."""
 
     def __init__(
-        self, prep_split_dir, crop, seed, length=100_000, noisy_spp=None, dle_paths=None, extra_seeds=(), extra_spp=None
+        self,
+        prep_split_dir,
+        crop,
+        seed,
+        length=100_000,
+        noisy_spp=None,
+        dle_paths=None,
+        extra_seeds=(),
+        extra_spp=None,
+        start=0,
     ):
         refs = {}  # a scene's inputs share its reference array (DeviceCrops holds it once)
         self.pairs = []
@@ -99,16 +108,19 @@ class Crops(torch.utils.data.Dataset):
         if not self.pairs:
             raise FileNotFoundError(f"{prep_split_dir}: no preprocessed pairs (run preprocess.py)")
         self.split_dir, self.crop, self.seed, self.length = Path(prep_split_dir), crop, seed, length
+        # Crop i of this dataset is crop start + i of the seed's sequence: a run resumed at step s
+        # takes the crops an uninterrupted run takes from step s on.
+        self.start = start
 
     def __len__(self):
         return self.length
 
     def draw(self, i):
-        """The random choices of crop i, from (seed, i) alone: (pair index, top, left, flip the
+        """The random choices of crop i, from (seed, start + i) alone: (pair index, top, left, flip the
         columns, flip the rows, transpose, index into PERMUTATIONS). The pair is drawn as a group
         (a scene's image at one count, `groups`), then one of its noise realizations, so that
         extra realizations add variety to their levels without weighting them more."""
-        rng = np.random.default_rng((self.seed, i))
+        rng = np.random.default_rng((self.seed, self.start + i))
         g = self.groups[int(rng.integers(len(self.groups)))]
         p = g[0] if len(g) == 1 else g[int(rng.integers(len(g)))]
         h, w = self.pairs[p][1].shape[:2]

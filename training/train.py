@@ -9,6 +9,7 @@ run on a machine of unknown speed anneals when its time is up."""
 
 import json
 import math
+import os
 import sys
 import time
 from dataclasses import asdict
@@ -259,7 +260,8 @@ def main(argv=None):
         data = dataset.Crops(
             Path(cfg.prep_dir) / "train",
             cfg.crop,
-            cfg.seed + step,
+            cfg.seed,
+            start=step * cfg.batch,
             length=max(cfg.steps - step, 0) * cfg.batch,
             noisy_spp=cfg.noisy_spp,
             dle_paths=cfg.dle_paths,
@@ -303,7 +305,7 @@ def main(argv=None):
             log.write(json.dumps(rec) + "\n")
             log.flush()
             print(f"step {step:5d}  loss {rec['loss']:.4f}  lr {rec['lr']:.2e}  {rec['seconds']:.0f} s", flush=True)
-        if step % 200 == 0:
+        if step % cfg.checkpoint_every == 0:
             save(net, opt, sched, step, earlier_seconds + time.time() - start, resumed_at, ckpt)
     save(net, opt, sched, step, earlier_seconds + time.time() - start, resumed_at, ckpt)
     net.eval()
@@ -324,7 +326,9 @@ def main(argv=None):
 
 def save(net, opt, sched, step, seconds, resumed_at, path):
     """A checkpoint: weights, optimiser and schedule state, the step, the training seconds of all
-    runs so far and the steps at which it was resumed."""
+    runs so far and the steps at which it was resumed. Written to a temporary name and renamed,
+    so that a run killed while saving (scancel, pre-emption) leaves the previous checkpoint."""
+    tmp = Path(path).with_name(f".{Path(path).name}.tmp-{os.getpid()}")
     torch.save(
         {
             "model": net.state_dict(),
@@ -334,8 +338,9 @@ def save(net, opt, sched, step, seconds, resumed_at, path):
             "seconds": seconds,
             "resumed_at": resumed_at,
         },
-        path,
+        tmp,
     )
+    os.replace(tmp, path)
 
 
 if __name__ == "__main__":

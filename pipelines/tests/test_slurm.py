@@ -4,14 +4,18 @@ A single-node cluster — slurmctld, slurmd and munge from Debian's packages, st
 scripts/slurm-cluster.sh under a temporary directory, only its own pids stopped — runs a small
 dataset with every stage as a job step (`LAUNCH="srun ..."`); the files must equal those of the
 same make run without Slurm (pixels and every header value but the wall-clock seconds). A job
-cancelled while its stage runs leaves no partial output, a failed step fails its make target,
-and `make -n` plans the same stage commands with and without a launcher, apart from its prefix.
+cancelled while its stage runs leaves no partial output, a failed step fails its make target, a
+requeued training job resumes from its checkpoint to the uninterrupted run's weights, and
+`make -n` plans the same stage commands with and without a launcher, apart from its prefix.
 
 The stage programs are those in LUXEST_BIN_DIR (make test passes target/debug, built before)."""
+
+import json
 import os
 import shlex
 import shutil
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -26,8 +30,14 @@ ROOT = Path(__file__).resolve().parents[2]
 STAGES = {"SCENE_COMPILE": "scene-compile", "TRACE": "trace", "AOV_WRITE": "aov-write", "ESTIMATE": "estimate"}
 # A small dataset of every file family: references, noisy levels with their features, and
 # local-estimate images, over train, valid and test rooms.
-TINY = {"DATASET_COUNT": "6", "DATASET_SIDE": "16", "REF_SPP": "16", "NOISY_LEVELS": "1 4", "FEATURE_SPP": "4",
-        "DATASET_DLE": "10"}
+TINY = {
+    "DATASET_COUNT": "6",
+    "DATASET_SIDE": "16",
+    "REF_SPP": "16",
+    "NOISY_LEVELS": "1 4",
+    "FEATURE_SPP": "4",
+    "DATASET_DLE": "10",
+}
 # Header values that are measurements of the run, not results.
 TIMING_KEYS = {contract.SECONDS}
 
@@ -37,14 +47,21 @@ def stage_vars():
     paths = {var: bin_dir / name for var, name in STAGES.items()}
     missing = [str(p) for p in paths.values() if not p.exists()]
     if missing:
-        pytest.fail(f"stage programs missing: {', '.join(missing)} (build them first: cargo build, or set LUXEST_BIN_DIR)")
+        pytest.fail(
+            f"stage programs missing: {', '.join(missing)} (build them first: cargo build, or set LUXEST_BIN_DIR)"
+        )
     return {var: str(p) for var, p in paths.items()}
 
 
 def make(*args, env=None, **variables):
     v = {**stage_vars(), **variables}
-    return subprocess.run(["make", "--no-print-directory", *args] + [f"{k}={val}" for k, val in v.items()],
-                          cwd=ROOT, capture_output=True, text=True, env=env)
+    return subprocess.run(
+        ["make", "--no-print-directory", *args] + [f"{k}={val}" for k, val in v.items()],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env=env,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +79,10 @@ def cluster():
         yield env
     finally:
         subprocess.run([str(script), "stop", str(state)], capture_output=True)
-        shutil.rmtree(state, ignore_errors=True)
+        if os.environ.get("LUXEST_KEEP_SLURM"):
+            print(f"cluster state kept in {state}")
+        else:
+            shutil.rmtree(state, ignore_errors=True)
 
 
 def dataset_files(name):
@@ -128,8 +148,12 @@ def squeue(env, job):
 def cancel_when(env, cmd, log, ready):
     """Submits `cmd` as a batch job, cancels it (SIGTERM, then SIGKILL) as soon as `ready()`
     holds or the job has ended, and waits until Slurm has cleaned it up."""
-    r = subprocess.run(["sbatch", "--parsable", "-n1", "-c1", "-o", str(log), "--wrap", shlex.join(cmd)],
-                       capture_output=True, text=True, env=env)
+    r = subprocess.run(
+        ["sbatch", "--parsable", "-n1", "-c1", "-o", str(log), "--wrap", shlex.join(cmd)],
+        capture_output=True,
+        text=True,
+        env=env,
+    )
     assert r.returncode == 0, r.stderr
     job = r.stdout.strip().split(";")[0]
     deadline = time.time() + 120
@@ -149,12 +173,26 @@ def test_a_cancelled_job_leaves_no_partial_output(cluster, tmp_path):
     # names are all of them, each whole, or none; the rerun through Slurm completes.
     scene = tmp_path / "scene.lxs"
     bins = stage_vars()
-    subprocess.run([bins["SCENE_COMPILE"], str(ROOT / "scenes" / "cornell-box.ron"), "-o", str(scene), "-q"], check=True)
+    subprocess.run(
+        [bins["SCENE_COMPILE"], str(ROOT / "scenes" / "cornell-box.ron"), "-o", str(scene), "-q"], check=True
+    )
     levels = [1 << k for k in range(9)]
     out = tmp_path / "out" / "cb"
     out.parent.mkdir()
-    cmd = [bins["TRACE"], str(scene), "--spp", str(levels[-1]), "--snapshots", ",".join(map(str, levels[:-1])),
-           "--resolution", "96x96", "--threads", "1", "-o", str(out)]
+    cmd = [
+        bins["TRACE"],
+        str(scene),
+        "--spp",
+        str(levels[-1]),
+        "--snapshots",
+        ",".join(map(str, levels[:-1])),
+        "--resolution",
+        "96x96",
+        "--threads",
+        "1",
+        "-o",
+        str(out),
+    ]
 
     def finals():
         return sorted(out.parent.glob("cb_*.exr"))
@@ -195,7 +233,7 @@ def test_make_n_plans_the_same_commands_with_a_launcher():
     for x, y in zip(a, b):
         is_stage = Path(x.split()[0]).name in stage_names
         if x.startswith(cd):  # a training step (TRAIN_LAUNCH follows LAUNCH by default)
-            assert y == cd + f"{launch} " + x[len(cd):], (x, y)
+            assert y == cd + f"{launch} " + x[len(cd) :], (x, y)
             prefixed += 1
         elif is_stage:
             assert y == f"{launch} {x}", (x, y)
@@ -204,3 +242,87 @@ def test_make_n_plans_the_same_commands_with_a_launcher():
             assert y == x, (x, y)
     assert prefixed > 20 and sum(l.startswith(cd) for l in a) == 4
     remove_dataset("pytest-dry-launch")
+
+
+def tiny_training_data(root):
+    """A preprocessed one-scene split (random 32² images at 4 spp against a 64-spp reference) and
+    train.py's arguments for a short run of the steps schedule, checkpointing every 5 steps."""
+    sys.path.insert(0, str(ROOT / "training"))
+    import preprocess
+
+    rng = np.random.default_rng(11)
+    d = root / "data" / "train"
+    d.mkdir(parents=True)
+    contract.write(
+        d / contract.image_name("g", "hdr"), rng.random((32, 32, 3)), {contract.SAMPLES: 64, contract.SEED: 2}
+    )
+    for kind in contract.FEATURES:
+        contract.write(
+            d / contract.image_name("g", kind, 4), rng.random((32, 32, 3)), {contract.SAMPLES: 4, contract.SEED: 1}
+        )
+    preprocess.preprocess_split(d, root / "prep" / "train", [4], [])
+    return [
+        "--prep-dir",
+        str(root / "prep"),
+        *"--noisy-spp 4 --dle-paths --crop 32 --batch 2 --threads 1".split(),
+        *"--base-width 8 --schedule steps --steps 60 --minutes 30 --checkpoint-every 5".split(),
+    ]
+
+
+def checkpoint_step(path):
+    import torch
+
+    try:
+        return torch.load(path, weights_only=False)["step"]
+    except (OSError, EOFError, RuntimeError, KeyError):
+        return None
+
+
+def test_a_requeued_training_resumes_where_it_stopped(cluster, tmp_path):
+    # The same run twice: straight through, and as a batch job requeued (killed and queued
+    # again, as pre-emption does) once it has checkpointed; the requeued job resumes from its
+    # checkpoint and ends with the weights of the uninterrupted run.
+    import torch
+
+    args = tiny_training_data(tmp_path)
+    train = [sys.executable, "train.py", *args]
+    subprocess.run(
+        train + ["--run-dir", str(tmp_path / "whole")], cwd=ROOT / "training", check=True, capture_output=True
+    )
+    cut = tmp_path / "cut"
+    script = f"cd {shlex.quote(str(ROOT / 'training'))} && " + shlex.join(train + ["--run-dir", str(cut), "--resume"])
+    r = subprocess.run(
+        ["sbatch", "--parsable", "--requeue", "-n1", "-c1", "-o", str(tmp_path / "job.log"), "--wrap", script],
+        capture_output=True,
+        text=True,
+        env=cluster,
+    )
+    assert r.returncode == 0, r.stderr
+    job = r.stdout.strip().split(";")[0]
+    deadline = time.time() + 300
+    while not (checkpoint_step(cut / "checkpoint.pt") or 0) >= 5:
+        assert time.time() < deadline, f"job {job}: no checkpoint in 300 s ({(tmp_path / 'job.log').read_text()})"
+        time.sleep(0.05)
+    subprocess.run(["scontrol", "requeue", job], check=True, env=cluster)
+    deadline, released = time.time() + 300, False
+    while "JobState=COMPLETED" not in (
+        state := subprocess.run(["scontrol", "show", "job", job], capture_output=True, text=True, env=cluster).stdout
+    ):
+        assert "FAILED" not in state and time.time() < deadline, state + (tmp_path / "job.log").read_text()
+        gone = subprocess.run(["pgrep", "-f", f"--run-dir {cut}"], capture_output=True).returncode != 0
+        if not released and "Reason=BeginTime" in state and gone:
+            # Slurm holds a requeued job back for about two minutes; a test need not wait that
+            # long, but slurmd refuses the job for a few seconds after it killed it ("already
+            # killed, do not launch batch job").
+            time.sleep(5)
+            subprocess.run(["scontrol", "update", f"JobId={job}", "StartTime=now"], check=True, env=cluster)
+            released = True
+        time.sleep(0.1)
+    summary = json.loads((cut / "summary.json").read_text())
+    assert summary["steps"] == 60 and len(summary["resumed_at"]) == 1 and 5 <= summary["resumed_at"][0] < 60, summary
+    assert "Restarts=1" in state
+    whole = torch.load(tmp_path / "whole" / "checkpoint.pt", weights_only=False)["model"]
+    resumed = torch.load(cut / "checkpoint.pt", weights_only=False)["model"]
+    assert whole.keys() == resumed.keys()
+    for k in whole:
+        assert torch.equal(whole[k], resumed[k]), k
