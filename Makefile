@@ -127,17 +127,18 @@ test: pytest
 	$(CARGO) fmt --all -- --check
 	$(CLIPPY_BUILD) $(CARGO) test --workspace --all-targets --no-run
 	$(CLIPPY_BUILD) $(CARGO) test --workspace
-	$(CLIPPY_BUILD) $(CARGO) build -p denoise -p evaluate --bins
+	$(CLIPPY_BUILD) $(CARGO) build $(addprefix -p ,$(STAGE_BINS)) --bins
 	@for b in denoise evaluate; do \
 		readelf -d target/debug/$$b > target/debug/$$b.dynamic || exit 1; \
 		if grep -qi embree target/debug/$$b.dynamic; then echo "error: target/debug/$$b links Embree" >&2; exit 1; fi; \
 	done; echo "denoise and evaluate link no Embree"
+	LUXEST_BIN_DIR=target/debug $(PYTHON) -m pytest pipelines/tests -q
 
-# The Make DAG through a real single-node Slurm cluster (pipelines/tests/test_slurm.py; set up
-# by scripts/slurm-cluster.sh, Slurm and munge from scripts/setup.sh) with the debug stage
-# programs that make test builds.
+# The Make DAG through a real single-node Slurm cluster alone (pipelines/tests/test_slurm.py, the
+# last step of make test; set up by scripts/slurm-cluster.sh, Slurm and munge from
+# scripts/setup.sh), with the debug stage programs.
 test-slurm: $(VENV)/$(VENV_STAMP)
-	$(CARGO) build -p scene-compile -p trace -p aov-write -p estimate --bins
+	$(CLIPPY_BUILD) $(CARGO) build $(addprefix -p ,$(STAGE_BINS)) --bins
 	LUXEST_BIN_DIR=target/debug $(PYTHON) -m pytest pipelines/tests -q
 
 $(VENV)/$(VENV_STAMP): scripts/setup-python.sh training/requirements.txt

@@ -173,8 +173,11 @@ def main(argv=None):
         "le": pixels * rooms * dle["full"] / dle["quick"],
     }
     train_minutes = float(preset("full", "TRAIN_MINUTES"))
+    version = subprocess.run([stages["TRACE"], "--version"], capture_output=True, text=True).stdout.strip()
     lines = [
         "# The Make DAG through Slurm: overhead, and the cost of `PRESET=full`",
+        "",
+        f"Stages: `{a.bin_dir}` ({version}).",
         "",
         f"Host: {host_summary()}; single-node Slurm 22.05 from Debian (scripts/slurm-cluster.sh). "
         "Produced by `make bench-slurm` (pipelines/bench_slurm.py).",
