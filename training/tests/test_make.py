@@ -2,10 +2,12 @@
 the noisy target following NOISY_MAX, and every stage called through its variable; and one real
 make run with a stand-in denoiser (make eval's model stamp)."""
 
+import atexit
 import functools
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import tempfile
 from pathlib import Path
@@ -15,6 +17,7 @@ import luxest_contract as contract
 ROOT = Path(__file__).resolve().parents[2]
 # Stand-in stage programs: files make sees as up-to-date prerequisites (no cargo build planned).
 _STAGE_DIR = Path(tempfile.mkdtemp(prefix="luxest-stages-"))
+atexit.register(shutil.rmtree, _STAGE_DIR, True)
 STAGES = {
     v: str(_STAGE_DIR / v.lower())
     for v in ("SCENE_COMPILE", "TRACE", "AOV_WRITE", "ESTIMATE", "DENOISE", "EVALUATE", "OIDN_DENOISE")
