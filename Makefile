@@ -58,8 +58,8 @@ PYTHON := $(VENV)/bin/python
 # reads the makefiles (in a dry run too) if it is missing, the others removed; its path. A
 # prerequisite of the outputs that depend on VALUE, so that a changed VALUE makes them out of date.
 # Not made by a rule: under `.SECONDARY:` GNU make 4.3 treats a missing file that has a rule and no
-# prerequisites as present, and a changed value went unnoticed (REF_SPP, DATASET_SIDE until
-# 2026-11-25; training/tests/test_make.py runs make to check).
+# prerequisites as present, so a changed value would go unnoticed (training/tests/test_make.py
+# runs make to check).
 lx_stamp = $(shell mkdir -p $(1) && { [ -e $(1)/$(2)-$(3) ] || { rm -f $(1)/$(2)-*; touch $(1)/$(2)-$(3); }; } && echo $(1)/$(2)-$(3))
 
 include pipelines/presets.mk
