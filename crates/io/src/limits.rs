@@ -274,13 +274,6 @@ impl WorkPlan {
     pub fn is_long(&self) -> bool {
         self.seconds > PLAN_AFTER_SECONDS
     }
-
-    /// Prints [`WorkPlan::line`] on stderr when the run [`is long`](WorkPlan::is_long).
-    pub fn announce(&self) {
-        if self.is_long() {
-            eprintln!("{}", self.line());
-        }
-    }
 }
 
 /// Times `unit(k)` for k = 0, 1, ... until it has run at least 64 times and 20 ms, or 4096
