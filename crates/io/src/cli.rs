@@ -142,6 +142,9 @@ pub struct Console {
 }
 
 impl Console {
+    /// The console of `--quiet`: what library callers and tests pass.
+    pub const QUIET: Console = Console { quiet: true };
+
     /// The progress of `label`'s work of `total` `unit`s (`None`: not known), shown on stderr
     /// unless quiet ([`crate::progress`]).
     pub fn progress(&self, label: &str, total: Option<u64>, unit: &'static str) -> Progress {
@@ -159,6 +162,14 @@ impl Console {
     pub fn announce(&self, plan: &WorkPlan) {
         if plan.is_long() {
             self.note(plan.line());
+        }
+    }
+
+    /// [`Console::announce`] while `progress` is shown (a plan made from the run's first
+    /// unit of work), above its line.
+    pub fn announce_during(&self, plan: &WorkPlan, progress: &Progress) {
+        if plan.is_long() && !self.quiet {
+            progress.println(&plan.line());
         }
     }
 }

@@ -183,6 +183,16 @@ impl Progress {
         }
     }
 
+    /// Prints `line` on stderr while the progress is shown: on a terminal above its line
+    /// (erased, then redrawn by the next frame), in a log as a line of its own.
+    pub fn println(&self, line: &str) {
+        match &self.shared {
+            Some(s) if s.display == Display::Bar => s.write(&format!("\r\x1b[K{line}\n")),
+            Some(s) => s.write(&format!("{line}\n")),
+            None => eprintln!("{line}"),
+        }
+    }
+
     /// A counter for one worker's fine-grained loop (see [`Tally`]).
     pub fn tally(&self) -> Tally<'_> {
         Tally {
@@ -320,7 +330,8 @@ impl State<'_> {
     /// Seconds left at the rate so far, once some work is done.
     fn left(&self) -> Option<f64> {
         let total = self.total?;
-        (self.done > 0).then(|| self.elapsed * total.saturating_sub(self.done) as f64 / self.done as f64)
+        (self.done > 0)
+            .then(|| self.elapsed * total.saturating_sub(self.done) as f64 / self.done as f64)
     }
 
     /// The terminal's frame, most important first (a narrow terminal cuts the end):
@@ -445,7 +456,11 @@ fn terminal_width() -> usize {
             y_pixels: u16,
         }
         extern "C" {
-            fn ioctl(fd: std::os::raw::c_int, request: std::os::raw::c_ulong, ...) -> std::os::raw::c_int;
+            fn ioctl(
+                fd: std::os::raw::c_int,
+                request: std::os::raw::c_ulong,
+                ...
+            ) -> std::os::raw::c_int;
         }
         // Linux's asm-generic/ioctls.h (x86 and arm64 alike): TIOCGWINSZ 0x5413.
         const TIOCGWINSZ: std::os::raw::c_ulong = 0x5413;
@@ -503,15 +518,25 @@ mod tests {
         assert_eq!(Display::choose(false, None, None, true), Display::Bar);
         assert_eq!(Display::choose(false, None, None, false), lines);
         assert_eq!(Display::choose(false, Some("auto"), None, false), lines);
-        assert_eq!(Display::choose(false, Some("bar"), None, false), Display::Bar);
+        assert_eq!(
+            Display::choose(false, Some("bar"), None, false),
+            Display::Bar
+        );
         assert_eq!(Display::choose(false, Some("lines"), None, true), lines);
-        assert_eq!(Display::choose(false, Some("off"), None, true), Display::Off);
+        assert_eq!(
+            Display::choose(false, Some("off"), None, true),
+            Display::Off
+        );
         assert_eq!(
             Display::choose(false, None, Some("0.5"), false),
             Display::Lines { interval: 0.5 }
         );
         for bad in ["-1", "soon", "inf", "NaN"] {
-            assert_eq!(Display::choose(false, None, Some(bad), false), lines, "{bad}");
+            assert_eq!(
+                Display::choose(false, None, Some(bad), false),
+                lines,
+                "{bad}"
+            );
         }
     }
 
@@ -542,7 +567,9 @@ mod tests {
             end.line(true),
             "trace: 100% (65.5M of 65.5M samples), 1.25M samples/s, 0:52 elapsed, done"
         );
-        assert!(end.frame().starts_with("trace [====================] 100% ~0:00 left"));
+        assert!(end
+            .frame()
+            .starts_with("trace [====================] 100% ~0:00 left"));
         let open = State {
             total: None,
             ..state
@@ -634,7 +661,10 @@ mod tests {
         let text = sink.text();
         assert!(!text.contains('\n'), "{text:?}");
         let frames = text.matches('\r').count() - 1;
-        assert!(frames >= 1 && frames as f64 <= 10.0 * seconds + 1.0, "{frames} in {seconds} s");
+        assert!(
+            frames >= 1 && frames as f64 <= 10.0 * seconds + 1.0,
+            "{frames} in {seconds} s"
+        );
         assert!(text.starts_with("\rtrace ["), "{text:?}");
         assert!(text.ends_with("\r\x1b[K"), "{text:?}");
     }
@@ -660,7 +690,15 @@ mod tests {
             }
         });
         p.finish();
-        assert!(sink.text().lines().last().unwrap().starts_with("x: 4.00k paths"), "{}", sink.text());
+        assert!(
+            sink.text()
+                .lines()
+                .last()
+                .unwrap()
+                .starts_with("x: 4.00k paths"),
+            "{}",
+            sink.text()
+        );
         // Off: counting is a no-op.
         let off = Progress::off();
         off.tally().add(5);
