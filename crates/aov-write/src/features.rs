@@ -196,7 +196,7 @@ impl FeatureFilm {
     }
 
     /// Adds samples `self.samples .. target` of every pixel (rows in parallel, each pixel's
-    /// samples in order), counting them on `progress` row by row.
+    /// samples in order), counting them on `progress`.
     pub fn advance(
         &mut self,
         world: &World,
@@ -207,7 +207,8 @@ impl FeatureFilm {
     ) {
         let (w, h, done) = (self.width, self.height, self.samples);
         let rows = run_batches(h, threads, |y| {
-            let row = (0..w)
+            let mut tally = progress.tally();
+            (0..w)
                 .map(|x| {
                     let pixel = y * w + x;
                     let (mut a, mut n, mut d, mut e) = (Rgb::BLACK, Vec3::ZERO, 0.0, Rgb::BLACK);
@@ -223,11 +224,10 @@ impl FeatureFilm {
                         d += hit.depth;
                         e = e + hit.emission;
                     }
+                    tally.add(target.saturating_sub(done) as u64);
                     (a, n, d, e)
                 })
-                .collect::<Vec<_>>();
-            progress.inc(w as u64 * target.saturating_sub(done) as u64);
-            row
+                .collect::<Vec<_>>()
         });
         for (y, row) in rows.into_iter().enumerate() {
             for (x, (a, n, d, e)) in row.into_iter().enumerate() {

@@ -286,7 +286,7 @@ impl Shared {
             elapsed: self.start.elapsed().as_secs_f64(),
         };
         let text = match self.display {
-            Display::Bar => format!("\r{}\x1b[K", cut(&state.frame(), terminal_width() - 1)),
+            Display::Bar => format!("\r{}\x1b[K", fit(&state.frame(), terminal_width() - 1)),
             _ => state.line(last) + "\n",
         };
         self.write(&text);
@@ -433,10 +433,14 @@ pub fn clock(seconds: f64) -> String {
     }
 }
 
-/// The first `width` characters of `text`.
-fn cut(text: &str, width: usize) -> &str {
+/// `text` in `width` characters: whole, or cut before the last `, ` that leaves it within
+/// them (a frame's parts are separated so), or else cut at `width`.
+fn fit(text: &str, width: usize) -> &str {
     match text.char_indices().nth(width) {
-        Some((i, _)) => &text[..i],
+        Some((i, _)) => {
+            let cut = &text[..i];
+            cut.rfind(", ").map_or(cut, |j| &cut[..j])
+        }
         None => text,
     }
 }
@@ -593,7 +597,12 @@ mod tests {
         assert_eq!(show_si(123_456.0), "123k");
         assert_eq!(clock(7.4), "0:07");
         assert_eq!(clock(3.0 * 3600.0 + 121.0), "3:02:01");
-        assert_eq!(cut("trace [===]", 5), "trace");
+        assert_eq!(
+            fit("trace [===] 5%, ~0:01 left", 26),
+            "trace [===] 5%, ~0:01 left"
+        );
+        assert_eq!(fit("trace [===] 5%, ~0:01 left", 20), "trace [===] 5%");
+        assert_eq!(fit("trace [===] 5%", 5), "trace");
     }
 
     #[test]

@@ -94,8 +94,8 @@ impl<'a> Renderer<'a> {
         }
     }
 
-    /// Adds samples `film.samples .. target` to every pixel, counting them on `progress` tile by
-    /// tile; returns the rays traced.
+    /// Adds samples `film.samples .. target` to every pixel, counting them on `progress`;
+    /// returns the rays traced.
     pub fn advance(
         &self,
         film: &mut Film,
@@ -114,6 +114,7 @@ impl<'a> Renderer<'a> {
                 ..Default::default()
             };
             let mut out = Vec::with_capacity(TILE * TILE);
+            let mut tally = progress.tally();
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
                     let pixel = y * w + x;
@@ -136,9 +137,9 @@ impl<'a> Renderer<'a> {
                         sum_y2 += l.luminance() * l.luminance();
                     }
                     out.push((pixel, sum, sum_y2));
+                    tally.add(target.saturating_sub(from) as u64);
                 }
             }
-            progress.inc(out.len() as u64 * target.saturating_sub(from) as u64);
             (out, log)
         });
         let mut total = RayLog {
