@@ -353,15 +353,15 @@ impl State<'_> {
                     "{} [{bar}] {:>3.0}% ~{left} left, {rate}, {elapsed}, {}/{} {}",
                     self.label,
                     (f * 100.0).floor(),
-                    show_si(self.done as f64),
-                    show_si(total as f64),
+                    show_si_count(self.done),
+                    show_si_count(total),
                     self.unit
                 )
             }
             _ => format!(
                 "{}: {} {}, {rate}, {elapsed}",
                 self.label,
-                show_si(self.done as f64),
+                show_si_count(self.done),
                 self.unit
             ),
         }
@@ -383,11 +383,11 @@ impl State<'_> {
             (Some(f), Some(total)) => format!(
                 "{:.0}% ({} of {} {})",
                 (f * 100.0).floor(),
-                show_si(self.done as f64),
-                show_si(total as f64),
+                show_si_count(self.done),
+                show_si_count(total),
                 self.unit
             ),
-            _ => format!("{} {}", show_si(self.done as f64), self.unit),
+            _ => format!("{} {}", show_si_count(self.done), self.unit),
         };
         let mut line = format!(
             "{}: {counted}, {rate}, {} elapsed",
@@ -402,7 +402,17 @@ impl State<'_> {
     }
 }
 
-/// A count or rate with an SI prefix and three significant digits: `812`, `45.1k`, `1.23M`.
+/// A count: whole below 1000, else three significant digits with an SI prefix (`45.1k`).
+pub fn show_si_count(n: u64) -> String {
+    if n < 1000 {
+        n.to_string()
+    } else {
+        show_si(n as f64)
+    }
+}
+
+/// A rate or count with three significant digits and an SI prefix: `0.31`, `812`, `45.1k`,
+/// `1.23M`.
 pub fn show_si(v: f64) -> String {
     const PREFIXES: [&str; 6] = ["", "k", "M", "G", "T", "P"];
     let mut v = v.max(0.0);
@@ -411,9 +421,7 @@ pub fn show_si(v: f64) -> String {
         v /= 1000.0;
         p += 1;
     }
-    if p == 0 {
-        format!("{v:.0}")
-    } else if v < 9.995 {
+    if v < 9.995 {
         format!("{v:.2}{}", PREFIXES[p])
     } else if v < 99.95 {
         format!("{v:.1}{}", PREFIXES[p])
@@ -589,9 +597,13 @@ mod tests {
                 ..state
             }
             .line(false),
-            "trace: 0% (0 of 65.5M samples), 0 samples/s, 0:00 elapsed"
+            "trace: 0% (0 of 65.5M samples), 0.00 samples/s, 0:00 elapsed"
         );
         assert_eq!(show_si(812.0), "812");
+        assert_eq!(show_si(0.314), "0.31");
+        assert_eq!(show_si(31.44), "31.4");
+        assert_eq!(show_si_count(12), "12");
+        assert_eq!(show_si_count(45_123), "45.1k");
         assert_eq!(show_si(999.6), "1.00k");
         assert_eq!(show_si(45_123.0), "45.1k");
         assert_eq!(show_si(123_456.0), "123k");
