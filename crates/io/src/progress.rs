@@ -432,7 +432,7 @@ pub fn show_si(v: f64) -> String {
 
 /// Seconds as a clock: `0:07`, `12:34`, `3:02:01` (hours past 24 keep counting: `51:00:00`).
 pub fn clock(seconds: f64) -> String {
-    let s = seconds.max(0.0).min(1e9).round() as u64;
+    let s = seconds.clamp(0.0, 1e9).round() as u64;
     let (h, m, s) = (s / 3600, s / 60 % 60, s % 60);
     if h > 0 {
         format!("{h}:{m:02}:{s:02}")
