@@ -102,6 +102,8 @@ struct Shared {
     unit: &'static str,
     /// The units to do; [`UNKNOWN`] when not known (a run for a given time).
     total: AtomicU64,
+    /// Seconds the run may take at most (`trace --time`), as f64 bits; 0: none.
+    budget: AtomicU64,
     done: AtomicU64,
     start: Instant,
     display: Display,
@@ -148,6 +150,7 @@ impl Progress {
             label: label.into(),
             unit,
             total: AtomicU64::new(total.unwrap_or(UNKNOWN)),
+            budget: AtomicU64::new(0),
             done: AtomicU64::new(0),
             start: Instant::now(),
             display,
@@ -190,6 +193,15 @@ impl Progress {
             Some(s) if s.display == Display::Bar => s.write(&format!("\r\x1b[K{line}\n")),
             Some(s) => s.write(&format!("{line}\n")),
             None => eprintln!("{line}"),
+        }
+    }
+
+    /// Bounds the run's time (a render for a time, `trace --time`): the fraction done is at
+    /// least the time spent over `seconds`, the time left at most what remains of them.
+    pub fn set_time_budget(&self, seconds: f64) {
+        if let Some(s) = &self.shared {
+            s.budget
+                .store(seconds.max(0.0).to_bits(), Ordering::Relaxed);
         }
     }
 
@@ -283,6 +295,7 @@ impl Shared {
             unit: self.unit,
             done: self.done.load(Ordering::Relaxed),
             total: (total != UNKNOWN).then_some(total),
+            budget: Some(f64::from_bits(self.budget.load(Ordering::Relaxed))).filter(|b| *b > 0.0),
             elapsed: self.start.elapsed().as_secs_f64(),
         };
         let text = match self.display {
@@ -307,6 +320,8 @@ pub struct State<'a> {
     pub unit: &'a str,
     pub done: u64,
     pub total: Option<u64>,
+    /// Seconds the run may take at most ([`Progress::set_time_budget`]).
+    pub budget: Option<f64>,
     /// Seconds since the work started.
     pub elapsed: f64,
 }
@@ -321,17 +336,42 @@ impl State<'_> {
         }
     }
 
-    /// The fraction done, when the total is known.
+    /// The fraction done: of the total, or of the time budget when that is further along.
     fn fraction(&self) -> Option<f64> {
-        self.total
-            .map(|t| (self.done as f64 / t.max(1) as f64).clamp(0.0, 1.0))
+        let of_total = self.total.map(|t| self.done as f64 / t.max(1) as f64);
+        let of_time = self.budget.map(|b| self.elapsed / b);
+        match (of_total, of_time) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        }
+        .map(|f| f.clamp(0.0, 1.0))
     }
 
-    /// Seconds left at the rate so far, once some work is done.
+    /// Seconds left at the rate so far, once some work is done, and at most what remains of
+    /// the time budget.
     fn left(&self) -> Option<f64> {
-        let total = self.total?;
-        (self.done > 0)
-            .then(|| self.elapsed * total.saturating_sub(self.done) as f64 / self.done as f64)
+        let by_rate = self
+            .total
+            .filter(|_| self.done > 0)
+            .map(|total| self.elapsed * total.saturating_sub(self.done) as f64 / self.done as f64);
+        let by_time = self.budget.map(|b| (b - self.elapsed).max(0.0));
+        match (by_rate, by_time) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// What is counted: `27.5M/65.5M samples` (`of` = `/`) or `27.5M samples` without a total.
+    fn counted(&self, of: &str) -> String {
+        match self.total {
+            Some(total) => format!(
+                "{}{of}{} {}",
+                show_si_count(self.done),
+                show_si_count(total),
+                self.unit
+            ),
+            None => format!("{} {}", show_si_count(self.done), self.unit),
+        }
     }
 
     /// The terminal's frame, most important first (a narrow terminal cuts the end):
@@ -339,8 +379,8 @@ impl State<'_> {
     pub fn frame(&self) -> String {
         let rate = format!("{} {}/s", show_si(self.rate()), self.unit);
         let elapsed = format!("{} elapsed", clock(self.elapsed));
-        match (self.fraction(), self.total) {
-            (Some(f), Some(total)) => {
+        match self.fraction() {
+            Some(f) => {
                 let full = ((f * BAR_WIDTH as f64).floor() as usize).min(BAR_WIDTH);
                 let head = if full < BAR_WIDTH { ">" } else { "" };
                 let bar = format!(
@@ -350,20 +390,13 @@ impl State<'_> {
                 );
                 let left = self.left().map_or("--:--".into(), clock);
                 format!(
-                    "{} [{bar}] {:>3.0}% ~{left} left, {rate}, {elapsed}, {}/{} {}",
+                    "{} [{bar}] {:>3.0}% ~{left} left, {rate}, {elapsed}, {}",
                     self.label,
                     (f * 100.0).floor(),
-                    show_si_count(self.done),
-                    show_si_count(total),
-                    self.unit
+                    self.counted("/")
                 )
             }
-            _ => format!(
-                "{}: {} {}, {rate}, {elapsed}",
-                self.label,
-                show_si_count(self.done),
-                self.unit
-            ),
+            None => format!("{}: {}, {rate}, {elapsed}", self.label, self.counted("/")),
         }
     }
 
@@ -379,15 +412,9 @@ impl State<'_> {
                 None => String::new(),
             }
         };
-        let counted = match (self.fraction(), self.total) {
-            (Some(f), Some(total)) => format!(
-                "{:.0}% ({} of {} {})",
-                (f * 100.0).floor(),
-                show_si_count(self.done),
-                show_si_count(total),
-                self.unit
-            ),
-            _ => format!("{} {}", show_si_count(self.done), self.unit),
+        let counted = match self.fraction() {
+            Some(f) => format!("{:.0}% ({})", (f * 100.0).floor(), self.counted(" of ")),
+            None => self.counted(" of "),
         };
         let mut line = format!(
             "{}: {counted}, {rate}, {} elapsed",
@@ -559,6 +586,7 @@ mod tests {
             unit: "samples",
             done: 27_500_000,
             total: Some(65_500_000),
+            budget: None,
             elapsed: 22.0,
         };
         assert_eq!(
@@ -590,6 +618,27 @@ mod tests {
             open.line(false),
             "trace: 27.5M samples, 1.25M samples/s, 0:22 elapsed"
         );
+        // A render for a time (trace --time 60): the budget is the fraction and the time left.
+        let timed = State {
+            budget: Some(60.0),
+            ..open
+        };
+        assert_eq!(
+            timed.line(false),
+            "trace: 36% (27.5M samples), 1.25M samples/s, 0:22 elapsed, ~0:38 left"
+        );
+        assert!(timed
+            .frame()
+            .starts_with("trace [=======>            ]  36% ~0:38 left, "));
+        // With a total too, whichever is further along.
+        assert!(State {
+            budget: Some(30.0),
+            ..state
+        }
+        .line(false)
+        .starts_with(
+            "trace: 73% (27.5M of 65.5M samples), 1.25M samples/s, 0:22 elapsed, ~0:08 left"
+        ));
         assert_eq!(
             State {
                 done: 0,

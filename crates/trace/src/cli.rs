@@ -139,6 +139,9 @@ pub fn run(args: Args) -> Result<()> {
     let mut film = Film::new(camera.width as usize, camera.height as usize);
     let pixels = camera.width as u64 * camera.height as u64;
     let progress = console.progress("trace", args.spp.map(|spp| pixels * spp as u64), "samples");
+    if let Some(seconds) = args.time {
+        progress.set_time_budget(seconds);
+    }
     let start = Instant::now();
     let info = |film: &Film| {
         RunInfo::new(
