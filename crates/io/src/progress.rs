@@ -136,7 +136,7 @@ impl Progress {
     }
 
     /// [`Progress::new`] drawn into `sink` (the tests' buffer).
-    pub fn to_sink(
+    fn to_sink(
         label: impl Into<String>,
         total: Option<u64>,
         unit: &'static str,
@@ -315,15 +315,15 @@ impl Shared {
 
 /// What one frame or line shows.
 #[derive(Clone, Copy, Debug)]
-pub struct State<'a> {
-    pub label: &'a str,
-    pub unit: &'a str,
-    pub done: u64,
-    pub total: Option<u64>,
+struct State<'a> {
+    label: &'a str,
+    unit: &'a str,
+    done: u64,
+    total: Option<u64>,
     /// Seconds the run may take at most ([`Progress::set_time_budget`]).
-    pub budget: Option<f64>,
+    budget: Option<f64>,
     /// Seconds since the work started.
-    pub elapsed: f64,
+    elapsed: f64,
 }
 
 impl State<'_> {
@@ -376,7 +376,7 @@ impl State<'_> {
 
     /// The terminal's frame, most important first (a narrow terminal cuts the end):
     /// `trace [=========>          ] 42% ~0:31 left, 1.23M samples/s, 0:22 elapsed, 27.5M/65.5M samples`.
-    pub fn frame(&self) -> String {
+    fn frame(&self) -> String {
         let rate = format!("{} {}/s", show_si(self.rate()), self.unit);
         let elapsed = format!("{} elapsed", clock(self.elapsed));
         match self.fraction() {
@@ -402,7 +402,7 @@ impl State<'_> {
 
     /// The log's line: `trace: 42% (27.5M of 65.5M samples), 1.23M samples/s, 0:22 elapsed,
     /// ~0:31 left`; `last`: the run's end (`..., 0:53 elapsed, done`).
-    pub fn line(&self, last: bool) -> String {
+    fn line(&self, last: bool) -> String {
         let rate = format!("{} {}/s", show_si(self.rate()), self.unit);
         let end = if last {
             "done".to_string()
@@ -430,7 +430,7 @@ impl State<'_> {
 }
 
 /// A count: whole below 1000, else three significant digits with an SI prefix (`45.1k`).
-pub fn show_si_count(n: u64) -> String {
+fn show_si_count(n: u64) -> String {
     if n < 1000 {
         n.to_string()
     } else {
@@ -440,7 +440,7 @@ pub fn show_si_count(n: u64) -> String {
 
 /// A rate or count with three significant digits and an SI prefix: `0.31`, `812`, `45.1k`,
 /// `1.23M`.
-pub fn show_si(v: f64) -> String {
+fn show_si(v: f64) -> String {
     const PREFIXES: [&str; 6] = ["", "k", "M", "G", "T", "P"];
     let mut v = v.max(0.0);
     let mut p = 0;
@@ -458,7 +458,7 @@ pub fn show_si(v: f64) -> String {
 }
 
 /// Seconds as a clock: `0:07`, `12:34`, `3:02:01` (hours past 24 keep counting: `51:00:00`).
-pub fn clock(seconds: f64) -> String {
+fn clock(seconds: f64) -> String {
     let s = seconds.clamp(0.0, 1e9).round() as u64;
     let (h, m, s) = (s / 3600, s / 60 % 60, s % 60);
     if h > 0 {
