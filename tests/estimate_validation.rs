@@ -5,6 +5,8 @@ use crate::util::repo_root;
 use estimate::local_estimate::{self as local, LocalConfig, NearField, Singularity};
 use estimate::sensor_batches::{Batches, SensorEstimates};
 use luxest_exact::solutions::{self, Sobolev};
+use luxest_io::cli::Console;
+use luxest_io::progress::Progress;
 use luxest_render::scene::SensorPoint;
 use luxest_render::world::World;
 
@@ -39,7 +41,13 @@ fn config(paths: u64, seed: u64, threads: usize, world: &World) -> LocalConfig {
 fn run(world: &World, paths: u64) -> (Vec<SensorPoint>, SensorEstimates) {
     let s = sensors(world);
     let near = vec![0.0; s.len()];
-    let r = local::estimate(world, &s, &near, &config(paths, 1, 2, world));
+    let r = local::estimate(
+        world,
+        &s,
+        &near,
+        &config(paths, 1, 2, world),
+        &Progress::off(),
+    );
     (s, r)
 }
 
@@ -163,11 +171,11 @@ fn result_is_independent_of_the_thread_count() {
     let w = world_from(&sobolev_text(1.0, 100.0, 1.0, 1.0, 0.7));
     let s = sensors(&w);
     let near = vec![0.0; s.len()];
-    let a = local::estimate(&w, &s, &near, &config(20_000, 9, 1, &w));
-    let b = local::estimate(&w, &s, &near, &config(20_000, 9, 2, &w));
+    let a = local::estimate(&w, &s, &near, &config(20_000, 9, 1, &w), &Progress::off());
+    let b = local::estimate(&w, &s, &near, &config(20_000, 9, 2, &w), &Progress::off());
     assert_eq!(a.value, b.value);
     assert_eq!(a.standard_error, b.standard_error);
-    let c = local::estimate(&w, &s, &near, &config(20_000, 10, 2, &w));
+    let c = local::estimate(&w, &s, &near, &config(20_000, 10, 2, &w), &Progress::off());
     assert_ne!(
         a.value, c.value,
         "a different seed must give a different estimate"
@@ -297,7 +305,7 @@ fn paths_cut_by_the_depth_bound_are_counted() {
         let s = sensors(&w);
         let mut cfg = config(640, 4, 2, &w);
         cfg.max_depth = max_depth;
-        local::estimate(&w, &s, &vec![0.0; s.len()], &cfg).truncated
+        local::estimate(&w, &s, &vec![0.0; s.len()], &cfg, &Progress::off()).truncated
     };
     assert_eq!(cut(&sphere(1.0), 5), 640);
     assert_eq!(cut(&sphere(0.999), 100_000), 0);
@@ -315,7 +323,7 @@ fn cie_room_mean_indirect_matches() {
     assert_eq!(floor.name, "floor");
     let s = floor.points.clone();
     let near = vec![0.0; s.len()];
-    let r = local::estimate(&w, &s, &near, &config(20_000, 3, 2, &w));
+    let r = local::estimate(&w, &s, &near, &config(20_000, 3, 2, &w), &Progress::off());
     let i = 10_000.0 / (4.0 * std::f64::consts::PI);
     let centre = luxest_io::math::Vec3::splat(2.0);
     let n = s.len() as f64;
@@ -354,7 +362,13 @@ fn sensors_on_edges_and_corners_match_the_backward_reference() {
     assert!(placed.near_radius.iter().all(|&r| r > 0.0));
     let mut cfg = config(100_000, 5, 2, &w);
     cfg.near_field = Some(NearField { samples: 20_000 });
-    let le = local::estimate(&w, &placed.points, &placed.near_radius, &cfg);
+    let le = local::estimate(
+        &w,
+        &placed.points,
+        &placed.near_radius,
+        &cfg,
+        &Progress::off(),
+    );
     let reference = estimate::gather::estimate(
         &w,
         &placed.points,
@@ -365,6 +379,7 @@ fn sensors_on_edges_and_corners_match_the_backward_reference() {
             threads: 2,
             max_depth: 100_000,
         },
+        &Progress::off(),
     );
     for (i, &(_, g, gse)) in reference.iter().enumerate() {
         let se = (le.standard_error[i].powi(2) + gse * gse).sqrt();
@@ -404,7 +419,13 @@ fn area_light_direct_part_equals_the_result_with_black_surfaces() {
         cfg.near_field = Some(NearField { samples: 4_000 });
         let near = placed.near_radius.iter().filter(|&&r| r > 0.0).count();
         (
-            local::estimate(world, &placed.points, &placed.near_radius, &cfg),
+            local::estimate(
+                world,
+                &placed.points,
+                &placed.near_radius,
+                &cfg,
+                &Progress::off(),
+            ),
             near,
         )
     };
@@ -523,6 +544,7 @@ fn render_floor_edge(paths: u64) -> (estimate::image::ImageResult, Vec<(f64, f64
             // One plane lit by a point source: no path that light tracing could add.
             mis_paths: 1,
         },
+        &Console::QUIET,
     );
     (r, floor_edge_reference(&cam))
 }
@@ -610,6 +632,7 @@ fn double_local_estimate_is_unbiased_at_an_edge_where_the_clamped_kernel_is_not(
             threads: 2,
             max_depth: 1000,
         },
+        &Progress::off(),
     );
     let dle = |mis_paths| {
         estimate::double_local_estimate::render(
@@ -624,6 +647,7 @@ fn double_local_estimate_is_unbiased_at_an_edge_where_the_clamped_kernel_is_not(
                 max_depth: 1000,
                 mis_paths,
             },
+            &Console::QUIET,
         )
     };
     let z = |r: &estimate::image::ImageResult| -> Vec<f64> {
@@ -676,6 +700,7 @@ fn images_are_bit_identical_at_any_thread_count() {
                 max_depth: 1000,
                 mis_paths: 100,
             },
+            &Console::QUIET,
         )
     };
     let lt = |threads| {
@@ -688,6 +713,7 @@ fn images_are_bit_identical_at_any_thread_count() {
                 threads,
                 max_depth: 1000,
             },
+            &Progress::off(),
         )
     };
     for (a, b) in [(dle(1), dle(2)), (lt(1), lt(2))] {
@@ -748,7 +774,13 @@ fn sensors_near_small_and_large_emitters_match_the_exact_direct_light() {
         );
         let mut cfg = config(4_000, 3, 2, &world);
         cfg.near_field = Some(NearField { samples: 20_000 });
-        let r = local::estimate(&world, &placed.points, &placed.near_radius, &cfg);
+        let r = local::estimate(
+            &world,
+            &placed.points,
+            &placed.near_radius,
+            &cfg,
+            &Progress::off(),
+        );
         let luminance = flux / (std::f64::consts::PI * a * a);
         for (i, d) in [0.01, 0.05, 0.1].into_iter().enumerate() {
             let exact = below_square_emitter(luminance, a, d);
@@ -873,7 +905,13 @@ fn near_field_emission_matches_the_backward_estimator_with_tilt_occluder_and_two
     );
     let mut cfg = config(20_000, 7, 2, &world);
     cfg.near_field = Some(NearField { samples: 20_000 });
-    let le = local::estimate(&world, &placed.points, &placed.near_radius, &cfg);
+    let le = local::estimate(
+        &world,
+        &placed.points,
+        &placed.near_radius,
+        &cfg,
+        &Progress::off(),
+    );
     let reference = estimate::gather::estimate(
         &world,
         &placed.points,
@@ -884,6 +922,7 @@ fn near_field_emission_matches_the_backward_estimator_with_tilt_occluder_and_two
             threads: 2,
             max_depth: 100_000,
         },
+        &Progress::off(),
     );
     for (i, &(_, g, gse)) in reference.iter().enumerate() {
         let (e, se) = (le.value[i], le.standard_error[i]);
@@ -918,7 +957,13 @@ fn a_light_mounted_exactly_on_the_ceiling_lights_the_room_by_reflection_too() {
     )"#;
     let w = world_from(text);
     let s = sensors(&w);
-    let r = local::estimate(&w, &s, &vec![0.0; s.len()], &config(40_000, 9, 2, &w));
+    let r = local::estimate(
+        &w,
+        &s,
+        &vec![0.0; s.len()],
+        &config(40_000, 9, 2, &w),
+        &Progress::off(),
+    );
     let reference = estimate::gather::estimate(
         &w,
         &s,
@@ -929,6 +974,7 @@ fn a_light_mounted_exactly_on_the_ceiling_lights_the_room_by_reflection_too() {
             threads: 2,
             max_depth: 100_000,
         },
+        &Progress::off(),
     );
     for (i, &(_, g, gse)) in reference.iter().enumerate() {
         let (e, se) = (r.value[i], r.standard_error[i]);

@@ -9,7 +9,9 @@
 use crate::util::{repo_root, scene_compile, TempDir};
 use estimate::local_estimate::{self as local, LocalConfig, Singularity};
 use estimate::sensor_batches::{Batches, SensorEstimates};
+use luxest_io::cli::Console;
 use luxest_io::math::Vec3;
+use luxest_io::progress::Progress;
 use luxest_render::compiled::{CompiledScene, Emitter};
 use luxest_render::scene::SensorPoint;
 use luxest_render::world::World;
@@ -51,7 +53,7 @@ fn config(paths: u64, world: &World) -> LocalConfig {
 fn run(world: &World, paths: u64) -> (Vec<SensorPoint>, SensorEstimates) {
     let s = estimate::all_sensors(world);
     let near = vec![0.0; s.len()];
-    let r = local::estimate(world, &s, &near, &config(paths, world));
+    let r = local::estimate(world, &s, &near, &config(paths, world), &Progress::off());
     (s, r)
 }
 
@@ -299,6 +301,7 @@ fn two_reflecting_planes_direct_part_exact_and_local_estimate_matches_gathering(
             threads: 2,
             max_depth: 100_000,
         },
+        &Progress::off(),
     );
     for (i, g) in gather.iter().enumerate() {
         let z = (r.value[i] - g.1) / (r.standard_error[i].powi(2) + g.2.powi(2)).sqrt();
@@ -640,7 +643,7 @@ fn path_tracer_next_event_sees_the_luminaire_distribution() {
     let mut film = Film::new(cam.width as usize, cam.height as usize);
     {
         let r = Renderer::new(&world, cam, 1, 2, 1024);
-        r.advance(&mut film, 64, false);
+        r.advance(&mut film, 64, false, &Progress::off());
     }
     let mean: Vec<f64> = film.mean().iter().map(|c| c.luminance()).collect();
     check_floor_view(
@@ -678,6 +681,7 @@ fn double_local_estimate_image_sees_the_luminaire_distribution() {
             max_depth: 1000,
             mis_paths: 100,
         },
+        &Console::QUIET,
     );
     let mean: Vec<f64> = r.rgb.iter().map(|c| c.luminance()).collect();
     check_floor_view(
@@ -1004,9 +1008,9 @@ fn luminaire_estimates_do_not_depend_on_the_thread_count() {
     let near = vec![0.0; s.len()];
     let mut cfg = config(3000, &world);
     cfg.batches.threads = 1;
-    let a = local::estimate(&world, &s, &near, &cfg);
+    let a = local::estimate(&world, &s, &near, &cfg, &Progress::off());
     cfg.batches.threads = 2;
-    let b = local::estimate(&world, &s, &near, &cfg);
+    let b = local::estimate(&world, &s, &near, &cfg, &Progress::off());
     assert_eq!(a.value, b.value);
     assert_eq!(a.standard_error, b.standard_error);
     assert!(a.standard_error.iter().all(|&e| e > 0.0));

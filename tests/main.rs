@@ -10,6 +10,7 @@ mod evaluate_cli;
 mod lighting;
 mod luminaires;
 mod metrics_parity;
+mod progress;
 mod reliability;
 mod reliability_processes;
 mod scene_compile_errors;

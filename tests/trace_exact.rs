@@ -3,6 +3,7 @@
 
 use crate::util::{compile_text, repo_root, TempDir};
 use luxest_io::header;
+use luxest_io::progress::Progress;
 use luxest_render::bsdf::fresnel_dielectric;
 use luxest_render::compiled::CompiledScene;
 use luxest_render::world::World;
@@ -13,7 +14,7 @@ fn render(scene: &std::path::Path, spp: u32, threads: usize) -> (World, Film) {
     let mut film = Film::new(cam.width as usize, cam.height as usize);
     {
         let r = Renderer::new(&world, cam, 1, threads, 1024);
-        r.advance(&mut film, spp, false);
+        r.advance(&mut film, spp, false, &Progress::off());
     }
     (world, film)
 }
@@ -163,15 +164,15 @@ fn images_are_independent_of_threads_and_passes() {
     let (world, cam) = trace::load(&lxs, Some("24x16")).unwrap();
     let one = {
         let mut f = Film::new(24, 16);
-        Renderer::new(&world, cam, 3, 1, 1024).advance(&mut f, 8, false);
+        Renderer::new(&world, cam, 3, 1, 1024).advance(&mut f, 8, false, &Progress::off());
         f.sum
     };
     let split = {
         let mut f = Film::new(24, 16);
         let r = Renderer::new(&world, cam, 3, 2, 1024);
-        r.advance(&mut f, 2, false);
-        r.advance(&mut f, 5, false);
-        r.advance(&mut f, 8, false);
+        r.advance(&mut f, 2, false, &Progress::off());
+        r.advance(&mut f, 5, false, &Progress::off());
+        r.advance(&mut f, 8, false, &Progress::off());
         f.sum
     };
     // Sums of the same samples in a different grouping agree to rounding.

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import infer
 import luxest_contract as contract
+import progress
 
 PIPELINES = Path(__file__).resolve().parents[1] / "pipelines"
 
@@ -67,20 +68,23 @@ def compare(model, split_dir, work_dir, evaluate, spp_levels, oidn=False):
     peer = oidn_split(done, scan, work) if oidn else {}
     keys = KEYS if oidn else KEYS[:4]
     per_level, per_scene = {}, {}
-    for name in sorted({d[0] for d in done}):
-        mine = [d for d in done if d[0] == name]
-        tests = [d[2] for d in mine] + [d[3] for d in mine] + [peer[str(d[2])] for d in mine if oidn]
-        rows = score(evaluate, refs[name], tests, work / f"{name}.images.csv")
-        by_image = {str(Path(r["image"]).resolve()): r for r in rows}
-        row = lambda path: by_image[str(Path(path).resolve())]
-        for _, spp, noisy, dn in mine:
-            n, d = row(noisy), row(dn)
-            vals = [n["psnr_db"], d["psnr_db"], n["ssim"], d["ssim"]]
-            if oidn:
-                o = row(peer[str(noisy)])
-                vals += [o["psnr_db"], o["ssim"]]
-            per_level.setdefault(spp, []).append(vals)
-            per_scene.setdefault(name, {})[spp] = dict(zip(keys, vals))
+    names = sorted({d[0] for d in done})
+    with progress.Progress("compare_image", len(names), "scenes") as shown:
+        for name in names:
+            mine = [d for d in done if d[0] == name]
+            tests = [d[2] for d in mine] + [d[3] for d in mine] + [peer[str(d[2])] for d in mine if oidn]
+            rows = score(evaluate, refs[name], tests, work / f"{name}.images.csv")
+            by_image = {str(Path(r["image"]).resolve()): r for r in rows}
+            row = lambda path: by_image[str(Path(path).resolve())]
+            for _, spp, noisy, dn in mine:
+                n, d = row(noisy), row(dn)
+                vals = [n["psnr_db"], d["psnr_db"], n["ssim"], d["ssim"]]
+                if oidn:
+                    o = row(peer[str(noisy)])
+                    vals += [o["psnr_db"], o["ssim"]]
+                per_level.setdefault(spp, []).append(vals)
+                per_scene.setdefault(name, {})[spp] = dict(zip(keys, vals))
+            shown.update()
     summary = {}
     for spp, vals in sorted(per_level.items()):
         m = [sum(v[k] for v in vals) / len(vals) for k in range(len(keys))]

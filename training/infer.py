@@ -10,6 +10,7 @@ import numpy as np
 import onnxruntime as ort
 
 import luxest_contract as contract
+import progress
 import transfer
 
 
@@ -46,18 +47,22 @@ def denoise_split(model, split_dir, out_dir, spp_levels=None, scan=None):
     out.mkdir(parents=True, exist_ok=True)
     wanted = channels(session)
     done = []
-    for name, levels in (contract.scan(split_dir) if scan is None else scan).items():
-        for feats in (v for k, v in sorted(levels.items(), key=lambda kv: kv[0] or 0) if k is not None):
-            noisy = contract.read(feats["hdr"])
-            spp = noisy.value(contract.SAMPLES, required=True)
-            if spp_levels and spp not in spp_levels:
-                continue
-            dn = denoise(session, noisy.pixels, *(contract.read_rgb(feats[k]) for k in wanted[1:]))
-            header = dict(noisy.header)
-            header[contract.DENOISER] = Path(model).name
-            path = out / contract.image_name(name, "dn", spp)
-            contract.write(path, dn, header)
-            done.append((name, spp, feats["hdr"], path))
+    scan = contract.scan(split_dir) if scan is None else scan
+    total = sum(1 for levels in scan.values() for k in levels if k is not None and (not spp_levels or k in spp_levels))
+    with progress.Progress("infer", total, "images") as shown:
+        for name, levels in scan.items():
+            for feats in (v for k, v in sorted(levels.items(), key=lambda kv: kv[0] or 0) if k is not None):
+                noisy = contract.read(feats["hdr"])
+                spp = noisy.value(contract.SAMPLES, required=True)
+                if spp_levels and spp not in spp_levels:
+                    continue
+                dn = denoise(session, noisy.pixels, *(contract.read_rgb(feats[k]) for k in wanted[1:]))
+                header = dict(noisy.header)
+                header[contract.DENOISER] = Path(model).name
+                path = out / contract.image_name(name, "dn", spp)
+                contract.write(path, dn, header)
+                done.append((name, spp, feats["hdr"], path))
+                shown.update()
     return done
 
 

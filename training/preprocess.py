@@ -19,6 +19,7 @@ import numpy as np
 import config
 import dataset
 import luxest_contract as contract
+import progress
 
 
 def check_pair(ref, noisy):
@@ -52,61 +53,67 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATUR
     scenes = contract.scan(src)
     local_estimates = contract.scan(src, unit="le")
     realized = _realizations(src, scenes, extra_seeds)
-    for name, levels in scenes.items():
-        if None not in levels or "hdr" not in levels[None]:
-            raise contract.ContractError(f"{src}: {name} has no reference image")
-        ref = contract.read(levels[None]["hdr"])
-        ref_out = dst / dataset.prep_name(name, None)
-        inputs = []  # (noisy hdr path, feature paths, count, unit)
-        for spp_in_name, feats in sorted((k, v) for k, v in levels.items() if k is not None):
-            _require_features(src, name, spp_in_name, feats, features)
-            inputs.append((feats["hdr"], feats, spp_in_name, "spp"))
-        for paths, kinds in sorted(local_estimates.get(name, {}).items()):
-            if "hdr" not in kinds:
-                continue
-            if not inputs:
-                raise contract.ContractError(f"{kinds['hdr']}: {name} has no noisy level whose features it could use")
-            inputs.append((kinds["hdr"], inputs[-1][1], paths, "le"))
-        for hdr_path, feats, count_in_name, unit in inputs:
-            n += _write_input(
-                dst,
-                name,
-                ref,
-                levels[None]["hdr"],
-                hdr_path,
-                feats,
-                count_in_name,
-                unit,
-                noisy_spp,
-                dle_paths,
-                features,
-            )
-        # The scene's extra noise realizations: its own reference, into <dst>/seed<k>/.
-        for k, (sub, found) in realized.items():
-            for count, feats in sorted((c, v) for c, v in found.get(name, {}).items() if c is not None):
-                if not (dataset.wanted("spp", count, noisy_spp, None) and (extra_spp is None or count in extra_spp)):
+    with progress.Progress(f"preprocess {src.name}", len(scenes), "scenes") as shown:
+        for name, levels in scenes.items():
+            if None not in levels or "hdr" not in levels[None]:
+                raise contract.ContractError(f"{src}: {name} has no reference image")
+            ref = contract.read(levels[None]["hdr"])
+            ref_out = dst / dataset.prep_name(name, None)
+            inputs = []  # (noisy hdr path, feature paths, count, unit)
+            for spp_in_name, feats in sorted((k, v) for k, v in levels.items() if k is not None):
+                _require_features(src, name, spp_in_name, feats, features)
+                inputs.append((feats["hdr"], feats, spp_in_name, "spp"))
+            for paths, kinds in sorted(local_estimates.get(name, {}).items()):
+                if "hdr" not in kinds:
                     continue
-                _require_features(sub, name, count, feats, features)
-                check = functools.partial(_check_realization, seed=k, twin=levels.get(count, {}).get("hdr"))
+                if not inputs:
+                    raise contract.ContractError(
+                        f"{kinds['hdr']}: {name} has no noisy level whose features it could use"
+                    )
+                inputs.append((kinds["hdr"], inputs[-1][1], paths, "le"))
+            for hdr_path, feats, count_in_name, unit in inputs:
                 n += _write_input(
-                    dst / sub.name,
+                    dst,
                     name,
                     ref,
                     levels[None]["hdr"],
-                    feats["hdr"],
+                    hdr_path,
                     feats,
-                    count,
-                    "spp",
+                    count_in_name,
+                    unit,
                     noisy_spp,
-                    (),
+                    dle_paths,
                     features,
-                    check,
                 )
-        if not ref_out.exists() or ref_out.stat().st_mtime < levels[None]["hdr"].stat().st_mtime:
-            if not np.isfinite(ref.pixels).all():
-                raise contract.ContractError(f"{ref.path}: non-finite values")
-            _save(ref_out, ref.pixels)
-            n += 1
+            # The scene's extra noise realizations: its own reference, into <dst>/seed<k>/.
+            for k, (sub, found) in realized.items():
+                for count, feats in sorted((c, v) for c, v in found.get(name, {}).items() if c is not None):
+                    if not (
+                        dataset.wanted("spp", count, noisy_spp, None) and (extra_spp is None or count in extra_spp)
+                    ):
+                        continue
+                    _require_features(sub, name, count, feats, features)
+                    check = functools.partial(_check_realization, seed=k, twin=levels.get(count, {}).get("hdr"))
+                    n += _write_input(
+                        dst / sub.name,
+                        name,
+                        ref,
+                        levels[None]["hdr"],
+                        feats["hdr"],
+                        feats,
+                        count,
+                        "spp",
+                        noisy_spp,
+                        (),
+                        features,
+                        check,
+                    )
+            if not ref_out.exists() or ref_out.stat().st_mtime < levels[None]["hdr"].stat().st_mtime:
+                if not np.isfinite(ref.pixels).all():
+                    raise contract.ContractError(f"{ref.path}: non-finite values")
+                _save(ref_out, ref.pixels)
+                n += 1
+            shown.update()
     return n
 
 

@@ -23,6 +23,7 @@ import grow
 import luxest_contract as contract
 import loss as losses
 import model
+import progress
 import transfer
 
 
@@ -275,6 +276,10 @@ def main(argv=None):
     loader = batches(data, cfg, device)
     start = time.time()
     log = open(run / "log.jsonl", "a")
+    # On stderr: a line redrawn on a terminal, a line every LUXEST_PROGRESS_INTERVAL seconds in
+    # make's output or Slurm's slurm-<job>.out (progress.py); every 50 steps in <run>/log.jsonl.
+    budget = cfg.minutes * 60 - (earlier_seconds if by_time else 0.0)
+    shown = progress.Progress("train", cfg.steps, "steps", done=step, budget=max(budget, 0.0) or None)
     net.train()
     for a, b, e, e_ref in loader:
         if by_time:  # the budget of all runs together: the cycle ends with it
@@ -295,6 +300,7 @@ def main(argv=None):
         if not by_time:
             sched.step()
         step += 1
+        status = None  # the loss as logged: reading it every step would wait for a GPU's step
         if step % 50 == 0 or step == 1:
             rec = {
                 "step": step,
@@ -304,9 +310,11 @@ def main(argv=None):
             }
             log.write(json.dumps(rec) + "\n")
             log.flush()
-            print(f"step {step:5d}  loss {rec['loss']:.4f}  lr {rec['lr']:.2e}  {rec['seconds']:.0f} s", flush=True)
+            status = f"loss {rec['loss']:.4f}"
+        shown.update(1, status)
         if step % cfg.checkpoint_every == 0:
             save(net, opt, sched, step, earlier_seconds + time.time() - start, resumed_at, ckpt)
+    shown.close()
     save(net, opt, sched, step, earlier_seconds + time.time() - start, resumed_at, ckpt)
     net.eval()
     v = validation_loss(net.cpu(), cfg.prep_dir, cfg)

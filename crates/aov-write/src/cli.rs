@@ -140,11 +140,22 @@ pub fn run(args: Args) -> Result<()> {
         .collect();
     checkpoints.sort_unstable();
     checkpoints.dedup();
-    if let Some(&last) = checkpoints.last() {
-        film.plan(&world, &cam, threads, last).announce();
-    }
+    let console = args.common.console;
+    let last = checkpoints.last().copied().unwrap_or(0);
+    console.announce(&film.plan(&world, &cam, threads, last));
+    let progress = console.progress(
+        "aov-write",
+        Some(cam.width as u64 * cam.height as u64 * last as u64),
+        "samples",
+    );
     for &samples in &checkpoints {
-        film.advance(&world, &cam, args.common.seed, threads, samples);
+        film.advance(
+            &world,
+            &cam,
+            (args.common.seed, threads),
+            samples,
+            &progress,
+        );
         let info = RunInfo::new(
             ESTIMATOR,
             samples as u64,
@@ -177,14 +188,15 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
+    progress.finish();
     plan.commit()?;
-    eprintln!(
+    console.note(format_args!(
         "wrote {}_{}.{{alb,emi,ema,nrm{}}}.exr ({} spp, {:.2} s)",
         prefix.display(),
         final_level,
         if args.depth { ",z" } else { "" },
         args.spp,
         start.elapsed().as_secs_f64()
-    );
+    ));
     Ok(())
 }

@@ -7,6 +7,7 @@
 
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use luxest_io::progress::Progress;
 use luxest_render::bsdf::{self, Transport};
 use luxest_render::camera::{pixel_jitter, PinholeCamera};
 use luxest_render::parallel::run_batches;
@@ -185,6 +186,7 @@ impl FeatureFilm {
             stage: "aov-write".into(),
             work: format!("{w}x{h} pixels x {samples} first hits"),
             units: total,
+            unit: "camera rays",
             seconds: total * per_sample / threads as f64,
             threads,
             memory_bytes: pixels as u128 * BYTES_PER_PIXEL as u128,
@@ -194,17 +196,18 @@ impl FeatureFilm {
     }
 
     /// Adds samples `self.samples .. target` of every pixel (rows in parallel, each pixel's
-    /// samples in order).
+    /// samples in order), counting them on `progress`.
     pub fn advance(
         &mut self,
         world: &World,
         cam: &PinholeCamera,
-        seed: u64,
-        threads: usize,
+        (seed, threads): (u64, usize),
         target: u32,
+        progress: &Progress,
     ) {
         let (w, h, done) = (self.width, self.height, self.samples);
-        let rows = run_batches(h, threads, "aov-write", |y| {
+        let rows = run_batches(h, threads, |y| {
+            let mut tally = progress.tally();
             (0..w)
                 .map(|x| {
                     let pixel = y * w + x;
@@ -221,6 +224,7 @@ impl FeatureFilm {
                         d += hit.depth;
                         e = e + hit.emission;
                     }
+                    tally.add(target.saturating_sub(done) as u64);
                     (a, n, d, e)
                 })
                 .collect::<Vec<_>>()

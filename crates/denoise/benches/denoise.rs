@@ -7,6 +7,7 @@
 
 use denoise::{Denoiser, Feature, Tiling};
 use luxest_io::image::RgbImage;
+use luxest_io::progress::Progress;
 use std::path::Path;
 use std::time::Instant;
 
@@ -51,11 +52,11 @@ fn main() {
     ] {
         let images = features(size, denoiser.features());
         let refs: Vec<&RgbImage> = images.iter().collect();
-        denoiser.denoise(&refs, tiling).unwrap(); // warm-up: allocations, kernel selection
+        denoiser.denoise(&refs, tiling, &Progress::off()).unwrap(); // warm-up: allocations, kernel selection
         let runs = 3;
         let start = Instant::now();
         for _ in 0..runs {
-            denoiser.denoise(&refs, tiling).unwrap();
+            denoiser.denoise(&refs, tiling, &Progress::off()).unwrap();
         }
         let seconds = start.elapsed().as_secs_f64() / runs as f64;
         let mp = (size * size) as f64 / 1e6;

@@ -11,6 +11,7 @@ use luxest_io::image::RgbImage;
 use luxest_io::naming::preview_path;
 use luxest_io::outputs::{Format, OutputPlan};
 use luxest_io::png::write_preview_png_auto_to;
+use luxest_io::progress::Progress;
 use luxest_io::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -185,6 +186,10 @@ pub fn run(args: Args) -> Result<()> {
     // What each image's line will say, printed once every output is in place: a line per
     // image as it was denoised announced outputs that a later image's failure then withheld.
     let mut done = Vec::new();
+    let console = args.common.console;
+    // The pixels of the run: those of the images read so far, the others taken to be the
+    // first one's size until they are read.
+    let (mut progress, mut pixels_read, mut first) = (Progress::off(), 0u64, 0u64);
     for (n, job) in jobs.iter().enumerate() {
         let images = job
             .features
@@ -193,17 +198,22 @@ pub fn run(args: Args) -> Result<()> {
             .collect::<Result<Vec<RgbImage>>>()?;
         let (w, h) = (images[0].width, images[0].height);
         tiling.check_memory(w, h)?;
+        let pixels = (w * h) as u64;
         if n == 0 {
             // The resource rule: the run's plan, its images taken to be the first one's size.
-            work_plan(
+            console.announce(&work_plan(
                 &mut denoiser,
                 tiling,
                 (w, h),
                 jobs.len(),
                 args.common.thread_count(),
-            )?
-            .announce();
+            )?);
+            progress = console.progress("denoise", Some(pixels * jobs.len() as u64), "pixels");
+            first = pixels;
+        } else {
+            progress.set_total(pixels_read + pixels + first * (jobs.len() - n - 1) as u64);
         }
+        pixels_read += pixels;
         for (image, path) in images.iter().zip(&job.features).skip(1) {
             if (image.width, image.height) != (w, h) {
                 return Err(Error::input(
@@ -219,10 +229,12 @@ pub fn run(args: Args) -> Result<()> {
         }
         let (start, cpu_start) = (Instant::now(), process_cpu_seconds());
         let refs: Vec<&RgbImage> = images.iter().collect();
-        let mut result = denoiser.denoise(&refs, tiling).map_err(|e| match e {
-            Error::Usage(m) => Error::input(&job.noisy, m),
-            e => e,
-        })?;
+        let mut result = denoiser
+            .denoise(&refs, tiling, &progress)
+            .map_err(|e| match e {
+                Error::Usage(m) => Error::input(&job.noisy, m),
+                e => e,
+            })?;
         let seconds = start.elapsed().as_secs_f64();
         let cpu_seconds = cpu_start.zip(process_cpu_seconds()).map(|(a, b)| b - a);
         result.attributes = images[0].attributes.clone();
@@ -248,10 +260,11 @@ pub fn run(args: Args) -> Result<()> {
             1e3 * seconds / (w * h) as f64 * 1e6
         ));
     }
+    progress.finish();
     // All outputs of the run appear together, or none (a later failure leaves nothing).
     plan.commit()?;
     for line in done {
-        eprintln!("{line}");
+        console.note(line);
     }
     Ok(())
 }
@@ -271,6 +284,7 @@ fn work_plan(
         stage: "denoise".into(),
         work: format!("{images} image(s) of {w}x{h} pixels (the first one's size)"),
         units: pixels,
+        unit: "pixels",
         seconds: pixels * per_pixel,
         threads,
         memory_bytes: tiling.memory(w, h),

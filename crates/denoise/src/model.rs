@@ -4,6 +4,7 @@
 use luxest_io::exposure::dim_exponent;
 use luxest_io::header;
 use luxest_io::image::RgbImage;
+use luxest_io::progress::Progress;
 
 use luxest_io::{Error, Result};
 use ort::environment::Environment;
@@ -238,13 +239,19 @@ impl Denoiser {
             .collect();
         let refs: Vec<&RgbImage> = inputs.iter().collect();
         let start = std::time::Instant::now();
-        self.denoise(&refs, tiling)?;
+        self.denoise(&refs, tiling, &Progress::off())?;
         Ok(start.elapsed().as_secs_f64() / (side * side) as f64)
     }
 
-    /// Denoises one image. `inputs` holds one image per feature of [`Denoiser::features`], in
-    /// that order, all of the same size and finite (the caller checks and names the files).
-    pub fn denoise(&mut self, inputs: &[&RgbImage], tiling: Tiling) -> Result<RgbImage> {
+    /// Denoises one image, counting its pixels on `progress` tile by tile. `inputs` holds one
+    /// image per feature of [`Denoiser::features`], in that order, all of the same size and
+    /// finite (the caller checks and names the files).
+    pub fn denoise(
+        &mut self,
+        inputs: &[&RgbImage],
+        tiling: Tiling,
+        progress: &Progress,
+    ) -> Result<RgbImage> {
         assert_eq!(inputs.len(), self.features.len());
         let (width, height) = (inputs[0].width, inputs[0].height);
         // Radiance near the f32 limit (finite, valid input) would overflow inside the model's
@@ -298,6 +305,7 @@ impl Denoiser {
                         out.pixels[y * width + x] = tile[(y - cy0) * tw + (x - cx0)];
                     }
                 }
+                progress.inc(((x1 - x0) * (y1 - y0)) as u64);
             }
         }
         if let Some((x, y)) = out.first_non_finite() {

@@ -9,6 +9,8 @@
 use estimate::direct_simulation::{self, DirectSimulationConfig};
 use estimate::local_estimate::{self as local, LocalConfig, Singularity};
 use estimate::sensor_batches::{Batches, SensorEstimates};
+use luxest_io::cli::Console;
+use luxest_io::progress::Progress;
 use luxest_render::compiled::CompiledScene;
 use luxest_render::scene::SensorPoint;
 use luxest_render::world::World;
@@ -57,7 +59,7 @@ fn run(w: &World, s: &[SensorPoint], method: Method, paths: u64) -> SensorEstima
                 max_depth: 100_000,
                 near_field: None,
             };
-            local::estimate(w, s, &vec![0.0; s.len()], &cfg)
+            local::estimate(w, s, &vec![0.0; s.len()], &cfg, &Progress::off())
         }
         Method::DirectSimulation { radius } => {
             let cfg = DirectSimulationConfig {
@@ -65,7 +67,7 @@ fn run(w: &World, s: &[SensorPoint], method: Method, paths: u64) -> SensorEstima
                 radius,
                 max_depth: 100_000,
             };
-            direct_simulation::estimate(w, s, &cfg)
+            direct_simulation::estimate(w, s, &cfg, &Progress::off())
         }
     }
 }
@@ -151,7 +153,7 @@ fn main() {
         max_depth: 100_000,
         mis_paths: estimate::cli::DEFAULT_MIS_PATHS,
     };
-    let r = estimate::double_local_estimate::render(&w, &cam, &icfg);
+    let r = estimate::double_local_estimate::render(&w, &cam, &icfg, &Console::QUIET);
     println!(
         "double local estimate, cornell-box 256x256, {} paths + {} light-tracing paths each: {:.2} s, {} collisions, {} shadow rays (connections and light tracing), {:.1} M shadow rays/s",
         icfg.paths,

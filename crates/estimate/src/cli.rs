@@ -8,6 +8,7 @@ use crate::double_local_estimate::{self, ImageConfig};
 use crate::image::{self, ImageResult};
 use crate::light_tracing::{self, LightTraceConfig};
 use crate::local_estimate::{self, LocalConfig, NearField};
+use crate::placement::Placement;
 use crate::sensor_batches::{Batches, SensorEstimates};
 use crate::sensors::{
     all_sensors, evaluation_points, load_world, record_evaluation_points, results, Estimate,
@@ -15,7 +16,7 @@ use crate::sensors::{
 use crate::singularity::Singularity;
 use crate::{exact_table, gather, work};
 use clap::{Parser, Subcommand, ValueEnum};
-use luxest_io::cli::CommonArgs;
+use luxest_io::cli::{CommonArgs, Console};
 use luxest_io::exr::write_rgb_to;
 use luxest_io::header;
 use luxest_io::image::RgbImage;
@@ -460,6 +461,7 @@ fn image_run(args: ImageArgs) -> Result<()> {
     )
     .map_err(Error::Usage)?;
     let eps = eps.unwrap_or(DEFAULT_IMAGE_EPS_FRACTION * world.room_scale);
+    let console = common.console;
     let cfg = ImageConfig {
         paths,
         pixel_samples,
@@ -516,17 +518,22 @@ fn image_run(args: ImageArgs) -> Result<()> {
             threads: common.thread_count(),
             max_depth,
         };
-        work::light_tracing_plan(&world, &cam, paths, (lt.seed, max_depth, lt.threads)).announce();
-        let r = light_tracing::render(&world, &cam, &lt);
+        console.announce(&work::light_tracing_plan(
+            &world,
+            &cam,
+            paths,
+            (lt.seed, max_depth, lt.threads),
+        ));
+        let progress = console.progress("estimate image --light-tracing", Some(paths), "paths");
+        let r = light_tracing::render(&world, &cam, &lt, &progress);
+        progress.finish();
         let info = info(estimator::LIGHT_TRACING, r.seconds);
-        write_image(&mut plan, &scene, &r, info, None, outputs)
+        write_image(&mut plan, &scene, &r, info, None, outputs, console)
     } else {
-        work::image_plan(&world, &cam, &cfg)
-            .map_err(Error::Usage)?
-            .announce();
-        let r = double_local_estimate::render(&world, &cam, &cfg);
+        console.announce(&work::image_plan(&world, &cam, &cfg).map_err(Error::Usage)?);
+        let r = double_local_estimate::render(&world, &cam, &cfg, &console);
         let info = info(estimator::DOUBLE_LOCAL_ESTIMATE, r.seconds);
-        write_image(&mut plan, &scene, &r, info, Some(&cfg), outputs)
+        write_image(&mut plan, &scene, &r, info, Some(&cfg), outputs, console)
     }
 }
 
@@ -551,14 +558,26 @@ fn check_eps(singularity: SingularityMode, eps: Option<f64>) -> Result<()> {
 /// A warning on stderr when light paths reached --max-depth still carrying light: the light
 /// they would have added is missing from the results (e.g. a closed scene of reflectance 1,
 /// where paths never end by themselves).
-fn warn_truncated(r: &SensorEstimates, paths: u64, max_depth: u32) {
+fn warn_truncated(console: Console, r: &SensorEstimates, paths: u64, max_depth: u32) {
     if r.truncated > 0 {
-        eprintln!(
+        console.note(format_args!(
             "warning: {} of {paths} light paths reached --max-depth {max_depth} still carrying \
              light; what they would have added is missing (biased low): raise --max-depth, or \
              look for reflectances near 1 in a closed scene",
             r.truncated
-        );
+        ));
+    }
+}
+
+/// A note on stderr when sensors on edges or in corners are evaluated `delta` m off the
+/// adjacent surfaces (`placed`, [`evaluation_points`]).
+fn note_moved(console: Console, placed: &Placement, delta: f64) {
+    if placed.moved > 0 {
+        console.note(format_args!(
+            "note: {} sensor(s) on edges or in corners are evaluated {delta:e} m off the \
+             adjacent surfaces",
+            placed.moved
+        ));
     }
 }
 
@@ -584,7 +603,10 @@ fn sensors(
     let (out, mut plan) = run.plan(&world)?;
     let sing = singularity.with_eps(eps.unwrap_or(DEFAULT_EPS_FRACTION * world.room_scale))?;
     let near_radius = near_radius.unwrap_or(DEFAULT_NEAR_FRACTION * world.room_scale);
-    let placed = evaluation_points(&world, run.edge_offset(&world)?, near_radius);
+    let console = run.common.console;
+    let edge_offset = run.edge_offset(&world)?;
+    let placed = evaluation_points(&world, edge_offset, near_radius);
+    note_moved(console, &placed, edge_offset);
     let near_field = (near_samples > 0).then_some(NearField {
         samples: near_samples,
     });
@@ -599,31 +621,40 @@ fn sensors(
         Some(nf) => (nf.samples / cfg.batches.count() as u64).max(1) * cfg.batches.count() as u64,
         None => 0,
     };
-    work::sensors_plan(
+    console.announce(&work::sensors_plan(
         &world,
         &placed.points,
         &placed.near_radius,
         paths,
         near_total,
         run.plan_terms(),
-    )
-    .announce();
-    let r = local_estimate::estimate(&world, &placed.points, &placed.near_radius, &cfg);
-    warn_truncated(&r, paths, run.max_depth);
+    ));
+    let progress = console.progress(
+        "estimate sensors",
+        Some(local_estimate::progress_total(
+            &placed.points,
+            &placed.near_radius,
+            &cfg,
+        )),
+        "paths",
+    );
+    let r = local_estimate::estimate(&world, &placed.points, &placed.near_radius, &cfg, &progress);
+    progress.finish();
+    warn_truncated(console, &r, paths, run.max_depth);
     let info = run.info(&world, estimator::LOCAL_ESTIMATE, paths, r.seconds);
     let batches = batch_values.then_some(r.batch_values.as_slice());
     let mut values = r.estimates();
     record_evaluation_points(&world, &mut values, &placed.points);
     let results = results(&run.scene, &world, info, sing.to_string(), &values)?;
     write_results(&mut plan, &out, run, results, batches)?;
-    eprintln!(
+    console.note(format_args!(
         "wrote {}: {} paths, {} collisions, {} shadow rays, {:.2} s",
         out.display(),
         paths,
         r.collisions,
         r.shadow_rays,
         r.seconds
-    );
+    ));
     Ok(())
 }
 
@@ -645,20 +676,28 @@ fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
         radius: bin_radius,
         max_depth: run.max_depth,
     };
-    work::direct_plan(&world, sensors.len(), paths, run.plan_terms()).announce();
-    let r = direct_simulation::estimate(&world, &sensors, &cfg);
-    warn_truncated(&r, paths, run.max_depth);
+    let console = run.common.console;
+    console.announce(&work::direct_plan(
+        &world,
+        sensors.len(),
+        paths,
+        run.plan_terms(),
+    ));
+    let progress = console.progress("estimate direct", Some(paths), "paths");
+    let r = direct_simulation::estimate(&world, &sensors, &cfg, &progress);
+    progress.finish();
+    warn_truncated(console, &r, paths, run.max_depth);
     let info = run.info(&world, estimator::DIRECT_SIMULATION, paths, r.seconds);
     let singularity = format!("bins(radius={bin_radius:e} m)");
     let values = r.estimates();
     let results = results(&run.scene, &world, info, singularity, &values)?;
     write_results(&mut plan, &out, run, results, None)?;
-    eprintln!(
+    console.note(format_args!(
         "wrote {}: {} paths, {:.2} s",
         out.display(),
         paths,
         r.seconds
-    );
+    ));
     Ok(())
 }
 
@@ -674,7 +713,11 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
         ));
     }
     let (out, mut plan) = run.plan(&world)?;
-    let sensors = evaluation_points(&world, run.edge_offset(&world)?, 0.0).points;
+    let console = run.common.console;
+    let edge_offset = run.edge_offset(&world)?;
+    let placed = evaluation_points(&world, edge_offset, 0.0);
+    note_moved(console, &placed, edge_offset);
+    let sensors = placed.points;
     let cfg = gather::GatherConfig {
         samples,
         batches: run.batches,
@@ -683,12 +726,23 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
         max_depth: run.max_depth,
     };
     let per_sensor = (samples / cfg.batches.max(2) as u64).max(1) * cfg.batches.max(2) as u64;
-    work::gather_plan(&world, &sensors, per_sensor, run.plan_terms()).announce();
+    console.announce(&work::gather_plan(
+        &world,
+        &sensors,
+        per_sensor,
+        run.plan_terms(),
+    ));
     let start = std::time::Instant::now();
-    let mut values: Vec<Estimate> = gather::estimate(&world, &sensors, &cfg)
+    let progress = console.progress(
+        "estimate gather",
+        Some(gather::progress_total(sensors.len(), &cfg)),
+        "samples",
+    );
+    let mut values: Vec<Estimate> = gather::estimate(&world, &sensors, &cfg, &progress)
         .into_iter()
         .map(Estimate::from)
         .collect();
+    progress.finish();
     record_evaluation_points(&world, &mut values, &sensors);
     let info = run.info(
         &world,
@@ -699,7 +753,7 @@ fn gather(run: &RunArgs, samples: u64) -> Result<()> {
     let singularity = "none (backward estimator)".to_string();
     let results = results(&run.scene, &world, info, singularity, &values)?;
     write_results(&mut plan, &out, run, results, None)?;
-    eprintln!("wrote {}", out.display());
+    console.note(format_args!("wrote {}", out.display()));
     Ok(())
 }
 
@@ -739,6 +793,7 @@ fn write_image(
     info: RunInfo,
     cfg: Option<&ImageConfig>,
     outputs: ImageOutputs,
+    console: Console,
 ) -> Result<()> {
     let ImageOutputs {
         out,
@@ -770,7 +825,7 @@ fn write_image(
         write_rgb_to(plan, p, &se)?;
     }
     plan.commit()?;
-    eprintln!(
+    console.note(format_args!(
         "wrote {}: {}x{}, {} paths, {} collisions, {} shadow rays, {:.2} s ({:.1} M shadow rays/s)",
         out.display(),
         r.width,
@@ -780,6 +835,6 @@ fn write_image(
         r.shadow_rays,
         r.seconds,
         r.shadow_rays as f64 / r.seconds / 1e6
-    );
+    ));
     Ok(())
 }

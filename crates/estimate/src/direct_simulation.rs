@@ -11,6 +11,7 @@ use crate::sensor_batches::{self, BatchSums, Batches, SensorEstimates};
 use crate::transport::walk_photon;
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use luxest_io::progress::Progress;
 use luxest_render::sampling::Rng;
 use luxest_render::scene::SensorPoint;
 use luxest_render::world::World;
@@ -50,33 +51,35 @@ fn run_batch(
     world: &World,
     sensors: &[SensorPoint],
     cfg: &DirectSimulationConfig,
-    batch: usize,
-    paths: u64,
+    (batch, paths): (usize, u64),
+    progress: &Progress,
 ) -> BatchSums {
     let mut rng = Rng::new(cfg.batches.seed, batch as u64 + 1);
     let mut out = BatchSums::new(sensors.len());
+    let mut tally = progress.tally();
     for _ in 0..paths {
         let end = walk_photon(world, &mut rng, cfg.max_depth, |sp, dir, q| {
             deposit(sensors, cfg.radius, (sp.position, sp.ng, dir), q, &mut out)
         });
         out.collisions += end.collisions;
         out.truncated += u64::from(end.truncated);
+        tally.add(1);
     }
     out
 }
 
-/// Runs direct simulation for `sensors`.
+/// Runs direct simulation for `sensors`, counting its light paths on `progress`.
 pub fn estimate(
     world: &World,
     sensors: &[SensorPoint],
     cfg: &DirectSimulationConfig,
+    progress: &Progress,
 ) -> SensorEstimates {
     sensor_batches::run(
         &cfg.batches,
         sensors.len(),
         &vec![Rgb::BLACK; sensors.len()],
         false,
-        "direct simulation",
-        |b, paths| run_batch(world, sensors, cfg, b, paths),
+        |b, paths| run_batch(world, sensors, cfg, (b, paths), progress),
     )
 }

@@ -39,8 +39,10 @@ use crate::image::{ImageResult, BATCHES};
 use crate::light_tracing::connect_to_camera;
 use crate::singularity::Singularity;
 use crate::transport::{delta_light_reflected, survival, walk_light_path, Arrival, LightVertex};
+use luxest_io::cli::Console;
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use luxest_io::progress::Progress;
 use luxest_render::bsdf::{self, Transport};
 use luxest_render::camera::{pixel_jitter, PinholeCamera};
 use luxest_render::parallel::run_batches;
@@ -233,11 +235,12 @@ fn light_records(
     world: &World,
     cam: &PinholeCamera,
     cfg: &ImageConfig,
-    batch: usize,
-    paths: u64,
+    (batch, paths): (usize, u64),
+    progress: &Progress,
 ) -> LightBatch {
     let mut rng = Rng::new(cfg.seed, batch as u64 + 1);
     let mut records = Vec::new();
+    let mut tally = progress.tally();
     // Light tracing's density of a path counts its `mis_paths` samples per light path.
     let k = cfg.mis_paths as f64;
     for path in 0..paths {
@@ -287,8 +290,10 @@ fn light_records(
                 }
             })
         });
+        tally.add(1);
     }
-    let (film, shadow_rays) = light_tracing(world, cam, cfg, batch, paths);
+    drop(tally);
+    let (film, shadow_rays) = light_tracing(world, cam, cfg, (batch, paths), progress);
     LightBatch {
         records,
         film,
@@ -303,8 +308,8 @@ fn light_tracing(
     world: &World,
     cam: &PinholeCamera,
     cfg: &ImageConfig,
-    batch: usize,
-    paths: u64,
+    (batch, paths): (usize, u64),
+    progress: &Progress,
 ) -> (Vec<Rgb>, u64) {
     let mut shadow_rays = 0;
     if cfg.mis_paths == 0 {
@@ -314,7 +319,9 @@ fn light_tracing(
     let k = cfg.mis_paths as f64;
     let spp = cfg.pixel_samples.max(1) as f64;
     let mut rng = Rng::new(cfg.seed ^ LIGHT_TRACING_SALT, batch as u64 + 1);
+    let mut tally = progress.tally();
     for _ in 0..paths * cfg.mis_paths as u64 {
+        tally.add(1);
         walk_light_path(world, &mut rng, cfg.max_depth, |v, q| {
             let (sp, dir, arrival) = match v {
                 LightVertex::Emission { position, normal } => {
@@ -440,15 +447,28 @@ pub fn singularity_header(cfg: &ImageConfig) -> String {
     }
 }
 
-/// Renders the double-local-estimate image of the scene's camera.
-pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageResult {
+/// Renders the double-local-estimate image of the scene's camera. Its two stretches of work
+/// show their progress through `console`: the light paths (and light tracing's paths), then
+/// the connections, tile by tile (in pixels).
+pub fn render(
+    world: &World,
+    cam: &PinholeCamera,
+    cfg: &ImageConfig,
+    console: &Console,
+) -> ImageResult {
     let start = std::time::Instant::now();
     let (w, h) = (cam.width as usize, cam.height as usize);
     let per_batch =
         |b: usize| cfg.paths / BATCHES as u64 + u64::from((b as u64) < cfg.paths % BATCHES as u64);
-    let light = run_batches(BATCHES, cfg.threads, "light paths", |b| {
-        light_records(world, cam, cfg, b, per_batch(b))
+    let progress = console.progress(
+        "estimate image: light paths",
+        Some(cfg.paths * (1 + cfg.mis_paths as u64)),
+        "paths",
+    );
+    let light = run_batches(BATCHES, cfg.threads, |b| {
+        light_records(world, cam, cfg, (b, per_batch(b)), &progress)
     });
+    progress.finish();
     let mut records = Vec::with_capacity(BATCHES);
     let mut films = Vec::with_capacity(BATCHES);
     let mut shadow_rays = 0;
@@ -473,132 +493,134 @@ pub fn render(world: &World, cam: &PinholeCamera, cfg: &ImageConfig) -> ImageRes
 
     let tiles_x = w.div_ceil(TILE);
     let tiles_y = h.div_ceil(TILE);
-    let tile_results = run_batches(
-        tiles_x * tiles_y,
-        cfg.threads,
-        "double local estimate",
-        |t| {
-            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-            let pixels: Vec<usize> = (y0..(y0 + TILE).min(h))
-                .flat_map(|y| (x0..(x0 + TILE).min(w)).map(move |x| y * w + x))
-                .collect();
-            let tile_width = (x0 + TILE).min(w) - x0;
-            let local = |p: usize| (p / w - y0) * tile_width + (p % w - x0);
-            // Per batch, per pixel of this tile: sums over the batch's paths.
-            let mut acc = vec![vec![Rgb::BLACK; pixels.len()]; BATCHES];
-            let mut rays = Vec::with_capacity(pixels.len());
-            let mut targets = Vec::with_capacity(pixels.len());
-            let mut blocked = Vec::new();
-            let mut shadow_rays = 0u64;
-            for (b, recs) in records.iter().enumerate() {
-                let n = per_batch(b);
-                let mut next = 0;
-                // Per pixel of the tile: this batch's connection contributions so far (Y).
-                let mut connected = vec![0.0f64; pixels.len()];
-                let mut tau = vec![0.0f64; pixels.len()];
-                let mut tau_path = 0;
-                if let Some(lt) = &light_traced {
-                    for (t, &p) in tau.iter_mut().zip(&pixels) {
-                        *t = RR_ALPHA * lt[p] / cfg.pixel_samples.max(1) as f64;
-                    }
+    let progress = console.progress(
+        "estimate image: connections",
+        Some((w * h) as u64),
+        "pixels",
+    );
+    let tile_results = run_batches(tiles_x * tiles_y, cfg.threads, |t| {
+        let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+        let pixels: Vec<usize> = (y0..(y0 + TILE).min(h))
+            .flat_map(|y| (x0..(x0 + TILE).min(w)).map(move |x| y * w + x))
+            .collect();
+        let tile_width = (x0 + TILE).min(w) - x0;
+        let local = |p: usize| (p / w - y0) * tile_width + (p % w - x0);
+        // Per batch, per pixel of this tile: sums over the batch's paths.
+        let mut acc = vec![vec![Rgb::BLACK; pixels.len()]; BATCHES];
+        let mut rays = Vec::with_capacity(pixels.len());
+        let mut targets = Vec::with_capacity(pixels.len());
+        let mut blocked = Vec::new();
+        let mut shadow_rays = 0u64;
+        for (b, recs) in records.iter().enumerate() {
+            let n = per_batch(b);
+            let mut next = 0;
+            // Per pixel of the tile: this batch's connection contributions so far (Y).
+            let mut connected = vec![0.0f64; pixels.len()];
+            let mut tau = vec![0.0f64; pixels.len()];
+            let mut tau_path = 0;
+            if let Some(lt) = &light_traced {
+                for (t, &p) in tau.iter_mut().zip(&pixels) {
+                    *t = RR_ALPHA * lt[p] / cfg.pixel_samples.max(1) as f64;
                 }
-                for r in 0..n.div_ceil(ROUND_PATHS).max(1) {
-                    // This round's paths, its camera points and their path-independent terms
-                    // (emitters seen directly, exact delta lights), counted once per path.
-                    let paths_in_round = (n - (r * ROUND_PATHS).min(n)).clamp(1, ROUND_PATHS);
-                    let round = b as u64 * rounds_per_batch + r;
-                    let (views, emitted) = view_points(world, cam, cfg, &pixels, round);
-                    let view_local: Vec<usize> = views.iter().map(|v| local(v.pixel)).collect();
-                    let direct = delta_light_reflected(
-                        world,
-                        &views
-                            .iter()
-                            .map(|v| (v.position, v.ng, v.wo, v.material, v.weight))
-                            .collect::<Vec<_>>(),
+            }
+            for r in 0..n.div_ceil(ROUND_PATHS).max(1) {
+                // This round's paths, its camera points and their path-independent terms
+                // (emitters seen directly, exact delta lights), counted once per path.
+                let paths_in_round = (n - (r * ROUND_PATHS).min(n)).clamp(1, ROUND_PATHS);
+                let round = b as u64 * rounds_per_batch + r;
+                let (views, emitted) = view_points(world, cam, cfg, &pixels, round);
+                let view_local: Vec<usize> = views.iter().map(|v| local(v.pixel)).collect();
+                let direct = delta_light_reflected(
+                    world,
+                    &views
+                        .iter()
+                        .map(|v| (v.position, v.ng, v.wo, v.material, v.weight))
+                        .collect::<Vec<_>>(),
+                );
+                let weight = paths_in_round as f64;
+                for (k, e) in emitted.iter().enumerate() {
+                    acc[b][k] = acc[b][k] + *e * weight;
+                }
+                for (&k, d) in view_local.iter().zip(&direct) {
+                    acc[b][k] = acc[b][k] + *d * weight;
+                }
+                let end = (r + 1) * ROUND_PATHS;
+                while next < recs.len() && recs[next].path < end {
+                    let rec = &recs[next];
+                    // Russian roulette on the connections: a pair whose contribution c is
+                    // below the threshold tau of its pixel is traced with probability
+                    // c / tau and then counts c / (c / tau) = tau; unbiased for any tau
+                    // independent of the roulette's own random number. tau is RR_ALPHA
+                    // times, per camera point, the pixel's light-traced luminance (with
+                    // MIS, known before any connection), or else the mean per path of its
+                    // connected light over this batch's earlier paths, from the batch's
+                    // RR_WARMUP-th path on (a mean over fewer paths is too noisy: it
+                    // promotes small contributions to a large tau).
+                    if rec.path != tau_path && light_traced.is_none() {
+                        tau_path = rec.path;
+                        let scale = if rec.path >= RR_WARMUP {
+                            RR_ALPHA / (rec.path as f64 * cfg.pixel_samples.max(1) as f64)
+                        } else {
+                            0.0
+                        };
+                        for (t, y) in tau.iter_mut().zip(&connected) {
+                            *t = y * scale;
+                        }
+                    }
+                    let record_key = splitmix64(
+                        cfg.seed ^ splitmix64(((b as u64) << 40) ^ next as u64 ^ RR_SALT),
                     );
-                    let weight = paths_in_round as f64;
-                    for (k, e) in emitted.iter().enumerate() {
-                        acc[b][k] = acc[b][k] + *e * weight;
-                    }
-                    for (&k, d) in view_local.iter().zip(&direct) {
-                        acc[b][k] = acc[b][k] + *d * weight;
-                    }
-                    let end = (r + 1) * ROUND_PATHS;
-                    while next < recs.len() && recs[next].path < end {
-                        let rec = &recs[next];
-                        // Russian roulette on the connections: a pair whose contribution c is
-                        // below the threshold tau of its pixel is traced with probability
-                        // c / tau and then counts c / (c / tau) = tau; unbiased for any tau
-                        // independent of the roulette's own random number. tau is RR_ALPHA
-                        // times, per camera point, the pixel's light-traced luminance (with
-                        // MIS, known before any connection), or else the mean per path of its
-                        // connected light over this batch's earlier paths, from the batch's
-                        // RR_WARMUP-th path on (a mean over fewer paths is too noisy: it
-                        // promotes small contributions to a large tau).
-                        if rec.path != tau_path && light_traced.is_none() {
-                            tau_path = rec.path;
-                            let scale = if rec.path >= RR_WARMUP {
-                                RR_ALPHA / (rec.path as f64 * cfg.pixel_samples.max(1) as f64)
-                            } else {
-                                0.0
-                            };
-                            for (t, y) in tau.iter_mut().zip(&connected) {
-                                *t = y * scale;
-                            }
-                        }
-                        let record_key = splitmix64(
-                            cfg.seed ^ splitmix64(((b as u64) << 40) ^ next as u64 ^ RR_SALT),
-                        );
-                        next += 1;
-                        rays.clear();
-                        targets.clear();
-                        for (i, (v, &k)) in views.iter().zip(&view_local).enumerate() {
-                            let m_v = world.material(v.material);
-                            if let Some((c, dir_to_view)) =
-                                contribution(world, &cfg.singularity, mis_paths, rec, v, m_v)
-                            {
-                                let y = c.luminance();
-                                let c = if y < tau[k] {
-                                    let h = splitmix64(record_key ^ (i as u64));
-                                    let u = (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
-                                    if u * tau[k] >= y {
-                                        continue;
-                                    }
-                                    c * (tau[k] / y)
-                                } else {
-                                    c
-                                };
-                                // Cast from the view point towards the record (coherent across
-                                // the tile), measured from the offset origin so it stops short.
-                                let origin = world.offset(v.position, v.ng, -dir_to_view);
-                                let to = rec.position - origin;
-                                let len = to.length();
-                                let eps = world.margin(v.position, rec.position);
-                                if len > 2.0 * eps {
-                                    rays.push(Ray {
-                                        origin,
-                                        direction: to / len,
-                                        tnear: eps,
-                                        tfar: len - eps,
-                                    });
-                                    targets.push((k, c));
+                    next += 1;
+                    rays.clear();
+                    targets.clear();
+                    for (i, (v, &k)) in views.iter().zip(&view_local).enumerate() {
+                        let m_v = world.material(v.material);
+                        if let Some((c, dir_to_view)) =
+                            contribution(world, &cfg.singularity, mis_paths, rec, v, m_v)
+                        {
+                            let y = c.luminance();
+                            let c = if y < tau[k] {
+                                let h = splitmix64(record_key ^ (i as u64));
+                                let u = (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+                                if u * tau[k] >= y {
+                                    continue;
                                 }
+                                c * (tau[k] / y)
+                            } else {
+                                c
+                            };
+                            // Cast from the view point towards the record (coherent across
+                            // the tile), measured from the offset origin so it stops short.
+                            let origin = world.offset(v.position, v.ng, -dir_to_view);
+                            let to = rec.position - origin;
+                            let len = to.length();
+                            let eps = world.margin(v.position, rec.position);
+                            if len > 2.0 * eps {
+                                rays.push(Ray {
+                                    origin,
+                                    direction: to / len,
+                                    tnear: eps,
+                                    tfar: len - eps,
+                                });
+                                targets.push((k, c));
                             }
                         }
-                        shadow_rays += rays.len() as u64;
-                        world.tracer.occluded_many(&rays, &mut blocked);
-                        for ((k, c), bl) in targets.iter().zip(&blocked) {
-                            if !bl {
-                                acc[b][*k] = acc[b][*k] + *c;
-                                connected[*k] += c.luminance();
-                            }
+                    }
+                    shadow_rays += rays.len() as u64;
+                    world.tracer.occluded_many(&rays, &mut blocked);
+                    for ((k, c), bl) in targets.iter().zip(&blocked) {
+                        if !bl {
+                            acc[b][*k] = acc[b][*k] + *c;
+                            connected[*k] += c.luminance();
                         }
                     }
                 }
             }
-            (pixels, acc, shadow_rays)
-        },
-    );
+        }
+        progress.inc(pixels.len() as u64);
+        (pixels, acc, shadow_rays)
+    });
+    progress.finish();
 
     // Combine: per pixel and batch, the mean over the batch's paths (the light-tracing films
     // are the batches' accumulators: at most BYTES_PER_PIXEL at any time).

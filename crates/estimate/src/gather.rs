@@ -11,6 +11,7 @@
 use crate::transport::{delta_light_illuminance, scatter};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use luxest_io::progress::Progress;
 use luxest_render::bsdf::{self, Transport};
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
 use luxest_render::sampling::{cosine_hemisphere, Rng};
@@ -234,23 +235,27 @@ pub fn near_field_sample(
     )
 }
 
-/// Per sensor: (RGB mean, Y mean, Y standard error).
+/// Per sensor: (RGB mean, Y mean, Y standard error); counts every sample on `progress`
+/// ([`progress_total`] in all).
 pub fn estimate(
     world: &World,
     sensors: &[SensorPoint],
     cfg: &GatherConfig,
+    progress: &Progress,
 ) -> Vec<(Rgb, f64, f64)> {
     let direct = delta_light_illuminance(world, sensors);
     let batches = cfg.batches.max(2);
     let per_batch = (cfg.samples / batches as u64).max(1);
-    let results = run_batches(batches, cfg.threads, "gather", |b| {
+    let results = run_batches(batches, cfg.threads, |b| {
         let mut rng = Rng::new(cfg.seed, b as u64 + 1);
+        let mut tally = progress.tally();
         sensors
             .iter()
             .map(|s| {
                 let mut acc = Rgb::BLACK;
                 for _ in 0..per_batch {
                     acc = acc + sample_once(world, s, &mut rng, cfg.max_depth);
+                    tally.add(1);
                 }
                 acc * (1.0 / per_batch as f64)
             })
@@ -267,4 +272,10 @@ pub fn estimate(
             (rgb + direct[i], m + direct[i].luminance(), se)
         })
         .collect()
+}
+
+/// The samples [`estimate`] counts on its progress at `sensors` sensor points.
+pub fn progress_total(sensors: usize, cfg: &GatherConfig) -> u64 {
+    let batches = cfg.batches.max(2) as u64;
+    sensors as u64 * (cfg.samples / batches).max(1) * batches
 }

@@ -25,6 +25,7 @@ use crate::image::{ImageResult, BATCHES};
 use crate::transport::{walk_light_path, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use luxest_io::progress::Progress;
 use luxest_render::bsdf;
 use luxest_render::camera::PinholeCamera;
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
@@ -112,9 +113,10 @@ fn run_batch(
     world: &World,
     cam: &PinholeCamera,
     cfg: &LightTraceConfig,
-    batch: usize,
-    paths: u64,
+    (batch, paths): (usize, u64),
+    progress: &Progress,
 ) -> BatchFilm {
+    let mut tally = progress.tally();
     let mut rng = Rng::new(cfg.seed, batch as u64 + 1);
     let mut film = BatchFilm {
         sums: vec![[0.0; 3]; cam.width as usize * cam.height as usize],
@@ -136,17 +138,24 @@ fn run_batch(
                 }
             }
         });
+        tally.add(1);
     }
     film
 }
 
-/// Renders the camera's image by light tracing (see the module docs).
-pub fn render(world: &World, cam: &PinholeCamera, cfg: &LightTraceConfig) -> ImageResult {
+/// Renders the camera's image by light tracing (see the module docs), counting its `paths`
+/// light paths on `progress`.
+pub fn render(
+    world: &World,
+    cam: &PinholeCamera,
+    cfg: &LightTraceConfig,
+    progress: &Progress,
+) -> ImageResult {
     let start = std::time::Instant::now();
     let per_batch =
         |b: usize| cfg.paths / BATCHES as u64 + u64::from((b as u64) < cfg.paths % BATCHES as u64);
-    let films = run_batches(BATCHES, cfg.threads, "light tracing", |b| {
-        run_batch(world, cam, cfg, b, per_batch(b))
+    let films = run_batches(BATCHES, cfg.threads, |b| {
+        run_batch(world, cam, cfg, (b, per_batch(b)), progress)
     });
     let n = cam.width as usize * cam.height as usize;
     let mut rgb = vec![Rgb::BLACK; n];

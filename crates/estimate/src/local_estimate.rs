@@ -31,6 +31,7 @@ pub use crate::singularity::Singularity;
 use crate::transport::{delta_light_illuminance, walk_light_path, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use luxest_io::progress::Progress;
 use luxest_render::bsdf;
 use luxest_render::rt::Ray;
 use luxest_render::sampling::Rng;
@@ -167,13 +168,14 @@ fn run_batch(
     sensors: &[SensorPoint],
     skip_within: &[f64],
     cfg: &LocalConfig,
-    batch: usize,
-    paths: u64,
+    (batch, paths): (usize, u64),
+    progress: &Progress,
 ) -> BatchSums {
     let mut rng = Rng::new(cfg.batches.seed, batch as u64 + 1);
     let mut out = BatchSums::new(sensors.len());
     let mut scratch = Scratch::default();
     let sing = &cfg.singularity;
+    let mut tally = progress.tally();
     for _ in 0..paths {
         let end = walk_light_path(world, &mut rng, cfg.max_depth, |v, q| {
             let (at, src) = match v {
@@ -204,6 +206,7 @@ fn run_batch(
         });
         out.collisions += end.collisions;
         out.truncated += u64::from(end.truncated);
+        tally.add(1);
     }
     if let Some(nf) = cfg.near_field {
         let samples = (nf.samples / cfg.batches.count() as u64).max(1);
@@ -219,6 +222,7 @@ fn run_batch(
                         cfg.max_depth,
                     );
                     (emitted, reflected) = (emitted + e, reflected + r);
+                    tally.add(1);
                 }
                 // Stored as a sum over `paths` so that the common division gives the mean.
                 let scale = paths as f64 / samples as f64;
@@ -231,12 +235,14 @@ fn run_batch(
 }
 
 /// Runs the local estimate for `sensors`, with the near-field split (when configured) for
-/// each planar sensor `i` with `near_radius[i] > 0`.
+/// each planar sensor `i` with `near_radius[i] > 0`; counts on `progress` every light path and
+/// every near-field sample ([`progress_total`] in all).
 pub fn estimate(
     world: &World,
     sensors: &[SensorPoint],
     near_radius: &[f64],
     cfg: &LocalConfig,
+    progress: &Progress,
 ) -> SensorEstimates {
     let delta_light = delta_light_illuminance(world, sensors);
     // The backward near-field estimate samples the cosine about the normal: planar only.
@@ -253,7 +259,21 @@ pub fn estimate(
         sensors.len(),
         &delta_light,
         true,
-        "local estimate",
-        |b, paths| run_batch(world, sensors, &skip_within, cfg, b, paths),
+        |b, paths| run_batch(world, sensors, &skip_within, cfg, (b, paths), progress),
     )
+}
+
+/// The paths [`estimate`] counts on its progress: the light paths, and the near field's
+/// backward samples (each batch takes at least one per near-field sensor).
+pub fn progress_total(sensors: &[SensorPoint], near_radius: &[f64], cfg: &LocalConfig) -> u64 {
+    let Some(nf) = cfg.near_field else {
+        return cfg.batches.paths;
+    };
+    let near = sensors
+        .iter()
+        .zip(near_radius)
+        .filter(|(s, &r)| r > 0.0 && s.kind.is_planar())
+        .count() as u64;
+    let count = cfg.batches.count() as u64;
+    cfg.batches.paths + near * (nf.samples / count).max(1) * count
 }

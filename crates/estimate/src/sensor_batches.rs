@@ -129,21 +129,19 @@ impl SensorEstimates {
     }
 }
 
-/// Runs `run_batch(b, paths)` for every batch of `batches` (on its threads, `label` naming the
-/// work in a worker's panic) and combines the sums at `sensors` sensor points with the exact
-/// delta-light part `delta_light` (one per sensor). `split`: report the direct and indirect
-/// parts.
+/// Runs `run_batch(b, paths)` for every batch of `batches` (on its threads) and combines the
+/// sums at `sensors` sensor points with the exact delta-light part `delta_light` (one per
+/// sensor). `split`: report the direct and indirect parts.
 pub fn run(
     batches: &Batches,
     sensors: usize,
     delta_light: &[Rgb],
     split: bool,
-    label: &str,
     run_batch: impl Fn(usize, u64) -> BatchSums + Sync,
 ) -> SensorEstimates {
     let start = std::time::Instant::now();
     let count = batches.count();
-    let results = run_batches(count, batches.threads, label, |b| {
+    let results = run_batches(count, batches.threads, |b| {
         run_batch(b, batches.paths_of(b))
     });
     let n = sensors;

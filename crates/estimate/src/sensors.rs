@@ -37,13 +37,10 @@ pub fn all_sensors(world: &World) -> Vec<SensorPoint> {
 }
 
 /// The sensors as evaluated: moved off adjacent surfaces by `delta`, each with its near-field
-/// radius (`near_radius` when another surface is that close; see [`placement`]).
+/// radius (`near_radius` when another surface is that close; see [`placement`]); how many
+/// were moved is `moved`, which the stage notes.
 pub fn evaluation_points(world: &World, delta: f64, near_radius: f64) -> placement::Placement {
-    let p = placement::place(world, &all_sensors(world), delta, near_radius);
-    if p.moved > 0 {
-        eprintln!("note: {} sensor(s) on edges or in corners are evaluated {delta:e} m off the adjacent surfaces", p.moved);
-    }
-    p
+    placement::place(world, &all_sensors(world), delta, near_radius)
 }
 
 /// One sensor's estimate (lx): RGB illuminance, its photometric value Y and Y's standard

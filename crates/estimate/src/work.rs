@@ -211,6 +211,7 @@ pub fn sensors_plan(
         stage: "estimate sensors".into(),
         work,
         units,
+        unit: "ray casts",
         seconds: cost * cal.seconds_per_ray / parallel as f64,
         threads: parallel,
         memory_bytes: batch_memory(batches, sensors.len()),
@@ -241,6 +242,7 @@ pub fn gather_plan(
             luxest_io::limits::show_count(path)
         ),
         units,
+        unit: "ray casts",
         seconds: units * cal.seconds_per_ray / parallel as f64,
         threads: parallel,
         memory_bytes: batch_memory(batches, sensors.len()),
@@ -266,6 +268,7 @@ pub fn direct_plan(
             luxest_io::limits::show_count(cal.light_path)
         ),
         units,
+        unit: "ray casts",
         seconds: units * cal.seconds_per_ray / parallel as f64,
         threads: parallel,
         memory_bytes: batch_memory(batches, sensors),
@@ -352,6 +355,7 @@ pub fn image_plan(
         stage: "estimate image".into(),
         work,
         units,
+        unit: "ray casts",
         seconds,
         threads: cfg.threads.min(tiles.max(BATCHES)).max(1),
         memory_bytes: memory,
@@ -379,6 +383,7 @@ pub fn light_tracing_plan(
             luxest_io::limits::show_count(cal.light_path)
         ),
         units,
+        unit: "ray casts",
         seconds: units * cal.seconds_per_ray / parallel as f64,
         threads: parallel,
         memory_bytes: (cam.width as u128 * cam.height as u128)

@@ -90,7 +90,7 @@ pub fn run(args: Args) -> Result<()> {
             out,
             ron,
             flip_maps,
-            common: _,
+            common,
         } => {
             // Every output of the run, checked against the images before any is written.
             let maps: Vec<PathBuf> = flip_maps
@@ -102,24 +102,26 @@ pub fn run(args: Args) -> Result<()> {
             let inputs = std::iter::once(&reference).chain(&tests);
             let mut plan = OutputPlan::new(inputs, outputs)?;
             check_report_formats(Some(&out), ron.as_ref())?;
-            let report = score_images(&reference, &tests, |test, map| match &flip_maps {
-                Some(dir) => {
-                    let path = flip_map_path(dir, test);
-                    write_rgb_to(&mut plan, &path, map)?;
-                    write_preview_png_to(&mut plan, &preview_path(&path), map, 1.0)
-                }
-                None => Ok(()),
-            })?;
+            let console = common.console;
+            let report =
+                score_images(&reference, &tests, &console, |test, map| match &flip_maps {
+                    Some(dir) => {
+                        let path = flip_map_path(dir, test);
+                        write_rgb_to(&mut plan, &path, map)?;
+                        write_preview_png_to(&mut plan, &preview_path(&path), map, 1.0)
+                    }
+                    None => Ok(()),
+                })?;
             report.write_csv_to(&mut plan, &out)?;
             if let Some(r) = &ron {
                 report.write_ron_to(&mut plan, r)?;
             }
             plan.commit()?;
             for r in &report.rows {
-                eprintln!(
+                console.note(format_args!(
                     "evaluate: {}: PSNR {:.2} dB, SSIM {:.4}, FLIP {:.4}, relMSE {:.3e}",
                     r.image, r.psnr_db, r.ssim, r.flip, r.rel_mse
-                );
+                ));
             }
             Ok(())
         }
@@ -131,7 +133,7 @@ pub fn run(args: Args) -> Result<()> {
             sets,
             scene,
             ron,
-            common: _,
+            common,
         } => {
             if max_z.is_some_and(|z| z.is_nan() || z <= 0.0) {
                 return Err(Error::Usage("--max-z must be positive".into()));
@@ -149,13 +151,13 @@ pub fn run(args: Args) -> Result<()> {
             // The table first: a failed write to stdout leaves no report files behind.
             luxest_io::cli::print(&report.table(max_z))?;
             plan.commit()?;
-            eprintln!(
+            common.console.note(format_args!(
                 "evaluate: {}: {} points, max |z| {:.2}, RMS relative error {:.3e}",
                 results.display(),
                 report.points,
                 report.max_abs_z,
                 report.rms_relative_error
-            );
+            ));
             match max_z {
                 Some(z) => report.z_test(z),
                 None => Ok(()),

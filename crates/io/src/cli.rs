@@ -3,6 +3,8 @@
 //! `error: <file>: <place>: <problem>` line and exits 1. Nothing panics on bad input.
 
 use crate::error::Error;
+use crate::limits::WorkPlan;
+use crate::progress::{Display, Progress};
 use clap::Parser;
 use std::ffi::OsString;
 use std::process::ExitCode;
@@ -125,6 +127,51 @@ pub struct CommonArgs {
     /// Worker threads, 1 to 4096; 0 or leaving it out: all cores.
     #[arg(long, value_parser = crate::num::THREADS)]
     pub threads: Option<usize>,
+    #[command(flatten)]
+    pub console: Console,
+}
+
+/// What a stage prints on stderr besides its errors: the progress of its work, the plan of a
+/// long run, warnings and notes, and its closing `wrote …` line. `-q/--quiet` (every stage's,
+/// through [`CommonArgs`] or on its own) silences all of it; errors are printed all the same.
+#[derive(clap::Args, Clone, Copy, Debug, Default)]
+pub struct Console {
+    /// Print nothing on stderr but errors: no progress, plan, warnings or summary.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+impl Console {
+    /// The console of `--quiet`: what library callers and tests pass.
+    pub const QUIET: Console = Console { quiet: true };
+
+    /// The progress of `label`'s work of `total` `unit`s (`None`: not known), shown on stderr
+    /// unless quiet ([`crate::progress`]).
+    pub fn progress(&self, label: &str, total: Option<u64>, unit: &'static str) -> Progress {
+        Progress::new(label, total, unit, Display::for_stderr(self.quiet))
+    }
+
+    /// Prints `message` as a line on stderr unless quiet.
+    pub fn note(&self, message: impl std::fmt::Display) {
+        if !self.quiet {
+            eprintln!("{message}");
+        }
+    }
+
+    /// Prints the plan of a long run ([`WorkPlan::is_long`]) unless quiet.
+    pub fn announce(&self, plan: &WorkPlan) {
+        if plan.is_long() {
+            self.note(plan.line());
+        }
+    }
+
+    /// [`Console::announce`] while `progress` is shown (a plan made from the run's first
+    /// unit of work), above its line.
+    pub fn announce_during(&self, plan: &WorkPlan, progress: &Progress) {
+        if plan.is_long() && !self.quiet {
+            progress.println(&plan.line());
+        }
+    }
 }
 
 impl CommonArgs {

@@ -11,6 +11,8 @@
 //!   another output or a non-regular file; all outputs of a run committed together);
 //! - [`limits`]: the resource rule: buffers sized against the memory available before
 //!   allocating, and the one-line plan of a long run;
+//! - [`progress`]: the progress of a long run on stderr (a line redrawn on a terminal, periodic
+//!   lines in a log);
 //! - [`num`]: validated numbers for command-line options (finite, in range, unit in messages);
 //! - [`image`]: the linear RGB image every stage exchanges, with its header attributes;
 //! - [`exposure`]: the exposure contract shared with Python (autoexposure, dim-image exponent);
@@ -41,6 +43,7 @@ pub mod naming;
 pub mod num;
 pub mod outputs;
 pub mod png;
+pub mod progress;
 pub mod sensors;
 
 pub use error::{Error, Result};

@@ -238,8 +238,10 @@ pub struct WorkPlan {
     pub stage: String,
     /// The work in the arguments' terms: `64 light paths of ~1.0e5 collisions, ...`.
     pub work: String,
-    /// Ray casts (or the stage's unit of work) predicted in all.
+    /// Units of work predicted in all ...
     pub units: f64,
+    /// ... and what they count: `ray casts` (the Monte Carlo stages), `pixels` (`denoise`).
+    pub unit: &'static str,
     /// Predicted wall-clock seconds.
     pub seconds: f64,
     /// Threads the work is spread over.
@@ -256,11 +258,12 @@ impl WorkPlan {
     /// The plan as one line: `estimate sensors: plan: ...; about 3.2 h on 1 thread ...`.
     pub fn line(&self) -> String {
         format!(
-            "{}: plan: {}: ~{} ray casts, about {} on {} thread{} (from a {:.1} s \
+            "{}: plan: {}: ~{} {}, about {} on {} thread{} (from a {:.1} s \
              calibration), {} of memory; {} set the work",
             self.stage,
             self.work,
             show_count(self.units),
+            self.unit,
             show_duration(self.seconds),
             self.threads,
             if self.threads == 1 { "" } else { "s" },
@@ -273,13 +276,6 @@ impl WorkPlan {
     /// Whether the run is long enough to be announced.
     pub fn is_long(&self) -> bool {
         self.seconds > PLAN_AFTER_SECONDS
-    }
-
-    /// Prints [`WorkPlan::line`] on stderr when the run [`is long`](WorkPlan::is_long).
-    pub fn announce(&self) {
-        if self.is_long() {
-            eprintln!("{}", self.line());
-        }
     }
 }
 
@@ -367,6 +363,7 @@ mod tests {
             stage: "estimate sensors".into(),
             work: "64 light paths of ~1.0e5 collisions".into(),
             units: 6.4e10,
+            unit: "ray casts",
             seconds: 11520.0,
             threads: 1,
             memory_bytes: 2_000_000,

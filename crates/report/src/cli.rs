@@ -5,6 +5,7 @@ use crate::markdown::{self, ReportContext, SurfaceReport};
 use crate::surface::UncertaintyMethod;
 use crate::{input, peer, plot, scene_info, tables};
 use clap::Parser;
+use luxest_io::cli::Console;
 use luxest_io::outputs::{path_component, OutputPlan};
 use luxest_io::sensors::SensorResults;
 use luxest_io::Result;
@@ -33,6 +34,8 @@ pub struct Args {
     /// Fail (exit 1, after writing the report) if any point disagrees with the peer.
     #[arg(long, requires = "peer")]
     pub require_peer_agreement: bool,
+    #[command(flatten)]
+    pub console: Console,
 }
 
 /// Runs the command line.
@@ -95,7 +98,7 @@ pub fn run(args: Args) -> Result<()> {
             UncertaintyMethod::Jackknife { batches } => format!("jackknife over {batches} batches"),
             UncertaintyMethod::Independent => "independent points".to_string(),
         };
-        eprintln!(
+        args.console.note(format_args!(
             "report: surface {}/{} \"{}\": {} x {} points, Eavg {:.1} ± {:.1} lx, U0 {:.3} ± {:.3}",
             n + 1,
             surfaces.len(),
@@ -106,13 +109,13 @@ pub fn run(args: Args) -> Result<()> {
             stats.e_avg.std_error,
             stats.u0.value,
             stats.u0.std_error
-        );
+        ));
         if stats.e_max.value <= 0.0 {
-            eprintln!(
+            args.console.note(format_args!(
                 "warning: surface \"{}\" receives no light at any point: U0 and Ud are \
                  undefined (the tables show 0); is it facing away from the luminaires?",
                 s.name
-            );
+            ));
         }
         let rows = tables::rows(s);
         tables::write_csv_to(&mut plan, &dir.join(csv), &rows)?;
@@ -163,13 +166,13 @@ pub fn run(args: Args) -> Result<()> {
     let text = markdown::render(&ctx, &reports);
     plan.write_bytes(&md_path, text.as_bytes())?;
     plan.commit()?;
-    eprintln!(
+    args.console.note(format_args!(
         "report: wrote {} ({} surface{}, {:.2} s)",
         md_path.display(),
         surfaces.len(),
         if surfaces.len() == 1 { "" } else { "s" },
         start.elapsed().as_secs_f64()
-    );
+    ));
     if args.require_peer_agreement {
         let failing: Vec<&str> = reports
             .iter()

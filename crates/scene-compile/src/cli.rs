@@ -3,6 +3,7 @@
 
 use crate::{compile, referenced_files, scene_name};
 use clap::Parser;
+use luxest_io::cli::Console;
 use luxest_io::fsio::{read_ron, to_ron_string};
 use luxest_io::outputs::{path_component, Format, OutputPlan};
 use luxest_io::Result;
@@ -25,9 +26,8 @@ pub struct Args {
     /// Print the header (features manifest, emitters, sensors, stats) of a compiled scene.
     #[arg(long, conflicts_with_all = ["out", "check", "export_mitsuba"])]
     pub info: bool,
-    /// No warnings or summary on stderr.
-    #[arg(short, long)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub console: Console,
     /// Also write the scene for Mitsuba 3 into this directory (scene.xml and one OBJ per
     /// material): a cross-check of any scene with Mitsuba (`mitsuba -D spp=256 scene.xml`).
     #[arg(long, value_name = "DIR", conflicts_with = "check")]
@@ -71,10 +71,8 @@ pub fn run(args: Args) -> Result<()> {
         Format::Lxs.check(o, "-o/--out")?;
     }
     let (mut scene, report) = compile(&authored, &args.input)?;
-    if !args.quiet {
-        for w in &report.warnings {
-            eprintln!("warning: {w}");
-        }
+    for w in &report.warnings {
+        args.console.note(format_args!("warning: {w}"));
     }
     let bytes = scene.encode();
     let summary = {
@@ -95,9 +93,7 @@ pub fn run(args: Args) -> Result<()> {
         )
     };
     if args.check {
-        if !args.quiet {
-            eprintln!("ok {summary}");
-        }
+        args.console.note(format_args!("ok {summary}"));
         return Ok(());
     }
     let export = match &args.export_mitsuba {
@@ -117,15 +113,14 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     plan.commit()?;
-    if let (Some((dir, files, _)), false) = (&export, args.quiet) {
-        eprintln!(
+    if let Some((dir, files, _)) = &export {
+        args.console.note(format_args!(
             "wrote the Mitsuba 3 scene {} ({} meshes)",
             dir.join("scene.xml").display(),
             files.len() - 1
-        );
+        ));
     }
-    if !args.quiet {
-        eprintln!("wrote {} ({summary})", out.display());
-    }
+    args.console
+        .note(format_args!("wrote {} ({summary})", out.display()));
     Ok(())
 }

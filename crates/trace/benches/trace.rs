@@ -8,6 +8,7 @@
 //! wavefront formulation of the tracer could gain in Embree.
 
 use luxest_io::cli::thread_count;
+use luxest_io::progress::Progress;
 use luxest_render::parallel::run_batches;
 use luxest_render::rt::Ray;
 use std::path::PathBuf;
@@ -73,7 +74,7 @@ fn raw_seconds(
     };
     let tracer = &world.tracer;
     let start = Instant::now();
-    let hits: Vec<usize> = run_batches(chunks, threads, "raw", |c| {
+    let hits: Vec<usize> = run_batches(chunks, threads, |c| {
         let (closest, shadow) = (&closest[slice(closest, c)], &shadow[slice(shadow, c)]);
         let mut n = 0;
         match query {
@@ -129,12 +130,12 @@ fn bench(name: &str, resolution: &str, spp: u32) {
     let renderer = Renderer::new(&world, cam, 1, threads, 1024);
     let mut film = Film::new(cam.width as usize, cam.height as usize);
     // Warm-up pass, then the timed passes (best of 3: the machine is shared).
-    renderer.advance(&mut film, 1, false);
+    renderer.advance(&mut film, 1, false, &Progress::off());
     let (mut t, mut log) = (f64::INFINITY, None);
     for _ in 0..3 {
         let mut f = Film::new(cam.width as usize, cam.height as usize);
         let start = Instant::now();
-        let l = renderer.advance(&mut f, spp, false);
+        let l = renderer.advance(&mut f, spp, false, &Progress::off());
         t = t.min(start.elapsed().as_secs_f64());
         log = Some(l);
     }
@@ -144,7 +145,7 @@ fn bench(name: &str, resolution: &str, spp: u32) {
     // One recorded pass for the raw rate on identical rays (the same pixels and samples'
     // distribution as the timed passes), best of 3.
     let mut rec_film = Film::new(cam.width as usize, cam.height as usize);
-    let rec = renderer.advance(&mut rec_film, 1, true);
+    let rec = renderer.advance(&mut rec_film, 1, true, &Progress::off());
     let best = |closest: &[Ray], shadow: &[Ray], q: Query| {
         (0..3)
             .map(|_| raw_seconds(&world, closest, shadow, threads, q))

@@ -131,11 +131,17 @@ pub fn run(args: Args) -> Result<()> {
         args.common.thread_count(),
         args.max_depth,
     );
+    let console = args.common.console;
     if let Some(spp) = args.spp {
         // A --time run is as long as asked; a --spp run says first when it is long.
-        renderer.plan(spp).announce();
+        console.announce(&renderer.plan(spp));
     }
     let mut film = Film::new(camera.width as usize, camera.height as usize);
+    let pixels = camera.width as u64 * camera.height as u64;
+    let progress = console.progress("trace", args.spp.map(|spp| pixels * spp as u64), "samples");
+    if let Some(seconds) = args.time {
+        progress.set_time_budget(seconds);
+    }
     let start = Instant::now();
     let info = |film: &Film| {
         RunInfo::new(
@@ -151,7 +157,7 @@ pub fn run(args: Args) -> Result<()> {
         &snapshots,
         || start.elapsed().as_secs_f64(),
         |target| {
-            renderer.advance(&mut film, target, false);
+            renderer.advance(&mut film, target, false, &progress);
             if snapshots.contains(&target) {
                 let path = image_path(&prefix, Level::Spp(target as u64), Kind::Hdr);
                 write_image(&mut plan, &path, &film, &info(&film), args.stderr, None)?;
@@ -159,6 +165,7 @@ pub fn run(args: Args) -> Result<()> {
             Ok(())
         },
     )?;
+    progress.finish();
     let final_path = image_path(&prefix, final_level(samples), Kind::Hdr);
     if args.reference || !snapshots.contains(&samples) {
         if args.spp.is_none() {
@@ -186,18 +193,18 @@ pub fn run(args: Args) -> Result<()> {
         .map(|s| s.to_string())
         .collect();
     if !unreached.is_empty() {
-        eprintln!(
+        console.note(format_args!(
             "warning: snapshots {} not written: the --time budget ended at {samples} spp",
             unreached.join(",")
-        );
+        ));
     }
     // All images of the run appear together (a failure leaves none of them).
     plan.commit()?;
-    eprintln!(
+    console.note(format_args!(
         "wrote {} ({} spp, {:.2} s)",
         final_path.display(),
         samples,
         start.elapsed().as_secs_f64()
-    );
+    ));
     Ok(())
 }

@@ -7,6 +7,7 @@
 use crate::film::Film;
 use crate::integrator::{kernel_for, Kernel, RayLog};
 use luxest_io::limits::WorkPlan;
+use luxest_io::progress::Progress;
 use luxest_render::camera::PinholeCamera;
 use luxest_render::parallel::run_batches;
 use luxest_render::sobol::PixelSampler;
@@ -84,6 +85,7 @@ impl<'a> Renderer<'a> {
             stage: "trace".into(),
             work: format!("{w}x{h} pixels x {spp} samples of ~{rays_per_sample:.1} rays"),
             units: samples * rays_per_sample,
+            unit: "ray casts",
             seconds: samples * per_sample / threads as f64,
             threads,
             memory_bytes: pixels as u128 * luxest_render::world::FILM_BYTES_PER_PIXEL as u128,
@@ -92,19 +94,27 @@ impl<'a> Renderer<'a> {
         }
     }
 
-    /// Adds samples `film.samples .. target` to every pixel; returns the rays traced.
-    pub fn advance(&self, film: &mut Film, target: u32, record: bool) -> RayLog {
+    /// Adds samples `film.samples .. target` to every pixel, counting them on `progress`;
+    /// returns the rays traced.
+    pub fn advance(
+        &self,
+        film: &mut Film,
+        target: u32,
+        record: bool,
+        progress: &Progress,
+    ) -> RayLog {
         let (w, h) = (film.width, film.height);
         let tiles_x = w.div_ceil(TILE);
         let tiles = tiles_x * h.div_ceil(TILE);
         let from = film.samples;
-        let results = run_batches(tiles, self.threads, "trace", |t| {
+        let results = run_batches(tiles, self.threads, |t| {
             let (tx, ty) = (t % tiles_x, t / tiles_x);
             let mut log = RayLog {
                 record,
                 ..Default::default()
             };
             let mut out = Vec::with_capacity(TILE * TILE);
+            let mut tally = progress.tally();
             for y in ty * TILE..((ty + 1) * TILE).min(h) {
                 for x in tx * TILE..((tx + 1) * TILE).min(w) {
                     let pixel = y * w + x;
@@ -127,6 +137,7 @@ impl<'a> Renderer<'a> {
                         sum_y2 += l.luminance() * l.luminance();
                     }
                     out.push((pixel, sum, sum_y2));
+                    tally.add(target.saturating_sub(from) as u64);
                 }
             }
             (out, log)
