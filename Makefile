@@ -50,7 +50,7 @@ VENV := .venv
 VENV_STAMP := .luxest-setup-4
 PYTHON := $(VENV)/bin/python
 
-.PHONY: run scenes test lint bench validate singularity clean train pytest eval test-slurm
+.PHONY: run scenes test lint bench validate singularity clean train pytest eval test-slurm rust-test
 # Every file make builds is kept: none is a throwaway intermediate (compiled scenes, renders).
 .SECONDARY:
 
@@ -120,23 +120,28 @@ lint: $(VENV)/$(VENV_STAMP)
 # its -D warnings in CLIPPY_ARGS), so the dependencies are not built a second time for a check.
 CLIPPY_BUILD := RUSTC_WORKSPACE_WRAPPER=clippy-driver CLIPPY_ARGS=-D__CLIPPY_HACKERY__warnings__CLIPPY_HACKERY__
 
+# make test runs pytest and the Rust checks side by side (make -j2; each one's output shown when it
+# ends): pytest's processes wait on its two export workers part of the time, and the one build
+# that lints and links the tests fills the cores. Budget: docs/architecture.md, *Test time budget*.
+test: $(VENV)/$(VENV_STAMP)
+	$(MAKE) --no-print-directory --output-sync=target -j2 pytest rust-test
+
 # The evaluator and the denoiser are also built as programs and must not link Embree (a
 # researcher who swaps the tracer builds them without it; tests/architecture.rs checks the
 # dependency graph, this the binaries).
-test: pytest
+rust-test:
 	$(CARGO) fmt --all -- --check
 	$(CLIPPY_BUILD) $(CARGO) test --workspace --all-targets --no-run
 	$(CLIPPY_BUILD) $(CARGO) test --workspace
-	$(CLIPPY_BUILD) $(CARGO) build $(addprefix -p ,$(STAGE_BINS)) --bins
+	$(CLIPPY_BUILD) $(CARGO) build -p denoise -p evaluate --bins
 	@for b in denoise evaluate; do \
 		readelf -d target/debug/$$b > target/debug/$$b.dynamic || exit 1; \
 		if grep -qi embree target/debug/$$b.dynamic; then echo "error: target/debug/$$b links Embree" >&2; exit 1; fi; \
 	done; echo "denoise and evaluate link no Embree"
-	LUXEST_BIN_DIR=target/debug $(PYTHON) -m pytest pipelines/tests -q
 
-# The Make DAG through a real single-node Slurm cluster alone (pipelines/tests/test_slurm.py, the
-# last step of make test; set up by scripts/slurm-cluster.sh, Slurm and munge from
-# scripts/setup.sh), with the debug stage programs.
+# The Make DAG through a real single-node Slurm cluster (pipelines/tests/test_slurm.py; set up by
+# scripts/slurm-cluster.sh, Slurm and munge from scripts/setup.sh), with the debug stage programs
+# make test builds: about a minute, so a target of its own, which CI runs after make test.
 test-slurm: $(VENV)/$(VENV_STAMP)
 	$(CLIPPY_BUILD) $(CARGO) build $(addprefix -p ,$(STAGE_BINS)) --bins
 	LUXEST_BIN_DIR=target/debug $(PYTHON) -m pytest pipelines/tests -q
