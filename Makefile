@@ -144,13 +144,15 @@ rust-test:
 # make test builds: about a minute, so a target of its own, which CI runs after make test.
 test-slurm: $(VENV)/$(VENV_STAMP)
 	$(CLIPPY_BUILD) $(CARGO) build $(addprefix -p ,$(STAGE_BINS)) --bins
-	LUXEST_BIN_DIR=target/debug $(PYTHON) -m pytest pipelines/tests -q
+	MAKEFLAGS= MAKELEVEL= LUXEST_BIN_DIR=target/debug $(PYTHON) -m pytest pipelines/tests -q
 
 $(VENV)/$(VENV_STAMP): scripts/setup-python.sh training/requirements.txt
 	scripts/setup-python.sh
 
+# The tests run make themselves: without this make's jobserver (MAKEFLAGS), whose -j2 of make test
+# their makes would otherwise join, with a warning on stderr.
 pytest: $(VENV)/$(VENV_STAMP)
-	$(PYTHON) -m pytest training/tests -q
+	MAKEFLAGS= MAKELEVEL= $(PYTHON) -m pytest training/tests -q
 
 # The denoiser: preprocess the dataset, train (TRAIN_STEPS / TRAIN_MINUTES / TRAIN_SCHEDULE / TRAIN_LOSS), export ONNX, and
 # score it on the held-out test scenes with the evaluate stage (MODEL: defined before eval.mk).
