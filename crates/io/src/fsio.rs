@@ -37,12 +37,19 @@ pub fn write_bytes_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
 /// its own words), else `a directory`, `a device node` (`/dev/null` reads as empty, other
 /// devices endlessly), `a FIFO` (reading one waits for a writer forever) or `a socket`.
 pub fn non_file_kind(path: &Path) -> Option<&'static str> {
+    non_regular(std::fs::metadata(path).ok()?.file_type())
+}
+
+/// What a file type other than a regular file is (`a directory`, `a symbolic link` for the type
+/// of a link itself, `a device node`, `a FIFO`, `a socket`); `None` for a regular file.
+pub fn non_regular(t: std::fs::FileType) -> Option<&'static str> {
     use std::os::unix::fs::FileTypeExt;
-    let t = std::fs::metadata(path).ok()?.file_type();
     if t.is_file() {
         None
     } else if t.is_dir() {
         Some("a directory")
+    } else if t.is_symlink() {
+        Some("a symbolic link")
     } else if t.is_char_device() || t.is_block_device() {
         Some("a device node")
     } else if t.is_fifo() {

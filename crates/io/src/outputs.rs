@@ -23,7 +23,7 @@
 
 use crate::error::{Error, Result};
 use std::io::Write;
-use std::os::unix::fs::{FileTypeExt, MetadataExt};
+use std::os::unix::fs::MetadataExt;
 use std::path::{Component, Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -80,23 +80,7 @@ pub fn normalise(path: &Path) -> PathBuf {
 /// What kind of thing, other than a regular file, `path` names; `None` if it is a regular file or
 /// does not exist.
 fn non_regular_kind(path: &Path) -> Option<&'static str> {
-    let meta = std::fs::symlink_metadata(path).ok()?;
-    let t = meta.file_type();
-    if t.is_file() {
-        None
-    } else if t.is_dir() {
-        Some("a directory")
-    } else if t.is_symlink() {
-        Some("a symbolic link")
-    } else if t.is_char_device() || t.is_block_device() {
-        Some("a device node")
-    } else if t.is_fifo() {
-        Some("a FIFO")
-    } else if t.is_socket() {
-        Some("a socket")
-    } else {
-        Some("not a regular file")
-    }
+    crate::fsio::non_regular(std::fs::symlink_metadata(path).ok()?.file_type())
 }
 
 /// The nearest existing ancestor directory entry of `path` that is not a directory (so the

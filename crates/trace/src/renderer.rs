@@ -6,6 +6,7 @@
 
 use crate::film::Film;
 use crate::integrator::{kernel_for, Kernel, RayLog};
+use luxest_io::color::Rgb;
 use luxest_io::limits::WorkPlan;
 use luxest_io::progress::Progress;
 use luxest_render::camera::PinholeCamera;
@@ -63,17 +64,12 @@ impl<'a> Renderer<'a> {
         let (per_sample, spent) = luxest_io::limits::seconds_per_unit(|k| {
             // A stride coprime with nearly every image size spreads the samples over it.
             let pixel = (k * 7919) % pixels;
-            let mut rng = pixel_sampler(self.seed ^ CALIBRATION_SALT, pixel as usize, k as u32);
-            let (u, v) = rng.pixel_position();
-            let dir = self
-                .camera
-                .direction((pixel % w) as f64 + u, (pixel / w) as f64 + v);
-            (self.kernel)(
-                self.world,
-                self.camera.position,
-                dir,
-                &mut rng,
-                self.max_depth,
+            let (x, y) = ((pixel % w) as usize, (pixel / w) as usize);
+            self.sample(
+                self.seed ^ CALIBRATION_SALT,
+                pixel as usize,
+                (x, y),
+                k as u32,
                 &mut log,
             );
         });
@@ -92,6 +88,28 @@ impl<'a> Renderer<'a> {
             calibration_seconds: spent,
             levers: "--spp, --resolution and --threads".into(),
         }
+    }
+
+    /// The radiance of sample `s` of pixel number `pixel`, at (x, y), on the streams of `seed`.
+    fn sample(
+        &self,
+        seed: u64,
+        pixel: usize,
+        (x, y): (usize, usize),
+        s: u32,
+        log: &mut RayLog,
+    ) -> Rgb {
+        let mut rng = pixel_sampler(seed, pixel, s);
+        let (u, v) = rng.pixel_position();
+        let dir = self.camera.direction(x as f64 + u, y as f64 + v);
+        (self.kernel)(
+            self.world,
+            self.camera.position,
+            dir,
+            &mut rng,
+            self.max_depth,
+            log,
+        )
     }
 
     /// Adds samples `film.samples .. target` to every pixel, counting them on `progress`;
@@ -120,17 +138,7 @@ impl<'a> Renderer<'a> {
                     let pixel = y * w + x;
                     let (mut sum, mut sum_y2) = ([0.0; 3], 0.0);
                     for s in from..target {
-                        let mut rng = pixel_sampler(self.seed, pixel, s);
-                        let (u, v) = rng.pixel_position();
-                        let dir = self.camera.direction(x as f64 + u, y as f64 + v);
-                        let l = (self.kernel)(
-                            self.world,
-                            self.camera.position,
-                            dir,
-                            &mut rng,
-                            self.max_depth,
-                            &mut log,
-                        );
+                        let l = self.sample(self.seed, pixel, (x, y), s, &mut log);
                         for (a, c) in sum.iter_mut().zip(l.0) {
                             *a += c;
                         }
