@@ -108,7 +108,3 @@ bench-denoise: reports/bench/denoise.md
 .PHONY: bench-slurm
 bench-slurm: $(SCENE_COMPILE) $(TRACE) $(AOV_WRITE) $(ESTIMATE) $(VENV)/$(VENV_STAMP)
 	$(PYTHON) pipelines/bench_slurm.py --bin-dir $(RELEASE) -o reports/bench/slurm.md
-
-# `make lx-print-VAR`: a make variable's value (pipelines/bench_slurm.py reads the presets so).
-lx-print-%:
-	@echo $($*)

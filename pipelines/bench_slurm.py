@@ -24,6 +24,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "python"))
 sys.path.insert(0, str(ROOT / "pipelines"))
+sys.path.insert(0, str(ROOT / "training"))
+import config  # noqa: E402
 import luxest_contract as contract  # noqa: E402
 from host import host_summary  # noqa: E402
 
@@ -31,15 +33,12 @@ STAGES = {"SCENE_COMPILE": "scene-compile", "TRACE": "trace", "AOV_WRITE": "aov-
 
 
 def preset(name, variable):
-    """A value of pipelines/presets.mk for PRESET=`name`, as make expands it."""
-    r = subprocess.run(
-        ["make", "-s", "--no-print-directory", f"PRESET={name}", f"lx-print-{variable}"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return r.stdout.strip()
+    """A value of pipelines/presets.mk for PRESET=`name` (training/config.py reads the presets as
+    make does); DATASET_SCENES: the generated dataset's scenes for that preset."""
+    if variable == "DATASET_SCENES":
+        gen = [sys.executable, str(ROOT / "data-gen" / "generate.py"), "--preset", name, "--list"]
+        return subprocess.run(gen, capture_output=True, text=True, check=True).stdout.strip()
+    return config.presets(name)[variable]
 
 
 def wall(cmd, env=None):
@@ -102,30 +101,22 @@ def family(name):
 
 
 def core_seconds(dataset, cpus):
-    """Render core-seconds per family of the dataset's files: a snapshot set's last file carries
-    the whole render's seconds (its earlier snapshots are part of the same run)."""
-    per = {}
+    """Render core-seconds per family of the dataset's files: one file per render run carries the
+    run's seconds, the last snapshot of a set (trace and aov-write write every snapshot of one
+    run) and one feature file per aov-write run."""
+    runs = {}
     for p in sorted((ROOT / "data" / dataset).rglob("*.exr")):
         n = contract.parse_image_name(p.name)
-        if not n.reference and n.unit == "spp":
-            continue  # counted below, once per set
         if n.kind not in ("hdr", "nrm"):
-            continue  # one feature file per aov-write run
-        per[family(p.name)] = (
-            per.get(family(p.name), 0.0) + contract.header_value(contract.read(p).header, contract.SECONDS) * cpus
-        )
-    # Noisy sets: the last level of each (trace and aov-write write every snapshot of one run).
-    levels = {}
-    for p in (ROOT / "data" / dataset).rglob("*spp.*.exr"):
-        n = contract.parse_image_name(p.name)
-        if n.kind in ("hdr", "nrm"):
-            key = (p.parent, n.name, n.kind)
-            if n.spp > levels.get(key, (0, None))[0]:
-                levels[key] = (n.spp, p)
-    for spp, p in levels.values():
-        per[family(p.name)] = (
-            per.get(family(p.name), 0.0) + contract.header_value(contract.read(p).header, contract.SECONDS) * cpus
-        )
+            continue
+        # A noisy set is one run whatever its snapshots; a reference or a local-estimate image is one.
+        key = (p.parent, n.name, n.kind, n.reference, n.unit, n.spp if n.unit == "le" else None)
+        if key not in runs or (n.spp or 0) > runs[key][0]:
+            runs[key] = (n.spp or 0, p)
+    per = {}
+    for _, p in runs.values():
+        seconds = contract.header_value(contract.read(p).header, contract.SECONDS)
+        per[family(p.name)] = per.get(family(p.name), 0.0) + seconds * cpus
     return per
 
 

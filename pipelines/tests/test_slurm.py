@@ -145,17 +145,22 @@ def squeue(env, job):
     return r.stdout.strip()
 
 
-def cancel_when(env, cmd, log, ready):
-    """Submits `cmd` as a batch job, cancels it (SIGTERM, then SIGKILL) as soon as `ready()`
-    holds or the job has ended, and waits until Slurm has cleaned it up."""
+def sbatch(env, log, script, *options):
+    """Submits shell `script` as a one-task, one-CPU batch job logging to `log`; its job id."""
     r = subprocess.run(
-        ["sbatch", "--parsable", "-n1", "-c1", "-o", str(log), "--wrap", shlex.join(cmd)],
+        ["sbatch", "--parsable", *options, "-n1", "-c1", "-o", str(log), "--wrap", script],
         capture_output=True,
         text=True,
         env=env,
     )
     assert r.returncode == 0, r.stderr
-    job = r.stdout.strip().split(";")[0]
+    return r.stdout.strip().split(";")[0]
+
+
+def cancel_when(env, cmd, log, ready):
+    """Submits `cmd` as a batch job, cancels it (SIGTERM, then SIGKILL) as soon as `ready()`
+    holds or the job has ended, and waits until Slurm has cleaned it up."""
+    job = sbatch(env, log, shlex.join(cmd))
     deadline = time.time() + 120
     while not ready() and squeue(env, job):
         assert time.time() < deadline, f"job {job}: not ready in 120 s ({squeue(env, job)})"
@@ -245,28 +250,12 @@ def test_make_n_plans_the_same_commands_with_a_launcher():
 
 
 def tiny_training_data(root):
-    """A preprocessed one-scene split (random 32² images at 4 spp against a 64-spp reference) and
-    train.py's arguments for a short run of the steps schedule, checkpointing every 5 steps."""
-    sys.path.insert(0, str(ROOT / "training"))
-    import preprocess
+    """The training tests' tiny preprocessed split (training/tests/conftest.py) and train.py's
+    arguments for a short run of the steps schedule, checkpointing every 5 steps."""
+    sys.path.insert(0, str(ROOT / "training" / "tests"))
+    from conftest import make_tiny_prep
 
-    rng = np.random.default_rng(11)
-    d = root / "data" / "train"
-    d.mkdir(parents=True)
-    contract.write(
-        d / contract.image_name("g", "hdr"), rng.random((32, 32, 3)), {contract.SAMPLES: 64, contract.SEED: 2}
-    )
-    for kind in contract.FEATURES:
-        contract.write(
-            d / contract.image_name("g", kind, 4), rng.random((32, 32, 3)), {contract.SAMPLES: 4, contract.SEED: 1}
-        )
-    preprocess.preprocess_split(d, root / "prep" / "train", [4], [])
-    return [
-        "--prep-dir",
-        str(root / "prep"),
-        *"--noisy-spp 4 --dle-paths --crop 32 --batch 2 --threads 1".split(),
-        *"--base-width 8 --schedule steps --steps 60 --minutes 30 --checkpoint-every 5".split(),
-    ]
+    return make_tiny_prep(root) + "--base-width 8 --schedule steps --steps 60 --minutes 30 --checkpoint-every 5".split()
 
 
 def checkpoint_step(path):
@@ -291,14 +280,7 @@ def test_a_requeued_training_resumes_where_it_stopped(cluster, tmp_path):
     )
     cut = tmp_path / "cut"
     script = f"cd {shlex.quote(str(ROOT / 'training'))} && " + shlex.join(train + ["--run-dir", str(cut), "--resume"])
-    r = subprocess.run(
-        ["sbatch", "--parsable", "--requeue", "-n1", "-c1", "-o", str(tmp_path / "job.log"), "--wrap", script],
-        capture_output=True,
-        text=True,
-        env=cluster,
-    )
-    assert r.returncode == 0, r.stderr
-    job = r.stdout.strip().split(";")[0]
+    job = sbatch(cluster, tmp_path / "job.log", script, "--requeue")
     deadline = time.time() + 300
     while not (checkpoint_step(cut / "checkpoint.pt") or 0) >= 5:
         assert time.time() < deadline, f"job {job}: no checkpoint in 300 s ({(tmp_path / 'job.log').read_text()})"
