@@ -19,6 +19,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use luxest_io::cli::{CommonArgs, Console};
 use luxest_io::exr::write_rgb_to;
 use luxest_io::header;
+use luxest_io::header::estimator;
 use luxest_io::image::RgbImage;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{self, image_path, Kind, Level};
@@ -327,15 +328,6 @@ pub enum ExactCase {
         #[arg(long, default_value_t = 0.5)]
         rho: f64,
     },
-}
-
-/// Estimator names recorded in the results' run metadata.
-pub mod estimator {
-    pub const LOCAL_ESTIMATE: &str = luxest_io::header::estimator::LOCAL_ESTIMATE;
-    pub const DIRECT_SIMULATION: &str = luxest_io::header::estimator::DIRECT_SIMULATION;
-    pub const GATHER: &str = luxest_io::header::estimator::GATHER;
-    pub const DOUBLE_LOCAL_ESTIMATE: &str = luxest_io::header::estimator::DOUBLE_LOCAL_ESTIMATE;
-    pub const LIGHT_TRACING: &str = luxest_io::header::estimator::LIGHT_TRACING;
 }
 
 /// `estimate image`: the double local estimate (or light tracing) of the camera's image.
