@@ -15,5 +15,6 @@ mod reliability;
 mod reliability_processes;
 mod scene_compile_errors;
 mod scene_compile_scenes;
+mod textures;
 mod trace_exact;
 mod util;

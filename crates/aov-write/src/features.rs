@@ -67,13 +67,14 @@ fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> 
     let Some(sp) = world.intersect(origin, dir) else {
         return FirstHit::MISS;
     };
-    let m = world.material(sp.triangle);
     let wo = -dir;
+    let m = world.material_seen(&sp, wo);
+    let m = &*m;
     let own = FirstHit {
         albedo: albedo(m),
         normal: if sp.ns.dot(dir) > 0.0 { -sp.ns } else { sp.ns },
         depth: sp.distance,
-        emission: world.emitted_radiance(sp.triangle, sp.ng, wo),
+        emission: world.emitted_radiance(&sp, wo),
     };
     if vertices >= MAX_DELTA_VERTICES {
         return own;

@@ -132,7 +132,9 @@ fn run_batch(
                     splat(world, cam, position, normal, q, f_cos, &mut film);
                 }
                 LightVertex::Collision { sp, dir, .. } => {
-                    let (m, wo, ng) = (world.material(sp.triangle), -dir, sp.ng);
+                    let (wo, ng) = (-dir, sp.ng);
+                    let m = world.material_seen(sp, wo);
+                    let m = &*m;
                     let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
                     splat(world, cam, sp.position, ng, q, f_cos, &mut film);
                 }

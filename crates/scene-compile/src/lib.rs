@@ -8,7 +8,9 @@
 //! expansion (with calculation surfaces, [`surfaces`]).
 //!
 //! Modules: [`cli`] (arguments and run), [`validate`], [`shapes`] (tessellation), [`meshes`]
-//! (OBJ and glTF), [`luminaires`], [`surfaces`], [`mitsuba`] (export to Mitsuba 3); this file assembles the world-space scene.
+//! (OBJ and glTF), [`luminaires`], [`surfaces`], [`textures`] (bitmap textures and the
+//! per-material surfaces), [`mitsuba`] (export to Mitsuba 3); this file assembles the
+//! world-space scene.
 
 pub mod cli;
 pub mod luminaires;
@@ -16,6 +18,7 @@ pub mod meshes;
 pub mod mitsuba;
 pub mod shapes;
 pub mod surfaces;
+pub mod textures;
 pub mod validate;
 
 pub use cli::{run, Args};
@@ -72,6 +75,8 @@ pub fn compile_file(path: &Path) -> Result<(CompiledScene, Report)> {
 struct Builder {
     positions: Vec<[f32; 3]>,
     normals: Vec<[f32; 3]>,
+    /// Per vertex; zero for meshes without texture coordinates.
+    uvs: Vec<[f32; 2]>,
     indices: Vec<[u32; 3]>,
     triangle_material: Vec<u32>,
     triangle_emitter: Vec<u32>,
@@ -137,6 +142,14 @@ impl Builder {
                 .normals
                 .extend(std::iter::repeat_n([0.0f32; 3], mesh.positions.len())),
         }
+        match &mesh.uvs {
+            Some(t) => self
+                .uvs
+                .extend(t.iter().map(|&[u, v]| [u as f32, v as f32])),
+            None => self
+                .uvs
+                .extend(std::iter::repeat_n([0.0f32; 2], mesh.positions.len())),
+        }
         let (mut added, mut area, mut dropped) = (0u32, 0.0, 0u64);
         for t in &mesh.triangles {
             let [a, b, c] = t.map(|i| Vec3::from(self.positions[base + i as usize]));
@@ -166,32 +179,37 @@ impl Builder {
     }
 }
 
-fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMesh> {
-    let resolve = |p: &str| -> Result<PathBuf> {
-        let full = scene_path.parent().unwrap_or(Path::new(".")).join(p);
-        if full.is_file() {
-            Ok(full)
-        } else if let Some(kind) = luxest_io::fsio::non_file_kind(&full) {
-            // It exists (a directory, /dev/null, a FIFO): "not found" would send the user
-            // looking for a file that is there.
-            let what = if kind == "a directory" {
-                "a mesh file"
-            } else {
-                "a regular file, as a mesh must be"
-            };
-            Err(Error::at(
-                scene_path,
-                format!("{place}.shape.path"),
-                format!("{} is {kind}, not {what}", full.display()),
-            ))
+/// A file the scene names (`p`, relative to the scene file) at `place`: a mesh, texture or
+/// photometric file (`what`). It must be a regular file.
+pub(crate) fn resolve_file(scene_path: &Path, place: &str, p: &str, what: &str) -> Result<PathBuf> {
+    let full = scene_path.parent().unwrap_or(Path::new(".")).join(p);
+    if full.is_file() {
+        Ok(full)
+    } else if let Some(kind) = luxest_io::fsio::non_file_kind(&full) {
+        // It exists (a directory, /dev/null, a FIFO): "not found" would send the user
+        // looking for a file that is there.
+        let expected = if kind == "a directory" {
+            format!("a {what} file")
         } else {
-            Err(Error::at(
-                scene_path,
-                format!("{place}.shape.path"),
-                format!("mesh file {} not found", full.display()),
-            ))
-        }
-    };
+            format!("a regular file, as a {what} must be")
+        };
+        Err(Error::at(
+            scene_path,
+            place,
+            format!("{} is {kind}, not {expected}", full.display()),
+        ))
+    } else {
+        Err(Error::at(
+            scene_path,
+            place,
+            format!("{what} file {} not found", full.display()),
+        ))
+    }
+}
+
+fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMesh> {
+    let resolve =
+        |p: &str| resolve_file(scene_path, &format!("{place}.shape.path"), p, "mesh");
     Ok(match shape {
         Shape::Quad { corner, u, v } => shapes::quad(*corner, *u, *v),
         Shape::Polygon { vertices } => shapes::polygon(vertices),
@@ -283,12 +301,39 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         bounds_max: Vec3::splat(f64::NEG_INFINITY),
         ..Default::default()
     };
+    let loaded = textures::load(path, scene, &mut report.warnings)?;
+    let mut any_uvs = false;
     let mut emitters = Vec::new();
     let mut objects = Vec::new();
     for (i, o) in scene.objects.iter().enumerate() {
         let place = format!("objects[{i}]");
         let name = o.name.clone().unwrap_or_else(|| place.clone());
         let mesh = object_mesh(path, &place, &o.shape)?;
+        let surface = scene.surfaces.get(&o.material);
+        let textured_surface = surface.is_some_and(|s| {
+            s.color.is_some()
+                || s.roughness.is_some()
+                || s.normal.is_some()
+                || s.opacity.as_ref().is_some_and(|o| o.texture.is_some())
+        });
+        let textured_emission = matches!(o.emission, Some(Emission::Texture { .. }));
+        if textured_surface || textured_emission {
+            if mesh.uvs.is_none() {
+                return Err(Error::at(
+                    path,
+                    &place,
+                    format!(
+                        "({name}) has a textured {} but its shape has no texture coordinates",
+                        if textured_surface {
+                            format!("material \"{}\"", o.material)
+                        } else {
+                            "emission".to_string()
+                        }
+                    ),
+                ));
+            }
+            any_uvs = true;
+        }
         let material = material_index[o.material.as_str()];
         let emitter = if o.emission.is_some() {
             emitters.len() as u32
@@ -319,8 +364,16 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             ));
         }
         if let Some(e) = &o.emission {
+            let mut texture = None;
             let radiance_rgb = match e {
                 Emission::Radiance(l) => *l,
+                Emission::Texture {
+                    texture: t,
+                    scale,
+                } => {
+                    texture = Some(loaded.index[t.as_str()]);
+                    *scale
+                }
                 // L = flux / (pi A) for a Lambertian emitter radiating from one side.
                 Emission::Flux { lumens, color } => {
                     let l = color
@@ -344,13 +397,29 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
                     l
                 }
             };
+            // The mean luminance over the surface: the texture's mean over the triangles.
+            let mean = match texture {
+                None => radiance_rgb,
+                Some(t) => {
+                    let tris: Vec<([[f64; 2]; 3], f64)> = (first..first + count)
+                        .map(|k| {
+                            let idx = b.indices[k as usize];
+                            let [pa, pb, pc] = idx.map(|v| Vec3::from(b.positions[v as usize]));
+                            let uv = idx.map(|v| b.uvs[v as usize].map(|c| c as f64));
+                            (uv, 0.5 * (pb - pa).cross(pc - pa).length())
+                        })
+                        .collect();
+                    radiance_rgb * textures::mean_over(&loaded.textures[t as usize], &tris)
+                }
+            };
             emitters.push(Emitter::Area {
                 name: name.clone(),
                 first_triangle: first,
                 triangle_count: count,
                 radiance_rgb,
+                texture,
                 area_m2: area,
-                flux_rgb: radiance_rgb * (PI * area),
+                flux_rgb: mean * (PI * area),
             });
         }
         objects.push(ObjectRange {
@@ -405,29 +474,31 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             ));
         }
     }
-    for &i in &used {
-        let m = &materials[i as usize];
-        let albedo = |c: usize| match &m.model {
-            Material::Lambertian { reflectance } | Material::Mirror { reflectance } => {
-                reflectance.0[c]
-            }
-            Material::Glossy {
-                diffuse, specular, ..
-            } => diffuse.0[c] + specular.0[c],
-            // A dielectric absorbs nothing by design; its light leaves through other surfaces.
-            _ => 0.0,
-        };
-        if let Some(c) = (0..3).find(|&c| albedo(c) >= 1.0) {
-            // Choice: reflectance 1 stays allowed (an ideal mirror or white is a
-            // legitimate test), but its dependence on the path-depth cap is stated.
-            report.warnings.push(format!(
-                "{}: materials[\"{}\"]: reflectance 1 in channel {c} absorbs no light; in a \
-                 closed room paths then end only at the depth cap (--max-depth) and the result \
-                 depends on it",
-                path.display(),
-                m.name
-            ));
+    // Light is trapped (walks end only at --max-depth) where no surface absorbs it: in a
+    // channel where every used material reflects or transmits all of it. A white wall in a
+    // room with any absorbing surface is not such a case.
+    let lossless = |m: &Material, c: usize| match m {
+        Material::Lambertian { reflectance } | Material::Mirror { reflectance } => {
+            reflectance.0[c] >= 1.0
         }
+        Material::Glossy {
+            diffuse, specular, ..
+        } => diffuse.0[c] + specular.0[c] >= 1.0,
+        // A smooth dielectric absorbs nothing.
+        Material::Dielectric { .. } => true,
+        _ => false,
+    };
+    if let Some(c) = (0..3).find(|&c| {
+        !used.is_empty() && used.iter().all(|&i| lossless(&materials[i as usize].model, c))
+    }) {
+        // Choice: allowed (an ideal white furnace is a legitimate test), but its dependence on
+        // the path-depth cap is stated.
+        report.warnings.push(format!(
+            "{}: no material absorbs light in channel {c} (every one reflects or transmits all \
+             of it); in a closed scene paths then end only at the depth cap (--max-depth) and \
+             the result depends on it",
+            path.display(),
+        ));
     }
     let used_models: Vec<&Material> = used.iter().map(|&i| &materials[i as usize].model).collect();
     let mut material_kinds: Vec<_> = used_models.iter().map(|m| m.kind()).collect();
@@ -446,6 +517,10 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         camera: scene.camera.is_some(),
         sensors: !scene.sensors.is_empty() || !scene.calculation_surfaces.is_empty(),
         goniometric_luminaires: !scene.luminaires.is_empty(),
+        uvs: any_uvs,
+        textures: !loaded.textures.is_empty(),
+        one_sided: scene.surfaces.values().any(|s| !s.two_sided),
+        opacity: scene.surfaces.values().any(|s| s.opacity.is_some()),
     };
     let name = scene_name(scene, path);
     let stats = Stats {
@@ -523,6 +598,8 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         objects,
         sensors,
         photometries: lum.tables,
+        surfaces: textures::surfaces(scene, &loaded),
+        textures: loaded.infos,
         features,
         stats,
     };
@@ -533,6 +610,8 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         indices: b.indices,
         triangle_material: b.triangle_material,
         triangle_emitter: b.triangle_emitter,
+        uvs: if any_uvs { b.uvs } else { Vec::new() },
+        textures: loaded.textures,
         content_hash: String::new(),
     };
     compiled

@@ -85,7 +85,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
         };
         let wo = -dir;
         if AREA {
-            if let Some((e, le)) = world.emission(sp.triangle, sp.ng, wo) {
+            if let Some((e, le)) = world.emission(&sp, wo) {
                 {
                     let w = if delta {
                         1.0
@@ -99,7 +99,8 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
                 }
             }
         }
-        let m = world.material(sp.triangle);
+        let m = world.material_seen(&sp, wo);
+        let m = &*m;
         let is_delta = SPECULAR && bsdf::is_delta(m);
         if !is_delta && (POINT || AREA) {
             // Next-event estimation.
