@@ -6,6 +6,8 @@
 //! - [`sampling`], [`sobol`], [`bsdf`], [`camera`]: seeded RNG, the path tracer's Sobol
 //!   sampler and the sampling routines, material models, the pinhole camera and its pixel
 //!   sampling;
+//! - [`texture`]: bitmap textures (sRGB or linear, Mitsuba 3's wrap modes and filters,
+//!   mip-mapped minification);
 //! - [`luminaire`]: goniometric luminaires (photometric files) as delta lights and emitters;
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
 //! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
@@ -20,4 +22,5 @@ pub mod rt;
 pub mod sampling;
 pub mod scene;
 pub mod sobol;
+pub mod texture;
 pub mod world;
