@@ -185,8 +185,7 @@ fn view_points(
                 // Emitters seen directly are light tracing's when it runs (its emission points
                 // sample the emitter's image with far more points than the pixels get here).
                 if cfg.mis_paths == 0 || bounce > 0 {
-                    *emitted_px =
-                        *emitted_px + weight * world.emitted_radiance(&sp, -dir);
+                    *emitted_px = *emitted_px + weight * world.emitted_radiance(&sp, -dir);
                 }
                 let m = world.material_seen(&sp, -dir);
                 let m = &*m;
@@ -350,7 +349,7 @@ fn light_tracing(
                 return; // the exact direct term's
             }
             let (wo, ng) = (-dir, sp.ng);
-            let m = world.material_seen(sp, wo);
+            let m = world.material_seen(&sp, wo);
             let m = &*m;
             let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
             if let Some(link) =

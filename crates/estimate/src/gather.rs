@@ -222,7 +222,7 @@ pub fn near_field_sample(
     if d2 >= radius * radius {
         return (emitted, Rgb::BLACK);
     }
-    if let Some((e, radiance)) = world.emission(sp, -dir) {
+    if let Some((e, radiance)) = world.emission(&sp, -dir) {
         let cos_e = sp.ng.dot(-dir).abs();
         let p_cos = n.dot(dir).max(0.0) / PI;
         let p_light = world.area_light_point_pdf(e) * d2 / cos_e;

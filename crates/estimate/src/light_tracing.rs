@@ -133,7 +133,7 @@ fn run_batch(
                 }
                 LightVertex::Collision { sp, dir, .. } => {
                     let (wo, ng) = (-dir, sp.ng);
-                    let m = world.material_seen(sp, wo);
+                    let m = world.material_seen(&sp, wo);
                     let m = &*m;
                     let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
                     splat(world, cam, sp.position, ng, q, f_cos, &mut film);

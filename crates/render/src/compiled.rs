@@ -491,10 +491,8 @@ impl CompiledScene {
         let nuv = if header.features.uvs { nv } else { 0 };
         let uvs = r.f32x2(nuv, "texture coordinates")?;
         let mut textures = Vec::with_capacity(header.textures.len());
-        for info in &header.textures {
-            let (t, used) = Texture::decode(&body[r.pos..]).map_err(|m| {
-                Error::input(path, format!("texture '{}' ({}): {m}", info.name, info.source))
-            })?;
+        for _ in &header.textures {
+            let (t, used) = Texture::decode(path, &body[r.pos..])?;
             r.pos += used;
             textures.push(t);
         }
@@ -572,8 +570,14 @@ impl CompiledScene {
             Emitter::Area { texture, .. } => *texture,
             _ => None,
         });
-        if texture_refs.chain(emitter_refs).flatten().any(|t| t >= ntex) {
-            return Err(format!("a surface or emitter references texture beyond {ntex}"));
+        if texture_refs
+            .chain(emitter_refs)
+            .flatten()
+            .any(|t| t >= ntex)
+        {
+            return Err(format!(
+                "a surface or emitter references texture beyond {ntex}"
+            ));
         }
         if self.header.features.uvs && self.uvs.len() != self.positions.len() {
             return Err("texture coordinates and vertices differ in number".into());

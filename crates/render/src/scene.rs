@@ -105,10 +105,6 @@ pub struct Opacity {
     pub cutoff: Option<f64>,
 }
 
-fn one() -> f64 {
-    1.0
-}
-
 /// Pinhole camera.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

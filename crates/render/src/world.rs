@@ -11,9 +11,9 @@ use crate::sampling::{
 use crate::scene::Material;
 use crate::texture::Texture;
 use luxest_io::color::Rgb;
-use std::borrow::Cow;
 use luxest_io::error::Result;
 use luxest_io::math::Vec3;
+use std::borrow::Cow;
 
 /// A surface point hit by a ray.
 #[derive(Clone, Copy, Debug)]
@@ -738,7 +738,9 @@ impl World {
                 radiance_rgb,
                 texture,
                 ..
-            } if sp.ng.dot(w) > 0.0 => Some((e, self.textured_radiance(*radiance_rgb, *texture, sp.uv))),
+            } if sp.ng.dot(w) > 0.0 => {
+                Some((e, self.textured_radiance(*radiance_rgb, *texture, sp.uv)))
+            }
             _ => None,
         }
     }

@@ -208,8 +208,7 @@ pub(crate) fn resolve_file(scene_path: &Path, place: &str, p: &str, what: &str) 
 }
 
 fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMesh> {
-    let resolve =
-        |p: &str| resolve_file(scene_path, &format!("{place}.shape.path"), p, "mesh");
+    let resolve = |p: &str| resolve_file(scene_path, &format!("{place}.shape.path"), p, "mesh");
     Ok(match shape {
         Shape::Quad { corner, u, v } => shapes::quad(*corner, *u, *v),
         Shape::Polygon { vertices } => shapes::polygon(vertices),
@@ -367,10 +366,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             let mut texture = None;
             let radiance_rgb = match e {
                 Emission::Radiance(l) => *l,
-                Emission::Texture {
-                    texture: t,
-                    scale,
-                } => {
+                Emission::Texture { texture: t, scale } => {
                     texture = Some(loaded.index[t.as_str()]);
                     *scale
                 }
@@ -486,10 +482,12 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         } => diffuse.0[c] + specular.0[c] >= 1.0,
         // A smooth dielectric absorbs nothing.
         Material::Dielectric { .. } => true,
-        _ => false,
     };
     if let Some(c) = (0..3).find(|&c| {
-        !used.is_empty() && used.iter().all(|&i| lossless(&materials[i as usize].model, c))
+        !used.is_empty()
+            && used
+                .iter()
+                .all(|&i| lossless(&materials[i as usize].model, c))
     }) {
         // Choice: allowed (an ideal white furnace is a legitimate test), but its dependence on
         // the path-depth cap is stated.

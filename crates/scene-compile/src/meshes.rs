@@ -130,10 +130,17 @@ pub fn load_obj_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
                 .collect::<Vec<_>>()
         });
         if let Some(uvs) = &uvs {
-            if let Some(i) = uvs.iter().position(|t| !(t[0].is_finite() && t[1].is_finite())) {
+            if let Some(i) = uvs
+                .iter()
+                .position(|t| !(t[0].is_finite() && t[1].is_finite()))
+            {
                 return Err(Error::at(
                     path,
-                    format!("texture coordinate of vertex {} of object '{}'", i + 1, model.name),
+                    format!(
+                        "texture coordinate of vertex {} of object '{}'",
+                        i + 1,
+                        model.name
+                    ),
                     "non-finite value",
                 ));
             }

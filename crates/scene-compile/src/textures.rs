@@ -6,6 +6,7 @@ use luxest_io::color::Rgb;
 use luxest_io::num::show;
 use luxest_io::Result;
 use luxest_render::compiled::{CompiledOpacity, CompiledSurface, TextureInfo};
+use luxest_render::sampling::uniform_triangle;
 use luxest_render::scene::{Emission, Scene, Surface, TextureDesc};
 use luxest_render::texture::{Texture, TextureOptions};
 use std::collections::BTreeMap;
@@ -13,7 +14,7 @@ use std::path::Path;
 
 /// Checks the `textures` and `surfaces` tables: every surface belongs to a material, every
 /// texture named exists, opacities and cut-offs lie in [0, 1].
-pub fn check(c: &Check, scene: &Scene) -> Result<()> {
+pub(crate) fn check(c: &Check, scene: &Scene) -> Result<()> {
     for (name, t) in &scene.textures {
         if t.path.is_empty() {
             return Err(c.fail(&format!("textures[\"{name}\"].path"), "is empty"));
@@ -95,10 +96,7 @@ pub fn load(path: &Path, scene: &Scene, warnings: &mut Vec<String>) -> Result<Lo
     };
     for (name, desc) in &scene.textures {
         if !used.contains(name.as_str()) {
-            warnings.push(format!(
-                "{}: textures[\"{name}\"]: unused",
-                path.display()
-            ));
+            warnings.push(format!("{}: textures[\"{name}\"]: unused", path.display()));
             continue;
         }
         let place = format!("textures[\"{name}\"].path");
@@ -167,7 +165,7 @@ fn compile_surface(s: &Surface, tex: &dyn Fn(&Option<String>) -> Option<u32>) ->
     }
 }
 
-/// Barycentric sample points per side of a triangle when averaging an emitter's texture
+/// Sample points per side of the unit square mapped onto a triangle when averaging an emitter's texture
 /// (`STRATA²` points per triangle, at most [`MAX_LOOKUPS`] lookups per emitter).
 const STRATA: usize = 8;
 const MAX_LOOKUPS: usize = 1 << 22;
@@ -178,20 +176,19 @@ const MAX_LOOKUPS: usize = 1 << 22;
 /// millions of triangles); the emitter's flux only weighs it among the emitters, the estimators
 /// stay unbiased with any weight.
 pub fn mean_over(texture: &Texture, triangles: &[([[f64; 2]; 3], f64)]) -> Rgb {
-    let strata = STRATA.min(((MAX_LOOKUPS / triangles.len().max(1)) as f64).sqrt() as usize).max(1);
+    let strata = STRATA
+        .min(((MAX_LOOKUPS / triangles.len().max(1)) as f64).sqrt() as usize)
+        .max(1);
     let (mut sum, mut area) = (Rgb::BLACK, 0.0);
     for (uv, a) in triangles {
         let mut s = Rgb::BLACK;
         for i in 0..strata {
             for j in 0..strata {
-                // The square's cell centre, folded into the triangle.
-                let (mut b1, mut b2) = (
+                // The unit square's cell centre, mapped to the triangle preserving area.
+                let (b1, b2) = uniform_triangle(
                     (i as f64 + 0.5) / strata as f64,
                     (j as f64 + 0.5) / strata as f64,
                 );
-                if b1 + b2 > 1.0 {
-                    (b1, b2) = (1.0 - b1, 1.0 - b2);
-                }
                 let w = 1.0 - b1 - b2;
                 let p = [
                     uv[0][0] * w + uv[1][0] * b1 + uv[2][0] * b2,
