@@ -384,6 +384,19 @@ impl World {
     /// back. Borrowed (no copy) for untextured two-sided materials.
     #[inline]
     pub fn material_at(&self, triangle: u32, uv: [f64; 2], wo: Vec3) -> Cow<'_, Material> {
+        self.material_filtered(triangle, uv, wo, 0.0)
+    }
+
+    /// [`World::material_at`] with textures filtered over a footprint `footprint` wide in uv
+    /// space (mip-mapped; 0: the finest level, as the estimators look textures up — their
+    /// pixel samples do the filtering).
+    pub fn material_filtered(
+        &self,
+        triangle: u32,
+        uv: [f64; 2],
+        wo: Vec3,
+        footprint: f64,
+    ) -> Cow<'_, Material> {
         let mi = self.scene.triangle_material[triangle as usize] as usize;
         let m = &self.scene.header.materials[mi].model;
         let Some(s) = self.scene.header.surfaces.get(mi) else {
@@ -396,10 +409,12 @@ impl World {
             return Cow::Borrowed(m);
         }
         let color = s.color.map(|t| {
-            let [r, g, b, _] = self.texture(t).eval(uv, 0.0);
+            let [r, g, b, _] = self.texture(t).eval(uv, footprint);
             Rgb([r as f64, g as f64, b as f64])
         });
-        let roughness = s.roughness.map(|t| self.texture(t).eval(uv, 0.0)[0] as f64);
+        let roughness = s
+            .roughness
+            .map(|t| self.texture(t).eval(uv, footprint)[0] as f64);
         Cow::Owned(m.textured(color, roughness))
     }
 
@@ -411,6 +426,27 @@ impl World {
 
     fn texture(&self, t: u32) -> &Texture {
         &self.scene.textures[t as usize]
+    }
+
+    /// The uv-space width of a footprint `width` metres wide on the surface at `sp` seen from
+    /// direction `wo`: the footprint stretches by 1/√|cos θ| on average over its two axes, and
+    /// the triangle maps metres to uv units by √(uv area / area). Zero without texture
+    /// coordinates.
+    pub fn uv_footprint(&self, sp: &SurfacePoint, wo: Vec3, width: f64) -> f64 {
+        if !self.scene.header.features.uvs {
+            return 0.0;
+        }
+        let idx = self.scene.indices[sp.triangle as usize];
+        let [a, b, c] = idx.map(|i| Vec3::from(self.scene.positions[i as usize]));
+        let [ta, tb, tc] = idx.map(|i| self.scene.uvs[i as usize].map(|x| x as f64));
+        let area = (b - a).cross(c - a).length();
+        let uv_area = ((tb[0] - ta[0]) * (tc[1] - ta[1]) - (tb[1] - ta[1]) * (tc[0] - ta[0])).abs();
+        let cos = wo.dot(sp.ng).abs().max(1e-3);
+        if area > 0.0 {
+            width * (uv_area / area).sqrt() / cos.sqrt()
+        } else {
+            0.0
+        }
     }
 
     /// Texture coordinates at barycentric (u, v) of a triangle (zero without stored ones).
