@@ -71,7 +71,7 @@ impl Conductor<'_> {
             return 0.0;
         }
         let d = Distribution::new(r);
-        d.d(h) * d.smith_g1(wo, h) / (4.0 * wo.z)
+        d.d(h) * d.smith_g1_sampled(wo, h) / (4.0 * wo.z)
     }
 
     pub fn sample(&self, roughness: Option<&Microfacet>, wo: Vec3, u: (f64, f64)) -> Option<LocalSample> {
@@ -92,9 +92,10 @@ impl Conductor<'_> {
         if !(pdf_m > 0.0) || wi.z <= 0.0 {
             return None;
         }
-        // f cos θi / pdf = F G1(wi, m): D and G1(wo, m) cancel against the visible normals.
-        let weight =
-            reflectance(wo.dot(m), self.eta, self.k, self.specular_reflectance) * d.smith_g1(wi, m);
+        // f cos θi / pdf = F G1(wi, m): D and G1(wo, m) cancel against the visible normals
+        // (up to the masking ratio, see `microfacet`).
+        let weight = reflectance(wo.dot(m), self.eta, self.k, self.specular_reflectance)
+            * (d.smith_g1(wi, m) * d.masking_ratio(wo, m));
         Some(LocalSample {
             wi,
             weight,

@@ -168,8 +168,9 @@ impl Rough {
             return None;
         }
         // f |cos θi| / pdf = G1(wi, m) (times the radiance scaling): D, F and G1(wo, m)
-        // cancel against the visible normals' density and the lobe choice.
-        let g1 = self.d.smith_g1(wi, m);
+        // cancel against the visible normals' density and the lobe choice (up to the masking
+        // ratio, see `microfacet`).
+        let g1 = self.d.smith_g1(wi, m) * self.d.masking_ratio(wo, m);
         if !(g1 > 0.0 && pdf > 0.0) {
             return None;
         }

@@ -203,7 +203,7 @@ impl Plastic<'_> {
                 let ps = self.specular_probability(1.0 - t.transmittance(wo.z));
                 let d = Distribution::new(r);
                 let h = (wo + wi).try_normalize().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
-                let spec = d.d(h) * d.smith_g1(wo, h) / (4.0 * wo.z);
+                let spec = d.d(h) * d.smith_g1_sampled(wo, h) / (4.0 * wo.z);
                 ps * spec + (1.0 - ps) * wi.z / PI
             }
         }
