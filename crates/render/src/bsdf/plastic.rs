@@ -20,7 +20,9 @@
 //! ([`tables`]). Directions are in the local frame of the surface (+z the normal on `wo`'s
 //! side).
 
-use super::microfacet::{fresnel, reflect, reflectance, transmittance, Distribution};
+use super::microfacet::{
+    fresnel, quadrature_nodes, reflect, reflectance, transmittance, Distribution,
+};
 use super::LocalSample;
 use crate::scene::{Microfacet, MicrofacetDistribution};
 use luxest_io::color::Rgb;
@@ -62,11 +64,12 @@ impl Tables {
     fn compute(d: &Distribution, eta: f64) -> Tables {
         let mut external_transmittance = [0.0; TRANSMITTANCE_RES];
         let mut internal = 0.0;
+        let (outer, inner) = (quadrature_nodes(eta), quadrature_nodes(1.0 / eta));
         for (i, t) in external_transmittance.iter_mut().enumerate() {
             let mu = (i as f64 / (TRANSMITTANCE_RES - 1) as f64).max(1e-6);
             let wi = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-            *t = transmittance(d, wi, eta);
-            internal += reflectance(d, wi, 1.0 / eta) * mu;
+            *t = transmittance(d, wi, eta, &outer);
+            internal += reflectance(d, wi, 1.0 / eta, &inner) * mu;
         }
         Tables {
             external_transmittance,
@@ -262,3 +265,4 @@ impl Plastic<'_> {
         }
     }
 }
+
