@@ -39,6 +39,19 @@ pub fn assert_sampling_matches_pdf(
     tests: usize,
     tolerance: f64,
 ) {
+    // Microfacet lobes are narrow: 16 × 16 midpoints per bin integrate those of α ≥ 0.15 to
+    // 1e-4.
+    assert_sampling_matches_pdf_integrated(m, cases, seed, (tests, 16), tolerance);
+}
+
+/// [`assert_sampling_matches_pdf`] with `integration × integration` midpoints per bin.
+pub fn assert_sampling_matches_pdf_integrated(
+    m: &Material,
+    cases: &[(Vec3, Vec3)],
+    seed: u64,
+    (tests, integration): (usize, usize),
+    tolerance: f64,
+) {
     for (k, &(wo, ns)) in cases.iter().enumerate() {
         let (wo, ns) = (wo.try_normalize().unwrap(), ns.try_normalize().unwrap());
         let mut r = Rng::new(seed, k as u64);
@@ -61,10 +74,8 @@ pub fn assert_sampling_matches_pdf(
             }
             Some(s.wi)
         };
-        // Microfacet lobes are narrow: 16 × 16 midpoints per bin integrate those of α ≥ 0.15
-        // to 1e-4.
         ChiSquareTest::new(Sphere)
-            .integration(16)
+            .integration(integration)
             .tests(tests)
             .run(&mut draw, |wi| pdf(m, wo, wi, UP, ns))
             .unwrap_or_else(|r| panic!("{m:?}: wo {wo:?}, ns {ns:?}: {r:?}"));
