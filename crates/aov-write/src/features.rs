@@ -123,11 +123,12 @@ fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> 
     };
     let fresnel = match m {
         // trace's Fresnel reflectance at this vertex (bsdf::sample with flat normals).
-        Material::Dielectric { ior } => Some(bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance),
-        Material::ThinDielectric { ior } => Some(bsdf::dielectric::thin_reflectance(
-            wo.dot(sp.ng),
-            *ior,
-        )),
+        Material::Dielectric { ior } => {
+            Some(bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance)
+        }
+        Material::ThinDielectric { ior } => {
+            Some(bsdf::dielectric::thin_reflectance(wo.dot(sp.ng), *ior))
+        }
         _ => None,
     };
     match (m, fresnel) {

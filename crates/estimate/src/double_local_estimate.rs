@@ -343,9 +343,8 @@ fn light_tracing(
             }
             let (m, wo, ng) = (world.material(sp.triangle), -dir, sp.ng);
             // A light path's vertex: the adjoint BSDF (wo towards the light).
-            let f_cos = |w: Vec3| {
-                bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs()
-            };
+            let f_cos =
+                |w: Vec3| bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs();
             if let Some(link) =
                 connect_to_camera(world, cam, sp.position, ng, f_cos, &mut shadow_rays)
             {

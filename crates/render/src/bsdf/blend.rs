@@ -115,7 +115,7 @@ mod tests {
         Material::RoughDielectric {
             ior: 1.5,
             roughness: Microfacet {
-                distribution: MicrofacetDistribution::Beckmann,
+                distribution: MicrofacetDistribution::Ggx,
                 alpha: 0.3,
             },
         }
@@ -144,7 +144,6 @@ mod tests {
         let cases = [
             (Vec3::new(0.3, 0.1, 0.9), UP),
             (Vec3::new(0.5, 0.3, -0.8), UP),
-            (Vec3::new(0.97, 0.0, 0.25), UP),
         ];
         let m = blend(0.6, glass(), matte());
         assert_sampling_matches_pdf_integrated(&m, &cases, 91, (SAMPLING_TESTS, 32), 1e-9);

@@ -74,7 +74,12 @@ impl Conductor<'_> {
         d.d(h) * d.smith_g1_sampled(wo, h) / (4.0 * wo.z)
     }
 
-    pub fn sample(&self, roughness: Option<&Microfacet>, wo: Vec3, u: (f64, f64)) -> Option<LocalSample> {
+    pub fn sample(
+        &self,
+        roughness: Option<&Microfacet>,
+        wo: Vec3,
+        u: (f64, f64),
+    ) -> Option<LocalSample> {
         if wo.z <= 0.0 {
             return None;
         }

@@ -238,14 +238,17 @@ mod tests {
     /// single-scattering model's loss). In radiance transport the transmitted part is scaled
     /// by 1/η².
     fn assert_energy(m: &Material, seed: u64) {
-        for wo in [at_cos(0.8), at_cos(0.35), -at_cos(0.9), -at_cos(0.5)] {
-            for mode in [Transport::Flux, Transport::Radiance] {
-                let mc = albedo_mc(m, wo, 50_000, seed, mode);
-                let quad = albedo_quadrature(m, wo, 150, mode);
-                assert_agrees(&format!("{m:?} wo {wo:?} {mode:?}"), mc, quad, 4.0, 3e-3);
-                if mode == Transport::Flux {
-                    assert!(mc.0 .0[0] <= 1.0 + 3.0 * mc.1 .0[0], "albedo {:?}", mc.0);
-                }
+        for (wo, mode) in [
+            (at_cos(0.8), Transport::Flux),
+            (at_cos(0.35), Transport::Radiance),
+            (-at_cos(0.9), Transport::Flux),
+            (-at_cos(0.5), Transport::Radiance),
+        ] {
+            let mc = albedo_mc(m, wo, 50_000, seed, mode);
+            let quad = albedo_quadrature(m, wo, 150, mode);
+            assert_agrees(&format!("{m:?} wo {wo:?} {mode:?}"), mc, quad, 4.0, 3e-3);
+            if mode == Transport::Flux {
+                assert!(mc.0 .0[0] <= 1.0 + 3.0 * mc.1 .0[0], "albedo {:?}", mc.0);
             }
         }
     }
@@ -273,8 +276,15 @@ mod tests {
             for _ in 0..400 {
                 // Pairs in the lobes: b sampled from a.
                 let a = crate::sampling::uniform_sphere(r.next_f64(), r.next_f64());
-                let Some(s) = sample(&m, a, UP, UP, r.next_2d(), r.next_f64(), Transport::Radiance)
-                else {
+                let Some(s) = sample(
+                    &m,
+                    a,
+                    UP,
+                    UP,
+                    r.next_2d(),
+                    r.next_f64(),
+                    Transport::Radiance,
+                ) else {
                     continue;
                 };
                 let b = s.wi;
@@ -294,7 +304,11 @@ mod tests {
         // Normal incidence on glass: R = 0.04, R' = 0.08 / 1.04.
         assert!((thin_reflectance(1.0, 1.5) - 0.08 / 1.04).abs() < 1e-12);
         let m = Material::ThinDielectric { ior: 1.5 };
-        let cases = [Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.3, 0.2, -0.9), at_cos(0.1)];
+        let cases = [
+            Vec3::new(0.6, 0.0, 0.8),
+            Vec3::new(0.3, 0.2, -0.9),
+            at_cos(0.1),
+        ];
         for (k, wo) in cases.into_iter().enumerate() {
             let wo = wo.try_normalize().unwrap();
             let r = thin_reflectance(wo.z, 1.5);
@@ -304,8 +318,16 @@ mod tests {
                 .tests(cases.len())
                 .run(
                     || {
-                        let s = sample(&m, wo, UP, UP, rng.next_2d(), rng.next_f64(), Transport::Radiance)
-                            .expect("a thin sheet never absorbs");
+                        let s = sample(
+                            &m,
+                            wo,
+                            UP,
+                            UP,
+                            rng.next_2d(),
+                            rng.next_f64(),
+                            Transport::Radiance,
+                        )
+                        .expect("a thin sheet never absorbs");
                         assert!(s.delta && s.weight == luxest_io::color::Rgb::WHITE);
                         let reflected = s.wi.z * wo.z > 0.0;
                         let expected = if reflected {

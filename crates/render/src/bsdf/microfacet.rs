@@ -358,7 +358,10 @@ pub fn quadrature_nodes(eta: f64) -> QuadratureNodes {
     let u: Vec<f64> = nodes.iter().map(|&(x, _)| 0.5 * x + 0.5).collect();
     let disk = u
         .iter()
-        .flat_map(|&a| u.iter().map(move |&b| crate::sampling::concentric_disk(a, b)))
+        .flat_map(|&a| {
+            u.iter()
+                .map(move |&b| crate::sampling::concentric_disk(a, b))
+        })
         .collect();
     QuadratureNodes { nodes, u, disk }
 }
@@ -395,8 +398,7 @@ pub fn erf(x: f64) -> f64 {
                     + t * (-0.186_288_06
                         + t * (0.278_868_07
                             + t * (-1.135_203_98
-                                + t * (1.488_515_87
-                                    + t * (-0.822_152_23 + t * 0.170_872_77))))))));
+                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
     let erfc = t * poly.exp();
     if x >= 0.0 {
         1.0 - erfc
@@ -463,7 +465,11 @@ mod tests {
         ] {
             assert!((erf(x) - e).abs() < 2e-7, "erf({x}) = {}", erf(x));
             assert!((erf(-x) + e).abs() < 2e-7);
-            assert!((erfinv(e) - x).abs() < 1e-6 * x, "erfinv({e}) = {}", erfinv(e));
+            assert!(
+                (erfinv(e) - x).abs() < 1e-6 * x,
+                "erfinv({e}) = {}",
+                erfinv(e)
+            );
         }
     }
 

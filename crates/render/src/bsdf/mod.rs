@@ -364,8 +364,7 @@ pub fn pdf(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> f64 {
             .pdf(wo, wi, n)
         }
         Material::Conductor {
-            roughness: Some(r),
-            ..
+            roughness: Some(r), ..
         } => in_reflecting_frame(at, |wo, wi| Conductor::pdf(r, wo, wi)).unwrap_or(0.0),
         Material::Plastic {
             diffuse_reflectance,
@@ -878,43 +877,78 @@ mod tests {
             let m = &case.material;
             let mut beckmann = false;
             m.for_each(&mut |m| {
-                if let Material::Conductor { roughness: Some(r), .. }
-                | Material::Plastic { roughness: Some(r), .. }
+                if let Material::Conductor {
+                    roughness: Some(r), ..
+                }
+                | Material::Plastic {
+                    roughness: Some(r), ..
+                }
                 | Material::RoughDielectric { roughness: r, .. } = m
                 {
                     beckmann |= r.distribution == crate::scene::MicrofacetDistribution::Beckmann;
                 }
             });
             let tolerance = if beckmann { 4e-3 } else { 1e-4 };
-            let density_close = |a: f64, b: f64| (a - b).abs() <= tolerance * a.abs().max(b.abs()) + 1e-6;
+            let density_close =
+                |a: f64, b: f64| (a - b).abs() <= tolerance * a.abs().max(b.abs()) + 1e-6;
             for row in &case.rows {
                 let mode = match row.mode {
                     Mode::Radiance => Transport::Radiance,
                     Mode::Flux => Transport::Flux,
                 };
-                let at = format!("{}: wo {:?}, wi {:?}, u {:?} {}", case.name, row.wo, row.wi, row.u, row.uc);
+                let at = format!(
+                    "{}: wo {:?}, wi {:?}, u {:?} {}",
+                    case.name, row.wo, row.wi, row.u, row.uc
+                );
                 match row.kind {
                     RowKind::Eval => {
                         // Mitsuba's eval includes the cosine of the new direction.
                         let f = eval_transport(m, row.wo, row.wi, UP, UP, mode) * row.wi.z.abs();
                         let p = pdf(m, row.wo, row.wi, UP, UP);
                         for c in 0..3 {
-                            assert!(close(f.0[c], row.value.0[c]), "{at}: eval {f:?} vs Mitsuba {:?}", row.value);
+                            assert!(
+                                close(f.0[c], row.value.0[c]),
+                                "{at}: eval {f:?} vs Mitsuba {:?}",
+                                row.value
+                            );
                         }
-                        assert!(density_close(p, row.pdf), "{at}: pdf {p} vs Mitsuba {}", row.pdf);
+                        assert!(
+                            density_close(p, row.pdf),
+                            "{at}: pdf {p} vs Mitsuba {}",
+                            row.pdf
+                        );
                     }
                     RowKind::Sample => {
                         let s = sample(m, row.wo, UP, UP, row.u, row.uc, mode);
                         if row.value.max_component() == 0.0 {
-                            assert!(s.is_none_or(|s| s.weight.max_component() == 0.0), "{at}: {s:?} where Mitsuba's sample is invalid");
+                            assert!(
+                                s.is_none_or(|s| s.weight.max_component() == 0.0),
+                                "{at}: {s:?} where Mitsuba's sample is invalid"
+                            );
                             continue;
                         }
-                        let s = s.unwrap_or_else(|| panic!("{at}: no sample where Mitsuba has one"));
-                        assert!((s.wi - row.wi).length() < 1e-4, "{at}: direction {:?} vs Mitsuba {:?}", s.wi, row.wi);
+                        let s =
+                            s.unwrap_or_else(|| panic!("{at}: no sample where Mitsuba has one"));
+                        assert!(
+                            (s.wi - row.wi).length() < 1e-4,
+                            "{at}: direction {:?} vs Mitsuba {:?}",
+                            s.wi,
+                            row.wi
+                        );
                         for c in 0..3 {
-                            assert!(density_close(s.weight.0[c], row.value.0[c]), "{at}: weight {:?} vs Mitsuba {:?}", s.weight, row.value);
+                            assert!(
+                                density_close(s.weight.0[c], row.value.0[c]),
+                                "{at}: weight {:?} vs Mitsuba {:?}",
+                                s.weight,
+                                row.value
+                            );
                         }
-                        assert!(density_close(s.pdf, row.pdf), "{at}: pdf {} vs Mitsuba {}", s.pdf, row.pdf);
+                        assert!(
+                            density_close(s.pdf, row.pdf),
+                            "{at}: pdf {} vs Mitsuba {}",
+                            s.pdf,
+                            row.pdf
+                        );
                     }
                 }
                 checked += 1;

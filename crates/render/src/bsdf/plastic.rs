@@ -139,7 +139,10 @@ fn mean(c: &Rgb) -> f64 {
 impl Plastic<'_> {
     /// Mitsuba's `specular_sampling_weight`: mean(specular) / (mean(diffuse) + mean(specular)).
     pub fn specular_sampling_weight(&self) -> f64 {
-        let (d, s) = (mean(self.diffuse_reflectance), mean(self.specular_reflectance));
+        let (d, s) = (
+            mean(self.diffuse_reflectance),
+            mean(self.specular_reflectance),
+        );
         if d + s > 0.0 {
             s / (d + s)
         } else {
@@ -186,9 +189,11 @@ impl Plastic<'_> {
             Some(r) => {
                 let t = tables(r, self.eta);
                 let d = Distribution::new(r);
-                let h = (wo + wi).try_normalize().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
-                let spec = fresnel(wo.dot(h), self.eta).0 * d.d(h) * d.g(wo, wi, h)
-                    / (4.0 * wo.z * wi.z);
+                let h = (wo + wi)
+                    .try_normalize()
+                    .unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+                let spec =
+                    fresnel(wo.dot(h), self.eta).0 * d.d(h) * d.g(wo, wi, h) / (4.0 * wo.z * wi.z);
                 let diff = inv_eta2 * t.transmittance(wo.z) * t.transmittance(wi.z) / PI;
                 *self.specular_reflectance * spec + self.diffuse(t.internal_reflectance) * diff
             }
@@ -205,7 +210,9 @@ impl Plastic<'_> {
                 let t = tables(r, self.eta);
                 let ps = self.specular_probability(1.0 - t.transmittance(wo.z));
                 let d = Distribution::new(r);
-                let h = (wo + wi).try_normalize().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+                let h = (wo + wi)
+                    .try_normalize()
+                    .unwrap_or(Vec3::new(0.0, 0.0, 1.0));
                 let spec = d.d(h) * d.smith_g1_sampled(wo, h) / (4.0 * wo.z);
                 ps * spec + (1.0 - ps) * wi.z / PI
             }
@@ -266,7 +273,6 @@ impl Plastic<'_> {
     }
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::super::testing::*;
@@ -309,12 +315,18 @@ mod tests {
 
     #[test]
     fn ggx_plastic_sampling_matches_its_density() {
-        assert_sampling(&plastic(false, Some((MicrofacetDistribution::Ggx, 0.2))), 51);
+        assert_sampling(
+            &plastic(false, Some((MicrofacetDistribution::Ggx, 0.2))),
+            51,
+        );
     }
 
     #[test]
     fn beckmann_plastic_sampling_matches_its_density() {
-        assert_sampling(&plastic(true, Some((MicrofacetDistribution::Beckmann, 0.4))), 52);
+        assert_sampling(
+            &plastic(true, Some((MicrofacetDistribution::Beckmann, 0.4))),
+            52,
+        );
     }
 
     #[test]
@@ -358,7 +370,13 @@ mod tests {
                     [1.0, 0.9, 0.8][c] * fo + rho_eff * (1.0 - fo) * transmitted / (eta * eta)
                 }));
                 let mc = albedo_mc(&m, wo, 100_000, 60 + k as u64, Transport::Radiance);
-                assert_agrees(&format!("nonlinear {nonlinear}, cos {cos}"), mc, expected, 4.0, 1e-9);
+                assert_agrees(
+                    &format!("nonlinear {nonlinear}, cos {cos}"),
+                    mc,
+                    expected,
+                    4.0,
+                    1e-9,
+                );
                 for c in 0..3 {
                     assert!(expected.0[c] <= 1.0);
                 }
@@ -405,7 +423,10 @@ mod tests {
 
     #[test]
     fn ggx_plastic_conserves_energy_and_is_reciprocal() {
-        assert_energy_and_reciprocity(&plastic(false, Some((MicrofacetDistribution::Ggx, 0.3))), 71);
+        assert_energy_and_reciprocity(
+            &plastic(false, Some((MicrofacetDistribution::Ggx, 0.3))),
+            71,
+        );
     }
 
     #[test]

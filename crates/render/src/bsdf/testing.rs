@@ -56,7 +56,15 @@ pub fn assert_sampling_matches_pdf_integrated(
         let (wo, ns) = (wo.try_normalize().unwrap(), ns.try_normalize().unwrap());
         let mut r = Rng::new(seed, k as u64);
         let mut draw = || {
-            let s = sample(m, wo, UP, ns, r.next_2d(), r.next_f64(), Transport::Radiance)?;
+            let s = sample(
+                m,
+                wo,
+                UP,
+                ns,
+                r.next_2d(),
+                r.next_f64(),
+                Transport::Radiance,
+            )?;
             if s.delta {
                 return None;
             }
