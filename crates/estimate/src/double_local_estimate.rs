@@ -351,7 +351,9 @@ fn light_tracing(
             let (wo, ng) = (-dir, sp.ng);
             let m = world.material_seen(&sp, wo);
             let m = &*m;
-            let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+            // A light path's vertex: the adjoint BSDF (wo towards the light).
+            let f_cos =
+                |w: Vec3| bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs();
             if let Some(link) =
                 connect_to_camera(world, cam, sp.position, ng, f_cos, &mut shadow_rays)
             {
@@ -419,7 +421,8 @@ fn contribution(
         }
         Some(t) => {
             let m = world.material_at(t, r.uv, r.wo);
-            let (f, p) = bsdf::eval_and_pdf(&m, r.wo, w, r.ng, r.ng);
+            let (f, p) =
+                bsdf::eval_and_pdf_transport(&m, r.wo, w, r.ng, r.ng, Transport::Flux);
             let f = f * w.dot(r.ng).abs();
             let pdf = if p > 0.0 {
                 p * survival(f * (1.0 / p))

@@ -32,7 +32,7 @@ use crate::transport::{delta_light_illuminance, walk_light_path, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_io::progress::Progress;
-use luxest_render::bsdf;
+use luxest_render::bsdf::{self, Transport};
 use luxest_render::rt::Ray;
 use luxest_render::sampling::Rng;
 use luxest_render::scene::{Material, SensorPoint};
@@ -119,7 +119,8 @@ fn connect(
                 ng,
                 ns,
             } => {
-                let f = bsdf::eval(material, *wo, w, *ng, *ns);
+                // The adjoint BSDF (wo towards the light).
+                let f = bsdf::eval_transport(material, *wo, w, *ng, *ns, Transport::Flux);
                 f * w.dot(*ns).abs()
             }
             Source::Emitter { normal } => {

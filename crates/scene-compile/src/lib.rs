@@ -26,6 +26,7 @@ pub use cli::{run, Args};
 use luxest_io::math::Vec3;
 use luxest_io::num::show;
 use luxest_io::{Error, Result};
+use luxest_render::bsdf;
 use luxest_render::compiled::{
     CompiledScene, Emitter, Features, GridLayout, NamedMaterial, ObjectRange, SceneHeader,
     SensorSet, Stats, NO_EMITTER,
@@ -285,6 +286,41 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
     })
 }
 
+/// The fraction of light in channel `c` a reflecting material returns at normal incidence, for
+/// the warning on scenes where nothing absorbs (dielectrics: 0 here; that check counts them as
+/// lossless).
+fn lossless_albedo(m: &Material, c: usize) -> f64 {
+    match m {
+        Material::Lambertian { reflectance } | Material::Mirror { reflectance } => reflectance.0[c],
+        Material::Glossy {
+            diffuse, specular, ..
+        } => diffuse.0[c] + specular.0[c],
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            ..
+        } => specular_reflectance.0[c] * bsdf::conductor::fresnel_conductor(1.0, eta.0[c], k.0[c]),
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            ..
+        } => {
+            let f0 = bsdf::fresnel_dielectric(1.0, *ior).0;
+            f0 * specular_reflectance.0[c] + (1.0 - f0) * diffuse_reflectance.0[c]
+        }
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => (1.0 - weight) * lossless_albedo(first, c) + weight * lossless_albedo(second, c),
+        Material::Dielectric { .. }
+        | Material::RoughDielectric { .. }
+        | Material::ThinDielectric { .. } => 0.0,
+    }
+}
+
 /// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
 pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     validate::check_scene(path, scene)?;
@@ -473,15 +509,13 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     // Light is trapped (walks end only at --max-depth) where no surface absorbs it: in a
     // channel where every used material reflects or transmits all of it. A white wall in a
     // room with any absorbing surface is not such a case.
-    let lossless = |m: &Material, c: usize| match m {
-        Material::Lambertian { reflectance } | Material::Mirror { reflectance } => {
-            reflectance.0[c] >= 1.0
-        }
-        Material::Glossy {
-            diffuse, specular, ..
-        } => diffuse.0[c] + specular.0[c] >= 1.0,
-        // A smooth dielectric absorbs nothing.
-        Material::Dielectric { .. } => true,
+    let lossless = |m: &Material, c: usize| {
+        matches!(
+            m,
+            Material::Dielectric { .. }
+                | Material::RoughDielectric { .. }
+                | Material::ThinDielectric { .. }
+        ) || lossless_albedo(m, c) >= 1.0
     };
     if let Some(c) = (0..3).find(|&c| {
         !used.is_empty()
@@ -499,7 +533,10 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         ));
     }
     let used_models: Vec<&Material> = used.iter().map(|&i| &materials[i as usize].model).collect();
-    let mut material_kinds: Vec<_> = used_models.iter().map(|m| m.kind()).collect();
+    let mut material_kinds = Vec::new();
+    for m in &used_models {
+        m.for_each(&mut |m| material_kinds.push(m.kind()));
+    }
     material_kinds.sort();
     material_kinds.dedup();
     let any = |f: fn(&Material) -> bool| used_models.iter().any(|m| f(m));
@@ -507,9 +544,9 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         material_kinds,
         point_emitters: emitters.iter().any(|e| matches!(e, Emitter::Point { .. })),
         area_emitters: emitters.iter().any(|e| matches!(e, Emitter::Area { .. })),
-        specular_paths: any(|m| matches!(m, Material::Mirror { .. } | Material::Dielectric { .. })),
-        transmission: any(|m| matches!(m, Material::Dielectric { .. })),
-        glossy: any(|m| matches!(m, Material::Glossy { .. })),
+        specular_paths: any(bsdf::has_delta_lobe),
+        transmission: any(bsdf::transmits),
+        glossy: any(bsdf::is_glossy),
         smooth_normals: b.normals.iter().any(|n| *n != [0.0; 3]),
         spectral: false,
         camera: scene.camera.is_some(),
