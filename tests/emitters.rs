@@ -235,7 +235,7 @@ fn diffuse_plane_under_a_constant_sky_has_rho_l_in_every_image_estimator() {
 
     let (world, cam) = trace::load(&scene, None).unwrap();
     let mut film = Film::new(cam.width as usize, cam.height as usize);
-    Renderer::new(&world, cam.clone(), 2, 2, 1000).advance(&mut film, 256, false, &Progress::off());
+    Renderer::new(&world, cam, 2, 2, 1000).advance(&mut film, 256, false, &Progress::off());
     let mean: Vec<f64> = film.mean().iter().map(|c| c.luminance()).collect();
     check_image("trace", &mean, &film.standard_error(), expected, 4.0);
 
