@@ -326,6 +326,10 @@ fn background_pixels_show_the_sky_in_every_image_estimator() {
     let mut film = Film::new(cam.width as usize, cam.height as usize);
     Renderer::new(&world, cam, 2, 2, 10).advance(&mut film, 4, false, &Progress::off());
     assert!((film.mean()[corner].luminance() - SKY).abs() < 1e-9);
+    // aov-write's emission feature is the part of trace's image a denoiser leaves alone: the
+    // sky seen directly is in it.
+    let hit = aov_write::features::first_hit(&world, cam.position, cam.direction(0.5, 0.5));
+    assert!((hit.emission.luminance() - SKY).abs() < 1e-12, "{hit:?}");
 }
 
 /// A spot at (0, 2, 0) aiming down, 100 cd on its axis, cutoff 30°, beam 20°, over a plane.
