@@ -60,9 +60,10 @@ pub struct FirstHit {
     /// Distance in m to the first surface hit (zero where the ray escapes).
     pub depth: f64,
     /// Radiance emitted towards the camera by the surface hit or, through one mirror at the
-    /// first hit, by the surface seen in it: exactly the terms `trace` adds at those vertices
-    /// (weight one at the first, the mirror's reflectance at the second: nothing is sampled
-    /// before them, and Russian roulette starts later).
+    /// first hit, by the surface seen in it — or the environment's where the ray leaves the
+    /// scene: exactly the terms `trace` adds at those vertices (weight one at the first, the
+    /// mirror's reflectance at the second: nothing is sampled before them, and Russian roulette
+    /// starts later).
     pub emission: Rgb,
 }
 
@@ -99,7 +100,10 @@ fn along(
     (spread, travelled): (f64, f64),
 ) -> FirstHit {
     let Some(sp) = world.intersect(origin, dir) else {
-        return FirstHit::MISS;
+        return FirstHit {
+            emission: world.environment_radiance(dir),
+            ..FirstHit::MISS
+        };
     };
     let wo = -dir;
     let travelled = travelled + sp.distance;
