@@ -7,6 +7,8 @@
 //!   sampler and the sampling routines, material models, the pinhole camera and its pixel
 //!   sampling;
 //! - [`luminaire`]: goniometric luminaires (photometric files) as delta lights and emitters;
+//!   [`spot`]: spot lights' cones; [`environment`]: the environment emitter (constant sky,
+//!   equirectangular map) and its sampling;
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
 //! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
 //!   flush-to-zero mode, hence here and not in `luxest-io`).
@@ -14,10 +16,12 @@
 pub mod bsdf;
 pub mod camera;
 pub mod compiled;
+pub mod environment;
 pub mod luminaire;
 pub mod parallel;
 pub mod rt;
 pub mod sampling;
 pub mod scene;
 pub mod sobol;
+pub mod spot;
 pub mod world;

@@ -36,6 +36,35 @@ pub struct Scene {
     /// Calculation surfaces (work planes, EN 12464-1 grids); compiled into sensor sets.
     #[serde(default)]
     pub calculation_surfaces: Vec<CalculationSurface>,
+    /// Light arriving from infinitely far away (sky, HDR environment map); see [`Environment`].
+    #[serde(default)]
+    pub environment: Option<Environment>,
+}
+
+/// An environment emitter: radiance arriving from every direction that leaves the scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Environment {
+    /// The same luminance from every direction, cd/m² per RGB channel (Mitsuba 3 `constant`).
+    Constant(Rgb),
+    /// An equirectangular (latitude-longitude) map, linear RGB in cd/m², as Mitsuba 3 `envmap`
+    /// reads it: for the map-local unit direction d, u = atan2(d.x, −d.z) / 2π (wrapped to
+    /// [0, 1)) runs along the image's width, v = acos(d.y) / π down its height (the top row
+    /// is +y); bilinear between texel centres, wrapping in u.
+    Map {
+        /// OpenEXR file (R, G, B), relative to the scene file.
+        path: String,
+        /// Multiplies every texel.
+        #[serde(default = "one")]
+        scale: f64,
+        /// Map-to-world rotation, row-major: world = to_world · local.
+        #[serde(default = "identity")]
+        to_world: [[f64; 3]; 3],
+    },
+}
+
+fn identity() -> [[f64; 3]; 3] {
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
 }
 
 /// Pinhole camera.
@@ -233,6 +262,25 @@ pub struct PointLight {
     /// Tint; rescaled so that its luminance is 1 (the photometric magnitude is `power`).
     #[serde(default = "white")]
     pub color: Rgb,
+    /// Makes the source a spot light (Mitsuba 3 `spot`); `None`: isotropic.
+    #[serde(default)]
+    pub spot: Option<Spot>,
+}
+
+/// A spot light's cone: intensity I(θ) = I₀ · falloff(θ), θ the angle to `direction`, with
+/// Mitsuba 3's linear falloff: 1 for θ ≤ beam width, (cutoff − θ)/(cutoff − beam width)
+/// between, 0 beyond the cutoff. `PointPower::Intensity` is I₀ (on the axis); `Flux` the
+/// whole cone's flux, 2π I₀ (1 − (sin c − sin b)/(c − b)) (c, b the angles in radians).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spot {
+    /// The cone's axis (need not be unit length).
+    pub direction: Vec3,
+    /// Half-angle beyond which nothing is emitted, degrees in (0, 180] (Mitsuba's default 20).
+    pub cutoff_deg: f64,
+    /// Half-angle of the full-intensity core, degrees in [0, cutoff] (Mitsuba's default: 3/4
+    /// of the cutoff).
+    pub beam_width_deg: f64,
 }
 
 fn white() -> Rgb {

@@ -9,10 +9,12 @@
 //!
 //! Modules: [`cli`] (arguments and run), [`import`] (whole scenes from Mitsuba 3 XML, glTF and
 //! OBJ+MTL, translated into an authored scene), [`validate`], [`shapes`] (tessellation),
-//! [`meshes`] (OBJ and glTF), [`ply`] (PLY meshes), [`luminaires`], [`surfaces`], [`mitsuba`]
-//! (export to Mitsuba 3); this file assembles the world-space scene.
+//! [`meshes`] (OBJ and glTF), [`ply`] (PLY meshes), [`luminaires`], [`environment`] (the
+//! environment emitter and its map), [`surfaces`], [`mitsuba`] (export to Mitsuba 3); this file
+//! assembles the world-space scene.
 
 pub mod cli;
+pub mod environment;
 pub mod luminaires;
 pub mod meshes;
 pub mod import;
@@ -29,7 +31,7 @@ use luxest_io::num::show;
 use luxest_io::{Error, Result};
 use luxest_render::compiled::{
     CompiledScene, Emitter, Features, GridLayout, NamedMaterial, ObjectRange, SceneHeader,
-    SensorSet, Stats, NO_EMITTER,
+    SensorSet, SpotCone, Stats, NO_EMITTER,
 };
 use luxest_render::scene::{Emission, Material, PointPower, Scene, Sensor, SensorPoint, Shape};
 use shapes::LocalMesh;
@@ -64,7 +66,11 @@ pub fn referenced_files(scene: &Scene, path: &Path) -> Vec<PathBuf> {
         _ => None,
     });
     let photometry = scene.luminaires.iter().map(|l| dir.join(&l.file));
-    meshes.chain(photometry).collect()
+    let environment = match &scene.environment {
+        Some(luxest_render::scene::Environment::Map { path, .. }) => Some(dir.join(path)),
+        _ => None,
+    };
+    meshes.chain(photometry).chain(environment).collect()
 }
 
 /// Reads (a RON scene, or one [`import`] translates), validates and compiles a scene file.
@@ -380,10 +386,16 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         });
     }
     for (i, l) in scene.point_lights.iter().enumerate() {
-        // Isotropic source: flux = 4 pi I.
+        // Isotropic source: flux = 4π I; a spot: its cone's factor (luxest_render::spot).
+        let spot = l.spot.as_ref().map(|s| SpotCone {
+            direction: s.direction.try_normalize().expect("validated"),
+            cutoff_deg: s.cutoff_deg,
+            beam_width_deg: s.beam_width_deg,
+        });
+        let solid_angle = spot.as_ref().map_or(4.0 * PI, SpotCone::solid_angle_factor);
         let intensity = match l.power {
             PointPower::Intensity(cd) => cd,
-            PointPower::Flux(lm) => lm / (4.0 * PI),
+            PointPower::Flux(lm) => lm / solid_angle,
         };
         let intensity_rgb = l.color.with_luminance(intensity).expect("validated");
         emitters.push(Emitter::Point {
@@ -393,17 +405,13 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
                 .unwrap_or_else(|| format!("point_lights[{i}]")),
             position: l.position,
             intensity_rgb,
-            flux_rgb: intensity_rgb * (4.0 * PI),
+            flux_rgb: intensity_rgb * solid_angle,
+            spot,
         });
     }
     let lum = luminaires::compile(path, &scene.luminaires)?;
     report.warnings.extend(lum.warnings);
     emitters.extend(lum.emitters);
-    let fluxes: Vec<f64> = emitters.iter().map(Emitter::flux_lm).collect();
-    let emitter_cdf = luxest_render::sampling::Distribution1D::new(&fluxes)
-        .ok_or_else(|| Error::input(path, "emitters have no finite positive total flux"))?
-        .cdf()
-        .to_vec();
 
     let used: std::collections::BTreeSet<u32> = b.triangle_material.iter().copied().collect();
     let materials: Vec<NamedMaterial> = scene
@@ -464,6 +472,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         camera: scene.camera.is_some(),
         sensors: !scene.sensors.is_empty() || !scene.calculation_surfaces.is_empty(),
         goniometric_luminaires: !scene.luminaires.is_empty(),
+        environment: scene.environment.is_some(),
     };
     let name = scene_name(scene, path);
     let stats = Stats {
@@ -531,19 +540,32 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             }
         }
     }
-    let header = SceneHeader {
+    let mut header = SceneHeader {
         name,
         compiler_version: luxest_io::meta::PROGRAM_VERSION.to_string(),
         camera: scene.camera.clone(),
         materials,
         emitters,
-        emitter_cdf,
+        emitter_cdf: Vec::new(),
         objects,
         sensors,
         photometries: lum.tables,
         features,
         stats,
     };
+    // The environment's flux is its light through the disk of the bounding sphere of
+    // everything else, so it comes last.
+    let mut environment_texels = Vec::new();
+    if let Some(env) = &scene.environment {
+        let (emitter, texels) = environment::compile(path, env, &header)?;
+        header.emitters.push(emitter);
+        environment_texels = texels;
+    }
+    let fluxes: Vec<f64> = header.emitters.iter().map(Emitter::flux_lm).collect();
+    header.emitter_cdf = luxest_render::sampling::Distribution1D::new(&fluxes)
+        .ok_or_else(|| Error::input(path, "emitters have no finite positive total flux"))?
+        .cdf()
+        .to_vec();
     let compiled = CompiledScene {
         header,
         positions: b.positions,
@@ -551,6 +573,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         indices: b.indices,
         triangle_material: b.triangle_material,
         triangle_emitter: b.triangle_emitter,
+        environment_texels,
         content_hash: String::new(),
     };
     compiled

@@ -6,7 +6,7 @@ use luxest_io::math::Vec3;
 use luxest_io::num::show;
 use luxest_io::{Error, Result};
 use luxest_render::scene::{
-    Camera, Emission, Material, PointLight, PointPower, Scene, Sensor, Shape,
+    Camera, Emission, Environment, Material, PointLight, PointPower, Scene, Sensor, Shape,
 };
 use std::path::Path;
 
@@ -225,7 +225,55 @@ fn check_point_light(c: &Check, place: &str, l: &PointLight) -> Result<()> {
             ),
         ));
     }
-    c.emission_rgb(&format!("{place}.color"), l.color)
+    c.emission_rgb(&format!("{place}.color"), l.color)?;
+    if let Some(spot) = &l.spot {
+        let place = format!("{place}.spot");
+        c.nonzero_vec(&format!("{place}.direction"), spot.direction)?;
+        let (cut, beam) = (spot.cutoff_deg, spot.beam_width_deg);
+        c.finite(&format!("{place}.cutoff_deg"), cut)?;
+        c.finite(&format!("{place}.beam_width_deg"), beam)?;
+        if !(cut > 0.0 && cut <= 180.0) {
+            return Err(c.fail(
+                &format!("{place}.cutoff_deg"),
+                format!("the cutoff must be in (0, 180] degrees, got {}", show(cut)),
+            ));
+        }
+        if !(0.0..=cut).contains(&beam) {
+            return Err(c.fail(
+                &format!("{place}.beam_width_deg"),
+                format!(
+                    "the beam width must be in [0, cutoff_deg = {}] degrees, got {}",
+                    show(cut),
+                    show(beam)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// An environment: a constant radiance like an emitter's; a map's scale positive and its
+/// `to_world` a rotation (the file is read when compiling).
+fn check_environment(c: &Check, env: &Environment) -> Result<()> {
+    match env {
+        Environment::Constant(l) => c.emission_rgb("environment.Constant", *l),
+        Environment::Map {
+            scale, to_world, ..
+        } => {
+            c.positive("environment.scale", *scale, "the map's scale")?;
+            if *scale > MAX_EMISSION {
+                return Err(c.fail(
+                    "environment.scale",
+                    format!("{} exceeds {}", show(*scale), show(MAX_EMISSION)),
+                ));
+            }
+            for (i, row) in to_world.iter().enumerate() {
+                c.vec(&format!("environment.to_world[{i}]"), Vec3::from(*row))?;
+            }
+            luxest_render::compiled::check_rotation(to_world)
+                .map_err(|m| c.fail("environment.to_world", m))
+        }
+    }
 }
 
 fn check_sensor(c: &Check, place: &str, s: &Sensor) -> Result<()> {
@@ -398,13 +446,18 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
     for (i, l) in scene.luminaires.iter().enumerate() {
         crate::luminaires::check(&c, &format!("luminaires[{i}]"), l)?;
     }
+    if let Some(env) = &scene.environment {
+        check_environment(&c, env)?;
+    }
     if scene.point_lights.is_empty()
         && scene.luminaires.is_empty()
+        && scene.environment.is_none()
         && scene.objects.iter().all(|o| o.emission.is_none())
     {
         return Err(Error::input(
             path,
-            "scene has no emitter (no point light, luminaire or object with emission)",
+            "scene has no emitter (no point light, luminaire, environment or object with \
+             emission)",
         ));
     }
     let mut names = std::collections::BTreeSet::new();

@@ -158,6 +158,7 @@ pub fn import(path: &Path) -> Result<Imported> {
         sensors: Vec::new(),
         luminaires: Vec::new(),
         calculation_surfaces: Vec::new(),
+        environment: None,
     };
     // Material name and emission by glTF material index (None: the default material).
     let mut materials: BTreeMap<Option<usize>, (String, Option<Emission>)> = BTreeMap::new();
@@ -224,13 +225,15 @@ pub fn import(path: &Path) -> Result<Imported> {
                         position: world.apply_point(Vec3::ZERO),
                         power: PointPower::Intensity(intensity),
                         color,
+                        spot: None,
                     });
                 }
                 Kind::Spot { .. } => {
                     return Err(Error::at(
                         path,
                         place,
-                        "spot lights are not supported yet in this build of luxest",
+                        "spot lights are not supported: glTF's smooth angular falloff is not the \
+                         linear one of luxest's (Mitsuba's) spot",
                     ))
                 }
                 Kind::Directional => {

@@ -20,7 +20,7 @@
 //! **Objects.** Shapes `obj`, `ply`, `rectangle`, `cube`, `sphere`, `disk` (with `to_world`,
 //! `flip_normals`, `face_normals`); BSDFs `diffuse`, `dielectric`, `conductor` (`material`
 //! `none`: a mirror), `roughconductor` (GGX, `material` `none`), `twosided`; emitters `area`
-//! (inside a shape), `point`; sensor `perspective` (`fov`, `fov_axis`, `focal_length`,
+//! (inside a shape), `point`, `spot`, `constant`, `envmap` (OpenEXR); sensor `perspective` (`fov`, `fov_axis`, `focal_length`,
 //! `to_world`) with film `hdrfilm` (`width`, `height`). `<integrator>` and the sensor's
 //! `<sampler>` are left out with a warning (luxest's estimator and sample count are chosen on
 //! its command line), a non-box `<rfilter>` likewise (luxest's pixel filter is a box).
@@ -35,7 +35,8 @@ use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
 use luxest_io::{Error, Result};
 use luxest_render::scene::{
-    Camera, Emission, Material, Object, PointLight, PointPower, Scene, Shape, Transform,
+    Camera, Emission, Environment, Material, Object, PointLight, PointPower, Scene, Shape, Spot,
+    Transform,
 };
 use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
@@ -648,6 +649,22 @@ impl<'a> Importer<'a> {
     }
 }
 
+/// Whether `a` is a rotation: orthonormal, determinant +1, no translation.
+fn is_rotation(a: &Affine) -> bool {
+    let m = &a.m;
+    let col = |j: usize| Vec3::new(m[0][j], m[1][j], m[2][j]);
+    let (x, y, z) = (col(0), col(1), col(2));
+    let close = |v: f64, want: f64| (v - want).abs() <= 1e-6;
+    close(x.dot(x), 1.0)
+        && close(y.dot(y), 1.0)
+        && close(z.dot(z), 1.0)
+        && close(x.dot(y), 0.0)
+        && close(x.dot(z), 0.0)
+        && close(y.dot(z), 0.0)
+        && a.determinant() > 0.0
+        && a.t == Vec3::ZERO
+}
+
 /// Rotation about the unit axis `a` by `deg` degrees (right-handed; Rodrigues' formula).
 fn rotation(a: Vec3, deg: f64) -> Affine {
     let (s, c) = deg.to_radians().sin_cos();
@@ -1120,14 +1137,78 @@ impl<'a> Importer<'a> {
                     position,
                     power: PointPower::Intensity(y),
                     color: intensity,
+                    spot: None,
                 });
                 Ok(())
             }
+            "spot" => {
+                let to_world = r.transform("to_world")?;
+                let intensity = r.color("intensity", 1.0)?;
+                if r.props.items.iter().any(|i| i.name == "texture") {
+                    return Err(self.fail(e, "a projected texture on a spot light is not supported"));
+                }
+                let cutoff_deg = r.float("cutoff_angle", 20.0)?;
+                let beam_width_deg = r.float("beam_width", cutoff_deg * 3.0 / 4.0)?;
+                r.done()?;
+                let y = intensity.luminance();
+                if !(y > 0.0) || intensity.min_component() < 0.0 {
+                    return Err(self.fail(
+                        e,
+                        "the intensity must be non-negative with positive luminance",
+                    ));
+                }
+                self.scene.point_lights.push(PointLight {
+                    name: e.attr("id").map(str::to_string),
+                    position: to_world.apply_point(Vec3::ZERO),
+                    power: PointPower::Intensity(y),
+                    color: intensity,
+                    spot: Some(Spot {
+                        direction: to_world.apply_vector(Vec3::new(0.0, 0.0, 1.0)),
+                        cutoff_deg,
+                        beam_width_deg,
+                    }),
+                });
+                Ok(())
+            }
+            "constant" | "envmap" => {
+                if self.scene.environment.is_some() {
+                    return Err(self.fail(e, "a second environment emitter (luxest has one)"));
+                }
+                let env = if plugin == "constant" {
+                    let radiance = r.color("radiance", 1.0)?;
+                    r.done()?;
+                    Environment::Constant(radiance)
+                } else {
+                    let file = r
+                        .string("filename")?
+                        .ok_or_else(|| self.fail(e, "needs a filename"))?;
+                    if !file.to_ascii_lowercase().ends_with(".exr") {
+                        return Err(self.fail(
+                            e,
+                            format!("environment map \"{file}\": only OpenEXR maps are supported"),
+                        ));
+                    }
+                    let path = self.resolve_file(e, &file)?;
+                    let scale = r.float("scale", 1.0)?;
+                    let to_world = r.transform("to_world")?;
+                    r.done()?;
+                    if !is_rotation(&to_world) {
+                        return Err(self.fail(
+                            e,
+                            "the environment map's to_world must be a rotation (no scale, \
+                             shear, mirror or translation)",
+                        ));
+                    }
+                    Environment::Map {
+                        path,
+                        scale,
+                        to_world: to_world.m,
+                    }
+                };
+                self.scene.environment = Some(env);
+                Ok(())
+            }
             "area" => Err(self.fail(e, "an area emitter must be inside a shape")),
-            "spot" | "constant" | "envmap" => Err(self.fail(
-                e,
-                format!("the {plugin} emitter is not supported yet in this build of luxest"),
-            )),
             other => Err(self.fail(e, format!("unsupported emitter \"{other}\""))),
         }
     }
@@ -1410,6 +1491,7 @@ pub fn import(path: &Path) -> Result<Imported> {
             sensors: Vec::new(),
             luminaires: Vec::new(),
             calculation_surfaces: Vec::new(),
+            environment: None,
         },
         warnings: RefCell::new(Vec::new()),
         materials: BTreeMap::new(),

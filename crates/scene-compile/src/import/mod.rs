@@ -140,6 +140,9 @@ pub fn export_ron(scene: &Scene, source: &Path, out: &Path) -> String {
     for l in &mut s.luminaires {
         l.file = rebase(&l.file);
     }
+    if let Some(luxest_render::scene::Environment::Map { path, .. }) = &mut s.environment {
+        *path = rebase(path);
+    }
     format!(
         "// Translated by scene-compile {} from {}\n{}\n",
         env!("CARGO_PKG_VERSION"),

@@ -259,6 +259,7 @@ pub fn import(path: &Path) -> Result<Imported> {
         sensors: Vec::new(),
         luminaires: Vec::new(),
         calculation_surfaces: Vec::new(),
+        environment: None,
     };
     for name in &used {
         let m = &mtls[name];
