@@ -123,9 +123,7 @@ pub fn run(args: Args) -> Result<()> {
             // Every output, the compiled scene's included, checked together before writing.
             plan = OutputPlan::new(
                 &inputs,
-                std::iter::once(&out)
-                    .chain(&paths)
-                    .chain(&args.export_ron),
+                std::iter::once(&out).chain(&paths).chain(&args.export_ron),
             )?;
             Some((dir, files, paths))
         }

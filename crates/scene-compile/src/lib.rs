@@ -15,9 +15,9 @@
 
 pub mod cli;
 pub mod environment;
+pub mod import;
 pub mod luminaires;
 pub mod meshes;
-pub mod import;
 pub mod mitsuba;
 pub mod ply;
 pub mod shapes;

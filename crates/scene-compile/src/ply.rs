@@ -436,7 +436,12 @@ mod tests {
         );
         let a = load_ply_bytes(Path::new("a.ply"), ascii.as_bytes()).unwrap();
         let mut bin = format!("ply\nformat binary_little_endian 1.0\n{HEADER}").into_bytes();
-        for p in [[0f32, 0., 0., 0., 0.], [1., 0., 0., 1., 0.], [1., 1., 0., 1., 1.], [0., 1., 0., 0., 1.]] {
+        for p in [
+            [0f32, 0., 0., 0., 0.],
+            [1., 0., 0., 1., 0.],
+            [1., 1., 0., 1., 1.],
+            [0., 1., 0., 0., 1.],
+        ] {
             for c in p {
                 bin.extend_from_slice(&c.to_le_bytes());
             }
@@ -469,7 +474,9 @@ mod tests {
             ),
         ];
         for (want, bytes) in cases {
-            let e = load_ply_bytes(Path::new("m.ply"), bytes).unwrap_err().to_string();
+            let e = load_ply_bytes(Path::new("m.ply"), bytes)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains(want) && e.starts_with("m.ply"), "{want}: {e}");
         }
     }

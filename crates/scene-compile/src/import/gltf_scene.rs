@@ -264,7 +264,11 @@ pub fn import(path: &Path) -> Result<Imported> {
             }
             let (name, emission) = materials[&key].clone();
             scene.objects.push(Object {
-                name: Some(format!("{node_name} mesh {} primitive {}", mesh.index(), prim.index())),
+                name: Some(format!(
+                    "{node_name} mesh {} primitive {}",
+                    mesh.index(),
+                    prim.index()
+                )),
                 shape: Shape::Gltf {
                     path: shape_path.clone(),
                     primitive: Some((mesh.index() as u32, prim.index() as u32)),

@@ -500,7 +500,8 @@ impl<'a> Importer<'a> {
                                      affine transforms are supported)",
                                 ));
                             }
-                            let r = |i: usize| [values[i], values[i + 1], values[i + 2], values[i + 3]];
+                            let r =
+                                |i: usize| [values[i], values[i + 1], values[i + 2], values[i + 3]];
                             Affine::from_rows4([r(0), r(4), r(8), r(12)])
                         }
                         9 => Affine {
@@ -511,9 +512,7 @@ impl<'a> Importer<'a> {
                             ],
                             t: Vec3::ZERO,
                         },
-                        n => {
-                            return Err(self.fail(op, format!("{n} values; a matrix has 9 or 16")))
-                        }
+                        n => return Err(self.fail(op, format!("{n} values; a matrix has 9 or 16"))),
                     }
                 }
                 _ => {
@@ -546,7 +545,9 @@ impl<'a> Importer<'a> {
             };
             let value = match c.tag.as_str() {
                 "float" => {
-                    let v = c.attr("value").ok_or_else(|| self.fail(c, "needs a value attribute"))?;
+                    let v = c
+                        .attr("value")
+                        .ok_or_else(|| self.fail(c, "needs a value attribute"))?;
                     let x: f64 = v
                         .trim()
                         .parse()
@@ -557,7 +558,9 @@ impl<'a> Importer<'a> {
                     Value::Float(x)
                 }
                 "integer" => {
-                    let v = c.attr("value").ok_or_else(|| self.fail(c, "needs a value attribute"))?;
+                    let v = c
+                        .attr("value")
+                        .ok_or_else(|| self.fail(c, "needs a value attribute"))?;
                     Value::Integer(
                         v.trim()
                             .parse()
@@ -565,16 +568,24 @@ impl<'a> Importer<'a> {
                     )
                 }
                 "boolean" => {
-                    let v = c.attr("value").ok_or_else(|| self.fail(c, "needs a value attribute"))?;
+                    let v = c
+                        .attr("value")
+                        .ok_or_else(|| self.fail(c, "needs a value attribute"))?;
                     Value::Boolean(match v.to_ascii_lowercase().as_str() {
                         "true" => true,
                         "false" => false,
                         _ => return Err(self.fail(c, format!("\"{v}\" is not true or false"))),
                     })
                 }
-                "string" => Value::String(c.attr("value").ok_or_else(|| self.fail(c, "needs a value attribute"))?.to_string()),
+                "string" => Value::String(
+                    c.attr("value")
+                        .ok_or_else(|| self.fail(c, "needs a value attribute"))?
+                        .to_string(),
+                ),
                 "rgb" => {
-                    let v = c.attr("value").ok_or_else(|| self.fail(c, "needs a value attribute"))?;
+                    let v = c
+                        .attr("value")
+                        .ok_or_else(|| self.fail(c, "needs a value attribute"))?;
                     match parse_floats(v).as_deref() {
                         Some(&[a]) => Value::Rgb(self.finite3(c, [a; 3])?),
                         Some(&[a, b, d]) => Value::Rgb(self.finite3(c, [a, b, d])?),
@@ -592,7 +603,9 @@ impl<'a> Importer<'a> {
                              <rgb> value)",
                         ));
                     }
-                    let v = c.attr("value").ok_or_else(|| self.fail(c, "needs a value attribute"))?;
+                    let v = c
+                        .attr("value")
+                        .ok_or_else(|| self.fail(c, "needs a value attribute"))?;
                     match parse_floats(v).as_deref() {
                         Some(&[a]) if a.is_finite() => Value::Rgb([a; 3]),
                         _ => {
@@ -609,10 +622,13 @@ impl<'a> Importer<'a> {
                 "point" | "vector" => Value::Vector(self.xyz(c, 0.0)?),
                 "transform" => Value::Transform(self.transform(c)?),
                 "ref" => {
-                    let id = c.attr("id").ok_or_else(|| self.fail(c, "needs an id attribute"))?;
-                    let target = self.ids.get(id).ok_or_else(|| {
-                        self.fail(c, format!("no object has the id \"{id}\""))
-                    })?;
+                    let id = c
+                        .attr("id")
+                        .ok_or_else(|| self.fail(c, "needs an id attribute"))?;
+                    let target = self
+                        .ids
+                        .get(id)
+                        .ok_or_else(|| self.fail(c, format!("no object has the id \"{id}\"")))?;
                     Value::Object(target)
                 }
                 "bsdf" | "shape" | "emitter" | "sensor" | "texture" | "film" | "rfilter"
@@ -671,9 +687,21 @@ fn rotation(a: Vec3, deg: f64) -> Affine {
     let t = 1.0 - c;
     Affine {
         m: [
-            [t * a.x * a.x + c, t * a.x * a.y - s * a.z, t * a.x * a.z + s * a.y],
-            [t * a.x * a.y + s * a.z, t * a.y * a.y + c, t * a.y * a.z - s * a.x],
-            [t * a.x * a.z - s * a.y, t * a.y * a.z + s * a.x, t * a.z * a.z + c],
+            [
+                t * a.x * a.x + c,
+                t * a.x * a.y - s * a.z,
+                t * a.x * a.z + s * a.y,
+            ],
+            [
+                t * a.x * a.y + s * a.z,
+                t * a.y * a.y + c,
+                t * a.y * a.z - s * a.x,
+            ],
+            [
+                t * a.x * a.z - s * a.y,
+                t * a.y * a.z + s * a.x,
+                t * a.z * a.z + c,
+            ],
         ],
         t: Vec3::ZERO,
     }
@@ -848,7 +876,11 @@ impl<'a> Importer<'a> {
             .string("distribution")?
             .unwrap_or_else(|| "beckmann".into())
             .to_ascii_lowercase();
-        if r.props.items.iter().any(|i| i.name == "alpha_u" || i.name == "alpha_v") {
+        if r.props
+            .items
+            .iter()
+            .any(|i| i.name == "alpha_u" || i.name == "alpha_v")
+        {
             let (u, v) = (r.float("alpha_u", -1.0)?, r.float("alpha_v", -1.0)?);
             if u != v {
                 return Err(self.fail(
@@ -907,7 +939,12 @@ impl<'a> Importer<'a> {
             "conductor" | "roughconductor" => {
                 let material = r.string("material")?.unwrap_or_else(|| "none".into());
                 let specular = r.color("specular_reflectance", 1.0)?;
-                if material != "none" || r.props.items.iter().any(|i| i.name == "eta" || i.name == "k") {
+                if material != "none"
+                    || r.props
+                        .items
+                        .iter()
+                        .any(|i| i.name == "eta" || i.name == "k")
+                {
                     return Err(self.fail(
                         e,
                         format!(
@@ -984,7 +1021,11 @@ impl<'a> Importer<'a> {
     }
 
     fn resolve_file(&self, e: &Elem, name: &str) -> Result<String> {
-        let here = self.file(e).parent().unwrap_or(Path::new(".")).to_path_buf();
+        let here = self
+            .file(e)
+            .parent()
+            .unwrap_or(Path::new("."))
+            .to_path_buf();
         let main = self.parser.files[0]
             .parent()
             .unwrap_or(Path::new("."))
@@ -1061,17 +1102,16 @@ impl<'a> Importer<'a> {
         let face_normals = r.boolean("face_normals", false)?;
         let bsdfs = r.objects("bsdf");
         let emitters = r.objects("emitter");
-        let material = match bsdfs.as_slice() {
-            [] => {
-                return Err(self.fail(
+        let material =
+            match bsdfs.as_slice() {
+                [] => return Err(self.fail(
                     e,
                     "a shape without a BSDF (Mitsuba's default, a one-sided diffuse 0.5) is not \
                      supported yet: give it a twosided BSDF",
-                ))
-            }
-            [b] => *b,
-            _ => return Err(self.fail(e, "more than one BSDF")),
-        };
+                )),
+                [b] => *b,
+                _ => return Err(self.fail(e, "more than one BSDF")),
+            };
         let emission = match emitters.as_slice() {
             [] => None,
             [em] => Some(self.area_emitter(em)?),
@@ -1130,7 +1170,10 @@ impl<'a> Importer<'a> {
                 r.done()?;
                 let y = intensity.luminance();
                 if !(y > 0.0) || intensity.min_component() < 0.0 {
-                    return Err(self.fail(e, "the intensity must be non-negative with positive luminance"));
+                    return Err(self.fail(
+                        e,
+                        "the intensity must be non-negative with positive luminance",
+                    ));
                 }
                 self.scene.point_lights.push(PointLight {
                     name: e.attr("id").map(str::to_string),
@@ -1145,7 +1188,9 @@ impl<'a> Importer<'a> {
                 let to_world = r.transform("to_world")?;
                 let intensity = r.color("intensity", 1.0)?;
                 if r.props.items.iter().any(|i| i.name == "texture") {
-                    return Err(self.fail(e, "a projected texture on a spot light is not supported"));
+                    return Err(
+                        self.fail(e, "a projected texture on a spot light is not supported")
+                    );
                 }
                 let cutoff_deg = r.float("cutoff_angle", 20.0)?;
                 let beam_width_deg = r.float("beam_width", cutoff_deg * 3.0 / 4.0)?;
@@ -1218,7 +1263,9 @@ impl<'a> Importer<'a> {
         if plugin != "perspective" {
             return Err(self.fail(
                 e,
-                format!("unsupported sensor \"{plugin}\" (luxest's camera is a pinhole: perspective)"),
+                format!(
+                    "unsupported sensor \"{plugin}\" (luxest's camera is a pinhole: perspective)"
+                ),
             ));
         }
         let r = self.reader(e)?;
@@ -1229,7 +1276,10 @@ impl<'a> Importer<'a> {
             _ => return Err(self.fail(e, "more than one film")),
         };
         for s in r.objects("sampler") {
-            self.warn(s, "ignored: luxest's sample count is given on its command line");
+            self.warn(
+                s,
+                "ignored: luxest's sample count is given on its command line",
+            );
         }
         let aspect = width as f64 / height as f64;
         let has_fov = r.props.items.iter().any(|i| i.name == "fov");
@@ -1247,17 +1297,24 @@ impl<'a> Importer<'a> {
                 .filter(|v: &f64| *v > 0.0)
                 .ok_or_else(|| self.fail(e, format!("focal_length \"{f}\" is not <x>mm")))?;
             (
-                2.0 * ((36.0f64 * 36.0 + 24.0 * 24.0).sqrt() / (2.0 * mm)).atan().to_degrees(),
+                2.0 * ((36.0f64 * 36.0 + 24.0 * 24.0).sqrt() / (2.0 * mm))
+                    .atan()
+                    .to_degrees(),
                 "diagonal".to_string(),
             )
         } else if has_fov {
             let fov = r.float("fov", 0.0)?;
-            let axis = r.string("fov_axis")?.unwrap_or_else(|| "x".into()).to_ascii_lowercase();
+            let axis = r
+                .string("fov_axis")?
+                .unwrap_or_else(|| "x".into())
+                .to_ascii_lowercase();
             (fov, axis)
         } else {
             // Mitsuba's default: a 50 mm lens on the diagonal of 35 mm film.
             (
-                2.0 * ((36.0f64 * 36.0 + 24.0 * 24.0).sqrt() / 100.0).atan().to_degrees(),
+                2.0 * ((36.0f64 * 36.0 + 24.0 * 24.0).sqrt() / 100.0)
+                    .atan()
+                    .to_degrees(),
                 "diagonal".to_string(),
             )
         };
@@ -1286,9 +1343,16 @@ impl<'a> Importer<'a> {
         let m = &to_world.m;
         let col = |j: usize| Vec3::new(m[0][j], m[1][j], m[2][j]);
         let (x, y, z) = (col(0), col(1), col(2));
-        let orthonormal = [(x, x, 1.0), (y, y, 1.0), (z, z, 1.0), (x, y, 0.0), (x, z, 0.0), (y, z, 0.0)]
-            .iter()
-            .all(|(a, b, want)| (a.dot(*b) - want).abs() <= 1e-3);
+        let orthonormal = [
+            (x, x, 1.0),
+            (y, y, 1.0),
+            (z, z, 1.0),
+            (x, y, 0.0),
+            (x, z, 0.0),
+            (y, z, 0.0),
+        ]
+        .iter()
+        .all(|(a, b, want)| (a.dot(*b) - want).abs() <= 1e-3);
         if !orthonormal {
             return Err(self.fail(
                 e,
@@ -1330,7 +1394,12 @@ impl<'a> Importer<'a> {
         }
         r.boolean("banner", true)?;
         r.boolean("sample_border", false)?;
-        for k in ["crop_offset_x", "crop_offset_y", "crop_width", "crop_height"] {
+        for k in [
+            "crop_offset_x",
+            "crop_offset_y",
+            "crop_width",
+            "crop_height",
+        ] {
             if r.props.items.iter().any(|i| i.name == k) {
                 return Err(self.fail(e, format!("{k}: crop windows are not supported")));
             }
@@ -1366,7 +1435,9 @@ impl<'a> Importer<'a> {
                     }
                 }
                 "texture" => {
-                    return Err(self.fail(c, "textures are not supported yet in this build of luxest"))
+                    return Err(
+                        self.fail(c, "textures are not supported yet in this build of luxest")
+                    )
                 }
                 "integrator" => self.warn(
                     c,
@@ -1428,7 +1499,11 @@ fn collect_ids<'a>(
     for c in &e.children {
         if c.tag == "alias" {
             let (Some(id), Some(alias)) = (c.attr("id"), c.attr("as")) else {
-                return Err(Error::at(&parser.files[c.file], describe(c), "needs id and as"));
+                return Err(Error::at(
+                    &parser.files[c.file],
+                    describe(c),
+                    "needs id and as",
+                ));
             };
             let Some(target) = ids.get(id).copied() else {
                 return Err(Error::at(
@@ -1526,9 +1601,15 @@ mod tests {
         assert!((v - 2.0 * 0.5f64.atan().to_degrees()).abs() < 1e-12);
         // Diagonal of a square: tan(v/2) = tan(d/2) / sqrt 2.
         let v = vertical_fov(60.0, "diagonal", 1.0).unwrap();
-        let want = 2.0 * ((30f64).to_radians().tan() / 2f64.sqrt()).atan().to_degrees();
+        let want = 2.0
+            * ((30f64).to_radians().tan() / 2f64.sqrt())
+                .atan()
+                .to_degrees();
         assert!((v - want).abs() < 1e-12);
-        assert_eq!(vertical_fov(40.0, "smaller", 2.0), vertical_fov(40.0, "y", 2.0));
+        assert_eq!(
+            vertical_fov(40.0, "smaller", 2.0),
+            vertical_fov(40.0, "y", 2.0)
+        );
         assert!(vertical_fov(40.0, "z", 1.0).is_none());
     }
 

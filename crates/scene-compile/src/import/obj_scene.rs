@@ -41,7 +41,10 @@ struct Mtl {
 }
 
 fn rgb_of(words: &[&str]) -> Option<Rgb> {
-    let v: Vec<f64> = words.iter().map(|w| w.parse().ok()).collect::<Option<_>>()?;
+    let v: Vec<f64> = words
+        .iter()
+        .map(|w| w.parse().ok())
+        .collect::<Option<_>>()?;
     match v.as_slice() {
         [a] => Some(Rgb::splat(*a)),
         [a, b, c] => Some(Rgb([*a, *b, *c])),
@@ -50,7 +53,11 @@ fn rgb_of(words: &[&str]) -> Option<Rgb> {
 }
 
 /// Reads an MTL library into `out`; warnings for what it leaves out.
-fn read_mtl(path: &Path, out: &mut BTreeMap<String, Mtl>, warnings: &mut Vec<String>) -> Result<()> {
+fn read_mtl(
+    path: &Path,
+    out: &mut BTreeMap<String, Mtl>,
+    warnings: &mut Vec<String>,
+) -> Result<()> {
     let bytes = luxest_io::fsio::read_bytes(path)?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|_| Error::input(path, "malformed MTL: not UTF-8 text"))?;
@@ -69,7 +76,11 @@ fn read_mtl(path: &Path, out: &mut BTreeMap<String, Mtl>, warnings: &mut Vec<Str
         if key == "newmtl" {
             let name = line.trim()["newmtl".len()..].trim().to_string();
             if out.contains_key(&name) {
-                return Err(Error::at(path, place, format!("material \"{name}\" defined twice")));
+                return Err(Error::at(
+                    path,
+                    place,
+                    format!("material \"{name}\" defined twice"),
+                ));
             }
             out.insert(
                 name.clone(),
@@ -90,7 +101,11 @@ fn read_mtl(path: &Path, out: &mut BTreeMap<String, Mtl>, warnings: &mut Vec<Str
             continue;
         }
         let Some(m) = current.as_ref().and_then(|c| out.get_mut(c)) else {
-            return Err(Error::at(path, place, format!("\"{key}\" before any newmtl")));
+            return Err(Error::at(
+                path,
+                place,
+                format!("\"{key}\" before any newmtl"),
+            ));
         };
         let bad = |what: &str| Error::at(path, format!("line {n}"), format!("{key}: {what}"));
         let number = || -> Result<f64> {
@@ -144,13 +159,7 @@ fn read_mtl(path: &Path, out: &mut BTreeMap<String, Mtl>, warnings: &mut Vec<Str
 
 /// The luxest material of an MTL material.
 fn material(name: &str, m: &Mtl) -> Result<Material> {
-    let at = |msg: String| {
-        Error::at(
-            &m.file,
-            format!("line {} (newmtl {name})", m.line),
-            msg,
-        )
-    };
+    let at = |msg: String| Error::at(&m.file, format!("line {} (newmtl {name})", m.line), msg);
     if let Some((key, line)) = m.maps.first() {
         return Err(Error::at(
             &m.file,
