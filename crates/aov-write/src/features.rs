@@ -1,6 +1,6 @@
 //! The denoiser's features of a camera ray and their per-pixel f64 sums: albedo as the denoiser
 //! sees it and the shading normal facing the ray, both of the first non-delta surface (through
-//! mirrors and smooth glass, [`first_hit`]), the hit distance, the emitted radiance seen directly
+//! mirrors, smooth metals and smooth glass, [`first_hit`]), the hit distance, the emitted radiance seen directly
 //! or in a mirror (the part of `trace`'s image a denoiser must leave untouched) — averaged over exactly the pixel samples
 //! `trace` uses ([`pixel_jitter`] with the same seed), and extendable like trace's film, so the
 //! features at n samples do not depend on the snapshots taken on the way.
@@ -14,14 +14,40 @@ use luxest_render::parallel::run_batches;
 use luxest_render::scene::Material;
 use luxest_render::world::World;
 
-/// Albedo of a material as the denoiser sees it.
+/// Albedo of a material as the denoiser sees it (Intel Open Image Denoise's definition): a
+/// diffuse surface's colour; a metal's reflectivity at normal incidence; 1 for a dielectric
+/// (where the ray does not follow it, see [`first_hit`]); for a layered material (`Glossy`, a
+/// plastic's coating over its base) the sum of its layers' albedos; for a blend the weighted sum
+/// of its materials'.
 pub fn albedo(m: &Material) -> Rgb {
     match m {
         Material::Lambertian { reflectance } | Material::Mirror { reflectance } => *reflectance,
         Material::Glossy {
             diffuse, specular, ..
         } => *diffuse + *specular,
-        Material::Dielectric { .. } => Rgb::WHITE,
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            ..
+        } => bsdf::conductor::reflectance(1.0, eta, k, specular_reflectance),
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            ..
+        } => {
+            let f0 = bsdf::fresnel_dielectric(1.0, *ior).0;
+            *specular_reflectance * f0 + *diffuse_reflectance * (1.0 - f0)
+        }
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => albedo(first) * (1.0 - weight) + albedo(second) * *weight,
+        Material::Dielectric { .. }
+        | Material::RoughDielectric { .. }
+        | Material::ThinDielectric { .. } => Rgb::WHITE,
     }
 }
 
@@ -54,8 +80,8 @@ pub const MAX_DELTA_VERTICES: u32 = 8;
 
 /// Features of one camera ray, as Intel Open Image Denoise recommends for perfect specular
 /// surfaces: albedo and normal of the first non-delta (diffuse or glossy) surface along the
-/// delta path — through a mirror, its reflectance times the albedo of the surface seen in it;
-/// at the first smooth dielectric, the Fresnel blend of the reflected and transmitted paths'
+/// delta path — through a mirror or a smooth metal, its reflectance times the albedo of the
+/// surface seen in it; at the first smooth dielectric or thin sheet, the Fresnel blend of the reflected and transmitted paths'
 /// features, at a later one its likelier branch alone (no random choice: the features stay
 /// noise-free); at most [`MAX_DELTA_VERTICES`] delta vertices, the last one's own features. The
 /// emission: see [`FirstHit::emission`]. The geometry is `trace`'s (flat normals, its offsets).
@@ -80,33 +106,51 @@ fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> 
     }
     // A branch of the delta path: trace's own sample (uc picks reflection below the Fresnel
     // reflectance, refraction above it) and the features where it leads.
+    // The sample's weight is the lobe's (a mirror's reflectance, a smooth metal's Fresnel
+    // reflectance).
     let branch = |uc: f64, split: bool| {
         let s = bsdf::sample(m, wo, sp.ng, sp.ng, (0.5, 0.5), uc, Transport::Radiance)?;
-        Some(along(
-            world,
-            world.offset(sp.position, sp.ng, s.wi),
-            s.wi,
-            vertices + 1,
-            split,
+        Some((
+            s.weight,
+            along(
+                world,
+                world.offset(sp.position, sp.ng, s.wi),
+                s.wi,
+                vertices + 1,
+                split,
+            ),
         ))
     };
-    match m {
-        Material::Mirror { reflectance } => match branch(0.0, split) {
-            Some(next) => FirstHit {
-                albedo: *reflectance * next.albedo,
+    let fresnel = match m {
+        // trace's Fresnel reflectance at this vertex (bsdf::sample with flat normals).
+        Material::Dielectric { ior } => Some(bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance),
+        Material::ThinDielectric { ior } => Some(bsdf::dielectric::thin_reflectance(
+            wo.dot(sp.ng),
+            *ior,
+        )),
+        _ => None,
+    };
+    match (m, fresnel) {
+        (
+            Material::Mirror { .. }
+            | Material::Conductor {
+                roughness: None, ..
+            },
+            _,
+        ) => match branch(0.0, split) {
+            Some((reflectance, next)) => FirstHit {
+                albedo: reflectance * next.albedo,
                 normal: next.normal,
                 depth: own.depth,
                 emission: if vertices == 0 {
-                    own.emission + *reflectance * next.emission
+                    own.emission + reflectance * next.emission
                 } else {
                     own.emission
                 },
             },
             None => own,
         },
-        Material::Dielectric { ior } => {
-            // trace's Fresnel reflectance at this vertex (bsdf::sample with flat normals).
-            let f = bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance;
+        (_, Some(f)) => {
             // Weights of the reflected and transmitted branches; at later dielectrics the
             // likelier branch alone, so that one camera ray's features stay one path (no
             // noise, no blow-up).
@@ -118,7 +162,7 @@ fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> 
             let (mut a, mut nrm) = (Rgb::BLACK, Vec3::ZERO);
             for (uc, w) in [(0.0, reflected), (1.0, transmitted)] {
                 if w > 0.0 {
-                    if let Some(h) = branch(uc, true) {
+                    if let Some((_, h)) = branch(uc, true) {
                         a = a + h.albedo * w;
                         nrm += h.normal * w;
                     }

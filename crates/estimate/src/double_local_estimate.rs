@@ -354,7 +354,10 @@ fn light_tracing(
                 return; // the exact direct term's, or the environment's at the view points
             }
             let (m, wo, ng) = (world.material(sp.triangle), -dir, sp.ng);
-            let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+            // A light path's vertex: the adjoint BSDF (wo towards the light).
+            let f_cos = |w: Vec3| {
+                bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs()
+            };
             if let Some(link) =
                 connect_to_camera(world, cam, sp.position, ng, f_cos, &mut shadow_rays)
             {
@@ -421,7 +424,14 @@ fn contribution(
             (Rgb::splat(c / PI), c / PI)
         }
         Some(t) => {
-            let (f, p) = bsdf::eval_and_pdf(world.material(t), r.wo, w, r.ng, r.ng);
+            let (f, p) = bsdf::eval_and_pdf_transport(
+                world.material(t),
+                r.wo,
+                w,
+                r.ng,
+                r.ng,
+                Transport::Flux,
+            );
             let f = f * w.dot(r.ng).abs();
             let pdf = if p > 0.0 {
                 p * survival(f * (1.0 / p))

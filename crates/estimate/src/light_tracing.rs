@@ -32,7 +32,7 @@ use crate::transport::{walk_light_path, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_io::progress::Progress;
-use luxest_render::bsdf;
+use luxest_render::bsdf::{self, Transport};
 use luxest_render::camera::{pixel_jitter, PinholeCamera};
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
 use luxest_render::sampling::Rng;
@@ -145,7 +145,10 @@ fn run_batch(
                 }
                 LightVertex::Collision { sp, dir, .. } => {
                     let (m, wo, ng) = (world.material(sp.triangle), -dir, sp.ng);
-                    let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+                    // The adjoint BSDF (wo towards the light).
+                    let f_cos = |w: Vec3| {
+                        bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs()
+                    };
                     splat(world, cam, sp.position, ng, q, f_cos, &mut film);
                 }
             }

@@ -42,7 +42,7 @@ use crate::transport::{
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_io::progress::Progress;
-use luxest_render::bsdf;
+use luxest_render::bsdf::{self, Transport};
 use luxest_render::rt::Ray;
 use luxest_render::sampling::Rng;
 use luxest_render::scene::{Material, SensorPoint};
@@ -132,7 +132,8 @@ fn connect(
                 ng,
                 ns,
             } => {
-                let f = bsdf::eval(material, *wo, w, *ng, *ns);
+                // The adjoint BSDF (wo towards the light).
+                let f = bsdf::eval_transport(material, *wo, w, *ng, *ns, Transport::Flux);
                 f * w.dot(*ns).abs()
             }
             Source::Emitter { normal } => {

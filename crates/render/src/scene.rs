@@ -88,7 +88,9 @@ fn default_up() -> Vec3 {
     Vec3::new(0.0, 1.0, 0.0)
 }
 
-/// Surface scattering models. Reflectances are linear RGB in [0, 1].
+/// Surface scattering models. Reflectances are linear RGB in [0, 1]. The models after `Glossy`
+/// are Mitsuba 3's plugins of the same name (named per variant), with Mitsuba's parameters and
+/// semantics; `docs/scene-format.md` documents each.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum Material {
@@ -109,6 +111,69 @@ pub enum Material {
         specular: Rgb,
         roughness: f64,
     },
+    /// A metal with the complex index of refraction `eta + i k` per channel (relative to the
+    /// outside): smooth without `roughness` (Mitsuba `conductor`), a microfacet surface with it
+    /// (`roughconductor`); the Fresnel reflectance is scaled by `specular_reflectance`.
+    Conductor {
+        eta: Rgb,
+        k: Rgb,
+        #[serde(default = "white")]
+        specular_reflectance: Rgb,
+        #[serde(default)]
+        roughness: Option<Microfacet>,
+    },
+    /// A diffuse base under a dielectric coating (Mitsuba `plastic`, or `roughplastic` with
+    /// `roughness`), with the internal scattering between base and coating.
+    Plastic {
+        diffuse_reflectance: Rgb,
+        #[serde(default = "white")]
+        specular_reflectance: Rgb,
+        /// int_ior / ext_ior (Mitsuba's default: polypropylene in air).
+        #[serde(default = "plastic_ior")]
+        ior: f64,
+        /// Mitsuba's `nonlinear`: the diffuse colour darkens and saturates through internal
+        /// scattering, as in wet or varnished materials.
+        #[serde(default)]
+        nonlinear: bool,
+        #[serde(default)]
+        roughness: Option<Microfacet>,
+    },
+    /// A rough dielectric interface with reflection and transmission (Mitsuba
+    /// `roughdielectric`); `ior` as for `Dielectric`.
+    RoughDielectric { ior: f64, roughness: Microfacet },
+    /// A thin dielectric sheet (a window pane): reflection with the internal reflections of
+    /// both faces summed, transmission straight through (Mitsuba `thindielectric`).
+    ThinDielectric { ior: f64 },
+    /// (1 − weight) · first + weight · second (Mitsuba `blendbsdf`).
+    Blend {
+        weight: f64,
+        first: Box<Material>,
+        second: Box<Material>,
+    },
+}
+
+/// Microfacet roughness (isotropic), Mitsuba 3's convention: `alpha` is the distribution's α
+/// (the root-mean-square slope for Beckmann).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Microfacet {
+    pub distribution: MicrofacetDistribution,
+    pub alpha: f64,
+}
+
+/// The microfacet normal distributions of Mitsuba 3.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum MicrofacetDistribution {
+    /// GGX / Trowbridge-Reitz.
+    Ggx,
+    /// Beckmann (Gaussian slopes).
+    Beckmann,
+}
+
+/// Mitsuba 3's default `int_ior / ext_ior` of `plastic` and `roughplastic`: polypropylene (1.49)
+/// in air (1.000277), from its table of indices (`include/mitsuba/render/ior.h`).
+pub fn plastic_ior() -> f64 {
+    1.49 / 1.000277
 }
 
 /// The kind of a material, as listed in the features manifest.
@@ -118,6 +183,11 @@ pub enum MaterialKind {
     Mirror,
     Dielectric,
     Glossy,
+    Conductor,
+    Plastic,
+    RoughDielectric,
+    ThinDielectric,
+    Blend,
 }
 
 impl Material {
@@ -127,6 +197,20 @@ impl Material {
             Material::Mirror { .. } => MaterialKind::Mirror,
             Material::Dielectric { .. } => MaterialKind::Dielectric,
             Material::Glossy { .. } => MaterialKind::Glossy,
+            Material::Conductor { .. } => MaterialKind::Conductor,
+            Material::Plastic { .. } => MaterialKind::Plastic,
+            Material::RoughDielectric { .. } => MaterialKind::RoughDielectric,
+            Material::ThinDielectric { .. } => MaterialKind::ThinDielectric,
+            Material::Blend { .. } => MaterialKind::Blend,
+        }
+    }
+
+    /// This material and, for a blend, the materials it blends (depth first).
+    pub fn for_each(&self, f: &mut impl FnMut(&Material)) {
+        f(self);
+        if let Material::Blend { first, second, .. } = self {
+            first.for_each(f);
+            second.for_each(f);
         }
     }
 }

@@ -33,6 +33,7 @@ use luxest_render::compiled::{
     CompiledScene, Emitter, Features, GridLayout, NamedMaterial, ObjectRange, SceneHeader,
     SensorSet, SpotCone, Stats, NO_EMITTER,
 };
+use luxest_render::bsdf;
 use luxest_render::scene::{Emission, Material, PointPower, Scene, Sensor, SensorPoint, Shape};
 use shapes::LocalMesh;
 use std::f64::consts::PI;
@@ -290,6 +291,43 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
 }
 
 /// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
+/// The fraction of light in channel `c` a material returns at normal incidence, for the warning
+/// on materials that absorb nothing (a dielectric counts as absorbing: it absorbs nothing by
+/// design, and its light leaves through other surfaces).
+fn lossless_albedo(m: &Material, c: usize) -> f64 {
+    match m {
+        Material::Lambertian { reflectance } | Material::Mirror { reflectance } => reflectance.0[c],
+        Material::Glossy {
+            diffuse, specular, ..
+        } => diffuse.0[c] + specular.0[c],
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            ..
+        } => {
+            specular_reflectance.0[c] * bsdf::conductor::fresnel_conductor(1.0, eta.0[c], k.0[c])
+        }
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            ..
+        } => {
+            let f0 = bsdf::fresnel_dielectric(1.0, *ior).0;
+            f0 * specular_reflectance.0[c] + (1.0 - f0) * diffuse_reflectance.0[c]
+        }
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => (1.0 - weight) * lossless_albedo(first, c) + weight * lossless_albedo(second, c),
+        Material::Dielectric { .. }
+        | Material::RoughDielectric { .. }
+        | Material::ThinDielectric { .. } => 0.0,
+    }
+}
+
 pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     validate::check_scene(path, scene)?;
     let mut report = Report::default();
@@ -433,17 +471,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     }
     for &i in &used {
         let m = &materials[i as usize];
-        let albedo = |c: usize| match &m.model {
-            Material::Lambertian { reflectance } | Material::Mirror { reflectance } => {
-                reflectance.0[c]
-            }
-            Material::Glossy {
-                diffuse, specular, ..
-            } => diffuse.0[c] + specular.0[c],
-            // A dielectric absorbs nothing by design; its light leaves through other surfaces.
-            _ => 0.0,
-        };
-        if let Some(c) = (0..3).find(|&c| albedo(c) >= 1.0) {
+        if let Some(c) = (0..3).find(|&c| lossless_albedo(&m.model, c) >= 1.0) {
             // Choice: reflectance 1 stays allowed (an ideal mirror or white is a
             // legitimate test), but its dependence on the path-depth cap is stated.
             report.warnings.push(format!(
@@ -456,7 +484,10 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         }
     }
     let used_models: Vec<&Material> = used.iter().map(|&i| &materials[i as usize].model).collect();
-    let mut material_kinds: Vec<_> = used_models.iter().map(|m| m.kind()).collect();
+    let mut material_kinds = Vec::new();
+    for m in &used_models {
+        m.for_each(&mut |m| material_kinds.push(m.kind()));
+    }
     material_kinds.sort();
     material_kinds.dedup();
     let any = |f: fn(&Material) -> bool| used_models.iter().any(|m| f(m));
@@ -464,9 +495,9 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         material_kinds,
         point_emitters: emitters.iter().any(|e| matches!(e, Emitter::Point { .. })),
         area_emitters: emitters.iter().any(|e| matches!(e, Emitter::Area { .. })),
-        specular_paths: any(|m| matches!(m, Material::Mirror { .. } | Material::Dielectric { .. })),
-        transmission: any(|m| matches!(m, Material::Dielectric { .. })),
-        glossy: any(|m| matches!(m, Material::Glossy { .. })),
+        specular_paths: any(bsdf::has_delta_lobe),
+        transmission: any(bsdf::transmits),
+        glossy: any(bsdf::is_glossy),
         smooth_normals: b.normals.iter().any(|n| *n != [0.0; 3]),
         spectral: false,
         camera: scene.camera.is_some(),

@@ -13,6 +13,11 @@
 //! | `Mirror` | `twosided` `conductor`, `material="none"` (Fresnel 1), `specular_reflectance` |
 //! | `Dielectric` (ior inside / outside) | `dielectric`, `int_ior = ior`, `ext_ior = 1` |
 //! | `Glossy` = diffuse/π + specular · GGX(α = roughness²) | `twosided` `blendbsdf` of weight ½ over `diffuse` (2 · diffuse) and `roughconductor` (`ggx`, α, `material="none"`, 2 · specular): the sum of the two lobes |
+//! | `Conductor` (η + ik per channel) | `twosided` `conductor`, or `roughconductor` with `distribution` and `alpha`; `eta`, `k`, `specular_reflectance` |
+//! | `Plastic` (ior = int / ext) | `twosided` `plastic`, or `roughplastic` with `distribution` and `alpha`; `diffuse_reflectance`, `specular_reflectance`, `int_ior = ior`, `ext_ior = 1`, `nonlinear` |
+//! | `RoughDielectric` | `roughdielectric`, `distribution`, `alpha`, `int_ior = ior`, `ext_ior = 1` |
+//! | `ThinDielectric` | `thindielectric`, `int_ior = ior`, `ext_ior = 1` |
+//! | `Blend` | `blendbsdf` with `weight`, over the two materials' own elements |
 //! | area emitter (front side, luminance L) | `area` emitter, `radiance` = L |
 //! | point source (intensity I per channel) | `point` emitter, `intensity` = I |
 //! | spot light (on-axis intensity I₀, cutoff, beam width) | `spot` emitter, `intensity` = I₀, `cutoff_angle`, `beam_width`, `to_world` a `lookat` along the axis |
@@ -26,7 +31,7 @@
 use luxest_io::math::Vec3;
 use luxest_io::{Error, Result};
 use luxest_render::compiled::{CompiledScene, Emitter, NO_EMITTER};
-use luxest_render::scene::Material;
+use luxest_render::scene::{Material, Microfacet, MicrofacetDistribution};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -69,6 +74,73 @@ fn bsdf(m: &Material) -> String {
             roughness * roughness,
             rgb("specular_reflectance", specular.0.map(|v| 2.0 * v))
         ),
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            roughness,
+        } => format!(
+            r#"<bsdf type="twosided"><bsdf type="{}">{}{}{}{}</bsdf></bsdf>"#,
+            if roughness.is_some() {
+                "roughconductor"
+            } else {
+                "conductor"
+            },
+            microfacet(roughness.as_ref()),
+            rgb("eta", eta.0),
+            rgb("k", k.0),
+            rgb("specular_reflectance", specular_reflectance.0)
+        ),
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            nonlinear,
+            roughness,
+        } => format!(
+            r#"<bsdf type="twosided"><bsdf type="{}">{}{}{}<float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/><boolean name="nonlinear" value="{nonlinear}"/></bsdf></bsdf>"#,
+            if roughness.is_some() {
+                "roughplastic"
+            } else {
+                "plastic"
+            },
+            microfacet(roughness.as_ref()),
+            rgb("diffuse_reflectance", diffuse_reflectance.0),
+            rgb("specular_reflectance", specular_reflectance.0)
+        ),
+        Material::RoughDielectric { ior, roughness } => format!(
+            r#"<bsdf type="roughdielectric">{}<float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/></bsdf>"#,
+            microfacet(Some(roughness))
+        ),
+        Material::ThinDielectric { ior } => format!(
+            r#"<bsdf type="thindielectric"><float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/></bsdf>"#
+        ),
+        // Each blended material keeps its own element (a two-sided reflector stays wrapped in
+        // `twosided`; Mitsuba's `twosided` cannot hold a transmitting blend).
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => format!(
+            r#"<bsdf type="blendbsdf"><float name="weight" value="{weight:e}"/>{}{}</bsdf>"#,
+            bsdf(first),
+            bsdf(second)
+        ),
+    }
+}
+
+/// The `distribution` and `alpha` of a microfacet model (nothing for a smooth one).
+fn microfacet(r: Option<&Microfacet>) -> String {
+    match r {
+        Some(r) => format!(
+            r#"<string name="distribution" value="{}"/><float name="alpha" value="{:e}"/>"#,
+            match r.distribution {
+                MicrofacetDistribution::Ggx => "ggx",
+                MicrofacetDistribution::Beckmann => "beckmann",
+            },
+            r.alpha
+        ),
+        None => String::new(),
     }
 }
 

@@ -1,16 +1,40 @@
-//! Scattering by the four material models of the scene format, shared by every estimator.
+//! Scattering by the material models of the scene format, shared by every estimator.
 //!
 //! Directions point away from the surface: `wo` towards where the path came from, `wi` the new
 //! direction. `ng` is the unit geometric normal (the front side), `ns` the unit shading normal.
-//! Reflection is two-sided: the frame is flipped to the side `wo` lies on. The dielectric uses
+//! Reflection is two-sided: the frame is flipped to the side `wo` lies on. The dielectrics use
 //! the front side to tell inside from outside (`ior` is the inside's index).
 //!
 //! `weight` of a sample is `f |cos θi| / pdf` (for delta lobes, the lobe's weight), so a path
 //! throughput is a running product of weights.
+//!
+//! One file per model family, the Mitsuba 3 plugins they are named after:
+//! - [`glossy`]: luxest's `Glossy` (a diffuse base plus an unweighted GGX lobe);
+//! - [`microfacet`]: Mitsuba's GGX and Beckmann distributions, visible-normal sampling, Smith G;
+//! - [`conductor`]: `conductor` and `roughconductor` (complex index of refraction);
+//! - [`plastic`]: `plastic` and `roughplastic`;
+//! - [`dielectric`]: `dielectric`, `roughdielectric` and `thindielectric`;
+//! - [`blend`]: `blendbsdf`.
+//!
+//! Lambertian (`diffuse`) and the ideal mirror are here.
+
+pub mod blend;
+pub mod conductor;
+pub mod dielectric;
+pub mod glossy;
+pub mod microfacet;
+pub mod plastic;
+
+pub use dielectric::{dielectric_side, fresnel_dielectric, DielectricSide};
 
 use crate::scene::Material;
+use conductor::Conductor;
+use dielectric::Rough;
+use glossy::Glossy;
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use microfacet::Distribution;
+use plastic::Plastic;
 use std::f64::consts::PI;
 
 /// Whether the path carries radiance (from the camera) or importance/flux (from the lights):
@@ -30,65 +54,91 @@ pub struct BsdfSample {
     pub delta: bool,
 }
 
+/// A sample in a model's local frame (+z the normal on `wo`'s side), as [`BsdfSample`].
+pub struct LocalSample {
+    pub wi: Vec3,
+    pub weight: Rgb,
+    pub pdf: f64,
+    pub delta: bool,
+}
+
 pub fn reflect(w: Vec3, n: Vec3) -> Vec3 {
     n * (2.0 * w.dot(n)) - w
 }
 
-/// Exact Fresnel reflectance of a smooth dielectric for unpolarised light; `cos_i` > 0 on the
-/// incident side, `eta` = η_transmitted / η_incident. Returns (F, cos_t); F = 1 under total
-/// internal reflection.
-pub fn fresnel_dielectric(cos_i: f64, eta: f64) -> (f64, f64) {
-    let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return (1.0, 0.0);
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    (0.5 * (rs * rs + rp * rp), cos_t)
-}
-
-/// A smooth dielectric interface as seen from `wo`: the shading normal on `wo`'s side (the side
-/// follows the geometric normal), the relative index of refraction, the cosine on that side, and
-/// the Fresnel reflectance with the transmitted cosine ([`fresnel_dielectric`]).
-pub struct DielectricSide {
-    pub n: Vec3,
-    pub eta: f64,
-    pub cos_o: f64,
-    pub reflectance: f64,
-    pub cos_t: f64,
-}
-
-/// The interface of a dielectric of index `ior` (inside relative to the side `ng` points to),
-/// as [`sample`] sees it.
-pub fn dielectric_side(wo: Vec3, ng: Vec3, ns: Vec3, ior: f64) -> DielectricSide {
-    let (n, eta) = if wo.dot(ng) > 0.0 {
-        (ns, ior)
-    } else {
-        (-ns, 1.0 / ior)
-    };
-    let cos_o = wo.dot(n).max(0.0);
-    let (reflectance, cos_t) = fresnel_dielectric(cos_o, eta);
-    DielectricSide {
-        n,
-        eta,
-        cos_o,
-        reflectance,
-        cos_t,
-    }
-}
-
+/// Every lobe is a delta lobe: the material has no density over directions (`eval` and `pdf`
+/// are zero everywhere), so next-event estimation and connections skip it.
 pub fn is_delta(m: &Material) -> bool {
-    matches!(m, Material::Mirror { .. } | Material::Dielectric { .. })
+    match m {
+        Material::Mirror { .. } | Material::Dielectric { .. } | Material::ThinDielectric { .. } => {
+            true
+        }
+        Material::Conductor { roughness, .. } => roughness.is_none(),
+        Material::Blend { first, second, .. } => is_delta(first) && is_delta(second),
+        Material::Lambertian { .. }
+        | Material::Glossy { .. }
+        | Material::Plastic { .. }
+        | Material::RoughDielectric { .. } => false,
+    }
+}
+
+/// Some lobe is a delta lobe (a smooth plastic's coating too): [`sample`] can return a delta
+/// sample, so delta (specular) paths exist.
+pub fn has_delta_lobe(m: &Material) -> bool {
+    match m {
+        Material::Plastic { roughness, .. } => roughness.is_none(),
+        Material::Blend { first, second, .. } => has_delta_lobe(first) || has_delta_lobe(second),
+        _ => is_delta(m),
+    }
+}
+
+/// Some lobe transmits light through the surface.
+pub fn transmits(m: &Material) -> bool {
+    match m {
+        Material::Dielectric { .. }
+        | Material::RoughDielectric { .. }
+        | Material::ThinDielectric { .. } => true,
+        Material::Blend { first, second, .. } => transmits(first) || transmits(second),
+        _ => false,
+    }
+}
+
+/// Some lobe is a glossy (microfacet) lobe.
+pub fn is_glossy(m: &Material) -> bool {
+    match m {
+        Material::Glossy { .. } | Material::RoughDielectric { .. } => true,
+        Material::Conductor { roughness, .. } | Material::Plastic { roughness, .. } => {
+            roughness.is_some()
+        }
+        Material::Blend { first, second, .. } => is_glossy(first) || is_glossy(second),
+        _ => false,
+    }
 }
 
 /// The albedo that Russian roulette and diffuse connections use: the reflectance of the
-/// diffuse part (Lambertian reflectance, Glossy diffuse), zero for delta materials.
+/// diffuse part (Lambertian reflectance, Glossy diffuse, a plastic's base, a blend's mix of its
+/// materials'), zero for purely specular or glossy materials.
 pub fn diffuse_reflectance(m: &Material) -> Rgb {
     match m {
         Material::Lambertian { reflectance } => *reflectance,
         Material::Glossy { diffuse, .. } => *diffuse,
-        _ => Rgb::BLACK,
+        Material::Plastic {
+            diffuse_reflectance,
+            ..
+        } => *diffuse_reflectance,
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => {
+            let w = weight.clamp(0.0, 1.0);
+            diffuse_reflectance(first) * (1.0 - w) + diffuse_reflectance(second) * w
+        }
+        Material::Mirror { .. }
+        | Material::Dielectric { .. }
+        | Material::Conductor { .. }
+        | Material::RoughDielectric { .. }
+        | Material::ThinDielectric { .. } => Rgb::BLACK,
     }
 }
 
@@ -108,91 +158,264 @@ pub fn facing_normal(wo: Vec3, ng: Vec3) -> Vec3 {
     facing(wo, ng, ng).0
 }
 
-fn ggx_d(n_dot_h: f64, alpha: f64) -> f64 {
-    let a2 = alpha * alpha;
-    let c2 = n_dot_h * n_dot_h;
-    let t = c2 * (a2 - 1.0) + 1.0;
-    a2 / (PI * t * t)
+/// An orthonormal frame about the unit normal `n`.
+#[derive(Clone, Copy)]
+struct Frame {
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
 }
 
-fn smith_g1(n_dot_v: f64, alpha: f64) -> f64 {
-    let c2 = n_dot_v * n_dot_v;
-    let tan2 = (1.0 - c2).max(0.0) / c2.max(1e-300);
-    2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt())
-}
-
-/// BSDF value f(wo, wi) (per sr, without the cosine); zero for delta materials.
-pub fn eval(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> Rgb {
-    let (g, n) = facing(wo, ng, ns);
-    if wi.dot(g) <= 0.0 {
-        return Rgb::BLACK;
+impl Frame {
+    fn new(n: Vec3) -> Frame {
+        let (t, b) = n.orthonormal_basis();
+        Frame { t, b, n }
     }
+    fn local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+    fn world(&self, v: Vec3) -> Vec3 {
+        self.t * v.x + self.b * v.y + self.n * v.z
+    }
+}
+
+/// A reflecting model's frame: the geometric normal on `wo`'s side and the local frame about
+/// the shading normal on that side.
+fn reflecting(wo: Vec3, ng: Vec3, ns: Vec3) -> (Vec3, Frame) {
+    let (g, n) = facing(wo, ng, ns);
+    (g, Frame::new(n))
+}
+
+/// A reflecting model evaluated in its local frame; `None` (no scattering) when `wi` is below
+/// the geometric surface.
+fn in_reflecting_frame<T>(
+    (wo, wi, ng, ns): (Vec3, Vec3, Vec3, Vec3),
+    f: impl FnOnce(Vec3, Vec3) -> T,
+) -> Option<T> {
+    let (g, frame) = reflecting(wo, ng, ns);
+    (wi.dot(g) > 0.0).then(|| f(frame.local(wo), frame.local(wi)))
+}
+
+/// The rough dielectric's interface seen from `wo` and its local frame, and whether `wi` leaves
+/// on the side the local frame says (reflection above, transmission below) for the geometric
+/// normal too.
+fn rough_dielectric(
+    wo: Vec3,
+    wi: Vec3,
+    (ng, ns): (Vec3, Vec3),
+    ior: f64,
+    roughness: &crate::scene::Microfacet,
+) -> Option<(Rough, Vec3, Vec3)> {
+    let (n, eta) = dielectric::side(wo, ng, ns, ior);
+    let frame = Frame::new(n);
+    let (wo_l, wi_l) = (frame.local(wo), frame.local(wi));
+    let g = facing_normal(wo, ng);
+    ((wi.dot(g) > 0.0) == (wi_l.z > 0.0)).then(|| {
+        (
+            Rough {
+                d: Distribution::new(roughness),
+                eta,
+            },
+            wo_l,
+            wi_l,
+        )
+    })
+}
+
+fn conductor<'a>(eta: &'a Rgb, k: &'a Rgb, specular_reflectance: &'a Rgb) -> Conductor<'a> {
+    Conductor {
+        eta,
+        k,
+        specular_reflectance,
+    }
+}
+
+/// The plastic model of `Material::Plastic`'s fields.
+fn plastic<'a>(
+    diffuse_reflectance: &'a Rgb,
+    specular_reflectance: &'a Rgb,
+    ior: f64,
+    nonlinear: bool,
+    roughness: &'a Option<crate::scene::Microfacet>,
+) -> Plastic<'a> {
+    Plastic {
+        diffuse_reflectance,
+        specular_reflectance,
+        eta: ior,
+        nonlinear,
+        roughness: roughness.as_ref(),
+    }
+}
+
+/// BSDF value f(wo, wi) (per sr, without the cosine) for radiance transport; zero for delta
+/// materials.
+pub fn eval(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> Rgb {
+    eval_transport(m, wo, wi, ng, ns, Transport::Radiance)
+}
+
+/// f(wo, wi) for a path of the given transport mode: light paths (flux, `wo` towards the light)
+/// evaluate the adjoint BSDF, which differs from the radiance BSDF by the refraction's
+/// (η_o/η_i)² (the rough dielectric's transmission); reflection is symmetric.
+pub fn eval_transport(
+    m: &Material,
+    wo: Vec3,
+    wi: Vec3,
+    ng: Vec3,
+    ns: Vec3,
+    mode: Transport,
+) -> Rgb {
+    let at = (wo, wi, ng, ns);
     match m {
-        Material::Lambertian { reflectance } => *reflectance * (1.0 / PI),
+        Material::Lambertian { reflectance } => {
+            if wi.dot(facing_normal(wo, ng)) <= 0.0 {
+                return Rgb::BLACK;
+            }
+            *reflectance * (1.0 / PI)
+        }
         Material::Glossy {
             diffuse,
             specular,
             roughness,
         } => {
-            let (co, ci) = (wo.dot(n), wi.dot(n));
-            if co <= 0.0 || ci <= 0.0 {
+            let (g, n) = facing(wo, ng, ns);
+            if wi.dot(g) <= 0.0 {
                 return Rgb::BLACK;
             }
-            let alpha = roughness * roughness;
-            let h = match (wo + wi).try_normalize() {
-                Some(h) => h,
-                None => return *diffuse * (1.0 / PI),
-            };
-            let spec = ggx_d(h.dot(n), alpha) * smith_g1(co, alpha) * smith_g1(ci, alpha)
-                / (4.0 * co * ci);
-            *diffuse * (1.0 / PI) + *specular * spec
+            Glossy {
+                diffuse,
+                specular,
+                roughness: *roughness,
+            }
+            .eval(wo, wi, n)
         }
-        Material::Mirror { .. } | Material::Dielectric { .. } => Rgb::BLACK,
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            roughness: Some(r),
+        } => in_reflecting_frame(at, |wo, wi| {
+            conductor(eta, k, specular_reflectance).eval(r, wo, wi)
+        })
+        .unwrap_or(Rgb::BLACK),
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            nonlinear,
+            roughness,
+        } => in_reflecting_frame(at, |wo, wi| {
+            plastic(
+                diffuse_reflectance,
+                specular_reflectance,
+                *ior,
+                *nonlinear,
+                roughness,
+            )
+            .eval(wo, wi)
+        })
+        .unwrap_or(Rgb::BLACK),
+        Material::RoughDielectric { ior, roughness } => {
+            match rough_dielectric(wo, wi, (ng, ns), *ior, roughness) {
+                Some((rough, wo_l, wi_l)) => Rgb::splat(rough.eval(wo_l, wi_l, mode)),
+                None => Rgb::BLACK,
+            }
+        }
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => blend::eval((*weight, first, second), wo, wi, (ng, ns), mode),
+        Material::Mirror { .. }
+        | Material::Dielectric { .. }
+        | Material::ThinDielectric { .. }
+        | Material::Conductor {
+            roughness: None, ..
+        } => Rgb::BLACK,
     }
-}
-
-fn glossy_lobe_probability(diffuse: &Rgb, specular: &Rgb) -> Option<f64> {
-    let (d, s) = (diffuse.luminance(), specular.luminance());
-    (d + s > 0.0).then(|| d / (d + s))
 }
 
 /// Solid-angle density with which [`sample`] produces `wi`; zero for delta materials.
 pub fn pdf(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> f64 {
-    let (g, n) = facing(wo, ng, ns);
-    if wi.dot(g) <= 0.0 {
-        return 0.0;
-    }
+    let at = (wo, wi, ng, ns);
     match m {
-        Material::Lambertian { .. } => wi.dot(n).max(0.0) / PI,
+        Material::Lambertian { .. } => {
+            let (g, n) = facing(wo, ng, ns);
+            if wi.dot(g) <= 0.0 {
+                return 0.0;
+            }
+            wi.dot(n).max(0.0) / PI
+        }
         Material::Glossy {
             diffuse,
             specular,
             roughness,
         } => {
-            let Some(pd) = glossy_lobe_probability(diffuse, specular) else {
-                return 0.0;
-            };
-            // [`sample`] rejects a direction below the shading normal's horizon (where `eval` is
-            // zero), even above the geometric one: the specular lobe's density there is lost.
-            if wi.dot(n) <= 0.0 {
+            let (g, n) = facing(wo, ng, ns);
+            if wi.dot(g) <= 0.0 {
                 return 0.0;
             }
-            let alpha = roughness * roughness;
-            let diff = wi.dot(n) / PI;
-            let spec = match (wo + wi).try_normalize() {
-                Some(h) if h.dot(n) > 0.0 && wo.dot(h) > 0.0 => {
-                    ggx_d(h.dot(n), alpha) * h.dot(n) / (4.0 * wo.dot(h))
-                }
-                _ => 0.0,
-            };
-            pd * diff + (1.0 - pd) * spec
+            Glossy {
+                diffuse,
+                specular,
+                roughness: *roughness,
+            }
+            .pdf(wo, wi, n)
         }
-        Material::Mirror { .. } | Material::Dielectric { .. } => 0.0,
+        Material::Conductor {
+            roughness: Some(r),
+            ..
+        } => in_reflecting_frame(at, |wo, wi| Conductor::pdf(r, wo, wi)).unwrap_or(0.0),
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            nonlinear,
+            roughness,
+        } => in_reflecting_frame(at, |wo, wi| {
+            plastic(
+                diffuse_reflectance,
+                specular_reflectance,
+                *ior,
+                *nonlinear,
+                roughness,
+            )
+            .pdf(wo, wi)
+        })
+        .unwrap_or(0.0),
+        Material::RoughDielectric { ior, roughness } => {
+            match rough_dielectric(wo, wi, (ng, ns), *ior, roughness) {
+                Some((rough, wo_l, wi_l)) => rough.pdf(wo_l, wi_l),
+                None => 0.0,
+            }
+        }
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => blend::density((*weight, first, second), wo, wi, (ng, ns)),
+        Material::Mirror { .. }
+        | Material::Dielectric { .. }
+        | Material::ThinDielectric { .. }
+        | Material::Conductor {
+            roughness: None, ..
+        } => 0.0,
     }
 }
 
 /// `(eval, pdf)` in one pass (next-event estimation with MIS needs both).
 pub fn eval_and_pdf(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> (Rgb, f64) {
+    eval_and_pdf_transport(m, wo, wi, ng, ns, Transport::Radiance)
+}
+
+/// [`eval_and_pdf`] for a path of the given transport mode ([`eval_transport`]).
+pub fn eval_and_pdf_transport(
+    m: &Material,
+    wo: Vec3,
+    wi: Vec3,
+    ng: Vec3,
+    ns: Vec3,
+    mode: Transport,
+) -> (Rgb, f64) {
     match m {
         Material::Lambertian { reflectance } => {
             let (g, n) = facing(wo, ng, ns);
@@ -201,7 +424,10 @@ pub fn eval_and_pdf(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> (Rg
             }
             (*reflectance * (1.0 / PI), wi.dot(n).max(0.0) / PI)
         }
-        _ => (eval(m, wo, wi, ng, ns), pdf(m, wo, wi, ng, ns)),
+        _ => (
+            eval_transport(m, wo, wi, ng, ns, mode),
+            pdf(m, wo, wi, ng, ns),
+        ),
     }
 }
 
@@ -209,6 +435,24 @@ pub fn eval_and_pdf(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> (Rg
 fn to_world(n: Vec3, local: Vec3) -> Vec3 {
     let (t, b) = n.orthonormal_basis();
     t * local.x + b * local.y + n * local.z
+}
+
+/// A reflecting model's local sample in world space; `None` below the geometric surface.
+fn reflected(
+    wo: Vec3,
+    ng: Vec3,
+    ns: Vec3,
+    f: impl FnOnce(Vec3) -> Option<LocalSample>,
+) -> Option<BsdfSample> {
+    let (g, frame) = reflecting(wo, ng, ns);
+    let s = f(frame.local(wo))?;
+    let wi = frame.world(s.wi);
+    (wi.dot(g) > 0.0).then_some(BsdfSample {
+        wi,
+        weight: s.weight,
+        pdf: s.pdf,
+        delta: s.delta,
+    })
 }
 
 /// Samples a new direction. `u` picks the direction, `uc` the lobe. `None` when the path
@@ -283,20 +527,13 @@ pub fn sample(
             specular,
             roughness,
         } => {
-            let pd = glossy_lobe_probability(diffuse, specular)?;
-            let (g, n) = facing(wo, ng, ns);
-            let wi = if uc < pd {
-                to_world(n, crate::sampling::cosine_hemisphere(u.0, u.1))
-            } else {
-                // GGX normal distribution D(h) cos θh: tan²θh = α² u / (1 − u).
-                let alpha = roughness * roughness;
-                let tan2 = alpha * alpha * u.0 / (1.0 - u.0).max(1e-300);
-                let cos_h = 1.0 / (1.0 + tan2).sqrt();
-                let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
-                let phi = 2.0 * PI * u.1;
-                let h = to_world(n, Vec3::new(sin_h * phi.cos(), sin_h * phi.sin(), cos_h));
-                reflect(wo, h)
+            let model = Glossy {
+                diffuse,
+                specular,
+                roughness: *roughness,
             };
+            let (g, n) = facing(wo, ng, ns);
+            let wi = model.sample_direction(wo, n, u, uc)?;
             if wi.dot(g) <= 0.0 || wi.dot(n) <= 0.0 {
                 return None;
             }
@@ -312,6 +549,72 @@ pub fn sample(
                 delta: false,
             })
         }
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            roughness,
+        } => reflected(wo, ng, ns, |wo| {
+            conductor(eta, k, specular_reflectance).sample(roughness.as_ref(), wo, u)
+        }),
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            nonlinear,
+            roughness,
+        } => reflected(wo, ng, ns, |wo| {
+            plastic(
+                diffuse_reflectance,
+                specular_reflectance,
+                *ior,
+                *nonlinear,
+                roughness,
+            )
+            .sample(wo, u, uc)
+        }),
+        Material::RoughDielectric { ior, roughness } => {
+            let (n, eta) = dielectric::side(wo, ng, ns, *ior);
+            let frame = Frame::new(n);
+            let rough = Rough {
+                d: Distribution::new(roughness),
+                eta,
+            };
+            let s = rough.sample(frame.local(wo), u, uc, mode)?;
+            let wi = frame.world(s.wi);
+            let g = facing_normal(wo, ng);
+            ((wi.dot(g) > 0.0) == (s.wi.z > 0.0)).then_some(BsdfSample {
+                wi,
+                weight: s.weight,
+                pdf: s.pdf,
+                delta: false,
+            })
+        }
+        Material::ThinDielectric { ior } => {
+            let (g, n) = facing(wo, ng, ns);
+            let r = dielectric::thin_reflectance(wo.dot(n), *ior);
+            if uc < r {
+                let wi = reflect(wo, n);
+                return (wi.dot(g) > 0.0).then_some(BsdfSample {
+                    wi,
+                    weight: Rgb::WHITE,
+                    pdf: r,
+                    delta: true,
+                });
+            }
+            // Straight through: the sheet's two refractions cancel.
+            Some(BsdfSample {
+                wi: -wo,
+                weight: Rgb::WHITE,
+                pdf: 1.0 - r,
+                delta: true,
+            })
+        }
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => blend::sample_blend((*weight, first, second), wo, (ng, ns), u, uc, mode),
     }
 }
 
