@@ -29,11 +29,11 @@ pub use cli::{run, Args};
 use luxest_io::math::Vec3;
 use luxest_io::num::show;
 use luxest_io::{Error, Result};
+use luxest_render::bsdf;
 use luxest_render::compiled::{
     CompiledScene, Emitter, Features, GridLayout, NamedMaterial, ObjectRange, SceneHeader,
     SensorSet, SpotCone, Stats, NO_EMITTER,
 };
-use luxest_render::bsdf;
 use luxest_render::scene::{Emission, Material, PointPower, Scene, Sensor, SensorPoint, Shape};
 use shapes::LocalMesh;
 use std::f64::consts::PI;
@@ -305,9 +305,7 @@ fn lossless_albedo(m: &Material, c: usize) -> f64 {
             k,
             specular_reflectance,
             ..
-        } => {
-            specular_reflectance.0[c] * bsdf::conductor::fresnel_conductor(1.0, eta.0[c], k.0[c])
-        }
+        } => specular_reflectance.0[c] * bsdf::conductor::fresnel_conductor(1.0, eta.0[c], k.0[c]),
         Material::Plastic {
             diffuse_reflectance,
             specular_reflectance,

@@ -8,7 +8,9 @@
 
 use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
-use luxest_render::scene::{Emission, Material, PointPower, Shape};
+use luxest_render::scene::{
+    Emission, Material, Microfacet, MicrofacetDistribution, PointPower, Shape,
+};
 use scene_compile::import::{export_ron, mitsuba_xml, read_scene};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -85,17 +87,18 @@ fn mitsuba_scene_translates_field_by_field() {
             reflectance: Rgb([0.9, 0.8, 0.7])
         }
     );
-    match &m["rough"] {
-        Material::Glossy {
-            diffuse,
-            specular,
-            roughness,
-        } => {
-            assert_eq!((*diffuse, *specular), (Rgb::splat(0.0), Rgb::WHITE));
-            assert!(close(*roughness, 0.3));
+    assert_eq!(
+        m["rough"],
+        Material::Conductor {
+            eta: Rgb::splat(0.0),
+            k: Rgb::WHITE,
+            specular_reflectance: Rgb::WHITE,
+            roughness: Some(Microfacet {
+                distribution: MicrofacetDistribution::Ggx,
+                alpha: 0.09
+            })
         }
-        other => panic!("{other:?}"),
-    }
+    );
     // The quad's inline BSDF, named after its element's place; a constant spectrum.
     assert_eq!(
         m["twosided@scene:69"],
@@ -517,10 +520,18 @@ fn gltf_scene_translates_nodes_materials_camera_and_lights() {
         imp.warnings
     );
     let s = &imp.scene;
+    // glTF's dielectric (roughness 1 by default): a plastic of index 1.5, GGX α = 1.
     assert_eq!(
         s.materials["paint"],
-        Material::Lambertian {
-            reflectance: Rgb([0.5, 0.25, 0.125])
+        Material::Plastic {
+            diffuse_reflectance: Rgb([0.5, 0.25, 0.125]),
+            specular_reflectance: Rgb::WHITE,
+            ior: 1.5,
+            nonlinear: false,
+            roughness: Some(Microfacet {
+                distribution: MicrofacetDistribution::Ggx,
+                alpha: 1.0
+            })
         }
     );
     assert_eq!(

@@ -7,12 +7,13 @@
 //!
 //! | glTF | luxest |
 //! |---|---|
-//! | `metallicFactor` 0 | `Lambertian(baseColorFactor)`, with a warning: glTF's dielectric specular layer (F0 = 0.04) is not represented |
-//! | `metallicFactor` 1, roughness > 0 | `Glossy(diffuse: 0, specular: baseColorFactor, roughness: roughnessFactor)` (GGX with α = roughness², F = 1 in place of Schlick's) |
+//! | `metallicFactor` 0 | `Plastic(diffuse_reflectance: baseColorFactor, ior: 1.5, roughness: GGX α = roughness²)` (glTF's dielectric: F0 = 0.04 over a diffuse base; smooth at roughness 0) |
+//! | `metallicFactor` 1, roughness > 0 | `Glossy(diffuse: 0, specular: baseColorFactor, roughness: roughnessFactor)` (GGX with α = roughness², F = baseColor at every angle in place of Schlick's) |
 //! | `metallicFactor` 1, roughness 0 | `Mirror(baseColorFactor)` |
+//! | `metallicFactor` m in (0, 1) | `Blend(weight: m, first: the dielectric, second: the metal)` |
 //! | `emissiveFactor` × `KHR_materials_emissive_strength` | `Radiance`, cd/m² |
 //!
-//! A metallic factor strictly between 0 and 1, textures, `alphaMode` `MASK`/`BLEND` and a
+//! Textures, `alphaMode` `MASK`/`BLEND` and a
 //! camera other than perspective are errors until luxest has the matching models; extensions
 //! the importer does not read are named in a warning (an error when the file requires them).
 //! `doubleSided` is not used: a single-sided glTF material means back faces are culled, which
@@ -25,7 +26,8 @@ use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
 use luxest_io::{Error, Result};
 use luxest_render::scene::{
-    Camera, Emission, Material, Object, PointLight, PointPower, Scene, Shape, Transform,
+    Camera, Emission, Material, Microfacet, MicrofacetDistribution, Object, PointLight, PointPower,
+    Scene, Shape, Transform,
 };
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -85,28 +87,43 @@ fn material(
     let base = Rgb([r as f64, g as f64, b as f64]);
     let metallic = pbr.metallic_factor() as f64;
     let roughness = pbr.roughness_factor() as f64;
-    let model = if metallic == 0.0 {
-        warnings.push(format!(
-            "{}: {place}: the dielectric specular layer of glTF's model (F0 = 0.04) is not \
-             represented: translated as Lambertian",
-            path.display()
-        ));
-        Material::Lambertian { reflectance: base }
-    } else if metallic == 1.0 {
-        if roughness == 0.0 {
-            Material::Mirror { reflectance: base }
-        } else {
-            Material::Glossy {
-                diffuse: Rgb::splat(0.0),
-                specular: base,
-                roughness,
-            }
-        }
-    } else {
+    if !(0.0..=1.0).contains(&metallic) || !(0.0..=1.0).contains(&roughness) {
         return Err(fail(format!(
-            "metallicFactor {metallic} (between 0 and 1) is not supported yet in this build of \
-             luxest"
+            "metallicFactor {metallic} and roughnessFactor {roughness} must lie in [0, 1]"
         )));
+    }
+    // The dielectric half of glTF's model: a diffuse base under a coating of index 1.5
+    // (F0 = 0.04), GGX with α = roughness².
+    let dielectric = Material::Plastic {
+        diffuse_reflectance: base,
+        specular_reflectance: Rgb::WHITE,
+        ior: 1.5,
+        nonlinear: false,
+        roughness: (roughness > 0.0).then_some(Microfacet {
+            distribution: MicrofacetDistribution::Ggx,
+            alpha: roughness * roughness,
+        }),
+    };
+    // The metal half: reflectance baseColor, the same lobe.
+    let metal = if roughness == 0.0 {
+        Material::Mirror { reflectance: base }
+    } else {
+        Material::Glossy {
+            diffuse: Rgb::splat(0.0),
+            specular: base,
+            roughness,
+        }
+    };
+    let model = if metallic == 0.0 {
+        dielectric
+    } else if metallic == 1.0 {
+        metal
+    } else {
+        Material::Blend {
+            weight: metallic,
+            first: Box::new(dielectric),
+            second: Box::new(metal),
+        }
     };
     let [er, eg, eb] = m.emissive_factor();
     let strength = m.emissive_strength().unwrap_or(1.0) as f64;

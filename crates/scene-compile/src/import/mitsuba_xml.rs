@@ -18,8 +18,10 @@
 //! not read is an error, so nothing is dropped without a word.
 //!
 //! **Objects.** Shapes `obj`, `ply`, `rectangle`, `cube`, `sphere`, `disk` (with `to_world`,
-//! `flip_normals`, `face_normals`); BSDFs `diffuse`, `dielectric`, `conductor` (`material`
-//! `none`: a mirror), `roughconductor` (GGX, `material` `none`), `twosided`; emitters `area`
+//! `flip_normals`, `face_normals`); BSDFs `diffuse`, `dielectric`, `thindielectric`,
+//! `roughdielectric`, `conductor` and `roughconductor` (`eta`/`k`, or a `material` preset of
+//! [`super::mitsuba_tables`]; `none`, smooth, is luxest's `Mirror`), `plastic`,
+//! `roughplastic`, `blendbsdf` (constant weight), `twosided`; emitters `area`
 //! (inside a shape), `point`, `spot`, `constant`, `envmap` (OpenEXR); sensor `perspective` (`fov`, `fov_axis`, `focal_length`,
 //! `to_world`) with film `hdrfilm` (`width`, `height`). `<integrator>` and the sensor's
 //! `<sampler>` are left out with a warning (luxest's estimator and sample count are chosen on
@@ -35,8 +37,8 @@ use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
 use luxest_io::{Error, Result};
 use luxest_render::scene::{
-    Camera, Emission, Environment, Material, Object, PointLight, PointPower, Scene, Shape, Spot,
-    Transform,
+    Camera, Emission, Environment, Material, Microfacet, MicrofacetDistribution, Object,
+    PointLight, PointPower, Scene, Shape, Spot, Transform,
 };
 use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
@@ -871,6 +873,26 @@ impl<'a> Importer<'a> {
         })
     }
 
+    /// The isotropic microfacet roughness of a rough BSDF (Mitsuba's default: Beckmann,
+    /// α = 0.1).
+    fn microfacet(&self, r: &Reader) -> Result<Microfacet> {
+        let (name, alpha) = self.microfacet_alpha(r)?;
+        let distribution = match name.as_str() {
+            "ggx" => MicrofacetDistribution::Ggx,
+            "beckmann" => MicrofacetDistribution::Beckmann,
+            other => {
+                return Err(self.fail(
+                    r.props.owner,
+                    format!("unknown distribution \"{other}\" (beckmann or ggx)"),
+                ))
+            }
+        };
+        Ok(Microfacet {
+            distribution,
+            alpha,
+        })
+    }
+
     fn microfacet_alpha(&self, r: &Reader) -> Result<(String, f64)> {
         let distribution = r
             .string("distribution")?
@@ -938,46 +960,135 @@ impl<'a> Importer<'a> {
             }
             "conductor" | "roughconductor" => {
                 let material = r.string("material")?.unwrap_or_else(|| "none".into());
-                let specular = r.color("specular_reflectance", 1.0)?;
-                if material != "none"
-                    || r.props
-                        .items
+                let explicit = r
+                    .props
+                    .items
+                    .iter()
+                    .any(|i| i.name == "eta" || i.name == "k");
+                let (eta, k) = if explicit || material == "none" {
+                    if material != "none" {
+                        return Err(self.fail(e, "give either eta and k or a material, not both"));
+                    }
+                    (r.color("eta", 0.0)?, r.color("k", 1.0)?)
+                } else {
+                    let (_, eta, k) = super::mitsuba_tables::CONDUCTORS
                         .iter()
-                        .any(|i| i.name == "eta" || i.name == "k")
-                {
-                    return Err(self.fail(
-                        e,
-                        format!(
-                            "a conductor with material \"{material}\" (complex IOR) is not \
-                             supported yet (only material \"none\", a perfect mirror)"
-                        ),
-                    ));
-                }
-                if plugin == "conductor" {
+                        .find(|(n, _, _)| *n == material)
+                        .ok_or_else(|| {
+                            self.fail(
+                                e,
+                                format!(
+                                    "unknown conductor material \"{material}\" (Mitsuba's: {})",
+                                    super::mitsuba_tables::CONDUCTORS
+                                        .iter()
+                                        .map(|(n, _, _)| *n)
+                                        .collect::<Vec<_>>()
+                                        .join(", ")
+                                ),
+                            )
+                        })?;
+                    (Rgb(*eta), Rgb(*k))
+                };
+                let specular_reflectance = r.color("specular_reflectance", 1.0)?;
+                let perfect = eta == Rgb::splat(0.0) && k == Rgb::WHITE;
+                if plugin == "conductor" && perfect {
+                    // eta 0, k 1: Fresnel reflectance 1 at every angle, an ideal mirror.
                     Material::Mirror {
-                        reflectance: specular,
+                        reflectance: specular_reflectance,
                     }
                 } else {
-                    let (distribution, alpha) = self.microfacet_alpha(&r)?;
-                    if distribution != "ggx" {
-                        return Err(self.fail(
-                            e,
-                            format!("roughconductor with the {distribution} distribution is not supported yet (only ggx)"),
-                        ));
-                    }
-                    // luxest's Glossy with no diffuse part is GGX with F = 1, α = roughness².
-                    Material::Glossy {
-                        diffuse: Rgb::splat(0.0),
-                        specular,
-                        roughness: alpha.sqrt(),
+                    let roughness = if plugin == "roughconductor" {
+                        Some(self.microfacet(&r)?)
+                    } else {
+                        None
+                    };
+                    Material::Conductor {
+                        eta,
+                        k,
+                        specular_reflectance,
+                        roughness,
                     }
                 }
             }
-            "thindielectric" | "roughdielectric" | "plastic" | "roughplastic" | "blendbsdf"
-            | "mask" => {
+            "plastic" | "roughplastic" => {
+                let int = ior(&r, "int_ior", "polypropylene")?;
+                let ext = ior(&r, "ext_ior", "air")?;
+                let roughness = if plugin == "roughplastic" {
+                    Some(self.microfacet(&r)?)
+                } else {
+                    None
+                };
+                Material::Plastic {
+                    diffuse_reflectance: r.color("diffuse_reflectance", 0.5)?,
+                    specular_reflectance: r.color("specular_reflectance", 1.0)?,
+                    ior: int / ext,
+                    nonlinear: r.boolean("nonlinear", false)?,
+                    roughness,
+                }
+            }
+            "thindielectric" | "roughdielectric" => {
+                let int = ior(&r, "int_ior", "bk7")?;
+                let ext = ior(&r, "ext_ior", "air")?;
+                for k in ["specular_reflectance", "specular_transmittance"] {
+                    if r.color(k, 1.0)? != Rgb::WHITE {
+                        return Err(self.fail(e, format!("{k} other than 1 is not supported")));
+                    }
+                }
+                let material = if plugin == "thindielectric" {
+                    Material::ThinDielectric { ior: int / ext }
+                } else {
+                    Material::RoughDielectric {
+                        ior: int / ext,
+                        roughness: self.microfacet(&r)?,
+                    }
+                };
+                r.done()?;
+                // Transmitting BSDFs scatter from both sides by nature.
+                return Ok(Bsdf {
+                    material,
+                    two_sided: true,
+                });
+            }
+            "blendbsdf" => {
+                let weight = match r.props.get("weight") {
+                    None => return Err(self.fail(e, "needs a weight")),
+                    Some(p) => match &p.value {
+                        Value::Float(w) => *w,
+                        Value::Object(t) if t.tag == "texture" => {
+                            return Err(self.fail(
+                                t,
+                                "a textured blend weight is not supported (luxest's Blend has \
+                                 a constant weight)",
+                            ))
+                        }
+                        _ => return Err(r.wrong(p, "a float")),
+                    },
+                };
+                let inner = r.objects("bsdf");
+                let [first, second] = inner.as_slice() else {
+                    return Err(self.fail(e, "blendbsdf needs two nested BSDFs"));
+                };
+                let (a, b) = (self.bsdf(first)?, self.bsdf(second)?);
+                if a.two_sided != b.two_sided {
+                    return Err(self.fail(
+                        e,
+                        "blendbsdf of a one-sided and a two-sided BSDF is not supported",
+                    ));
+                }
+                r.done()?;
+                return Ok(Bsdf {
+                    material: Material::Blend {
+                        weight,
+                        first: Box::new(a.material),
+                        second: Box::new(b.material),
+                    },
+                    two_sided: a.two_sided,
+                });
+            }
+            "mask" => {
                 return Err(self.fail(
                     e,
-                    format!("the {plugin} BSDF is not supported yet in this build of luxest"),
+                    "the mask BSDF is not supported yet in this build of luxest",
                 ))
             }
             other => return Err(self.fail(e, format!("unsupported BSDF \"{other}\""))),
