@@ -9,7 +9,7 @@
 use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
 use luxest_render::scene::{
-    Emission, Material, Microfacet, MicrofacetDistribution, PointPower, Shape,
+    Emission, Environment, Material, Microfacet, MicrofacetDistribution, PointPower, Shape,
 };
 use scene_compile::import::{export_ron, mitsuba_xml, read_scene};
 use std::path::{Path, PathBuf};
@@ -68,7 +68,7 @@ fn mitsuba_scene_translates_field_by_field() {
     // Materials: $white substituted by its <default>, the included file's BSDFs, Mitsuba's
     // own bk7 index (its table) over an ext_ior of 1, the GGX α = 0.09 as roughness √α.
     let m = &s.materials;
-    assert_eq!(m.len(), 5, "{:?}", m.keys());
+    assert_eq!(m.len(), 11, "{:?}", m.keys());
     assert_eq!(
         m["white"],
         Material::Lambertian {
@@ -101,11 +101,107 @@ fn mitsuba_scene_translates_field_by_field() {
     );
     // The quad's inline BSDF, named after its element's place; a constant spectrum.
     assert_eq!(
-        m["twosided@scene:69"],
+        m["twosided@scene:110"],
         Material::Lambertian {
             reflectance: Rgb::splat(0.25)
         }
     );
+
+    // Mitsuba's gold preset, as Mitsuba 3 evaluates it in RGB (its committed table).
+    let au = scene_compile::import::mitsuba_tables::CONDUCTORS
+        .iter()
+        .find(|c| c.0 == "Au")
+        .unwrap();
+    assert_eq!(
+        m["gold"],
+        Material::Conductor {
+            eta: Rgb(au.1),
+            k: Rgb(au.2),
+            specular_reflectance: Rgb::WHITE,
+            roughness: Some(Microfacet {
+                distribution: MicrofacetDistribution::Beckmann,
+                alpha: 0.2
+            })
+        }
+    );
+    // plastic: polypropylene (1.49) in air (1.000277) by default, as Mitsuba's table has them.
+    let air = 1.000277042388916;
+    assert_eq!(
+        m["varnish"],
+        Material::Plastic {
+            diffuse_reflectance: Rgb([0.3, 0.2, 0.1]),
+            specular_reflectance: Rgb::WHITE,
+            ior: 1.4900000095367432 / air,
+            nonlinear: true,
+            roughness: None
+        }
+    );
+    assert_eq!(
+        m["satin"],
+        Material::Plastic {
+            diffuse_reflectance: Rgb::splat(0.5),
+            specular_reflectance: Rgb::WHITE,
+            ior: 1.6 / air,
+            nonlinear: false,
+            roughness: Some(Microfacet {
+                distribution: MicrofacetDistribution::Ggx,
+                alpha: 0.3
+            })
+        }
+    );
+    assert_eq!(
+        m["pane"],
+        Material::ThinDielectric {
+            ior: 1.5046000480651855 / air
+        }
+    );
+    assert_eq!(
+        m["frosted"],
+        Material::RoughDielectric {
+            ior: 1.3329999446868896 / air,
+            roughness: Microfacet {
+                distribution: MicrofacetDistribution::Beckmann,
+                alpha: 0.05
+            }
+        }
+    );
+    assert_eq!(
+        m["mix"],
+        Material::Blend {
+            weight: 0.25,
+            first: Box::new(Material::Lambertian {
+                reflectance: Rgb::splat(0.5)
+            }),
+            second: Box::new(Material::Conductor {
+                eta: Rgb([0.2, 0.9, 1.1]),
+                k: Rgb([3.9, 2.4, 2.2]),
+                specular_reflectance: Rgb::WHITE,
+                roughness: None
+            })
+        }
+    );
+    // spot: on-axis intensity, the cone along to_world's z, beam width 3/4 of the cutoff.
+    let spot = s.point_lights.iter().find(|l| l.spot.is_some()).unwrap();
+    assert_eq!(spot.position, Vec3::new(0.0, 2.5, 0.0));
+    assert_eq!(spot.power, PointPower::Intensity(4.0));
+    let cone = spot.spot.as_ref().unwrap();
+    assert!((cone.direction - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-12);
+    assert_eq!((cone.cutoff_deg, cone.beam_width_deg), (30.0, 22.5));
+    // envmap: the file relative to the scene, the scale, the rotation (90° about y).
+    match s.environment.as_ref().unwrap() {
+        Environment::Map {
+            path,
+            scale,
+            to_world,
+        } => {
+            assert_eq!((path.as_str(), *scale), ("sky.exr", 0.5));
+            let want = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]];
+            for (r, w) in to_world.iter().flatten().zip(want.iter().flatten()) {
+                assert!((r - w).abs() < 1e-15, "{to_world:?}");
+            }
+        }
+        other => panic!("{other:?}"),
+    }
 
     let o = |name: &str| {
         s.objects
@@ -203,8 +299,8 @@ fn mitsuba_scene_translates_field_by_field() {
         }
     );
     // point: the intensity's luminance in candela, tinted by the RGB.
-    assert_eq!(s.point_lights.len(), 1);
-    let p = &s.point_lights[0];
+    assert_eq!(s.point_lights.len(), 2);
+    let p = s.point_lights.iter().find(|l| l.spot.is_none()).unwrap();
     assert_eq!(p.position, Vec3::new(0.0, 3.0, 0.0));
     assert_eq!(
         p.power,
@@ -223,7 +319,8 @@ fn mitsuba_scene_compiles_and_its_exported_ron_compiles_to_the_same_scene() {
         stats.triangles,
         2 + 12 + 20 * 4u64.pow(mitsuba_xml::SPHERE_SUBDIVISIONS) + 254 + 1 + 2
     );
-    assert_eq!(compiled.header.emitters.len(), 2);
+    // Area, point, spot and environment.
+    assert_eq!(compiled.header.emitters.len(), 4);
     // The area light's radiance is Mitsuba's number, as cd/m².
     let area = compiled
         .header
