@@ -131,6 +131,16 @@ impl Parser {
 
     /// Reads `path` (included from `from`, when it is) into its root element.
     fn parse_file(&mut self, path: &Path, from: Option<(usize, u32)>) -> Result<Elem> {
+        self.parse_file_bytes(path, None, from)
+    }
+
+    /// [`Parser::parse_file`] of the content `given` when given, else of the file.
+    fn parse_file_bytes(
+        &mut self,
+        path: &Path,
+        given: Option<&[u8]>,
+        from: Option<(usize, u32)>,
+    ) -> Result<Elem> {
         let canonical = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
         if let Some((file, line)) = from {
             if self.stack.contains(&canonical) {
@@ -159,8 +169,15 @@ impl Parser {
                 ));
             }
         }
-        let bytes = luxest_io::fsio::read_bytes(path)?;
-        let text = std::str::from_utf8(&bytes)
+        let read;
+        let bytes = match given {
+            Some(b) => b,
+            None => {
+                read = luxest_io::fsio::read_bytes(path)?;
+                &read[..]
+            }
+        };
+        let text = std::str::from_utf8(bytes)
             .map_err(|_| Error::input(path, "not a Mitsuba XML file: not UTF-8 text"))?;
         let doc = roxmltree::Document::parse(text).map_err(|e| {
             let pos = e.pos();
@@ -1645,12 +1662,22 @@ fn collect_ids<'a>(
 
 /// Translates the Mitsuba 3 scene file `path`.
 pub fn import(path: &Path) -> Result<Imported> {
+    import_impl(path, None)
+}
+
+/// [`import`] of the file's content `bytes`; `path` names it in errors and locates the files
+/// it refers to (includes, meshes, maps).
+pub fn import_bytes(path: &Path, bytes: &[u8]) -> Result<Imported> {
+    import_impl(path, Some(bytes))
+}
+
+fn import_impl(path: &Path, bytes: Option<&[u8]>) -> Result<Imported> {
     let mut parser = Parser {
         files: Vec::new(),
         params: Vec::new(),
         stack: Vec::new(),
     };
-    let root = parser.parse_file(path, None)?;
+    let root = parser.parse_file_bytes(path, bytes, None)?;
     if root.tag != "scene" {
         return Err(Error::at(
             path,
