@@ -742,6 +742,17 @@ struct Reader<'i, 'a> {
 
 impl<'a> Reader<'_, 'a> {
     fn wrong(&self, p: &Prop, want: &str) -> Error {
+        if let Value::Object(t) = p.value {
+            if t.tag == "texture" {
+                return self.imp.fail(
+                    t,
+                    format!(
+                        "a texture for \"{}\" is not supported (luxest takes a constant here)",
+                        p.name
+                    ),
+                );
+            }
+        }
         self.imp.fail(
             p.elem,
             format!(
@@ -1462,6 +1473,11 @@ impl<'a> Importer<'a> {
                 self.warn(e, format!("{k} ignored: luxest's camera does not clip"));
             }
         }
+        // Mitsuba's perspective camera does not read it either (a pinhole has no focus).
+        if r.props.items.iter().any(|i| i.name == "focus_distance") {
+            r.float("focus_distance", 0.0)?;
+            self.warn(e, "focus_distance ignored: a pinhole camera has no focus");
+        }
         for k in ["principal_point_offset_x", "principal_point_offset_y"] {
             if r.float(k, 0.0)? != 0.0 {
                 return Err(self.fail(e, format!("{k} other than 0 is not supported")));
@@ -1522,6 +1538,16 @@ impl<'a> Importer<'a> {
         }
         r.boolean("banner", true)?;
         r.boolean("sample_border", false)?;
+        // Mitsuba 0.6 film options that Mitsuba 3 does not read either.
+        for k in ["attach_log", "high_quality_edges"] {
+            if r.props.items.iter().any(|i| i.name == k) {
+                r.boolean(k, false)?;
+                self.warn(
+                    e,
+                    format!("{k} ignored (a Mitsuba 0.6 option Mitsuba 3 does not read)"),
+                );
+            }
+        }
         for k in [
             "crop_offset_x",
             "crop_offset_y",
@@ -1572,7 +1598,13 @@ impl<'a> Importer<'a> {
                     "ignored: luxest's estimators are chosen on its command line",
                 ),
                 "path" | "alias" => {}
-                "medium" | "phase" | "volume" | "film" | "sampler" | "rfilter" => {
+                // Referred to from a sensor by id (and translated there); otherwise unused.
+                "sampler" | "film" | "rfilter" => {
+                    if c.attr("id").is_none() {
+                        self.warn(c, "ignored: not inside a sensor");
+                    }
+                }
+                "medium" | "phase" | "volume" => {
                     return Err(self.fail(c, format!("<{}> is not supported", c.tag)))
                 }
                 other => {
