@@ -4,6 +4,7 @@
 mod architecture;
 mod contract;
 mod denoise_cli;
+mod emitters;
 mod estimate_cli;
 mod estimate_validation;
 mod evaluate_cli;
@@ -15,5 +16,6 @@ mod reliability;
 mod reliability_processes;
 mod scene_compile_errors;
 mod scene_compile_scenes;
+mod textures;
 mod trace_exact;
 mod util;

@@ -60,9 +60,10 @@ pub struct FirstHit {
     /// Distance in m to the first surface hit (zero where the ray escapes).
     pub depth: f64,
     /// Radiance emitted towards the camera by the surface hit or, through one mirror at the
-    /// first hit, by the surface seen in it: exactly the terms `trace` adds at those vertices
-    /// (weight one at the first, the mirror's reflectance at the second: nothing is sampled
-    /// before them, and Russian roulette starts later).
+    /// first hit, by the surface seen in it — or the environment's where the ray leaves the
+    /// scene: exactly the terms `trace` adds at those vertices (weight one at the first, the
+    /// mirror's reflectance at the second: nothing is sampled before them, and Russian roulette
+    /// starts later).
     pub emission: Rgb,
 }
 
@@ -85,21 +86,35 @@ pub const MAX_DELTA_VERTICES: u32 = 8;
 /// features, at a later one its likelier branch alone (no random choice: the features stay
 /// noise-free); at most [`MAX_DELTA_VERTICES`] delta vertices, the last one's own features. The
 /// emission: see [`FirstHit::emission`]. The geometry is `trace`'s (flat normals, its offsets).
-pub fn first_hit(world: &World, origin: Vec3, dir: Vec3) -> FirstHit {
-    along(world, origin, dir, 0, false)
+/// Textures are filtered over the ray's footprint, `spread` radians wide (the camera's pixel,
+/// [`PinholeCamera::pixel_spread`]) and widening with the distance along the delta path, so that
+/// one sample's albedo is already the pixel's average of a minified texture.
+pub fn first_hit(world: &World, origin: Vec3, dir: Vec3, spread: f64) -> FirstHit {
+    along(world, (origin, dir), (0, false), (spread, 0.0))
 }
 
-fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> FirstHit {
+fn along(
+    world: &World,
+    (origin, dir): (Vec3, Vec3),
+    (vertices, split): (u32, bool),
+    (spread, travelled): (f64, f64),
+) -> FirstHit {
     let Some(sp) = world.intersect(origin, dir) else {
-        return FirstHit::MISS;
+        return FirstHit {
+            emission: world.environment_radiance(dir),
+            ..FirstHit::MISS
+        };
     };
-    let m = world.material(sp.triangle);
     let wo = -dir;
+    let travelled = travelled + sp.distance;
+    let footprint = world.uv_footprint(&sp, wo, spread * travelled);
+    let m = world.material_filtered(sp.triangle, sp.uv, wo, footprint);
+    let m = &*m;
     let own = FirstHit {
         albedo: albedo(m),
         normal: if sp.ns.dot(dir) > 0.0 { -sp.ns } else { sp.ns },
         depth: sp.distance,
-        emission: world.emitted_radiance(sp.triangle, sp.ng, wo),
+        emission: world.emitted_radiance(&sp, wo),
     };
     if vertices >= MAX_DELTA_VERTICES {
         return own;
@@ -114,20 +129,20 @@ fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> 
             s.weight,
             along(
                 world,
-                world.offset(sp.position, sp.ng, s.wi),
-                s.wi,
-                vertices + 1,
-                split,
+                (world.offset(sp.position, sp.ng, s.wi), s.wi),
+                (vertices + 1, split),
+                (spread, travelled),
             ),
         ))
     };
     let fresnel = match m {
         // trace's Fresnel reflectance at this vertex (bsdf::sample with flat normals).
-        Material::Dielectric { ior } => Some(bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance),
-        Material::ThinDielectric { ior } => Some(bsdf::dielectric::thin_reflectance(
-            wo.dot(sp.ng),
-            *ior,
-        )),
+        Material::Dielectric { ior } => {
+            Some(bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance)
+        }
+        Material::ThinDielectric { ior } => {
+            Some(bsdf::dielectric::thin_reflectance(wo.dot(sp.ng), *ior))
+        }
         _ => None,
     };
     match (m, fresnel) {
@@ -222,7 +237,7 @@ impl FeatureFilm {
             let pixel = (k * 7919) % pixels;
             let (u, v) = pixel_jitter(0x00ca_11b2_a7e2, pixel, k);
             let dir = cam.direction((pixel % w) as f64 + u, (pixel / w) as f64 + v);
-            first_hit(world, cam.position, dir);
+            first_hit(world, cam.position, dir, cam.pixel_spread());
         });
         let total = (pixels * samples as u64) as f64;
         let threads = threads.min(self.height).max(1);
@@ -262,6 +277,7 @@ impl FeatureFilm {
                             world,
                             cam.position,
                             cam.direction(x as f64 + u, y as f64 + v),
+                            cam.pixel_spread(),
                         );
                         a = a + hit.albedo;
                         n += hit.normal;

@@ -99,7 +99,9 @@ struct ViewPoint {
     ng: Vec3,
     /// Direction towards the camera (along the specular chain).
     wo: Vec3,
+    /// The triangle and texture coordinates of the point.
     material: u32,
+    uv: [f64; 2],
     /// Throughput of the specular chain, divided by the samples per pixel.
     weight: Rgb,
     /// Samples per pixel times the camera's area density at the point, for multiple importance
@@ -120,6 +122,8 @@ struct Record {
     q: Rgb,
     /// Material triangle for collisions; `None` for emission points.
     triangle: Option<u32>,
+    /// Texture coordinates of collisions.
+    uv: [f64; 2],
     /// Index of the light path within its batch (its round is `path / ROUND_PATHS`).
     path: u64,
     /// Whether the light path may go on from here (the depth bound), for light tracing's
@@ -193,10 +197,10 @@ fn view_points(
                 // Emitters seen directly are light tracing's when it runs (its emission points
                 // sample the emitter's image with far more points than the pixels get here).
                 if cfg.mis_paths == 0 || bounce > 0 {
-                    *emitted_px =
-                        *emitted_px + weight * world.emitted_radiance(sp.triangle, sp.ng, -dir);
+                    *emitted_px = *emitted_px + weight * world.emitted_radiance(&sp, -dir);
                 }
-                let m = world.material(sp.triangle);
+                let m = world.material_seen(&sp, -dir);
+                let m = &*m;
                 if !bsdf::is_delta(m) {
                     let wo = -dir;
                     out.push(ViewPoint {
@@ -205,6 +209,7 @@ fn view_points(
                         ng: sp.ng,
                         wo,
                         material: sp.triangle,
+                        uv: sp.uv,
                         weight,
                         camera_pdf: (cfg.mis_paths > 0 && bounce == 0)
                             .then(|| spp as f64 * cam.area_density(sp.position, sp.ng)),
@@ -266,6 +271,7 @@ fn light_records(
                         wo: normal,
                         q,
                         triangle: None,
+                        uv: [0.0, 0.0],
                         path,
                         can_continue,
                         diffuse: Some((
@@ -284,9 +290,10 @@ fn light_records(
                         wo,
                         q,
                         triangle: Some(sp.triangle),
+                        uv: sp.uv,
                         path,
                         can_continue,
-                        diffuse: match world.material(sp.triangle) {
+                        diffuse: match &*world.material_seen(&sp, wo) {
                             Material::Lambertian { reflectance } => Some((
                                 bsdf::facing_normal(wo, sp.ng),
                                 q * *reflectance * (1.0 / PI),
@@ -353,11 +360,12 @@ fn light_tracing(
             if matches!(arrival, Arrival::DeltaLight | Arrival::Environment) {
                 return; // the exact direct term's, or the environment's at the view points
             }
-            let (m, wo, ng) = (world.material(sp.triangle), -dir, sp.ng);
+            let (wo, ng) = (-dir, sp.ng);
+            let m = world.material_seen(&sp, wo);
+            let m = &*m;
             // A light path's vertex: the adjoint BSDF (wo towards the light).
-            let f_cos = |w: Vec3| {
-                bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs()
-            };
+            let f_cos =
+                |w: Vec3| bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs();
             if let Some(link) =
                 connect_to_camera(world, cam, sp.position, ng, f_cos, &mut shadow_rays)
             {
@@ -424,14 +432,8 @@ fn contribution(
             (Rgb::splat(c / PI), c / PI)
         }
         Some(t) => {
-            let (f, p) = bsdf::eval_and_pdf_transport(
-                world.material(t),
-                r.wo,
-                w,
-                r.ng,
-                r.ng,
-                Transport::Flux,
-            );
+            let m = world.material_at(t, r.uv, r.wo);
+            let (f, p) = bsdf::eval_and_pdf_transport(&m, r.wo, w, r.ng, r.ng, Transport::Flux);
             let f = f * w.dot(r.ng).abs();
             let pdf = if p > 0.0 {
                 p * survival(f * (1.0 / p))
@@ -556,7 +558,7 @@ pub fn render(
                     world,
                     &views
                         .iter()
-                        .map(|v| (v.position, v.ng, v.wo, v.material, v.weight))
+                        .map(|v| (v.position, v.ng, v.wo, (v.material, v.uv), v.weight))
                         .collect::<Vec<_>>(),
                 );
                 let weight = paths_in_round as f64;
@@ -608,9 +610,9 @@ pub fn render(
                     rays.clear();
                     targets.clear();
                     for (i, (v, &k)) in views.iter().zip(&view_local).enumerate() {
-                        let m_v = world.material(v.material);
+                        let m_v = world.material_at(v.material, v.uv, v.wo);
                         if let Some((c, dir_to_view)) =
-                            contribution(world, &cfg.singularity, mis_paths, rec, v, m_v)
+                            contribution(world, &cfg.singularity, mis_paths, rec, v, &m_v)
                         {
                             let y = c.luminance();
                             let c = if y < tau[k] {

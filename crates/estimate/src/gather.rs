@@ -127,8 +127,9 @@ fn reflected_radiance(
 ) -> Rgb {
     let mut l = Rgb::BLACK;
     backward_walk(world, first, dir, rng, max_depth, |sp, dir, beta, rng| {
-        let m = world.material(sp.triangle);
         let wo = -dir;
+        let m = world.material_seen(sp, wo);
+        let m = &*m;
         let ng = bsdf::facing_normal(wo, sp.ng);
         let radiance = next_event(
             world,
@@ -241,7 +242,7 @@ pub fn near_field_sample(
     if d2 >= radius * radius {
         return (emitted, Rgb::BLACK);
     }
-    if let Some((e, radiance)) = world.emission(sp.triangle, sp.ng, -dir) {
+    if let Some((e, radiance)) = world.emission(&sp, -dir) {
         let cos_e = sp.ng.dot(-dir).abs();
         let p_cos = n.dot(dir).max(0.0) / PI;
         let p_light = world.area_light_point_pdf(e) * d2 / cos_e;

@@ -144,7 +144,9 @@ fn run_batch(
                     splat(world, cam, position, normal, q, f_cos, &mut film);
                 }
                 LightVertex::Collision { sp, dir, .. } => {
-                    let (m, wo, ng) = (world.material(sp.triangle), -dir, sp.ng);
+                    let (wo, ng) = (-dir, sp.ng);
+                    let m = world.material_seen(&sp, wo);
+                    let m = &*m;
                     // The adjoint BSDF (wo towards the light).
                     let f_cos = |w: Vec3| {
                         bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs()

@@ -192,13 +192,15 @@ fn run_batch(
     let mut tally = progress.tally();
     for _ in 0..paths {
         let end = walk_light_path(world, &mut rng, cfg.max_depth, |v, q| {
+            let material;
             let (at, src) = match v {
                 LightVertex::Emission { position, normal } => {
                     ((position, normal), Source::Emitter { normal })
                 }
                 LightVertex::Collision { sp, dir, .. } => {
+                    material = world.material_seen(&sp, -dir);
                     let src = Source::Collision {
-                        material: world.material(sp.triangle),
+                        material: &material,
                         wo: -dir,
                         ng: sp.ng,
                         ns: sp.ng,

@@ -157,7 +157,7 @@ fn walk(world: &World, rng: &mut Rng, max_depth: u32, mut visit: impl FnMut(Step
             return end;
         };
         end.collisions += 1;
-        let delta = bsdf::is_delta(world.material(sp.triangle));
+        let delta = bsdf::is_delta(&world.material_seen(&sp, -dir));
         let step = if delta {
             Step::Specular { sp, dir }
         } else {
@@ -197,8 +197,8 @@ pub fn scatter(
     mode: Transport,
     rng: &mut Rng,
 ) -> Option<Scattered> {
-    let m = world.material(sp.triangle);
-    let s = bsdf::sample_flat(m, -dir, sp.ng, rng, mode)?;
+    let m = world.material_seen(sp, -dir);
+    let s = bsdf::sample_flat(&m, -dir, sp.ng, rng, mode)?;
     let survival = survival(s.weight);
     if survival <= 0.0 || rng.next_f64() >= survival {
         return None;
@@ -255,13 +255,18 @@ pub fn delta_light_illuminance(world: &World, sensors: &[SensorPoint]) -> Vec<Rg
 }
 
 /// Exact delta-light (point source, luminaire) luminance towards the camera at view points
-/// given as (position, geometric normal, direction to the camera, triangle, weight).
-pub fn delta_light_reflected(world: &World, points: &[(Vec3, Vec3, Vec3, u32, Rgb)]) -> Vec<Rgb> {
+/// given as (position, geometric normal, direction to the camera, (triangle, texture
+/// coordinates), weight).
+pub type ViewedPoint = (Vec3, Vec3, Vec3, (u32, [f64; 2]), Rgb);
+
+/// [`delta_light_illuminance`]'s counterpart for view points: the luminance they reflect.
+pub fn delta_light_reflected(world: &World, points: &[ViewedPoint]) -> Vec<Rgb> {
     let emitters = world.scene.header.emitters.len();
     points
         .iter()
-        .map(|&(x, ng, wo, triangle, weight)| {
-            let m = world.material(triangle);
+        .map(|&(x, ng, wo, (triangle, uv), weight)| {
+            let m = world.material_at(triangle, uv, wo);
+            let m = &*m;
             let mut l = Rgb::BLACK;
             for ei in 0..emitters {
                 world.for_each_delta_source(ei, x, |position, intensity_rgb| {

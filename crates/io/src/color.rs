@@ -1,5 +1,5 @@
 //! Linear RGB triples (Rec. 709 primaries), the photometric luminance Y, and the sRGB transfer
-//! function that encodes linear values for display.
+//! function that encodes linear values for display and decodes sRGB-encoded textures.
 //!
 //! In photometric scenes the Y of an RGB value *is* the photometric quantity (cd, lm, lx,
 //! cd/m²); the RGB split only tints it.
@@ -86,6 +86,16 @@ pub fn srgb_encode(v: f64) -> f64 {
     }
 }
 
+/// Inverse sRGB transfer function (IEC 61966-2-1): the linear value of an encoded one in [0, 1].
+pub fn srgb_decode(v: f64) -> f64 {
+    let v = v.clamp(0.0, 1.0);
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -100,5 +110,18 @@ mod tests {
         let c = Rgb([0.9, 0.2, 0.1]).with_luminance(1000.0).unwrap();
         assert!((c.luminance() - 1000.0).abs() < 1e-9);
         assert!(Rgb::BLACK.with_luminance(1.0).is_none());
+    }
+
+    #[test]
+    fn srgb_decoding_inverts_encoding() {
+        // IEC 61966-2-1: code 128 of 255 is 0.2158605 linear, the linear segment ends at 0.04045.
+        assert!((srgb_decode(128.0 / 255.0) - 0.215_860_500_113_899_2).abs() < 1e-15);
+        assert_eq!(srgb_decode(0.04045), 0.04045 / 12.92);
+        assert_eq!(srgb_decode(0.0), 0.0);
+        assert!((srgb_decode(1.0) - 1.0).abs() < 1e-15);
+        for k in 0..=255 {
+            let v = k as f64 / 255.0;
+            assert!((srgb_encode(srgb_decode(v)) - v).abs() < 1e-12, "{k}");
+        }
     }
 }

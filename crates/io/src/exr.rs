@@ -211,7 +211,7 @@ fn max_expansion(compression: ::exr::compression::Compression) -> u128 {
 /// available (with the RGB copy this reader makes), and the file must be long enough to hold at
 /// least the table of chunk offsets the header implies (8 bytes per chunk). A few hundred bytes
 /// claiming 100000² pixels are refused here instead of aborting in the allocator.
-fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
+pub(crate) fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
     let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)
         .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
     let mut chunks: u128 = 0;

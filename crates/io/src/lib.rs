@@ -18,6 +18,8 @@
 //! - [`exposure`]: the exposure contract shared with Python (autoexposure, dim-image exponent);
 //! - [`exr`]: OpenEXR reading and writing (f32 RGB, ZIP scanlines, header attributes);
 //! - [`png`]: PNG previews of linear images, and the PNG encoder of 8-bit sRGB rasters;
+//! - [`texture_image`]: decoding of bitmap texture images (PNG, JPEG, OpenEXR) with their size
+//!   checked before allocating;
 //! - [`sensors`]: sensor results (RON + CSV);
 //! - [`math`], [`color`]: f64 vectors and transforms, RGB, luminance and the sRGB transfer
 //!   function;
@@ -45,5 +47,6 @@ pub mod outputs;
 pub mod png;
 pub mod progress;
 pub mod sensors;
+pub mod texture_image;
 
 pub use error::{Error, Result};

@@ -11,6 +11,8 @@
 //! header   hlen bytes of RON: SceneHeader (camera, materials, emitters, sensors, features, stats)
 //! arrays   positions [f32;3] x V, normals [f32;3] x V, indices [u32;3] x T,
 //!          triangle material u32 x T, triangle emitter u32 x T (NO_EMITTER if none),
+//!          texture coordinates [f32;2] x V (only if `features.uvs`),
+//!          each texture of `header.textures`, in order ([`Texture::encode`])
 //!          environment map texels [f32;3] x W·H (row-major, top row first; only with an
 //!          `Emitter::Environment` that has a map)
 //! ```
@@ -22,6 +24,7 @@
 
 use crate::scene::{Camera, Material, MaterialKind};
 pub use crate::spot::SpotCone;
+use crate::texture::Texture;
 use luxest_io::color::Rgb;
 use luxest_io::error::{Error, Result};
 use luxest_io::math::Vec3;
@@ -30,9 +33,11 @@ use std::path::Path;
 
 pub const MAGIC: &[u8; 8] = luxest_io::meta::COMPILED_MAGIC;
 /// Bumped whenever the layout or the meaning of a field changes.
+/// 3: environment light (`Emitter::Environment`, its map's texels after the other arrays), spot
+/// lights (`Emitter::Point::spot`); texture coordinates, textures, surfaces (textured,
+/// one-sided and cut-out materials), textured area emitters.
 /// 2: goniometric luminaires (`Emitter::Luminaire`, `photometries`), sensor kinds and
-/// calculation-grid layouts. 3: environment light (`Emitter::Environment`, its map's texels
-/// after the triangle arrays), spot lights (`Emitter::Point::spot`).
+/// calculation-grid layouts.
 pub const SCHEMA_VERSION: u32 = 3;
 /// `triangle_emitter` value of a triangle that does not emit.
 pub const NO_EMITTER: u32 = u32::MAX;
@@ -57,6 +62,13 @@ pub struct SceneHeader {
     /// Goniometric intensity tables referenced by `Emitter::Luminaire` (one per distinct file).
     #[serde(default)]
     pub photometries: Vec<PhotometricTable>,
+    /// The bitmap textures, in the order their pixels follow the arrays.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub textures: Vec<TextureInfo>,
+    /// Per material (indexed like `materials`), its textures and sidedness; empty when no
+    /// material has any (every material untextured and two-sided).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub surfaces: Vec<CompiledSurface>,
     pub features: Features,
     pub stats: Stats,
 }
@@ -80,6 +92,56 @@ pub struct PhotometricTable {
     pub file_flux_lm: Option<f64>,
     /// Input power the file states (W), if any.
     pub input_watts: Option<f64>,
+}
+
+/// Where a texture of the compiled scene came from (its pixels are in the array section).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureInfo {
+    /// The scene's name for it.
+    pub name: String,
+    /// The image file as the scene named it (for reports; not read at run time).
+    pub source: String,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// A material's textures (indices into `SceneHeader::textures`) and sidedness, as
+/// [`crate::scene::Surface`] describes them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompiledSurface {
+    /// Multiplies the material's main colour ([`Material::textured`]).
+    pub color: Option<u32>,
+    /// Its first channel multiplies the microfacet α.
+    pub roughness: Option<u32>,
+    pub opacity: Option<CompiledOpacity>,
+    /// Tangent-space normal map.
+    pub normal: Option<u32>,
+    /// False: black seen from the back side.
+    pub two_sided: bool,
+}
+
+/// Opacity of a cut-out surface: `value` × the texture's alpha (1 without a texture).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompiledOpacity {
+    pub texture: Option<u32>,
+    pub value: f64,
+    /// Opaque where the opacity reaches `cutoff`, transparent below; `None`: opaque with
+    /// probability equal to the opacity.
+    pub cutoff: Option<f64>,
+}
+
+impl CompiledSurface {
+    /// Whether the surface is what a material without a `surfaces` entry is.
+    pub fn is_plain(&self) -> bool {
+        self.color.is_none()
+            && self.roughness.is_none()
+            && self.opacity.is_none()
+            && self.normal.is_none()
+            && self.two_sided
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -109,8 +171,12 @@ pub enum Emitter {
         name: String,
         first_triangle: u32,
         triangle_count: u32,
-        /// Luminance per RGB channel, cd/m².
+        /// Luminance per RGB channel, cd/m² (with `texture`: the factor of its texels).
         radiance_rgb: Rgb,
+        /// Index into `SceneHeader::textures`: the luminance varies over the emitter as
+        /// `radiance_rgb` × texel.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        texture: Option<u32>,
         area_m2: f64,
         /// pi * L * A, lm per channel.
         flux_rgb: Rgb,
@@ -276,6 +342,18 @@ pub struct Features {
     /// Any luminaire from a photometric file (`Emitter::Luminaire`).
     #[serde(default)]
     pub goniometric_luminaires: bool,
+    /// Texture coordinates are stored (some material or emitter is textured).
+    #[serde(default)]
+    pub uvs: bool,
+    /// Any textured colour, roughness, normal or emission.
+    #[serde(default)]
+    pub textures: bool,
+    /// Any one-sided material (black from the back).
+    #[serde(default)]
+    pub one_sided: bool,
+    /// Any cut-out (opacity) surface: every ray query skips its transparent points.
+    #[serde(default)]
+    pub opacity: bool,
     /// An environment emitter (`Emitter::Environment`): rays that leave the scene carry light.
     #[serde(default)]
     pub environment: bool,
@@ -302,6 +380,11 @@ pub struct CompiledScene {
     pub indices: Vec<[u32; 3]>,
     pub triangle_material: Vec<u32>,
     pub triangle_emitter: Vec<u32>,
+    /// Per vertex (empty unless `features.uvs`), glTF's convention ((0, 0) the image's
+    /// top-left corner).
+    pub uvs: Vec<[f32; 2]>,
+    /// Decoded textures, indexed like `header.textures`.
+    pub textures: Vec<Texture>,
     /// The environment map's texels (linear RGB, row-major, top row first); empty without one.
     pub environment_texels: Vec<[f32; 3]>,
     /// xxh3-128 content hash as 32 hex digits (set by `encode` / `decode`).
@@ -318,6 +401,14 @@ fn push_f32x3(out: &mut Vec<u8>, a: &[[f32; 3]]) {
 }
 fn push_u32x3(out: &mut Vec<u8>, a: &[[u32; 3]]) {
     out.reserve(a.len() * 12);
+    for v in a {
+        for c in v {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+}
+fn push_f32x2(out: &mut Vec<u8>, a: &[[f32; 2]]) {
+    out.reserve(a.len() * 8);
     for v in a {
         for c in v {
             out.extend_from_slice(&c.to_le_bytes());
@@ -363,6 +454,15 @@ impl<'a> Reader<'a> {
             })
             .collect())
     }
+    fn f32x2(&mut self, n: usize, what: &str) -> Result<Vec<[f32; 2]>> {
+        let s = self.take(n * 8, what)?;
+        Ok(s.chunks_exact(8)
+            .map(|c| {
+                let f = |i: usize| f32::from_le_bytes(c[i..i + 4].try_into().unwrap());
+                [f(0), f(4)]
+            })
+            .collect())
+    }
     fn u32x3(&mut self, n: usize, what: &str) -> Result<Vec<[u32; 3]>> {
         let s = self.take(n * 12, what)?;
         Ok(s.chunks_exact(12)
@@ -388,6 +488,10 @@ impl CompiledScene {
         push_u32x3(&mut body, &self.indices);
         push_u32(&mut body, &self.triangle_material);
         push_u32(&mut body, &self.triangle_emitter);
+        push_f32x2(&mut body, &self.uvs);
+        for t in &self.textures {
+            t.encode(&mut body);
+        }
         push_f32x3(&mut body, &self.environment_texels);
         let hash = xxhash_rust::xxh3::xxh3_128(&body);
         self.content_hash = format!("{hash:032x}");
@@ -456,6 +560,14 @@ impl CompiledScene {
         let indices = r.u32x3(nt, "indices")?;
         let triangle_material = r.u32s(nt, "triangle materials")?;
         let triangle_emitter = r.u32s(nt, "triangle emitters")?;
+        let nuv = if header.features.uvs { nv } else { 0 };
+        let uvs = r.f32x2(nuv, "texture coordinates")?;
+        let mut textures = Vec::with_capacity(header.textures.len());
+        for _ in &header.textures {
+            let (t, used) = Texture::decode(path, &body[r.pos..])?;
+            r.pos += used;
+            textures.push(t);
+        }
         let texels = header
             .environment_map()
             .map_or(0, |m| (m.width as usize).saturating_mul(m.height as usize));
@@ -473,6 +585,8 @@ impl CompiledScene {
             indices,
             triangle_material,
             triangle_emitter,
+            uvs,
+            textures,
             environment_texels,
             content_hash: format!("{hash:032x}"),
         };
@@ -513,6 +627,37 @@ impl CompiledScene {
         }
         if self.header.emitter_cdf.len() != self.header.emitters.len() {
             return Err("emitter table and its distribution differ in length".into());
+        }
+        let ntex = self.header.textures.len() as u32;
+        if self.textures.len() != ntex as usize {
+            return Err("texture table and texture data differ in length".into());
+        }
+        if !self.header.surfaces.is_empty() && self.header.surfaces.len() != nm as usize {
+            return Err("surface table and material table differ in length".into());
+        }
+        let texture_refs = self.header.surfaces.iter().flat_map(|s| {
+            [
+                s.color,
+                s.roughness,
+                s.normal,
+                s.opacity.as_ref().and_then(|o| o.texture),
+            ]
+        });
+        let emitter_refs = self.header.emitters.iter().map(|e| match e {
+            Emitter::Area { texture, .. } => *texture,
+            _ => None,
+        });
+        if texture_refs
+            .chain(emitter_refs)
+            .flatten()
+            .any(|t| t >= ntex)
+        {
+            return Err(format!(
+                "a surface or emitter references texture beyond {ntex}"
+            ));
+        }
+        if self.header.features.uvs && self.uvs.len() != self.positions.len() {
+            return Err("texture coordinates and vertices differ in number".into());
         }
         let environments = self
             .header
@@ -643,6 +788,8 @@ mod tests {
                 objects: vec![],
                 sensors: vec![],
                 photometries: vec![],
+                textures: vec![],
+                surfaces: vec![],
                 features: Features::default(),
                 stats: Stats {
                     vertices: 3,
@@ -655,6 +802,8 @@ mod tests {
             indices: vec![[0, 1, 2]],
             triangle_material: vec![0],
             triangle_emitter: vec![NO_EMITTER],
+            uvs: vec![],
+            textures: vec![],
             environment_texels: vec![],
             content_hash: String::new(),
         }

@@ -6,6 +6,8 @@
 //! - [`sampling`], [`sobol`], [`bsdf`], [`camera`]: seeded RNG, the path tracer's Sobol
 //!   sampler and the sampling routines, material models, the pinhole camera and its pixel
 //!   sampling;
+//! - [`texture`]: bitmap textures (sRGB or linear, Mitsuba 3's wrap modes and filters,
+//!   mip-mapped minification);
 //! - [`luminaire`]: goniometric luminaires (photometric files) as delta lights and emitters;
 //!   [`spot`]: spot lights' cones; [`environment`]: the environment emitter (constant sky,
 //!   equirectangular map) and its sampling;
@@ -24,4 +26,5 @@ pub mod sampling;
 pub mod scene;
 pub mod sobol;
 pub mod spot;
+pub mod texture;
 pub mod world;

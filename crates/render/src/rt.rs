@@ -53,6 +53,42 @@ pub struct RayTracer {
     device: sys::RTCDevice,
     scene: sys::RTCScene,
     triangles: usize,
+    /// The cut-out test the filter functions call (Embree holds a pointer to the inner box).
+    _mask: Option<Box<Box<Mask>>>,
+}
+
+/// Whether a hit is kept: called with the triangle, the hit's barycentric (u, v) and the
+/// ray's origin and direction (a source of randomness for stochastic opacity). Must be cheap
+/// and thread-safe: Embree calls it during traversal, for every query kind.
+pub type Mask = dyn Fn(u32, f32, f32, [f32; 6]) -> bool + Send + Sync;
+
+/// Embree's filter function for both closest-hit and occlusion queries: rejects the hits the
+/// mask says are not there, so traversal goes on past them. The hit and ray arrays are
+/// Embree's SoA layouts (`RTCHitN`: Ng_x, Ng_y, Ng_z, u, v, primID, …; `RTCRayN`: org_x,
+/// org_y, org_z, tnear, dir_x, dir_y, dir_z, …, each `N` entries).
+unsafe extern "C" fn mask_filter(args: *const sys::RTCFilterFunctionNArguments) {
+    // SAFETY: Embree passes valid arguments; `geometryUserPtr` is the `Box<Mask>` the
+    // tracer owns for as long as the scene exists.
+    unsafe {
+        let a = &*args;
+        let n = a.N as usize;
+        let mask = &*(a.geometryUserPtr as *const Box<Mask>);
+        let hit = a.hit as *const f32;
+        let ray = a.ray as *const f32;
+        for i in 0..n {
+            let valid = a.valid.add(i);
+            if *valid == 0 {
+                continue;
+            }
+            let u = *hit.add(3 * n + i);
+            let v = *hit.add(4 * n + i);
+            let prim = *(hit.add(5 * n + i) as *const u32);
+            let r = |k: usize| *ray.add(k * n + i);
+            if !mask(prim, u, v, [r(0), r(1), r(2), r(4), r(5), r(6)]) {
+                *valid = 0;
+            }
+        }
+    }
 }
 
 // SAFETY: the scene is committed before `RayTracer` is returned and never modified afterwards;
@@ -137,6 +173,16 @@ impl RayTracer {
     /// Builds the acceleration structure over world-space triangles. `robust` trades a little
     /// speed for watertight hits on shared edges (used where sensors sit on edges and corners).
     pub fn new(positions: &[[f32; 3]], indices: &[[u32; 3]], robust: bool) -> Result<RayTracer> {
+        RayTracer::with_mask(positions, indices, robust, None)
+    }
+
+    /// [`RayTracer::new`] where the hits `mask` rejects are not there, for every query.
+    pub fn with_mask(
+        positions: &[[f32; 3]],
+        indices: &[[u32; 3]],
+        robust: bool,
+        mask: Option<Box<Mask>>,
+    ) -> Result<RayTracer> {
         let fail = |m: String| Error::Usage(format!("cannot build the Embree scene: {m}"));
         // SAFETY: plain FFI calls following the Embree 3 API; buffers are allocated by Embree
         // with the sizes we pass, and filled within those sizes.
@@ -148,10 +194,11 @@ impl RayTracer {
                 ));
             }
             let scene = sys::rtcNewScene(device);
-            let tracer = RayTracer {
+            let mut tracer = RayTracer {
                 device,
                 scene,
                 triangles: indices.len(),
+                _mask: mask.map(Box::new),
             };
             let flags = if robust {
                 sys::RTCSceneFlags::ROBUST
@@ -186,6 +233,12 @@ impl RayTracer {
                 }
                 ptr::copy_nonoverlapping(positions.as_ptr(), vb, positions.len());
                 ptr::copy_nonoverlapping(indices.as_ptr(), ib, indices.len());
+                if let Some(m) = tracer._mask.as_mut() {
+                    let user: *mut Box<Mask> = &mut **m;
+                    sys::rtcSetGeometryUserData(geom, user as *mut std::os::raw::c_void);
+                    sys::rtcSetGeometryIntersectFilterFunction(geom, Some(mask_filter));
+                    sys::rtcSetGeometryOccludedFilterFunction(geom, Some(mask_filter));
+                }
                 sys::rtcCommitGeometry(geom);
                 sys::rtcAttachGeometry(scene, geom);
                 sys::rtcReleaseGeometry(geom);

@@ -36,9 +36,76 @@ pub struct Scene {
     /// Calculation surfaces (work planes, EN 12464-1 grids); compiled into sensor sets.
     #[serde(default)]
     pub calculation_surfaces: Vec<CalculationSurface>,
+    /// Bitmap textures by name, referenced from `surfaces` and from emissions.
+    #[serde(default, deserialize_with = "luxest_io::fsio::unique_keys")]
+    pub textures: BTreeMap<String, TextureDesc>,
+    /// Per material name: its textures, cut-outs and sidedness. A material without an entry
+    /// is untextured, opaque and two-sided.
+    #[serde(default, deserialize_with = "luxest_io::fsio::unique_keys")]
+    pub surfaces: BTreeMap<String, Surface>,
     /// Light arriving from infinitely far away (sky, HDR environment map); see [`Environment`].
     #[serde(default)]
     pub environment: Option<Environment>,
+}
+
+/// A bitmap texture: a PNG, JPEG or EXR file and how it is looked up.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TextureDesc {
+    /// Image file, relative to the scene file.
+    pub path: String,
+    /// How stored values become linear ones; default: sRGB for PNG and JPEG, linear for EXR.
+    #[serde(default)]
+    pub encoding: Option<crate::texture::Encoding>,
+    #[serde(default)]
+    pub wrap: crate::texture::Wrap,
+    #[serde(default)]
+    pub filter: crate::texture::Filter,
+    /// Applied to a point's texture coordinates before the lookup.
+    #[serde(default)]
+    pub uv_transform: Option<crate::texture::UvTransform>,
+}
+
+/// What varies over a material's surfaces (see `docs/scene-format.md`, *Textures*).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Surface {
+    /// Texture multiplying the material's main colour ([`Material::textured`]).
+    #[serde(default)]
+    pub color: Option<String>,
+    /// Texture whose first channel multiplies the microfacet α (Glossy: its roughness).
+    #[serde(default)]
+    pub roughness: Option<String>,
+    /// Cut-out: where the surface is not there (leaves, grilles).
+    #[serde(default)]
+    pub opacity: Option<Opacity>,
+    /// Tangent-space normal map (glTF's convention: RGB = (x, y, z) · 0.5 + 0.5, y towards
+    /// decreasing v).
+    #[serde(default)]
+    pub normal: Option<String>,
+    /// False: the surface reflects from its front side only (black from the back), as a
+    /// Mitsuba 3 BSDF not wrapped in `twosided`.
+    #[serde(default = "yes")]
+    pub two_sided: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// Opacity of a cut-out surface: `value` × the texture's alpha channel (its first channel if
+/// it has no alpha; 1 without a texture).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Opacity {
+    #[serde(default)]
+    pub texture: Option<String>,
+    #[serde(default = "one")]
+    pub value: f64,
+    /// Opaque where the opacity reaches `cutoff`, transparent below (glTF `alphaMode: MASK`);
+    /// absent: opaque with a probability equal to the opacity (Mitsuba 3 `mask`).
+    #[serde(default)]
+    pub cutoff: Option<f64>,
 }
 
 /// An environment emitter: radiance arriving from every direction that leaves the scene.
@@ -191,6 +258,80 @@ pub enum MaterialKind {
 }
 
 impl Material {
+    /// The material at a textured point: `color` multiplies its main colour (Lambertian and
+    /// Mirror reflectance, Glossy diffuse, Conductor specular reflectance, Plastic diffuse
+    /// reflectance, both members of a Blend), `roughness` its microfacet α (Glossy: its
+    /// roughness). The smooth dielectrics are returned unchanged.
+    pub fn textured(&self, color: Option<Rgb>, roughness: Option<f64>) -> Material {
+        let tint = |c: &Rgb| match color {
+            Some(t) => *c * t,
+            None => *c,
+        };
+        // α scaled by the texture, kept within the range validation allows.
+        let rough = |r: &Option<Microfacet>| match (r, roughness) {
+            (Some(m), Some(s)) => Some(Microfacet {
+                distribution: m.distribution,
+                alpha: (m.alpha * s).clamp(1e-4, 4.0),
+            }),
+            _ => *r,
+        };
+        match self {
+            Material::Lambertian { reflectance } => Material::Lambertian {
+                reflectance: tint(reflectance),
+            },
+            Material::Mirror { reflectance } => Material::Mirror {
+                reflectance: tint(reflectance),
+            },
+            Material::Glossy {
+                diffuse,
+                specular,
+                roughness: r,
+            } => Material::Glossy {
+                diffuse: tint(diffuse),
+                specular: *specular,
+                roughness: roughness.map_or(*r, |s| (r * s).clamp(1e-4, 1.0)),
+            },
+            Material::Conductor {
+                eta,
+                k,
+                specular_reflectance,
+                roughness: r,
+            } => Material::Conductor {
+                eta: *eta,
+                k: *k,
+                specular_reflectance: tint(specular_reflectance),
+                roughness: rough(r),
+            },
+            Material::Plastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                ior,
+                nonlinear,
+                roughness: r,
+            } => Material::Plastic {
+                diffuse_reflectance: tint(diffuse_reflectance),
+                specular_reflectance: *specular_reflectance,
+                ior: *ior,
+                nonlinear: *nonlinear,
+                roughness: rough(r),
+            },
+            Material::RoughDielectric { ior, roughness: r } => Material::RoughDielectric {
+                ior: *ior,
+                roughness: rough(&Some(*r)).unwrap_or(*r),
+            },
+            Material::Blend {
+                weight,
+                first,
+                second,
+            } => Material::Blend {
+                weight: *weight,
+                first: Box::new(first.textured(color, roughness)),
+                second: Box::new(second.textured(color, roughness)),
+            },
+            Material::Dielectric { .. } | Material::ThinDielectric { .. } => self.clone(),
+        }
+    }
+
     pub fn kind(&self) -> MaterialKind {
         match self {
             Material::Lambertian { .. } => MaterialKind::Lambertian,
@@ -332,6 +473,13 @@ pub enum Emission {
         lumens: f64,
         #[serde(default = "white")]
         color: Rgb,
+    },
+    /// Luminance varying over the surface: `scale` × the texture's texels, cd/m² per channel
+    /// (the object needs texture coordinates).
+    Texture {
+        texture: String,
+        #[serde(default = "white")]
+        scale: Rgb,
     },
 }
 

@@ -42,7 +42,8 @@ impl SpotCone {
                 "spot beam_width_deg {b} is not in [0, cutoff_deg = {c}]"
             ));
         }
-        if !((self.direction.length() - 1.0).abs() < 1e-9) {
+        let unit = (self.direction.length() - 1.0).abs() < 1e-9;
+        if !unit {
             return Err("spot direction is not a unit vector".into());
         }
         Ok(())

@@ -11,9 +11,11 @@ use crate::sampling::{
     cosine_hemisphere, uniform_sphere, uniform_triangle, Distribution1D, Rng, Sampler,
 };
 use crate::scene::Material;
+use crate::texture::Texture;
 use luxest_io::color::Rgb;
 use luxest_io::error::Result;
 use luxest_io::math::Vec3;
+use std::borrow::Cow;
 
 /// A surface point hit by a ray.
 #[derive(Clone, Copy, Debug)]
@@ -27,6 +29,8 @@ pub struct SurfacePoint {
     pub ns: Vec3,
     pub triangle: u32,
     pub distance: f64,
+    /// Texture coordinates (zero unless the scene stores them).
+    pub uv: [f64; 2],
 }
 
 /// A point on a light source with the flux it carries (for light paths).
@@ -97,6 +101,72 @@ pub struct World {
     /// The environment emitter and its index, if the scene has one.
     environment: Option<(u32, EnvironmentLight)>,
 }
+
+/// The cut-out test of a scene with opacity: a hit on a surface of opacity α (its `value`
+/// times its texture's alpha at the hit) is kept where α reaches the cut-off, or, without a
+/// cut-off, with probability α — decided by a hash of the hit and the ray, so that every ray
+/// draws independently and the result is the same at any thread count.
+fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
+    let per_material: Vec<Option<(Option<Texture>, f64, Option<f64>)>> = scene
+        .header
+        .surfaces
+        .iter()
+        .map(|s| {
+            s.opacity.as_ref().map(|o| {
+                let texture = o.texture.map(|t| scene.textures[t as usize].clone());
+                (texture, o.value, o.cutoff)
+            })
+        })
+        .collect();
+    let triangle_material = scene.triangle_material.clone();
+    let indices = scene.indices.clone();
+    let uvs = scene.uvs.clone();
+    Box::new(move |prim, u, v, ray| {
+        let m = triangle_material[prim as usize] as usize;
+        let Some(Some((texture, value, cutoff))) = per_material.get(m) else {
+            return true;
+        };
+        let mut alpha = *value;
+        if let Some(t) = texture {
+            let [a, b, c] = indices[prim as usize].map(|i| uvs[i as usize]);
+            let (u, v) = (u as f64, v as f64);
+            let w = 1.0 - u - v;
+            let uv = [
+                a[0] as f64 * w + b[0] as f64 * u + c[0] as f64 * v,
+                a[1] as f64 * w + b[1] as f64 * u + c[1] as f64 * v,
+            ];
+            alpha *= opacity(t, uv) as f64;
+        }
+        match cutoff {
+            Some(c) => alpha >= *c,
+            None if alpha >= 1.0 => true,
+            None if alpha <= 0.0 => false,
+            None => {
+                let mut h = 0x9e37_79b9_7f4a_7c15u64 ^ prim as u64;
+                for x in [u, v].into_iter().chain(ray) {
+                    h = crate::sampling::splitmix64(h ^ x.to_bits() as u64);
+                }
+                ((h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)) < alpha
+            }
+        }
+    })
+}
+
+/// A texture's opacity at `uv`: its alpha channel, or its first channel without one.
+#[inline]
+fn opacity(t: &Texture, uv: [f64; 2]) -> f32 {
+    let c = t.eval(uv, 0.0);
+    if t.has_alpha() {
+        c[3]
+    } else {
+        c[0]
+    }
+}
+
+/// What a one-sided surface is seen from the back: it reflects nothing.
+static BLACK: Material = Material::Lambertian {
+    reflectance: Rgb::BLACK,
+};
 
 /// A side of the bounding box at most this many f32 roundings (`f32::EPSILON`) of the
 /// geometry's largest |coordinate| is flat: a scene in one plane, up to the noise of its f32
@@ -185,7 +255,13 @@ impl World {
     /// The world with the given kind of ray queries (the stage that loads it chooses:
     /// docs/architecture.md, *Crate graph*).
     pub fn with_traversal(scene: CompiledScene, traversal: Traversal) -> Result<World> {
-        let tracer = RayTracer::for_scene(&scene, traversal == Traversal::Robust)?;
+        let mask = scene.header.features.opacity.then(|| opacity_mask(&scene));
+        let tracer = RayTracer::with_mask(
+            &scene.positions,
+            &scene.indices,
+            traversal == Traversal::Robust,
+            mask,
+        )?;
         let weights: Vec<f64> = scene.header.emitters.iter().map(Emitter::flux_lm).collect();
         let emitter_choice = Distribution1D::new(&weights).ok_or_else(|| {
             luxest_io::Error::input(
@@ -319,8 +395,95 @@ impl World {
         })
     }
 
+    /// The material of a triangle as authored (untextured, both sides); the estimators ask
+    /// [`World::material_at`] instead.
     pub fn material(&self, triangle: u32) -> &Material {
         self.scene.material_of(triangle as usize)
+    }
+
+    /// The material at a surface point seen from direction `wo`: its textures evaluated at the
+    /// point's texture coordinates `uv`, and black where a one-sided surface is seen from the
+    /// back. Borrowed (no copy) for untextured two-sided materials.
+    #[inline]
+    pub fn material_at(&self, triangle: u32, uv: [f64; 2], wo: Vec3) -> Cow<'_, Material> {
+        self.material_filtered(triangle, uv, wo, 0.0)
+    }
+
+    /// [`World::material_at`] with textures filtered over a footprint `footprint` wide in uv
+    /// space (mip-mapped; 0: the finest level, as the estimators look textures up — their
+    /// pixel samples do the filtering).
+    pub fn material_filtered(
+        &self,
+        triangle: u32,
+        uv: [f64; 2],
+        wo: Vec3,
+        footprint: f64,
+    ) -> Cow<'_, Material> {
+        let mi = self.scene.triangle_material[triangle as usize] as usize;
+        let m = &self.scene.header.materials[mi].model;
+        let Some(s) = self.scene.header.surfaces.get(mi) else {
+            return Cow::Borrowed(m);
+        };
+        if !s.two_sided && wo.dot(self.geometric_normal(triangle)) < 0.0 {
+            return Cow::Borrowed(&BLACK);
+        }
+        if s.color.is_none() && s.roughness.is_none() {
+            return Cow::Borrowed(m);
+        }
+        let color = s.color.map(|t| {
+            let [r, g, b, _] = self.texture(t).eval(uv, footprint);
+            Rgb([r as f64, g as f64, b as f64])
+        });
+        let roughness = s
+            .roughness
+            .map(|t| self.texture(t).eval(uv, footprint)[0] as f64);
+        Cow::Owned(m.textured(color, roughness))
+    }
+
+    /// [`World::material_at`] of a hit.
+    #[inline]
+    pub fn material_seen(&self, sp: &SurfacePoint, wo: Vec3) -> Cow<'_, Material> {
+        self.material_at(sp.triangle, sp.uv, wo)
+    }
+
+    fn texture(&self, t: u32) -> &Texture {
+        &self.scene.textures[t as usize]
+    }
+
+    /// The uv-space width of a footprint `width` metres wide on the surface at `sp` seen from
+    /// direction `wo`: the footprint stretches by 1/√|cos θ| on average over its two axes, and
+    /// the triangle maps metres to uv units by √(uv area / area). Zero without texture
+    /// coordinates.
+    pub fn uv_footprint(&self, sp: &SurfacePoint, wo: Vec3, width: f64) -> f64 {
+        if !self.scene.header.features.uvs {
+            return 0.0;
+        }
+        let idx = self.scene.indices[sp.triangle as usize];
+        let [a, b, c] = idx.map(|i| Vec3::from(self.scene.positions[i as usize]));
+        let [ta, tb, tc] = idx.map(|i| self.scene.uvs[i as usize].map(|x| x as f64));
+        let area = (b - a).cross(c - a).length();
+        let uv_area = ((tb[0] - ta[0]) * (tc[1] - ta[1]) - (tb[1] - ta[1]) * (tc[0] - ta[0])).abs();
+        let cos = wo.dot(sp.ng).abs().max(1e-3);
+        if area > 0.0 {
+            width * (uv_area / area).sqrt() / cos.sqrt()
+        } else {
+            0.0
+        }
+    }
+
+    /// Texture coordinates at barycentric (u, v) of a triangle (zero without stored ones).
+    #[inline]
+    pub fn uv_at(&self, triangle: u32, u: f64, v: f64) -> [f64; 2] {
+        if !self.scene.header.features.uvs {
+            return [0.0, 0.0];
+        }
+        let idx = self.scene.indices[triangle as usize];
+        let [a, b, c] = idx.map(|i| self.scene.uvs[i as usize]);
+        let w = 1.0 - u - v;
+        [
+            a[0] as f64 * w + b[0] as f64 * u + c[0] as f64 * v,
+            a[1] as f64 * w + b[1] as f64 * u + c[1] as f64 * v,
+        ]
     }
 
     pub fn emitter_of(&self, triangle: u32) -> Option<u32> {
@@ -356,6 +519,7 @@ impl World {
             ns,
             triangle: hit.triangle,
             distance: hit.t,
+            uv: self.uv_at(hit.triangle, u, v),
         }
     }
 
@@ -561,15 +725,26 @@ impl World {
                     environment: false,
                 }
             }
-            Emitter::Area { flux_rgb, .. } => {
-                let (position, normal, _) = self.sample_area_point(ei, rng);
+            Emitter::Area {
+                flux_rgb,
+                texture,
+                area_m2,
+                ..
+            } => {
+                let (position, normal, radiance) = self.sample_area_point(ei, rng);
+                // Uniform in area and cosine-weighted in direction: the weight is
+                // π L(x) A / p_e, the emitter's flux where L is constant.
+                let flux = match texture {
+                    None => *flux_rgb,
+                    Some(_) => radiance * (std::f64::consts::PI * area_m2),
+                };
                 let local = cosine_hemisphere(rng.next_f64(), rng.next_f64());
                 let (t, b) = normal.orthonormal_basis();
                 EmissionSample {
                     position,
                     normal: Some(normal),
                     direction: t * local.x + b * local.y + normal * local.z,
-                    flux: *flux_rgb * (1.0 / p_e),
+                    flux: flux * (1.0 / p_e),
                     emitter: ei as u32,
                     environment: false,
                 }
@@ -578,9 +753,15 @@ impl World {
     }
 
     /// A uniformly distributed point on area emitter `ei`: (position, unit front normal,
-    /// triangle).
-    fn sample_area_point(&self, ei: usize, rng: &mut impl Sampler) -> (Vec3, Vec3, u32) {
-        let Emitter::Area { first_triangle, .. } = &self.scene.header.emitters[ei] else {
+    /// its luminance there).
+    fn sample_area_point(&self, ei: usize, rng: &mut impl Sampler) -> (Vec3, Vec3, Rgb) {
+        let Emitter::Area {
+            first_triangle,
+            radiance_rgb,
+            texture,
+            ..
+        } = &self.scene.header.emitters[ei]
+        else {
             unreachable!("sample_area_point on a point emitter")
         };
         let dist = self.triangle_choice[ei]
@@ -590,7 +771,14 @@ impl World {
         let [a, e1, e2, n] = self.emitter_triangles[ei][ti];
         let (u1, u2) = rng.next_2d();
         let (b1, b2) = uniform_triangle(u1, u2);
-        (a + e1 * b1 + e2 * b2, n, first_triangle + ti as u32)
+        let radiance = match texture {
+            None => *radiance_rgb,
+            Some(_) => {
+                let uv = self.uv_at(first_triangle + ti as u32, b1, b2);
+                self.textured_radiance(*radiance_rgb, *texture, uv)
+            }
+        };
+        (a + e1 * b1 + e2 * b2, n, radiance)
     }
 
     /// A point on a light chosen by flux, or a direction towards the environment, for
@@ -642,19 +830,14 @@ impl World {
 
     /// A uniformly sampled point of the area emitter `ei`, chosen with probability `p_e`.
     fn area_light_point(&self, ei: usize, p_e: f64, rng: &mut impl Sampler) -> LightPoint {
-        let Emitter::Area {
-            radiance_rgb,
-            area_m2,
-            ..
-        } = &self.scene.header.emitters[ei]
-        else {
+        let Emitter::Area { area_m2, .. } = &self.scene.header.emitters[ei] else {
             unreachable!("area_light_point on an emitter without area")
         };
-        let (position, normal, _) = self.sample_area_point(ei, rng);
+        let (position, normal, radiance) = self.sample_area_point(ei, rng);
         LightPoint {
             position,
             normal: Some(normal),
-            emitted: *radiance_rgb,
+            emitted: radiance,
             pdf: p_e / area_m2,
         }
     }
@@ -690,25 +873,38 @@ impl World {
         }
     }
 
-    /// The emitter index and luminance of `triangle` towards `w`, if it emits that way.
+    /// The emitter index and luminance of the surface at `sp` towards `w`, if it emits that
+    /// way.
     #[inline]
-    pub fn emission(&self, triangle: u32, ng: Vec3, w: Vec3) -> Option<(u32, Rgb)> {
-        let e = self.emitter_of(triangle)?;
+    pub fn emission(&self, sp: &SurfacePoint, w: Vec3) -> Option<(u32, Rgb)> {
+        let e = self.emitter_of(sp.triangle)?;
         match &self.scene.header.emitters[e as usize] {
-            Emitter::Area { radiance_rgb, .. } if ng.dot(w) > 0.0 => Some((e, *radiance_rgb)),
+            Emitter::Area {
+                radiance_rgb,
+                texture,
+                ..
+            } if sp.ng.dot(w) > 0.0 => {
+                Some((e, self.textured_radiance(*radiance_rgb, *texture, sp.uv)))
+            }
             _ => None,
         }
     }
 
-    /// Luminance per channel emitted by the surface of `triangle` towards `w` (zero behind
-    /// the emitter or off emitters).
-    pub fn emitted_radiance(&self, triangle: u32, ng: Vec3, w: Vec3) -> Rgb {
-        match self
-            .emitter_of(triangle)
-            .map(|e| &self.scene.header.emitters[e as usize])
-        {
-            Some(Emitter::Area { radiance_rgb, .. }) if ng.dot(w) > 0.0 => *radiance_rgb,
-            _ => Rgb::BLACK,
+    /// Luminance per channel emitted by the surface at `sp` towards `w` (zero behind the
+    /// emitter or off emitters).
+    pub fn emitted_radiance(&self, sp: &SurfacePoint, w: Vec3) -> Rgb {
+        self.emission(sp, w).map_or(Rgb::BLACK, |(_, l)| l)
+    }
+
+    /// An area emitter's luminance at texture coordinates `uv`: `radiance` times the texel.
+    #[inline]
+    fn textured_radiance(&self, radiance: Rgb, texture: Option<u32>, uv: [f64; 2]) -> Rgb {
+        match texture {
+            None => radiance,
+            Some(t) => {
+                let [r, g, b, _] = self.texture(t).eval(uv, 0.0);
+                radiance * Rgb([r as f64, g as f64, b as f64])
+            }
         }
     }
 }

@@ -10,8 +10,9 @@
 //! Modules: [`cli`] (arguments and run), [`import`] (whole scenes from Mitsuba 3 XML, glTF and
 //! OBJ+MTL, translated into an authored scene), [`validate`], [`shapes`] (tessellation),
 //! [`meshes`] (OBJ and glTF), [`ply`] (PLY meshes), [`luminaires`], [`environment`] (the
-//! environment emitter and its map), [`surfaces`], [`mitsuba`] (export to Mitsuba 3); this file
-//! assembles the world-space scene.
+//! environment emitter and its map), [`surfaces`], [`textures`] (bitmap textures and the
+//! per-material surfaces), [`mitsuba`] (export to Mitsuba 3); this file assembles the
+//! world-space scene.
 
 pub mod cli;
 pub mod environment;
@@ -22,6 +23,7 @@ pub mod mitsuba;
 pub mod ply;
 pub mod shapes;
 pub mod surfaces;
+pub mod textures;
 pub mod validate;
 
 pub use cli::{run, Args};
@@ -87,6 +89,8 @@ pub fn compile_file(path: &Path) -> Result<(CompiledScene, Report)> {
 struct Builder {
     positions: Vec<[f32; 3]>,
     normals: Vec<[f32; 3]>,
+    /// Per vertex; zero for meshes without texture coordinates.
+    uvs: Vec<[f32; 2]>,
     indices: Vec<[u32; 3]>,
     triangle_material: Vec<u32>,
     triangle_emitter: Vec<u32>,
@@ -152,6 +156,14 @@ impl Builder {
                 .normals
                 .extend(std::iter::repeat_n([0.0f32; 3], mesh.positions.len())),
         }
+        match &mesh.uvs {
+            Some(t) => self
+                .uvs
+                .extend(t.iter().map(|&[u, v]| [u as f32, v as f32])),
+            None => self
+                .uvs
+                .extend(std::iter::repeat_n([0.0f32; 2], mesh.positions.len())),
+        }
         let (mut added, mut area, mut dropped) = (0u32, 0.0, 0u64);
         for t in &mesh.triangles {
             let [a, b, c] = t.map(|i| Vec3::from(self.positions[base + i as usize]));
@@ -181,32 +193,36 @@ impl Builder {
     }
 }
 
-fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMesh> {
-    let resolve = |p: &str| -> Result<PathBuf> {
-        let full = scene_path.parent().unwrap_or(Path::new(".")).join(p);
-        if full.is_file() {
-            Ok(full)
-        } else if let Some(kind) = luxest_io::fsio::non_file_kind(&full) {
-            // It exists (a directory, /dev/null, a FIFO): "not found" would send the user
-            // looking for a file that is there.
-            let what = if kind == "a directory" {
-                "a mesh file"
-            } else {
-                "a regular file, as a mesh must be"
-            };
-            Err(Error::at(
-                scene_path,
-                format!("{place}.shape.path"),
-                format!("{} is {kind}, not {what}", full.display()),
-            ))
+/// A file the scene names (`p`, relative to the scene file) at `place`: a mesh, texture or
+/// photometric file (`what`). It must be a regular file.
+pub(crate) fn resolve_file(scene_path: &Path, place: &str, p: &str, what: &str) -> Result<PathBuf> {
+    let full = scene_path.parent().unwrap_or(Path::new(".")).join(p);
+    if full.is_file() {
+        Ok(full)
+    } else if let Some(kind) = luxest_io::fsio::non_file_kind(&full) {
+        // It exists (a directory, /dev/null, a FIFO): "not found" would send the user
+        // looking for a file that is there.
+        let expected = if kind == "a directory" {
+            format!("a {what} file")
         } else {
-            Err(Error::at(
-                scene_path,
-                format!("{place}.shape.path"),
-                format!("mesh file {} not found", full.display()),
-            ))
-        }
-    };
+            format!("a regular file, as a {what} must be")
+        };
+        Err(Error::at(
+            scene_path,
+            place,
+            format!("{} is {kind}, not {expected}", full.display()),
+        ))
+    } else {
+        Err(Error::at(
+            scene_path,
+            place,
+            format!("{what} file {} not found", full.display()),
+        ))
+    }
+}
+
+fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMesh> {
+    let resolve = |p: &str| resolve_file(scene_path, &format!("{place}.shape.path"), p, "mesh");
     Ok(match shape {
         Shape::Quad { corner, u, v } => shapes::quad(*corner, *u, *v),
         Shape::Polygon { vertices } => shapes::polygon(vertices),
@@ -223,7 +239,7 @@ fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMes
             Some((m, p)) => meshes::load_gltf_primitive(&resolve(path)?, *m, *p)?,
             None => meshes::load_gltf(&resolve(path)?)?,
         },
-        Shape::Ply { path } => ply::load_ply(&resolve(path)?)?.mesh,
+        Shape::Ply { path } => ply::load_ply(&resolve(path)?)?,
     })
 }
 
@@ -290,10 +306,9 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
     })
 }
 
-/// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
-/// The fraction of light in channel `c` a material returns at normal incidence, for the warning
-/// on materials that absorb nothing (a dielectric counts as absorbing: it absorbs nothing by
-/// design, and its light leaves through other surfaces).
+/// The fraction of light in channel `c` a reflecting material returns at normal incidence, for
+/// the warning on scenes where nothing absorbs (dielectrics: 0 here; that check counts them as
+/// lossless).
 fn lossless_albedo(m: &Material, c: usize) -> f64 {
     match m {
         Material::Lambertian { reflectance } | Material::Mirror { reflectance } => reflectance.0[c],
@@ -326,6 +341,7 @@ fn lossless_albedo(m: &Material, c: usize) -> f64 {
     }
 }
 
+/// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
 pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     validate::check_scene(path, scene)?;
     let mut report = Report::default();
@@ -340,6 +356,8 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         bounds_max: Vec3::splat(f64::NEG_INFINITY),
         ..Default::default()
     };
+    let loaded = textures::load(path, scene, &mut report.warnings)?;
+    let mut any_uvs = false;
     let mut emitters = Vec::new();
     let mut objects = Vec::new();
     for (i, o) in scene.objects.iter().enumerate() {
@@ -348,6 +366,31 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         let mut mesh = object_mesh(path, &place, &o.shape)?;
         if o.face_normals {
             mesh.normals = None;
+        }
+        let surface = scene.surfaces.get(&o.material);
+        let textured_surface = surface.is_some_and(|s| {
+            s.color.is_some()
+                || s.roughness.is_some()
+                || s.normal.is_some()
+                || s.opacity.as_ref().is_some_and(|o| o.texture.is_some())
+        });
+        let textured_emission = matches!(o.emission, Some(Emission::Texture { .. }));
+        if textured_surface || textured_emission {
+            if mesh.uvs.is_none() {
+                return Err(Error::at(
+                    path,
+                    &place,
+                    format!(
+                        "({name}) has a textured {} but its shape has no texture coordinates",
+                        if textured_surface {
+                            format!("material \"{}\"", o.material)
+                        } else {
+                            "emission".to_string()
+                        }
+                    ),
+                ));
+            }
+            any_uvs = true;
         }
         let material = material_index[o.material.as_str()];
         let emitter = if o.emission.is_some() {
@@ -379,8 +422,13 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             ));
         }
         if let Some(e) = &o.emission {
+            let mut texture = None;
             let radiance_rgb = match e {
                 Emission::Radiance(l) => *l,
+                Emission::Texture { texture: t, scale } => {
+                    texture = Some(loaded.index[t.as_str()]);
+                    *scale
+                }
                 // L = flux / (pi A) for a Lambertian emitter radiating from one side.
                 Emission::Flux { lumens, color } => {
                     let l = color
@@ -404,13 +452,29 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
                     l
                 }
             };
+            // The mean luminance over the surface: the texture's mean over the triangles.
+            let mean = match texture {
+                None => radiance_rgb,
+                Some(t) => {
+                    let tris: Vec<([[f64; 2]; 3], f64)> = (first..first + count)
+                        .map(|k| {
+                            let idx = b.indices[k as usize];
+                            let [pa, pb, pc] = idx.map(|v| Vec3::from(b.positions[v as usize]));
+                            let uv = idx.map(|v| b.uvs[v as usize].map(|c| c as f64));
+                            (uv, 0.5 * (pb - pa).cross(pc - pa).length())
+                        })
+                        .collect();
+                    radiance_rgb * textures::mean_over(&loaded.textures[t as usize], &tris)
+                }
+            };
             emitters.push(Emitter::Area {
                 name: name.clone(),
                 first_triangle: first,
                 triangle_count: count,
                 radiance_rgb,
+                texture,
                 area_m2: area,
-                flux_rgb: radiance_rgb * (PI * area),
+                flux_rgb: mean * (PI * area),
             });
         }
         objects.push(ObjectRange {
@@ -467,19 +531,31 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             ));
         }
     }
-    for &i in &used {
-        let m = &materials[i as usize];
-        if let Some(c) = (0..3).find(|&c| lossless_albedo(&m.model, c) >= 1.0) {
-            // Choice: reflectance 1 stays allowed (an ideal mirror or white is a
-            // legitimate test), but its dependence on the path-depth cap is stated.
-            report.warnings.push(format!(
-                "{}: materials[\"{}\"]: reflectance 1 in channel {c} absorbs no light; in a \
-                 closed room paths then end only at the depth cap (--max-depth) and the result \
-                 depends on it",
-                path.display(),
-                m.name
-            ));
-        }
+    // Light is trapped (walks end only at --max-depth) where no surface absorbs it: in a
+    // channel where every used material reflects or transmits all of it. A white wall in a
+    // room with any absorbing surface is not such a case.
+    let lossless = |m: &Material, c: usize| {
+        matches!(
+            m,
+            Material::Dielectric { .. }
+                | Material::RoughDielectric { .. }
+                | Material::ThinDielectric { .. }
+        ) || lossless_albedo(m, c) >= 1.0
+    };
+    if let Some(c) = (0..3).find(|&c| {
+        !used.is_empty()
+            && used
+                .iter()
+                .all(|&i| lossless(&materials[i as usize].model, c))
+    }) {
+        // Choice: allowed (an ideal white furnace is a legitimate test), but its dependence on
+        // the path-depth cap is stated.
+        report.warnings.push(format!(
+            "{}: no material absorbs light in channel {c} (every one reflects or transmits all \
+             of it); in a closed scene paths then end only at the depth cap (--max-depth) and \
+             the result depends on it",
+            path.display(),
+        ));
     }
     let used_models: Vec<&Material> = used.iter().map(|&i| &materials[i as usize].model).collect();
     let mut material_kinds = Vec::new();
@@ -501,6 +577,10 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         camera: scene.camera.is_some(),
         sensors: !scene.sensors.is_empty() || !scene.calculation_surfaces.is_empty(),
         goniometric_luminaires: !scene.luminaires.is_empty(),
+        uvs: any_uvs,
+        textures: !loaded.textures.is_empty(),
+        one_sided: scene.surfaces.values().any(|s| !s.two_sided),
+        opacity: scene.surfaces.values().any(|s| s.opacity.is_some()),
         environment: scene.environment.is_some(),
     };
     let name = scene_name(scene, path);
@@ -579,6 +659,8 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         objects,
         sensors,
         photometries: lum.tables,
+        surfaces: textures::surfaces(scene, &loaded),
+        textures: loaded.infos,
         features,
         stats,
     };
@@ -602,6 +684,8 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         indices: b.indices,
         triangle_material: b.triangle_material,
         triangle_emitter: b.triangle_emitter,
+        uvs: if any_uvs { b.uvs } else { Vec::new() },
+        textures: loaded.textures,
         environment_texels,
         content_hash: String::new(),
     };

@@ -153,6 +153,30 @@ pub fn load_obj_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
                 .map(|c| Vec3::new(c[0] as f64, c[1] as f64, c[2] as f64))
                 .collect::<Vec<_>>()
         });
+        // OBJ's v points up the image; luxest's (glTF's) points down (Mitsuba 3's loader flips
+        // it the same way).
+        let uvs = (m.texcoords.len() == 2 * nv).then(|| {
+            m.texcoords
+                .chunks_exact(2)
+                .map(|c| [c[0] as f64, 1.0 - c[1] as f64])
+                .collect::<Vec<_>>()
+        });
+        if let Some(uvs) = &uvs {
+            if let Some(i) = uvs
+                .iter()
+                .position(|t| !(t[0].is_finite() && t[1].is_finite()))
+            {
+                return Err(Error::at(
+                    path,
+                    format!(
+                        "texture coordinate of vertex {} of object '{}'",
+                        i + 1,
+                        model.name
+                    ),
+                    "non-finite value",
+                ));
+            }
+        }
         if m.indices.iter().any(|&i| i as usize >= nv) {
             let message = format!("object '{}' has a face index out of range", model.name);
             return Err(match face_line_out_of_range(bytes) {
@@ -168,6 +192,7 @@ pub fn load_obj_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
         mesh.append(LocalMesh {
             positions,
             normals,
+            uvs,
             triangles,
         });
     }
@@ -643,6 +668,24 @@ pub fn primitive_mesh(
         .read_normals()
         .map(|n| n.map(Vec3::from).collect::<Vec<_>>());
     let normals = normals.filter(|n| n.len() == positions.len());
+    let uvs = reader
+        .read_tex_coords(0)
+        .map(|t| {
+            t.into_f32()
+                .map(|[u, v]| [u as f64, v as f64])
+                .collect::<Vec<_>>()
+        })
+        .filter(|t| t.len() == positions.len());
+    if let Some(i) = uvs.as_ref().and_then(|t| {
+        t.iter()
+            .position(|t| !(t[0].is_finite() && t[1].is_finite()))
+    }) {
+        return Err(Error::at(
+            path,
+            format!("{place} vertex {i}"),
+            "non-finite TEXCOORD_0",
+        ));
+    }
     let det = world.determinant();
     let positions: Vec<Vec3> = positions
         .into_iter()
@@ -670,6 +713,7 @@ pub fn primitive_mesh(
     Ok(LocalMesh {
         positions,
         normals,
+        uvs,
         triangles,
     })
 }

@@ -1,7 +1,7 @@
 //! A reader of Stanford PLY triangle meshes (the mesh format of Mitsuba 3 scenes): `ascii 1.0`,
 //! `binary_little_endian 1.0` and `binary_big_endian 1.0`; the `vertex` element's `x y z`,
 //! optional `nx ny nz` and texture coordinates (`u v`, `s t` or `texture_u texture_v`, as
-//! Mitsuba 3 reads them), and the `face` element's index list (`vertex_indices` or
+//! Mitsuba 3 reads them, unflipped), and the `face` element's index list (`vertex_indices` or
 //! `vertex_index`), polygons fan-triangulated. Other elements and properties are skipped.
 //!
 //! Every count is checked against the bytes the file has before anything is allocated, and
@@ -11,13 +11,6 @@ use crate::shapes::LocalMesh;
 use luxest_io::math::Vec3;
 use luxest_io::{Error, Result};
 use std::path::Path;
-
-/// A PLY mesh: the triangles and, when the file has them, per-vertex texture coordinates.
-#[derive(Clone, Debug, Default)]
-pub struct PlyMesh {
-    pub mesh: LocalMesh,
-    pub uvs: Option<Vec<[f64; 2]>>,
-}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Scalar {
@@ -153,13 +146,13 @@ impl Body<'_> {
 const MAX_COUNT: u64 = 1 << 31;
 
 /// Reads the PLY file at `path`.
-pub fn load_ply(path: &Path) -> Result<PlyMesh> {
+pub fn load_ply(path: &Path) -> Result<LocalMesh> {
     let bytes = luxest_io::fsio::read_bytes(path)?;
     load_ply_bytes(path, &bytes)
 }
 
 /// [`load_ply`] of the file's content `bytes`; `path` names it in errors.
-pub fn load_ply_bytes(path: &Path, bytes: &[u8]) -> Result<PlyMesh> {
+pub fn load_ply_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
     let fail = |place: String, msg: String| Error::at(path, place, format!("PLY: {msg}"));
     // The header: text lines up to `end_header`.
     let mut pos = 0;
@@ -399,13 +392,16 @@ pub fn load_ply_bytes(path: &Path, bytes: &[u8]) -> Result<PlyMesh> {
     if !faces_seen || triangles.is_empty() {
         return Err(Error::input(path, "PLY: the file has no faces"));
     }
-    Ok(PlyMesh {
-        mesh: LocalMesh {
-            positions,
-            normals: has_normals.then_some(normals),
-            triangles,
-        },
+    if has_uvs && uvs.iter().flatten().any(|c| !c.is_finite()) {
+        return Err(Error::input(path, "PLY: non-finite texture coordinate"));
+    }
+    // Texture coordinates as stored: Mitsuba 3 reads PLY's without flipping, and its (0, 0) is
+    // the image's top-left corner, luxest's convention.
+    Ok(LocalMesh {
+        positions,
+        normals: has_normals.then_some(normals),
         uvs: has_uvs.then_some(uvs),
+        triangles,
     })
 }
 
@@ -452,10 +448,10 @@ mod tests {
         }
         let b = load_ply_bytes(Path::new("b.ply"), &bin).unwrap();
         for m in [&a, &b] {
-            assert_eq!(m.mesh.triangles, vec![[0, 1, 2], [0, 2, 3]]);
-            assert_eq!(m.mesh.positions[2], Vec3::new(1.0, 1.0, 0.0));
+            assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+            assert_eq!(m.positions[2], Vec3::new(1.0, 1.0, 0.0));
             assert_eq!(m.uvs.as_ref().unwrap()[1], [1.0, 0.0]);
-            assert!(m.mesh.normals.is_none());
+            assert!(m.normals.is_none());
         }
     }
 

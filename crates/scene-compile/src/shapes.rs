@@ -4,20 +4,23 @@ use luxest_io::math::Vec3;
 use std::collections::HashMap;
 
 /// A triangle mesh in an object's local frame. `normals`, when present, are per-vertex
-/// shading normals; absent means flat shading.
+/// shading normals; absent means flat shading. `uvs`, when present, are per-vertex texture
+/// coordinates in glTF's convention ((0, 0) the image's top-left corner, v down).
 #[derive(Clone, Debug, Default)]
 pub struct LocalMesh {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<[f64; 2]>>,
     pub triangles: Vec<[u32; 3]>,
 }
 
 impl LocalMesh {
-    /// Appends `other`, keeping normals only if both have them (else flat everywhere).
+    /// Appends `other`, keeping normals (and UVs) only if both have them (else flat
+    /// everywhere, and no UVs).
     pub fn append(&mut self, other: LocalMesh) {
         let base = self.positions.len() as u32;
-        let keep_normals =
-            (self.positions.is_empty() || self.normals.is_some()) && other.normals.is_some();
+        let first = self.positions.is_empty();
+        let keep_normals = (first || self.normals.is_some()) && other.normals.is_some();
         if keep_normals {
             let mut n = self.normals.take().unwrap_or_default();
             n.extend(other.normals.unwrap());
@@ -25,17 +28,28 @@ impl LocalMesh {
         } else {
             self.normals = None;
         }
+        let keep_uvs = (first || self.uvs.is_some()) && other.uvs.is_some();
+        if keep_uvs {
+            let mut t = self.uvs.take().unwrap_or_default();
+            t.extend(other.uvs.unwrap());
+            self.uvs = Some(t);
+        } else {
+            self.uvs = None;
+        }
         self.positions.extend(other.positions);
         self.triangles
             .extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
     }
 }
 
-/// The parallelogram `corner + s u + t v` as two triangles facing `u x v`.
+/// The parallelogram `corner + s u + t v` as two triangles facing `u x v`, with texture
+/// coordinates (s, 1 − t): the image upright on the parallelogram seen from its front, as on
+/// Mitsuba 3's `rectangle`.
 pub fn quad(corner: Vec3, u: Vec3, v: Vec3) -> LocalMesh {
     LocalMesh {
         positions: vec![corner, corner + u, corner + u + v, corner + v],
         normals: None,
+        uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
         triangles: vec![[0, 1, 2], [0, 2, 3]],
     }
 }
@@ -45,6 +59,7 @@ pub fn polygon(vertices: &[Vec3]) -> LocalMesh {
     LocalMesh {
         positions: vertices.to_vec(),
         normals: None,
+        uvs: None,
         triangles: (1..vertices.len().saturating_sub(1) as u32)
             .map(|i| [0, i, i + 1])
             .collect(),
@@ -146,6 +161,7 @@ pub fn icosphere(radius: f64, level: u32) -> LocalMesh {
     LocalMesh {
         normals: Some(pos.clone()),
         positions: pos.into_iter().map(|p| p * radius).collect(),
+        uvs: None,
         triangles: tris,
     }
 }

@@ -58,6 +58,15 @@ pub(crate) struct Check<'a> {
 }
 
 impl Check<'_> {
+    /// `name` must be a key of the scene's `textures`.
+    pub(crate) fn texture_name(&self, scene: &Scene, place: &str, name: &str) -> Result<()> {
+        if scene.textures.contains_key(name) {
+            Ok(())
+        } else {
+            Err(self.fail(place, format!("unknown texture \"{name}\"")))
+        }
+    }
+
     pub(crate) fn fail(&self, place: &str, msg: impl Into<String>) -> Error {
         Error::at(self.path, place, msg)
     }
@@ -553,8 +562,13 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
                 }
                 c.emission_rgb(&format!("{place}.emission.color"), *color)?;
             }
+            Some(Emission::Texture { texture, scale }) => {
+                c.texture_name(scene, &format!("{place}.emission.texture"), texture)?;
+                c.emission_rgb(&format!("{place}.emission.scale"), *scale)?;
+            }
         }
     }
+    crate::textures::check(&c, scene)?;
     for (i, l) in scene.point_lights.iter().enumerate() {
         check_point_light(&c, &format!("point_lights[{i}]"), l)?;
     }

@@ -9,8 +9,10 @@
 use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
 use luxest_render::scene::{
-    Emission, Environment, Material, Microfacet, MicrofacetDistribution, PointPower, Shape,
+    Emission, Environment, Material, Microfacet, MicrofacetDistribution, Opacity, PointPower,
+    Shape, Surface,
 };
+use luxest_render::texture::{Encoding, Filter, UvTransform, Wrap};
 use scene_compile::import::{export_ron, mitsuba_xml, read_scene};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -68,7 +70,7 @@ fn mitsuba_scene_translates_field_by_field() {
     // Materials: $white substituted by its <default>, the included file's BSDFs, Mitsuba's
     // own bk7 index (its table) over an ext_ior of 1, the GGX α = 0.09 as roughness √α.
     let m = &s.materials;
-    assert_eq!(m.len(), 11, "{:?}", m.keys());
+    assert_eq!(m.len(), 14, "{:?}", m.keys());
     assert_eq!(
         m["white"],
         Material::Lambertian {
@@ -101,7 +103,7 @@ fn mitsuba_scene_translates_field_by_field() {
     );
     // The quad's inline BSDF, named after its element's place; a constant spectrum.
     assert_eq!(
-        m["twosided@scene:110"],
+        m["twosided@scene:117"],
         Material::Lambertian {
             reflectance: Rgb::splat(0.25)
         }
@@ -209,7 +211,95 @@ fn mitsuba_scene_translates_field_by_field() {
             .find(|o| o.name.as_deref() == Some(name))
             .unwrap_or_else(|| panic!("no object {name}"))
     };
-    assert_eq!(s.objects.len(), 6);
+    assert_eq!(s.objects.len(), 9);
+
+    // Textures: the bitmap's file, wrap, filter and to_uv (scale, then translate: u' = 2u + ½,
+    // v' = 3v); raw bitmaps are linear, the others keep the file's encoding.
+    let wood = &s.textures["wood"];
+    assert_eq!(wood.path, "textures/wood.png");
+    assert_eq!(
+        (wood.encoding, wood.wrap, wood.filter),
+        (None, Wrap::Mirror, Filter::Nearest)
+    );
+    assert_eq!(
+        wood.uv_transform,
+        Some(UvTransform([[2.0, 0.0, 0.5], [0.0, 3.0, 0.0]]))
+    );
+    let opacity_tex = "textures/alpha.png@scene:130";
+    let alpha_tex = "textures/alpha.png@scene:138";
+    assert_eq!(s.textures.len(), 3, "{:?}", s.textures.keys());
+    assert_eq!(s.textures[opacity_tex].encoding, Some(Encoding::Linear));
+    // A bare BSDF is one-sided; its bitmap colour multiplies a reflectance of 1.
+    assert_eq!(
+        m["diffuse@scene:124"],
+        Material::Lambertian {
+            reflectance: Rgb::WHITE
+        }
+    );
+    assert_eq!(
+        s.surfaces["diffuse@scene:124"],
+        Surface {
+            color: Some("wood".into()),
+            roughness: None,
+            opacity: None,
+            normal: None,
+            two_sided: false
+        }
+    );
+    // mask: a stochastic cut-out with the bitmap's opacity; the bitmap α multiplies α = 1.
+    let cu = scene_compile::import::mitsuba_tables::CONDUCTORS
+        .iter()
+        .find(|c| c.0 == "Cu")
+        .unwrap();
+    assert_eq!(
+        m["mask@scene:129"],
+        Material::Conductor {
+            eta: Rgb(cu.1),
+            k: Rgb(cu.2),
+            specular_reflectance: Rgb::WHITE,
+            roughness: Some(Microfacet {
+                distribution: MicrofacetDistribution::Ggx,
+                alpha: 1.0
+            })
+        }
+    );
+    assert_eq!(
+        s.surfaces["mask@scene:129"],
+        Surface {
+            color: None,
+            roughness: Some(alpha_tex.into()),
+            opacity: Some(Opacity {
+                texture: Some(opacity_tex.into()),
+                value: 1.0,
+                cutoff: None
+            }),
+            normal: None,
+            two_sided: true
+        }
+    );
+    // A shape without a BSDF gets Mitsuba's default: one-sided diffuse 0.5.
+    let screen = s
+        .objects
+        .iter()
+        .find(|o| o.name.as_deref() == Some("screen"))
+        .unwrap();
+    assert_eq!(screen.material, "diffuse (Mitsuba's default)");
+    assert!(!s.surfaces[&screen.material].two_sided);
+    assert_eq!(
+        m[&screen.material],
+        Material::Lambertian {
+            reflectance: Rgb::splat(0.5)
+        }
+    );
+    assert_eq!(
+        screen.emission,
+        Some(Emission::Texture {
+            texture: "wood".into(),
+            scale: Rgb::WHITE
+        })
+    );
+    // Two-sided untextured materials need no surface entry.
+    assert_eq!(s.surfaces.len(), 3, "{:?}", s.surfaces.keys());
     // rectangle: rotate 90° about x, scale 0.5, translate, composed in that order.
     let light = o("light");
     assert_eq!(
@@ -314,13 +404,13 @@ fn mitsuba_scene_compiles_and_its_exported_ron_compiles_to_the_same_scene() {
     let path = data().join("scene.xml");
     let (compiled, _) = scene_compile::compile_file(&path).unwrap();
     let stats = &compiled.header.stats;
-    // 2 (rectangle) + 12 (cube) + 20·4^6 (sphere) + 254 (disk fan) + 1 (OBJ) + 2 (PLY).
+    // 4 rectangles of 2 + 12 (cube) + 20·4^6 (sphere) + 254 (disk fan) + 1 (OBJ) + 2 (PLY).
     assert_eq!(
         stats.triangles,
-        2 + 12 + 20 * 4u64.pow(mitsuba_xml::SPHERE_SUBDIVISIONS) + 254 + 1 + 2
+        8 + 12 + 20 * 4u64.pow(mitsuba_xml::SPHERE_SUBDIVISIONS) + 254 + 1 + 2
     );
-    // Area, point, spot and environment.
-    assert_eq!(compiled.header.emitters.len(), 4);
+    // Two area emitters, point, spot and environment.
+    assert_eq!(compiled.header.emitters.len(), 5);
     // The area light's radiance is Mitsuba's number, as cd/m².
     let area = compiled
         .header

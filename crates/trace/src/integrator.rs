@@ -102,7 +102,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
         };
         let wo = -dir;
         if AREA {
-            if let Some((e, le)) = world.emission(sp.triangle, sp.ng, wo) {
+            if let Some((e, le)) = world.emission(&sp, wo) {
                 {
                     let w = if delta {
                         1.0
@@ -116,17 +116,18 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 }
             }
         }
-        let m = world.material(sp.triangle);
+        let m = world.material_seen(&sp, wo);
+        let m = &*m;
         let is_delta = SPECULAR && bsdf::is_delta(m);
         if !is_delta && (POINT || AREA || ENV) {
-            // Next-event estimation: (unit direction, distance to the light or infinity,
-            // contribution before visibility).
-            let (w, d, contribution) = match world.sample_light_point(rng, sp.position) {
+            // Next-event estimation: (unit direction, distance to the light or infinity, the
+            // light's point (none for the environment), contribution before visibility).
+            let (w, d, target, contribution) = match world.sample_light_point(rng, sp.position) {
                 LightSample::Point(lp) => {
                     let v = lp.position - sp.position;
                     let d2 = v.length_squared();
                     if d2 <= 0.0 {
-                        (v, 0.0, Rgb::BLACK)
+                        (v, 0.0, None, Rgb::BLACK)
                     } else {
                         let d = d2.sqrt();
                         let w = v / d;
@@ -150,7 +151,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                                 _ => Rgb::BLACK,
                             }
                         };
-                        (w, d, c)
+                        (w, d, Some(lp.position), c)
                     }
                 }
                 LightSample::Environment(es) if ENV && es.pdf > 0.0 => {
@@ -158,9 +159,9 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                     let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
                     let f = f * w.dot(sp.ng).abs();
                     let c = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
-                    (w, f64::INFINITY, c)
+                    (w, f64::INFINITY, None, c)
                 }
-                LightSample::Environment(es) => (es.direction, f64::INFINITY, Rgb::BLACK),
+                LightSample::Environment(es) => (es.direction, f64::INFINITY, None, Rgb::BLACK),
             };
             if contribution.max_component() > 0.0 {
                 log.shadow += 1;
@@ -174,10 +175,9 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                         tfar: d,
                     });
                 }
-                let visible = if d.is_finite() {
-                    !world.occluded(from, from + w * d)
-                } else {
-                    world.escapes(from, w)
+                let visible = match target {
+                    Some(p) => !world.occluded(from, p),
+                    None => world.escapes(from, w),
                 };
                 if visible {
                     l = l + beta * contribution;

@@ -168,8 +168,9 @@ impl Rough {
             return None;
         }
         // f |cos θi| / pdf = G1(wi, m) (times the radiance scaling): D, F and G1(wo, m)
-        // cancel against the visible normals' density and the lobe choice.
-        let g1 = self.d.smith_g1(wi, m);
+        // cancel against the visible normals' density and the lobe choice (up to the masking
+        // ratio, see `microfacet`).
+        let g1 = self.d.smith_g1(wi, m) * self.d.masking_ratio(wo, m);
         if !(g1 > 0.0 && pdf > 0.0) {
             return None;
         }
@@ -179,5 +180,168 @@ impl Rough {
             pdf,
             delta: false,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::*;
+    use super::super::{eval_transport, sample, Transport};
+    use super::*;
+    use crate::sampling::Rng;
+    use crate::scene::{Material, Microfacet, MicrofacetDistribution};
+    use luxest_io::chi2::{ChiSquareTest, Discrete};
+
+    fn rough(distribution: MicrofacetDistribution, alpha: f64, ior: f64) -> Material {
+        Material::RoughDielectric {
+            ior,
+            roughness: Microfacet {
+                distribution,
+                alpha,
+            },
+        }
+    }
+
+    /// The rough dielectrics' chi-square tests: each from outside, inside, grazing, and with
+    /// a tilted shading normal.
+    const SAMPLING_TESTS: usize = 3 * 4;
+
+    fn assert_sampling(m: &Material, seed: u64) {
+        let tilted = Vec3::new(0.4, 0.0, 1.0);
+        let cases = [
+            (Vec3::new(0.3, 0.1, 0.9), UP),
+            (Vec3::new(0.5, 0.3, -0.8), UP),
+            (Vec3::new(0.97, 0.0, 0.25), UP),
+            (Vec3::new(-0.5, 0.2, 0.6), tilted),
+        ];
+        assert_sampling_matches_pdf(m, &cases, seed, SAMPLING_TESTS, 1e-9);
+    }
+
+    #[test]
+    fn ggx_dielectric_sampling_matches_its_density() {
+        assert_sampling(&rough(MicrofacetDistribution::Ggx, 0.3, 1.5), 80);
+    }
+
+    #[test]
+    fn beckmann_dielectric_sampling_matches_its_density() {
+        assert_sampling(&rough(MicrofacetDistribution::Beckmann, 0.25, 1.33), 81);
+    }
+
+    #[test]
+    fn dense_ggx_dielectric_sampling_matches_its_density() {
+        // Strong total internal reflection from inside.
+        assert_sampling(&rough(MicrofacetDistribution::Ggx, 0.5, 2.4), 82);
+    }
+
+    /// In flux transport a dielectric conserves energy: reflected plus transmitted flux by
+    /// sampling equals the quadrature of `eval` over the sphere, at most 1 (the rest is the
+    /// single-scattering model's loss). In radiance transport the transmitted part is scaled
+    /// by 1/η².
+    fn assert_energy(m: &Material, seed: u64) {
+        for (wo, mode) in [
+            (at_cos(0.8), Transport::Flux),
+            (at_cos(0.35), Transport::Radiance),
+            (-at_cos(0.9), Transport::Flux),
+            (-at_cos(0.5), Transport::Radiance),
+        ] {
+            let mc = albedo_mc(m, wo, 50_000, seed, mode);
+            let quad = albedo_quadrature(m, wo, 150, mode);
+            assert_agrees(&format!("{m:?} wo {wo:?} {mode:?}"), mc, quad, 4.0, 3e-3);
+            if mode == Transport::Flux {
+                assert!(mc.0 .0[0] <= 1.0 + 3.0 * mc.1 .0[0], "albedo {:?}", mc.0);
+            }
+        }
+    }
+
+    #[test]
+    fn ggx_dielectric_conserves_energy() {
+        assert_energy(&rough(MicrofacetDistribution::Ggx, 0.3, 1.5), 83);
+    }
+
+    #[test]
+    fn beckmann_dielectric_conserves_energy() {
+        assert_energy(&rough(MicrofacetDistribution::Beckmann, 0.3, 1.33), 84);
+    }
+
+    /// Reflection is reciprocal; transmission's radiance BSDF is the adjoint of its flux BSDF:
+    /// f_radiance(wo, wi) = f_flux(wi, wo) (Veach's thesis, §5.2).
+    #[test]
+    fn rough_dielectric_radiance_is_the_adjoint_of_flux() {
+        for m in [
+            rough(MicrofacetDistribution::Ggx, 0.3, 1.5),
+            rough(MicrofacetDistribution::Beckmann, 0.4, 1.33),
+        ] {
+            let mut r = Rng::new(85, 0);
+            let mut transmitted = 0;
+            for _ in 0..400 {
+                // Pairs in the lobes: b sampled from a.
+                let a = crate::sampling::uniform_sphere(r.next_f64(), r.next_f64());
+                let Some(s) = sample(
+                    &m,
+                    a,
+                    UP,
+                    UP,
+                    r.next_2d(),
+                    r.next_f64(),
+                    Transport::Radiance,
+                ) else {
+                    continue;
+                };
+                let b = s.wi;
+                let f = eval_transport(&m, a, b, UP, UP, Transport::Radiance).0[0];
+                let g = eval_transport(&m, b, a, UP, UP, Transport::Flux).0[0];
+                assert!(relative(f, g) < 1e-10, "{a:?} {b:?}: {f} vs {g}");
+                transmitted += usize::from(a.z * b.z < 0.0 && f > 0.0);
+            }
+            assert!(transmitted > 100);
+        }
+    }
+
+    /// The thin sheet: reflection with probability R' = 2R / (1 + R), transmission straight
+    /// through otherwise, every weight 1 (R + T = 1: nothing absorbed), from either side.
+    #[test]
+    fn thin_dielectric_reflects_its_summed_reflectance_and_absorbs_nothing() {
+        // Normal incidence on glass: R = 0.04, R' = 0.08 / 1.04.
+        assert!((thin_reflectance(1.0, 1.5) - 0.08 / 1.04).abs() < 1e-12);
+        let m = Material::ThinDielectric { ior: 1.5 };
+        let cases = [
+            Vec3::new(0.6, 0.0, 0.8),
+            Vec3::new(0.3, 0.2, -0.9),
+            at_cos(0.1),
+        ];
+        for (k, wo) in cases.into_iter().enumerate() {
+            let wo = wo.try_normalize().unwrap();
+            let r = thin_reflectance(wo.z, 1.5);
+            let mut rng = Rng::new(86, k as u64);
+            ChiSquareTest::new(Discrete(2))
+                .samples(20_000)
+                .tests(cases.len())
+                .run(
+                    || {
+                        let s = sample(
+                            &m,
+                            wo,
+                            UP,
+                            UP,
+                            rng.next_2d(),
+                            rng.next_f64(),
+                            Transport::Radiance,
+                        )
+                        .expect("a thin sheet never absorbs");
+                        assert!(s.delta && s.weight == luxest_io::color::Rgb::WHITE);
+                        let reflected = s.wi.z * wo.z > 0.0;
+                        let expected = if reflected {
+                            Vec3::new(-wo.x, -wo.y, wo.z)
+                        } else {
+                            -wo
+                        };
+                        assert!((s.wi - expected).length() < 1e-12);
+                        assert!((s.pdf - if reflected { r } else { 1.0 - r }).abs() < 1e-12);
+                        Some(usize::from(!reflected))
+                    },
+                    |lobe| [r, 1.0 - r][lobe],
+                )
+                .unwrap();
+        }
     }
 }

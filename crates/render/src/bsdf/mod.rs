@@ -24,6 +24,8 @@ pub mod dielectric;
 pub mod glossy;
 pub mod microfacet;
 pub mod plastic;
+#[cfg(test)]
+mod testing;
 
 pub use dielectric::{dielectric_side, fresnel_dielectric, DielectricSide};
 
@@ -362,8 +364,7 @@ pub fn pdf(m: &Material, wo: Vec3, wi: Vec3, ng: Vec3, ns: Vec3) -> f64 {
             .pdf(wo, wi, n)
         }
         Material::Conductor {
-            roughness: Some(r),
-            ..
+            roughness: Some(r), ..
         } => in_reflecting_frame(at, |wo, wi| Conductor::pdf(r, wo, wi)).unwrap_or(0.0),
         Material::Plastic {
             diffuse_reflectance,
@@ -827,6 +828,133 @@ mod tests {
         // Reflection branch.
         let s = sample(&m, wo, UP, UP, (0.5, 0.5), 0.0, Transport::Radiance).unwrap();
         assert!((s.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-12);
+    }
+
+    #[derive(serde::Deserialize)]
+    enum RowKind {
+        Eval,
+        Sample,
+    }
+
+    #[derive(serde::Deserialize)]
+    enum Mode {
+        Radiance,
+        Flux,
+    }
+
+    #[derive(serde::Deserialize)]
+    struct Row {
+        kind: RowKind,
+        mode: Mode,
+        wo: Vec3,
+        wi: Vec3,
+        u: (f64, f64),
+        uc: f64,
+        value: Rgb,
+        pdf: f64,
+    }
+
+    #[derive(serde::Deserialize)]
+    struct Case {
+        name: String,
+        material: Material,
+        rows: Vec<Row>,
+    }
+
+    /// Mitsuba 3's eval, pdf and sample of every new material at fixed directions and uniform
+    /// numbers (`tests/data/mitsuba_bsdf.ron`, written by `tests/data/mitsuba_bsdf.py`) against
+    /// luxest's: the same formulas, so within Mitsuba's single precision (relative 1e-4; the
+    /// rough plastic's tables are Mitsuba's quadratures, recomputed here in double precision).
+    /// Beckmann densities and sample weights within 0.4 %: luxest's density is its sampler's own
+    /// (the exact G1), Mitsuba's uses its 0.35 % fit (`microfacet`'s module docs).
+    #[test]
+    fn agrees_with_mitsuba() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mitsuba_bsdf.ron");
+        let cases: Vec<Case> = ron::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-6;
+        let mut checked = 0;
+        for case in &cases {
+            let m = &case.material;
+            let mut beckmann = false;
+            m.for_each(&mut |m| {
+                if let Material::Conductor {
+                    roughness: Some(r), ..
+                }
+                | Material::Plastic {
+                    roughness: Some(r), ..
+                }
+                | Material::RoughDielectric { roughness: r, .. } = m
+                {
+                    beckmann |= r.distribution == crate::scene::MicrofacetDistribution::Beckmann;
+                }
+            });
+            let tolerance = if beckmann { 4e-3 } else { 1e-4 };
+            let density_close =
+                |a: f64, b: f64| (a - b).abs() <= tolerance * a.abs().max(b.abs()) + 1e-6;
+            for row in &case.rows {
+                let mode = match row.mode {
+                    Mode::Radiance => Transport::Radiance,
+                    Mode::Flux => Transport::Flux,
+                };
+                let at = format!(
+                    "{}: wo {:?}, wi {:?}, u {:?} {}",
+                    case.name, row.wo, row.wi, row.u, row.uc
+                );
+                match row.kind {
+                    RowKind::Eval => {
+                        // Mitsuba's eval includes the cosine of the new direction.
+                        let f = eval_transport(m, row.wo, row.wi, UP, UP, mode) * row.wi.z.abs();
+                        let p = pdf(m, row.wo, row.wi, UP, UP);
+                        for c in 0..3 {
+                            assert!(
+                                close(f.0[c], row.value.0[c]),
+                                "{at}: eval {f:?} vs Mitsuba {:?}",
+                                row.value
+                            );
+                        }
+                        assert!(
+                            density_close(p, row.pdf),
+                            "{at}: pdf {p} vs Mitsuba {}",
+                            row.pdf
+                        );
+                    }
+                    RowKind::Sample => {
+                        let s = sample(m, row.wo, UP, UP, row.u, row.uc, mode);
+                        if row.value.max_component() == 0.0 {
+                            assert!(
+                                s.is_none_or(|s| s.weight.max_component() == 0.0),
+                                "{at}: {s:?} where Mitsuba's sample is invalid"
+                            );
+                            continue;
+                        }
+                        let s =
+                            s.unwrap_or_else(|| panic!("{at}: no sample where Mitsuba has one"));
+                        assert!(
+                            (s.wi - row.wi).length() < 1e-4,
+                            "{at}: direction {:?} vs Mitsuba {:?}",
+                            s.wi,
+                            row.wi
+                        );
+                        for c in 0..3 {
+                            assert!(
+                                density_close(s.weight.0[c], row.value.0[c]),
+                                "{at}: weight {:?} vs Mitsuba {:?}",
+                                s.weight,
+                                row.value
+                            );
+                        }
+                        assert!(
+                            density_close(s.pdf, row.pdf),
+                            "{at}: pdf {} vs Mitsuba {}",
+                            s.pdf,
+                            row.pdf
+                        );
+                    }
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 500, "{checked} rows");
     }
 
     #[test]

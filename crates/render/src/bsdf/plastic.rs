@@ -20,7 +20,9 @@
 //! ([`tables`]). Directions are in the local frame of the surface (+z the normal on `wo`'s
 //! side).
 
-use super::microfacet::{fresnel, reflect, reflectance, transmittance, Distribution};
+use super::microfacet::{
+    fresnel, quadrature_nodes, reflect, reflectance, transmittance, Distribution,
+};
 use super::LocalSample;
 use crate::scene::{Microfacet, MicrofacetDistribution};
 use luxest_io::color::Rgb;
@@ -62,11 +64,12 @@ impl Tables {
     fn compute(d: &Distribution, eta: f64) -> Tables {
         let mut external_transmittance = [0.0; TRANSMITTANCE_RES];
         let mut internal = 0.0;
+        let (outer, inner) = (quadrature_nodes(eta), quadrature_nodes(1.0 / eta));
         for (i, t) in external_transmittance.iter_mut().enumerate() {
             let mu = (i as f64 / (TRANSMITTANCE_RES - 1) as f64).max(1e-6);
             let wi = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-            *t = transmittance(d, wi, eta);
-            internal += reflectance(d, wi, 1.0 / eta) * mu;
+            *t = transmittance(d, wi, eta, &outer);
+            internal += reflectance(d, wi, 1.0 / eta, &inner) * mu;
         }
         Tables {
             external_transmittance,
@@ -136,7 +139,10 @@ fn mean(c: &Rgb) -> f64 {
 impl Plastic<'_> {
     /// Mitsuba's `specular_sampling_weight`: mean(specular) / (mean(diffuse) + mean(specular)).
     pub fn specular_sampling_weight(&self) -> f64 {
-        let (d, s) = (mean(self.diffuse_reflectance), mean(self.specular_reflectance));
+        let (d, s) = (
+            mean(self.diffuse_reflectance),
+            mean(self.specular_reflectance),
+        );
         if d + s > 0.0 {
             s / (d + s)
         } else {
@@ -183,9 +189,11 @@ impl Plastic<'_> {
             Some(r) => {
                 let t = tables(r, self.eta);
                 let d = Distribution::new(r);
-                let h = (wo + wi).try_normalize().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
-                let spec = fresnel(wo.dot(h), self.eta).0 * d.d(h) * d.g(wo, wi, h)
-                    / (4.0 * wo.z * wi.z);
+                let h = (wo + wi)
+                    .try_normalize()
+                    .unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+                let spec =
+                    fresnel(wo.dot(h), self.eta).0 * d.d(h) * d.g(wo, wi, h) / (4.0 * wo.z * wi.z);
                 let diff = inv_eta2 * t.transmittance(wo.z) * t.transmittance(wi.z) / PI;
                 *self.specular_reflectance * spec + self.diffuse(t.internal_reflectance) * diff
             }
@@ -202,8 +210,10 @@ impl Plastic<'_> {
                 let t = tables(r, self.eta);
                 let ps = self.specular_probability(1.0 - t.transmittance(wo.z));
                 let d = Distribution::new(r);
-                let h = (wo + wi).try_normalize().unwrap_or(Vec3::new(0.0, 0.0, 1.0));
-                let spec = d.d(h) * d.smith_g1(wo, h) / (4.0 * wo.z);
+                let h = (wo + wi)
+                    .try_normalize()
+                    .unwrap_or(Vec3::new(0.0, 0.0, 1.0));
+                let spec = d.d(h) * d.smith_g1_sampled(wo, h) / (4.0 * wo.z);
                 ps * spec + (1.0 - ps) * wi.z / PI
             }
         }
@@ -260,5 +270,216 @@ impl Plastic<'_> {
                 })
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::testing::*;
+    use super::super::{eval, Transport};
+    use super::*;
+    use crate::scene::Material;
+
+    fn plastic(nonlinear: bool, roughness: Option<(MicrofacetDistribution, f64)>) -> Material {
+        Material::Plastic {
+            diffuse_reflectance: Rgb([0.7, 0.4, 0.1]),
+            specular_reflectance: Rgb([1.0, 0.9, 0.8]),
+            ior: 1.5,
+            nonlinear,
+            roughness: roughness.map(|(distribution, alpha)| Microfacet {
+                distribution,
+                alpha,
+            }),
+        }
+    }
+
+    /// The plastics' chi-square tests: each material from four directions, the shading normal
+    /// tilted in the last. The smooth coating's delta samples count as rejected.
+    const SAMPLING_TESTS: usize = 4 * 4;
+
+    fn assert_sampling(m: &Material, seed: u64) {
+        let tilted = Vec3::new(0.4, 0.0, 1.0);
+        let cases = [
+            (Vec3::new(0.0, 0.0, 1.0), UP),
+            (Vec3::new(0.5, 0.3, -0.8), UP),
+            (Vec3::new(0.97, 0.0, 0.25), UP),
+            (Vec3::new(-0.5, 0.2, 0.6), tilted),
+        ];
+        assert_sampling_matches_pdf(m, &cases, seed, SAMPLING_TESTS, 1e-9);
+    }
+
+    #[test]
+    fn smooth_plastic_sampling_matches_its_density() {
+        assert_sampling(&plastic(false, None), 50);
+    }
+
+    #[test]
+    fn ggx_plastic_sampling_matches_its_density() {
+        assert_sampling(
+            &plastic(false, Some((MicrofacetDistribution::Ggx, 0.2))),
+            51,
+        );
+    }
+
+    #[test]
+    fn beckmann_plastic_sampling_matches_its_density() {
+        assert_sampling(
+            &plastic(true, Some((MicrofacetDistribution::Beckmann, 0.4))),
+            52,
+        );
+    }
+
+    #[test]
+    fn diffuse_only_plastic_sampling_matches_its_density() {
+        // No specular reflectance: the coating's lobe is never chosen.
+        let m = Material::Plastic {
+            diffuse_reflectance: Rgb::splat(0.5),
+            specular_reflectance: Rgb::BLACK,
+            ior: 1.5,
+            nonlinear: false,
+            roughness: Some(Microfacet {
+                distribution: MicrofacetDistribution::Ggx,
+                alpha: 0.3,
+            }),
+        };
+        assert_sampling(&m, 53);
+    }
+
+    /// The smooth plastic's directional albedo in closed form: the coating reflects s F(θo),
+    /// the base returns ρ' η⁻² (1 − F(θo)) ∫ (1 − F(μ)) 2μ dμ (the integral by the midpoint
+    /// rule), ρ' = ρ / (1 − R_i) or ρ / (1 − ρ R_i).
+    #[test]
+    fn smooth_plastic_albedo_is_its_closed_form() {
+        let eta = 1.5;
+        let n = 200_000;
+        let transmitted: f64 = (0..n)
+            .map(|i| {
+                let mu = (i as f64 + 0.5) / n as f64;
+                (1.0 - fresnel(mu, eta).0) * 2.0 * mu / n as f64
+            })
+            .sum();
+        let ri = fresnel_diffuse_reflectance(1.0 / eta);
+        for (k, nonlinear) in [false, true].into_iter().enumerate() {
+            let m = plastic(nonlinear, None);
+            for cos in [1.0, 0.5, 0.15] {
+                let wo = at_cos(cos);
+                let fo = fresnel(cos, eta).0;
+                let expected = Rgb(std::array::from_fn(|c| {
+                    let rho = [0.7, 0.4, 0.1][c];
+                    let rho_eff = rho / (1.0 - if nonlinear { rho * ri } else { ri });
+                    [1.0, 0.9, 0.8][c] * fo + rho_eff * (1.0 - fo) * transmitted / (eta * eta)
+                }));
+                let mc = albedo_mc(&m, wo, 100_000, 60 + k as u64, Transport::Radiance);
+                assert_agrees(
+                    &format!("nonlinear {nonlinear}, cos {cos}"),
+                    mc,
+                    expected,
+                    4.0,
+                    1e-9,
+                );
+                for c in 0..3 {
+                    assert!(expected.0[c] <= 1.0);
+                }
+            }
+        }
+    }
+
+    /// The rough plastic's albedo by sampling equals the quadrature of `eval`, stays below 1,
+    /// and `eval` is reciprocal.
+    fn assert_energy_and_reciprocity(m: &Material, seed: u64) {
+        for cos in [0.9, 0.3] {
+            let wo = at_cos(cos);
+            let mc = albedo_mc(m, wo, 50_000, seed, Transport::Radiance);
+            let quad = albedo_quadrature(m, wo, 150, Transport::Radiance);
+            assert_agrees(&format!("{m:?} cos {cos}"), mc, quad, 4.0, 2e-3);
+            for c in 0..3 {
+                assert!(mc.0 .0[c] <= 1.0 + 3.0 * mc.1 .0[c], "albedo {:?}", mc.0);
+            }
+        }
+        let mut r = crate::sampling::Rng::new(seed, 1);
+        for _ in 0..200 {
+            let a = crate::sampling::uniform_sphere(r.next_f64(), r.next_f64());
+            let b = crate::sampling::uniform_sphere(r.next_f64(), r.next_f64());
+            let (fa, fb) = (eval(m, a, b, UP, UP), eval(m, b, a, UP, UP));
+            for c in 0..3 {
+                assert!(relative(fa.0[c], fb.0[c]) < 1e-12, "{fa:?} vs {fb:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn smooth_plastic_is_reciprocal() {
+        let m = plastic(true, None);
+        let mut r = crate::sampling::Rng::new(70, 0);
+        for _ in 0..200 {
+            let a = crate::sampling::uniform_sphere(r.next_f64(), r.next_f64());
+            let b = crate::sampling::uniform_sphere(r.next_f64(), r.next_f64());
+            let (fa, fb) = (eval(&m, a, b, UP, UP), eval(&m, b, a, UP, UP));
+            for c in 0..3 {
+                assert!(relative(fa.0[c], fb.0[c]) < 1e-12, "{fa:?} vs {fb:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn ggx_plastic_conserves_energy_and_is_reciprocal() {
+        assert_energy_and_reciprocity(
+            &plastic(false, Some((MicrofacetDistribution::Ggx, 0.3))),
+            71,
+        );
+    }
+
+    #[test]
+    fn beckmann_plastic_conserves_energy_and_is_reciprocal() {
+        assert_energy_and_reciprocity(
+            &plastic(true, Some((MicrofacetDistribution::Beckmann, 0.25))),
+            72,
+        );
+    }
+
+    /// A nearly smooth coating's tables approach the smooth interface's: transmittance 1 − F(μ),
+    /// and internal reflectance Mitsuba's sum over its 64 cosines of F(μ, 1/η) μ, which is
+    /// 2 ∫ F(μ, 1/η) μ dμ (midpoint rule) within 2 %.
+    #[test]
+    fn tables_of_a_smooth_coating_are_the_fresnel_averages() {
+        let eta = 1.5;
+        let t = tables(
+            &Microfacet {
+                distribution: MicrofacetDistribution::Ggx,
+                alpha: 1e-3,
+            },
+            eta,
+        );
+        for i in [8, 32, 63] {
+            let mu = i as f64 / 63.0;
+            let smooth = 1.0 - fresnel(mu, eta).0;
+            assert!(
+                (t.external_transmittance[i] - smooth).abs() < 1e-3,
+                "μ {mu}: {} vs {smooth}",
+                t.external_transmittance[i]
+            );
+        }
+        // Mitsuba's sum: 2 × the mean of F μ over the 64 cosines (1.5 % below the integral).
+        let sum: f64 = (0..TRANSMITTANCE_RES)
+            .map(|i| {
+                let mu = (i as f64 / 63.0).max(1e-6);
+                2.0 * fresnel(mu, 1.0 / eta).0 * mu / TRANSMITTANCE_RES as f64
+            })
+            .sum();
+        assert!(
+            (t.internal_reflectance - sum).abs() < 2e-3 * sum,
+            "{} vs {sum}",
+            t.internal_reflectance
+        );
+        let n = 100_000;
+        let ri: f64 = (0..n)
+            .map(|i| {
+                let mu = (i as f64 + 0.5) / n as f64;
+                fresnel(mu, 1.0 / eta).0 * 2.0 * mu / n as f64
+            })
+            .sum();
+        assert!((sum - ri).abs() < 0.02 * ri, "{sum} vs {ri}");
+        // Mitsuba's fit of the same average.
+        assert!((fresnel_diffuse_reflectance(1.0 / eta) - ri).abs() < 0.002 * ri);
     }
 }

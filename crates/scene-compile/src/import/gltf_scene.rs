@@ -27,7 +27,7 @@ use luxest_io::math::{Affine, Vec3};
 use luxest_io::{Error, Result};
 use luxest_render::scene::{
     Camera, Emission, Material, Microfacet, MicrofacetDistribution, Object, PointLight, PointPower,
-    Scene, Shape, Transform,
+    Shape, Transform,
 };
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -166,17 +166,7 @@ pub fn import(path: &Path) -> Result<Imported> {
         ));
     }
     let shape_path = scene_relative(path, path);
-    let mut scene = Scene {
-        name: None,
-        camera: None,
-        materials: BTreeMap::new(),
-        objects: Vec::new(),
-        point_lights: Vec::new(),
-        sensors: Vec::new(),
-        luminaires: Vec::new(),
-        calculation_surfaces: Vec::new(),
-        environment: None,
-    };
+    let mut scene = super::empty_scene();
     // Material name and emission by glTF material index (None: the default material).
     let mut materials: BTreeMap<Option<usize>, (String, Option<Emission>)> = BTreeMap::new();
     for (node, world) in gltf_nodes(path, &file)? {

@@ -37,9 +37,10 @@ use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
 use luxest_io::{Error, Result};
 use luxest_render::scene::{
-    Camera, Emission, Environment, Material, Microfacet, MicrofacetDistribution, Object,
-    PointLight, PointPower, Scene, Shape, Spot, Transform,
+    Camera, Emission, Environment, Material, Microfacet, MicrofacetDistribution, Object, Opacity,
+    PointLight, PointPower, Scene, Shape, Spot, Surface, TextureDesc, Transform,
 };
+use luxest_render::texture::{Encoding, Filter, UvTransform, Wrap};
 use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -386,6 +387,11 @@ struct Importer<'a> {
     warnings: RefCell<Vec<String>>,
     /// Material name by the address of its BSDF element.
     materials: BTreeMap<usize, String>,
+    /// The material of shapes without a BSDF, once made.
+    default_bsdf: Option<String>,
+    /// Textures made so far, and their names by the address of their element.
+    textures: RefCell<BTreeMap<String, TextureDesc>>,
+    texture_names: RefCell<BTreeMap<usize, String>>,
     /// Directories `<path>` adds to the file search.
     search: Vec<PathBuf>,
 }
@@ -817,6 +823,31 @@ impl<'a> Reader<'_, 'a> {
             },
         }
     }
+    /// A colour parameter that may be a `bitmap` texture: (the constant, the texture's name);
+    /// with a texture the constant is 1 (the texture multiplies it).
+    fn color_or_texture(&self, name: &str, default: f64) -> Result<(Rgb, Option<String>)> {
+        if let Some(p) = self.props.items.iter().find(|i| i.name == name) {
+            if let Value::Object(e) = p.value {
+                if e.tag == "texture" {
+                    p.used.set(true);
+                    return Ok((Rgb::WHITE, Some(self.imp.texture(e)?)));
+                }
+            }
+        }
+        Ok((self.color(name, default)?, None))
+    }
+    /// A float parameter that may be a `bitmap` texture, as [`Reader::color_or_texture`].
+    fn float_or_texture(&self, name: &str, default: f64) -> Result<(f64, Option<String>)> {
+        if let Some(p) = self.props.items.iter().find(|i| i.name == name) {
+            if let Value::Object(e) = p.value {
+                if e.tag == "texture" {
+                    p.used.set(true);
+                    return Ok((1.0, Some(self.imp.texture(e)?)));
+                }
+            }
+        }
+        Ok((self.float(name, default)?, None))
+    }
     /// A colour parameter: `rgb`, constant `spectrum` or `float`; a texture is an error.
     fn color(&self, name: &str, default: f64) -> Result<Rgb> {
         match self.props.get(name) {
@@ -824,14 +855,6 @@ impl<'a> Reader<'_, 'a> {
             Some(p) => match &p.value {
                 Value::Rgb(c) => Ok(Rgb(*c)),
                 Value::Float(x) => Ok(Rgb::splat(*x)),
-                Value::Object(e) if e.tag == "texture" => Err(self.imp.fail(
-                    e,
-                    format!(
-                        "a texture for \"{}\" is not supported yet (textures are not in this \
-                         build of luxest)",
-                        p.name
-                    ),
-                )),
                 _ => Err(self.wrong(p, "a colour (rgb, spectrum or float)")),
             },
         }
@@ -891,6 +914,25 @@ fn named_ior(name: &str) -> Option<f64> {
 struct Bsdf {
     material: Material,
     two_sided: bool,
+    /// Texture multiplying the main colour, the microfacet α; the `mask` opacity.
+    color: Option<String>,
+    roughness: Option<String>,
+    opacity: Option<Opacity>,
+}
+
+impl Bsdf {
+    fn plain(material: Material, two_sided: bool) -> Bsdf {
+        Bsdf {
+            material,
+            two_sided,
+            color: None,
+            roughness: None,
+            opacity: None,
+        }
+    }
+    fn textured(&self) -> bool {
+        self.color.is_some() || self.roughness.is_some() || self.opacity.is_some()
+    }
 }
 
 impl<'a> Importer<'a> {
@@ -903,8 +945,8 @@ impl<'a> Importer<'a> {
 
     /// The isotropic microfacet roughness of a rough BSDF (Mitsuba's default: Beckmann,
     /// α = 0.1).
-    fn microfacet(&self, r: &Reader) -> Result<Microfacet> {
-        let (name, alpha) = self.microfacet_alpha(r)?;
+    fn microfacet(&self, r: &Reader) -> Result<(Microfacet, Option<String>)> {
+        let (name, alpha, texture) = self.microfacet_alpha(r)?;
         let distribution = match name.as_str() {
             "ggx" => MicrofacetDistribution::Ggx,
             "beckmann" => MicrofacetDistribution::Beckmann,
@@ -915,13 +957,16 @@ impl<'a> Importer<'a> {
                 ))
             }
         };
-        Ok(Microfacet {
-            distribution,
-            alpha,
-        })
+        Ok((
+            Microfacet {
+                distribution,
+                alpha,
+            },
+            texture,
+        ))
     }
 
-    fn microfacet_alpha(&self, r: &Reader) -> Result<(String, f64)> {
+    fn microfacet_alpha(&self, r: &Reader) -> Result<(String, f64, Option<String>)> {
         let distribution = r
             .string("distribution")?
             .unwrap_or_else(|| "beckmann".into())
@@ -939,16 +984,18 @@ impl<'a> Importer<'a> {
                 ));
             }
             r.boolean("sample_visible", true)?;
-            return Ok((distribution, u));
+            return Ok((distribution, u, None));
         }
-        let alpha = r.float("alpha", 0.1)?;
+        let (alpha, texture) = r.float_or_texture("alpha", 0.1)?;
         r.boolean("sample_visible", true)?;
-        Ok((distribution, alpha))
+        Ok((distribution, alpha, texture))
     }
 
     fn bsdf(&self, e: &'a Elem) -> Result<Bsdf> {
         let plugin = e.attr("type").unwrap_or("");
         let r = self.reader(e)?;
+        let color;
+        let mut roughness_texture = None;
         let material = match plugin {
             "twosided" => {
                 let inner = r.objects("bsdf");
@@ -964,13 +1011,38 @@ impl<'a> Importer<'a> {
                 };
                 r.done()?;
                 return Ok(Bsdf {
-                    material: b.material,
                     two_sided: true,
+                    ..b
                 });
             }
-            "diffuse" => Material::Lambertian {
-                reflectance: r.color("reflectance", 0.5)?,
-            },
+            "mask" => {
+                let (value, texture) = r.float_or_texture("opacity", 0.5)?;
+                let inner = r.objects("bsdf");
+                let [one] = inner.as_slice() else {
+                    return Err(self.fail(e, "mask needs one nested BSDF"));
+                };
+                let b = self.bsdf(one)?;
+                r.done()?;
+                if b.opacity.is_some() {
+                    return Err(self.fail(e, "a mask inside a mask is not supported"));
+                }
+                if !(0.0..=1.0).contains(&value) {
+                    return Err(self.fail(e, format!("opacity {value} is outside [0, 1]")));
+                }
+                return Ok(Bsdf {
+                    opacity: Some(Opacity {
+                        texture,
+                        value,
+                        cutoff: None,
+                    }),
+                    ..b
+                });
+            }
+            "diffuse" => {
+                let (reflectance, t) = r.color_or_texture("reflectance", 0.5)?;
+                color = t;
+                Material::Lambertian { reflectance }
+            }
             "dielectric" => {
                 let int = ior(&r, "int_ior", "bk7")?;
                 let ext = ior(&r, "ext_ior", "air")?;
@@ -981,10 +1053,7 @@ impl<'a> Importer<'a> {
                 }
                 r.done()?;
                 // A dielectric refracts from both sides: it is two-sided by nature.
-                return Ok(Bsdf {
-                    material: Material::Dielectric { ior: int / ext },
-                    two_sided: true,
-                });
+                return Ok(Bsdf::plain(Material::Dielectric { ior: int / ext }, true));
             }
             "conductor" | "roughconductor" => {
                 let material = r.string("material")?.unwrap_or_else(|| "none".into());
@@ -1017,7 +1086,8 @@ impl<'a> Importer<'a> {
                         })?;
                     (Rgb(*eta), Rgb(*k))
                 };
-                let specular_reflectance = r.color("specular_reflectance", 1.0)?;
+                let (specular_reflectance, t) = r.color_or_texture("specular_reflectance", 1.0)?;
+                color = t;
                 let perfect = eta == Rgb::splat(0.0) && k == Rgb::WHITE;
                 if plugin == "conductor" && perfect {
                     // eta 0, k 1: Fresnel reflectance 1 at every angle, an ideal mirror.
@@ -1026,7 +1096,9 @@ impl<'a> Importer<'a> {
                     }
                 } else {
                     let roughness = if plugin == "roughconductor" {
-                        Some(self.microfacet(&r)?)
+                        let (m, t) = self.microfacet(&r)?;
+                        roughness_texture = t;
+                        Some(m)
                     } else {
                         None
                     };
@@ -1042,12 +1114,16 @@ impl<'a> Importer<'a> {
                 let int = ior(&r, "int_ior", "polypropylene")?;
                 let ext = ior(&r, "ext_ior", "air")?;
                 let roughness = if plugin == "roughplastic" {
-                    Some(self.microfacet(&r)?)
+                    let (m, t) = self.microfacet(&r)?;
+                    roughness_texture = t;
+                    Some(m)
                 } else {
                     None
                 };
+                let (diffuse_reflectance, t) = r.color_or_texture("diffuse_reflectance", 0.5)?;
+                color = t;
                 Material::Plastic {
-                    diffuse_reflectance: r.color("diffuse_reflectance", 0.5)?,
+                    diffuse_reflectance,
                     specular_reflectance: r.color("specular_reflectance", 1.0)?,
                     ior: int / ext,
                     nonlinear: r.boolean("nonlinear", false)?,
@@ -1062,20 +1138,25 @@ impl<'a> Importer<'a> {
                         return Err(self.fail(e, format!("{k} other than 1 is not supported")));
                     }
                 }
-                let material = if plugin == "thindielectric" {
-                    Material::ThinDielectric { ior: int / ext }
+                let mut b = if plugin == "thindielectric" {
+                    Bsdf::plain(Material::ThinDielectric { ior: int / ext }, true)
                 } else {
-                    Material::RoughDielectric {
-                        ior: int / ext,
-                        roughness: self.microfacet(&r)?,
+                    let (m, t) = self.microfacet(&r)?;
+                    Bsdf {
+                        roughness: t,
+                        ..Bsdf::plain(
+                            Material::RoughDielectric {
+                                ior: int / ext,
+                                roughness: m,
+                            },
+                            true,
+                        )
                     }
                 };
                 r.done()?;
                 // Transmitting BSDFs scatter from both sides by nature.
-                return Ok(Bsdf {
-                    material,
-                    two_sided: true,
-                });
+                b.two_sided = true;
+                return Ok(b);
             }
             "blendbsdf" => {
                 let weight = match r.props.get("weight") {
@@ -1103,29 +1184,125 @@ impl<'a> Importer<'a> {
                         "blendbsdf of a one-sided and a two-sided BSDF is not supported",
                     ));
                 }
+                if a.textured() || b.textured() {
+                    return Err(self.fail(
+                        e,
+                        "textured or masked BSDFs inside a blendbsdf are not supported (a \
+                         texture would apply to both)",
+                    ));
+                }
                 r.done()?;
-                return Ok(Bsdf {
-                    material: Material::Blend {
+                return Ok(Bsdf::plain(
+                    Material::Blend {
                         weight,
                         first: Box::new(a.material),
                         second: Box::new(b.material),
                     },
-                    two_sided: a.two_sided,
-                });
-            }
-            "mask" => {
-                return Err(self.fail(
-                    e,
-                    "the mask BSDF is not supported yet in this build of luxest",
-                ))
+                    a.two_sided,
+                ));
             }
             other => return Err(self.fail(e, format!("unsupported BSDF \"{other}\""))),
         };
         r.done()?;
         Ok(Bsdf {
-            material,
-            two_sided: false,
+            color,
+            roughness: roughness_texture,
+            ..Bsdf::plain(material, false)
         })
+    }
+
+    /// Registers a translated BSDF as a material (and its surface, when it has textures, a
+    /// mask or one side); returns the material's name.
+    fn register(&mut self, b: Bsdf, wanted: String) -> String {
+        let mut name = wanted;
+        while self.scene.materials.contains_key(&name) {
+            name.push('\'');
+        }
+        if b.textured() || !b.two_sided {
+            self.scene.surfaces.insert(
+                name.clone(),
+                Surface {
+                    color: b.color,
+                    roughness: b.roughness,
+                    opacity: b.opacity,
+                    normal: None,
+                    two_sided: b.two_sided,
+                },
+            );
+        }
+        self.scene.materials.insert(name.clone(), b.material);
+        name
+    }
+
+    /// The texture of a `<texture>` element (a `bitmap`), registered on first use; its name.
+    fn texture(&self, e: &'a Elem) -> Result<String> {
+        let key = e as *const Elem as usize;
+        if let Some(n) = self.texture_names.borrow().get(&key) {
+            return Ok(n.clone());
+        }
+        let plugin = e.attr("type").unwrap_or("");
+        if plugin != "bitmap" {
+            return Err(self.fail(e, format!("unsupported texture \"{plugin}\" (only bitmap)")));
+        }
+        let r = self.reader(e)?;
+        let file = r
+            .string("filename")?
+            .ok_or_else(|| self.fail(e, "needs a filename (bitmap data is not supported)"))?;
+        let path = self.resolve_file(e, &file)?;
+        let raw = r.boolean("raw", false)?;
+        let wrap = match r.string("wrap_mode")?.as_deref().unwrap_or("repeat") {
+            "repeat" => Wrap::Repeat,
+            "mirror" => Wrap::Mirror,
+            "clamp" => Wrap::Clamp,
+            other => return Err(self.fail(e, format!("unknown wrap_mode \"{other}\""))),
+        };
+        let filter = match r.string("filter_type")?.as_deref().unwrap_or("bilinear") {
+            "bilinear" => Filter::Bilinear,
+            "nearest" => Filter::Nearest,
+            other => return Err(self.fail(e, format!("unknown filter_type \"{other}\""))),
+        };
+        let to_uv = r.transform("to_uv")?;
+        r.boolean("accel", true)?;
+        if let Some(f) = r.string("format")? {
+            if f != "auto" {
+                return Err(self.fail(e, format!("format \"{f}\" is not supported")));
+            }
+        }
+        r.done()?;
+        let m = &to_uv.m;
+        if m[0][2] != 0.0 || m[1][2] != 0.0 {
+            return Err(self.fail(e, "to_uv mixes in a third coordinate (a 2D transform only)"));
+        }
+        let uv_transform = (to_uv != Affine::IDENTITY).then_some(UvTransform([
+            [m[0][0], m[0][1], to_uv.t.x],
+            [m[1][0], m[1][1], to_uv.t.y],
+        ]));
+        let stem = self
+            .file(e)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let mut name = match e.attr("id") {
+            Some(id) => id.to_string(),
+            None => format!("{file}@{stem}:{}", e.line),
+        };
+        let mut textures = self.textures.borrow_mut();
+        while textures.contains_key(&name) {
+            name.push('\'');
+        }
+        textures.insert(
+            name.clone(),
+            TextureDesc {
+                path,
+                // raw: the stored values as they are; otherwise the file's own encoding.
+                encoding: raw.then_some(Encoding::Linear),
+                wrap,
+                filter,
+                uv_transform,
+            },
+        );
+        self.texture_names.borrow_mut().insert(key, name.clone());
+        Ok(name)
     }
 
     /// The name of the material of a BSDF element, translating it on first use.
@@ -1135,28 +1312,34 @@ impl<'a> Importer<'a> {
             return Ok(n.clone());
         }
         let b = self.bsdf(e)?;
-        if !b.two_sided {
-            return Err(self.fail(
-                e,
-                "a one-sided BSDF (not inside twosided; Mitsuba shades its back black) is not \
-                 supported yet: wrap it in <bsdf type=\"twosided\">",
-            ));
-        }
         let stem = self
             .file(e)
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let mut name = match e.attr("id") {
+        let wanted = match e.attr("id") {
             Some(id) => id.to_string(),
             None => format!("{}@{stem}:{}", e.attr("type").unwrap_or("bsdf"), e.line),
         };
-        while self.scene.materials.contains_key(&name) {
-            name.push('\'');
-        }
-        self.scene.materials.insert(name.clone(), b.material);
+        let name = self.register(b, wanted);
         self.materials.insert(key, name.clone());
         Ok(name)
+    }
+
+    /// Mitsuba's BSDF of a shape that has none: a one-sided diffuse of reflectance 0.5.
+    fn default_material(&mut self) -> String {
+        if let Some(n) = &self.default_bsdf {
+            return n.clone();
+        }
+        let b = Bsdf::plain(
+            Material::Lambertian {
+                reflectance: Rgb::splat(0.5),
+            },
+            false,
+        );
+        let name = self.register(b, "diffuse (Mitsuba's default)".to_string());
+        self.default_bsdf = Some(name.clone());
+        name
     }
 
     fn resolve_file(&self, e: &Elem, name: &str) -> Result<String> {
@@ -1241,23 +1424,21 @@ impl<'a> Importer<'a> {
         let face_normals = r.boolean("face_normals", false)?;
         let bsdfs = r.objects("bsdf");
         let emitters = r.objects("emitter");
-        let material =
-            match bsdfs.as_slice() {
-                [] => return Err(self.fail(
-                    e,
-                    "a shape without a BSDF (Mitsuba's default, a one-sided diffuse 0.5) is not \
-                     supported yet: give it a twosided BSDF",
-                )),
-                [b] => *b,
-                _ => return Err(self.fail(e, "more than one BSDF")),
-            };
+        let material = match bsdfs.as_slice() {
+            [] => None,
+            [b] => Some(*b),
+            _ => return Err(self.fail(e, "more than one BSDF")),
+        };
         let emission = match emitters.as_slice() {
             [] => None,
             [em] => Some(self.area_emitter(em)?),
             _ => return Err(self.fail(e, "more than one emitter")),
         };
         r.done()?;
-        let material = self.material(material)?;
+        let material = match material {
+            Some(b) => self.material(b)?,
+            None => self.default_material(),
+        };
         let m = to_world;
         let matrix = [
             [m.m[0][0], m.m[0][1], m.m[0][2], m.t.x],
@@ -1293,9 +1474,15 @@ impl<'a> Importer<'a> {
             ));
         }
         let r = self.reader(e)?;
-        let radiance = r.color("radiance", 1.0)?;
+        let (radiance, texture) = r.color_or_texture("radiance", 1.0)?;
         r.done()?;
-        Ok(Emission::Radiance(radiance))
+        Ok(match texture {
+            Some(texture) => Emission::Texture {
+                texture,
+                scale: Rgb::WHITE,
+            },
+            None => Emission::Radiance(radiance),
+        })
     }
 
     fn emitter(&mut self, e: &'a Elem) -> Result<()> {
@@ -1583,15 +1770,10 @@ impl<'a> Importer<'a> {
                 "sensor" => self.sensor(c)?,
                 "bsdf" => {
                     // Translated (and checked) even when no shape uses it, as Mitsuba does.
-                    let b = self.bsdf(c)?;
-                    if b.two_sided {
-                        self.material(c)?;
-                    }
+                    self.material(c)?;
                 }
                 "texture" => {
-                    return Err(
-                        self.fail(c, "textures are not supported yet in this build of luxest")
-                    )
+                    self.texture(c)?;
                 }
                 "integrator" => self.warn(
                     c,
@@ -1727,22 +1909,16 @@ fn import_impl(path: &Path, bytes: Option<&[u8]>) -> Result<Imported> {
     let mut imp = Importer {
         parser: &parser,
         ids,
-        scene: Scene {
-            name: None,
-            camera: None,
-            materials: BTreeMap::new(),
-            objects: Vec::new(),
-            point_lights: Vec::new(),
-            sensors: Vec::new(),
-            luminaires: Vec::new(),
-            calculation_surfaces: Vec::new(),
-            environment: None,
-        },
+        scene: super::empty_scene(),
         warnings: RefCell::new(Vec::new()),
         materials: BTreeMap::new(),
+        default_bsdf: None,
+        textures: RefCell::new(BTreeMap::new()),
+        texture_names: RefCell::new(BTreeMap::new()),
         search,
     };
     imp.top_level(&root)?;
+    imp.scene.textures = imp.textures.take();
     Ok(Imported {
         scene: imp.scene,
         warnings: imp.warnings.into_inner(),

@@ -76,6 +76,23 @@ pub fn read_scene(path: &Path) -> Result<Imported> {
     }
 }
 
+/// A scene with nothing in it, for an importer to fill.
+pub(crate) fn empty_scene() -> Scene {
+    Scene {
+        name: None,
+        camera: None,
+        materials: Default::default(),
+        objects: Vec::new(),
+        point_lights: Vec::new(),
+        sensors: Vec::new(),
+        luminaires: Vec::new(),
+        calculation_surfaces: Vec::new(),
+        textures: Default::default(),
+        surfaces: Default::default(),
+        environment: None,
+    }
+}
+
 /// `target` relative to the directory `base`, both made absolute against the working
 /// directory first (`..` where they part); `target` itself when they share no root.
 pub fn relative_path(target: &Path, base: &Path) -> PathBuf {
@@ -142,6 +159,9 @@ pub fn export_ron(scene: &Scene, source: &Path, out: &Path) -> String {
     }
     if let Some(luxest_render::scene::Environment::Map { path, .. }) = &mut s.environment {
         *path = rebase(path);
+    }
+    for t in s.textures.values_mut() {
+        t.path = rebase(&t.path);
     }
     format!(
         "// Translated by scene-compile {} from {}\n{}\n",

@@ -20,7 +20,7 @@
 use crate::import::{scene_relative, Imported};
 use luxest_io::color::Rgb;
 use luxest_io::{Error, Result};
-use luxest_render::scene::{Emission, Material, Object, Scene, Shape, Transform};
+use luxest_render::scene::{Emission, Material, Object, Shape, Transform};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
@@ -259,17 +259,7 @@ pub fn import(path: &Path) -> Result<Imported> {
         return Err(Error::input(path, "the OBJ file has no faces"));
     }
     let file = scene_relative(path, path);
-    let mut scene = Scene {
-        name: None,
-        camera: None,
-        materials: BTreeMap::new(),
-        objects: Vec::new(),
-        point_lights: Vec::new(),
-        sensors: Vec::new(),
-        luminaires: Vec::new(),
-        calculation_surfaces: Vec::new(),
-        environment: None,
-    };
+    let mut scene = super::empty_scene();
     for name in &used {
         let m = &mtls[name];
         scene.materials.insert(name.clone(), material(name, m)?);

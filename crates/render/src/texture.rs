@@ -1,0 +1,716 @@
+//! Bitmap textures: an image (PNG, JPEG or OpenEXR, decoded by [`luxest_io::texture_image`])
+//! turned into linear RGBA, looked up at a surface point's UV with Mitsuba 3's `bitmap`
+//! semantics, plus a mip-map pyramid for minification.
+//!
+//! - UV convention (glTF's, and Mitsuba 3's after its OBJ loader flips v): (0, 0) is the
+//!   top-left corner of the image's top-left texel, u runs right, v runs down; (1, 1) is the
+//!   bottom-right corner. A [`UvTransform`] is applied to the UV first: uv' = M · (u, v, 1).
+//! - [`Encoding`]: integer images (PNG, JPEG) are sRGB-encoded colours by default, decoded with
+//!   the exact IEC 61966-2-1 curve (8-bit samples through a 256-entry table); `Linear` is for
+//!   data (roughness, opacity, normal maps). EXR is always linear. Alpha is always linear, and 1
+//!   where the image has none; a grey image is replicated into R, G and B.
+//! - [`Filter`], as Mitsuba 3's `filter_type` (Dr.Jit's texture): texel (i, j) of a w x h image
+//!   has its centre at ((i + ½)/w, (j + ½)/h). `Bilinear` interpolates the four texels around
+//!   (u w − ½, v h − ½); `Nearest` takes texel (⌊u w⌋, ⌊v h⌋).
+//! - [`Wrap`], as Mitsuba 3's `wrap_mode`, applied to the integer texel index i of a side of n
+//!   texels: `Repeat` i mod n; `Clamp` the nearest of 0 and n − 1; `Mirror` the image flipped
+//!   every other period (i mod n in even periods ⌊i/n⌋, n − 1 − i mod n in odd ones).
+//! - Minification: each mip level halves the previous one's sides (rounded down, at least 1)
+//!   and is its exact box filter: a texel of the coarser level is the area-weighted mean of the
+//!   finer texels it covers, so odd sizes need no resampling to a power of two. A lookup with
+//!   a `footprint` (the side, in UV units, of the square region the result should average) uses
+//!   the continuous level λ = log2(footprint · max(w, h)) + [`LEVEL_BIAS`] and interpolates
+//!   bilinear lookups of the two levels around it (trilinear filtering). `footprint = 0` is
+//!   level 0, Mitsuba's lookup. `Nearest` takes the nearest texel of the nearest level. Channels
+//!   are averaged independently (alpha is not premultiplied), in linear values.
+//!
+//! Storage: 8-bit images stay 8-bit (mip levels too, rounded to the nearest code of the same
+//! encoding) and are decoded on lookup; 16-bit and EXR images are stored as f32. The compiled
+//! scene stores the base level and the options ([`Texture::encode`]); levels are rebuilt on load.
+
+use luxest_io::color::srgb_decode;
+use luxest_io::error::{Error, Result};
+use luxest_io::texture_image::{ImageFormat, Samples, TextureImage, MAX_TEXTURE_SIDE};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::sync::LazyLock;
+
+/// How texel indices outside the image map back into it (Mitsuba 3 `wrap_mode`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    Mirror,
+    Clamp,
+}
+
+/// How a lookup combines texels (Mitsuba 3 `filter_type`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Filter {
+    #[default]
+    Bilinear,
+    Nearest,
+}
+
+/// What an integer image's samples encode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Encoding {
+    /// sRGB-encoded colour (IEC 61966-2-1), decoded to linear.
+    Srgb,
+    /// Linear values: sample / maximum code.
+    Linear,
+}
+
+/// An affine map of texture coordinates, uv' = M · (u, v, 1), rows of M (glTF's
+/// `KHR_texture_transform` and Mitsuba 3's `to_uv` as a matrix).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UvTransform(pub [[f64; 3]; 2]);
+
+impl UvTransform {
+    pub const IDENTITY: UvTransform = UvTransform([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+
+    /// M · (u, v, 1).
+    pub fn apply(&self, uv: [f64; 2]) -> [f64; 2] {
+        let m = &self.0;
+        [
+            m[0][0] * uv[0] + m[0][1] * uv[1] + m[0][2],
+            m[1][0] * uv[0] + m[1][1] * uv[1] + m[1][2],
+        ]
+    }
+    /// The factor by which the map scales lengths on average: √|det| of its linear part.
+    pub fn scale(&self) -> f64 {
+        let m = &self.0;
+        (m[0][0] * m[1][1] - m[0][1] * m[1][0]).abs().sqrt()
+    }
+    pub fn is_finite(&self) -> bool {
+        self.0.iter().flatten().all(|v| v.is_finite())
+    }
+}
+
+impl Default for UvTransform {
+    fn default() -> Self {
+        UvTransform::IDENTITY
+    }
+}
+
+/// How a texture is built from its image and looked up.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TextureOptions {
+    /// `None`: sRGB for PNG and JPEG, linear for EXR.
+    pub encoding: Option<Encoding>,
+    pub wrap: Wrap,
+    pub filter: Filter,
+    pub uv_transform: UvTransform,
+}
+
+/// Added to the mip level log2(footprint · max(w, h)) of a lookup. A bilinear lookup at the
+/// level whose texels are s wide averages over a box of s convolved with a tent of ±s (second
+/// moment s²/4); a box of side f has f²/12: equal for s = f/√3, a bias of −log2 √3.
+pub const LEVEL_BIAS: f64 = -0.792_481_250_360_578_1;
+
+/// The linear value of each 8-bit sRGB code (IEC 61966-2-1).
+static SRGB8: LazyLock<[f32; 256]> =
+    LazyLock::new(|| std::array::from_fn(|k| srgb_decode(k as f64 / 255.0) as f32));
+/// The value of each 8-bit linear code, k / 255.
+static UNORM8: LazyLock<[f32; 256]> = LazyLock::new(|| std::array::from_fn(|k| k as f32 / 255.0));
+
+/// The linear value of 8-bit sRGB code `k` (the table lookups decode with).
+pub fn srgb8_to_linear(k: u8) -> f32 {
+    SRGB8[k as usize]
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum Texels {
+    /// 8-bit codes, R, G, B decoded by the texture's table, A by k / 255.
+    U8(Vec<[u8; 4]>),
+    /// Linear values.
+    F32(Vec<[f32; 4]>),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+struct Level {
+    width: usize,
+    height: usize,
+    texels: Texels,
+}
+
+/// A decoded, mip-mapped bitmap texture (see the module documentation).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Level 0 is the image; each further level halves the sides, down to 1 x 1.
+    levels: Vec<Level>,
+    encoding: Encoding,
+    wrap: Wrap,
+    filter: Filter,
+    uv_transform: UvTransform,
+    has_alpha: bool,
+    /// R, G, B decoding table of 8-bit levels.
+    rgb_table: &'static [f32; 256],
+}
+
+impl Texture {
+    /// Reads the image `path` and builds its texture.
+    pub fn load(path: &Path, options: &TextureOptions) -> Result<Texture> {
+        let image = luxest_io::texture_image::read_texture_image(path)?;
+        Texture::from_image(&image, options).map_err(|m| Error::input(path, m))
+    }
+
+    /// Builds the texture of a decoded image. Fails on an sRGB encoding asked of an EXR, a
+    /// non-finite UV transform or an inconsistent image.
+    pub fn from_image(
+        image: &TextureImage,
+        options: &TextureOptions,
+    ) -> std::result::Result<Texture, String> {
+        let (w, h, c) = (image.width, image.height, image.channels);
+        if w == 0 || h == 0 || !(1..=4).contains(&c) || image.samples.len() != w * h * c {
+            return Err(format!(
+                "inconsistent image: {w}x{h} pixels of {c} channels with {} samples",
+                image.samples.len()
+            ));
+        }
+        let encoding = match (options.encoding, image.format) {
+            (Some(Encoding::Srgb), ImageFormat::Exr) => {
+                return Err("an OpenEXR texture is linear; encoding Srgb does not apply".into())
+            }
+            (Some(e), _) => e,
+            (None, f) if f.is_integer() => Encoding::Srgb,
+            (None, _) => Encoding::Linear,
+        };
+        // Grey, grey + alpha, RGB, RGBA → RGBA.
+        let rgba = |s: &[f32], one: f32| -> [f32; 4] {
+            match s.len() {
+                1 => [s[0], s[0], s[0], one],
+                2 => [s[0], s[0], s[0], s[1]],
+                3 => [s[0], s[1], s[2], one],
+                _ => [s[0], s[1], s[2], s[3]],
+            }
+        };
+        let texels = match &image.samples {
+            Samples::U8(v) => Texels::U8(
+                v.chunks_exact(c)
+                    .map(|s| match s.len() {
+                        1 => [s[0], s[0], s[0], 255],
+                        2 => [s[0], s[0], s[0], s[1]],
+                        3 => [s[0], s[1], s[2], 255],
+                        _ => [s[0], s[1], s[2], s[3]],
+                    })
+                    .collect(),
+            ),
+            Samples::U16(v) => {
+                // Grey (and alpha): one colour sample; RGB (and alpha): three.
+                let colour_samples = if c <= 2 { 1 } else { 3 };
+                Texels::F32(
+                    v.chunks_exact(c)
+                        .map(|s| {
+                            let mut p = [0f32; 4];
+                            for (i, &k) in s.iter().enumerate() {
+                                let x = k as f64 / 65535.0;
+                                let srgb = i < colour_samples && encoding == Encoding::Srgb;
+                                p[i] = if srgb { srgb_decode(x) } else { x } as f32;
+                            }
+                            rgba(&p[..c], 1.0)
+                        })
+                        .collect(),
+                )
+            }
+            Samples::F32(v) => {
+                if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+                    return Err(format!("non-finite texel value {x}"));
+                }
+                Texels::F32(v.chunks_exact(c).map(|s| rgba(s, 1.0)).collect())
+            }
+        };
+        Texture::build(
+            Level {
+                width: w,
+                height: h,
+                texels,
+            },
+            encoding,
+            options,
+            image.has_alpha(),
+        )
+    }
+
+    fn build(
+        base: Level,
+        encoding: Encoding,
+        options: &TextureOptions,
+        has_alpha: bool,
+    ) -> std::result::Result<Texture, String> {
+        if !options.uv_transform.is_finite() {
+            return Err(format!(
+                "UV transform {:?} is not finite",
+                options.uv_transform.0
+            ));
+        }
+        let rgb_table: &'static [f32; 256] = match encoding {
+            Encoding::Srgb => &SRGB8,
+            Encoding::Linear => &UNORM8,
+        };
+        let mut levels = vec![base];
+        loop {
+            let last = levels.last().expect("level 0");
+            if last.width == 1 && last.height == 1 {
+                break;
+            }
+            let next = downsample(last, encoding, rgb_table);
+            levels.push(next);
+        }
+        Ok(Texture {
+            levels,
+            encoding,
+            wrap: options.wrap,
+            filter: options.filter,
+            uv_transform: options.uv_transform,
+            has_alpha,
+            rgb_table,
+        })
+    }
+
+    pub fn width(&self) -> usize {
+        self.levels[0].width
+    }
+    pub fn height(&self) -> usize {
+        self.levels[0].height
+    }
+    /// The number of mip levels, the image included.
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+    /// Width and height of mip level `level`.
+    pub fn level_size(&self, level: usize) -> (usize, usize) {
+        (self.levels[level].width, self.levels[level].height)
+    }
+    pub fn encoding(&self) -> Encoding {
+        self.encoding
+    }
+    pub fn wrap(&self) -> Wrap {
+        self.wrap
+    }
+    pub fn filter(&self) -> Filter {
+        self.filter
+    }
+    pub fn uv_transform(&self) -> UvTransform {
+        self.uv_transform
+    }
+    /// Whether the image had an alpha channel (without one, alpha is 1 everywhere).
+    pub fn has_alpha(&self) -> bool {
+        self.has_alpha
+    }
+    /// Bytes the texels of all levels take.
+    pub fn memory_bytes(&self) -> usize {
+        self.levels
+            .iter()
+            .map(|l| match &l.texels {
+                Texels::U8(v) => v.len() * 4,
+                Texels::F32(v) => v.len() * 16,
+            })
+            .sum()
+    }
+
+    /// Texel (x, y) of mip level `level`, linear RGBA.
+    pub fn texel(&self, level: usize, x: usize, y: usize) -> [f32; 4] {
+        let l = &self.levels[level];
+        self.decode_texel(l, y * l.width + x)
+    }
+
+    fn decode_texel(&self, level: &Level, index: usize) -> [f32; 4] {
+        match &level.texels {
+            Texels::U8(v) => {
+                let p = v[index];
+                let t = self.rgb_table;
+                [
+                    t[p[0] as usize],
+                    t[p[1] as usize],
+                    t[p[2] as usize],
+                    UNORM8[p[3] as usize],
+                ]
+            }
+            Texels::F32(v) => v[index],
+        }
+    }
+
+    /// The texture's linear RGBA at `uv` (before the UV transform), averaged over a square
+    /// of side `footprint` in UV units (0: no minification filtering; see the module
+    /// documentation). A non-finite UV is read as (0, 0), a non-finite or negative footprint as
+    /// 0.
+    pub fn eval(&self, uv: [f64; 2], footprint: f64) -> [f32; 4] {
+        let uv = uv.map(|x| if x.is_finite() { x } else { 0.0 });
+        let uv = self.uv_transform.apply(uv);
+        let width = footprint * self.uv_transform.scale();
+        let lambda = if width > 0.0 && width.is_finite() {
+            let n = self.width().max(self.height()) as f64;
+            ((width * n).log2() + LEVEL_BIAS).clamp(0.0, (self.levels.len() - 1) as f64)
+        } else {
+            0.0
+        };
+        match self.filter {
+            Filter::Nearest => self.nearest(lambda.round() as usize, uv),
+            Filter::Bilinear => {
+                let l0 = lambda.floor() as usize;
+                let t = lambda - l0 as f64;
+                let a = self.bilinear(l0, uv);
+                if t == 0.0 || l0 + 1 >= self.levels.len() {
+                    return a;
+                }
+                let b = self.bilinear(l0 + 1, uv);
+                std::array::from_fn(|c| ((1.0 - t) * a[c] as f64 + t * b[c] as f64) as f32)
+            }
+        }
+    }
+
+    /// Bilinear lookup of level `level` at (transformed) `uv`.
+    fn bilinear(&self, level: usize, uv: [f64; 2]) -> [f32; 4] {
+        let l = &self.levels[level];
+        let x = texel_coordinate(uv[0] * l.width as f64 - 0.5);
+        let y = texel_coordinate(uv[1] * l.height as f64 - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let xs = [
+            wrap(self.wrap, x0, l.width),
+            wrap(self.wrap, x0 + 1, l.width),
+        ];
+        let ys = [
+            wrap(self.wrap, y0, l.height),
+            wrap(self.wrap, y0 + 1, l.height),
+        ];
+        let mut out = [0f64; 4];
+        for (j, &ty) in ys.iter().enumerate() {
+            let wy = if j == 0 { 1.0 - fy } else { fy };
+            for (i, &tx) in xs.iter().enumerate() {
+                let w = wy * if i == 0 { 1.0 - fx } else { fx };
+                let t = self.decode_texel(l, ty * l.width + tx);
+                for c in 0..4 {
+                    out[c] += w * t[c] as f64;
+                }
+            }
+        }
+        out.map(|v| v as f32)
+    }
+
+    /// Nearest-texel lookup of level `level` at (transformed) `uv`.
+    fn nearest(&self, level: usize, uv: [f64; 2]) -> [f32; 4] {
+        let l = &self.levels[level];
+        let x = texel_coordinate(uv[0] * l.width as f64).floor() as i64;
+        let y = texel_coordinate(uv[1] * l.height as f64).floor() as i64;
+        let (tx, ty) = (wrap(self.wrap, x, l.width), wrap(self.wrap, y, l.height));
+        self.decode_texel(l, ty * l.width + tx)
+    }
+
+    /// The mean linear RGBA of the image's texels (f64). It equals the integral of either
+    /// filter's lookup over the unit UV square, for every wrap mode.
+    pub fn average(&self) -> [f64; 4] {
+        let l = &self.levels[0];
+        let mut sum = [0f64; 4];
+        for i in 0..l.width * l.height {
+            let t = self.decode_texel(l, i);
+            for c in 0..4 {
+                sum[c] += t[c] as f64;
+            }
+        }
+        sum.map(|s| s / (l.width * l.height) as f64)
+    }
+
+    /// The mean linear RGBA of the texture over a triangle with UVs `uv` (before the UV
+    /// transform; an affine map, so the mean over the triangle's surface): the triangle is cut
+    /// into [`TRIANGLE_MEAN_CELLS`]² congruent triangles and the lookup at each one's centroid,
+    /// filtered over a footprint of its size, averaged.
+    pub fn mean_over_triangle(&self, uv: [[f64; 2]; 3]) -> [f64; 4] {
+        let n = TRIANGLE_MEAN_CELLS;
+        let (a, b, c) = (uv[0], uv[1], uv[2]);
+        let e1 = [b[0] - a[0], b[1] - a[1]];
+        let e2 = [c[0] - a[0], c[1] - a[1]];
+        let area = 0.5 * (e1[0] * e2[1] - e1[1] * e2[0]).abs();
+        let footprint = (area / (n * n) as f64).sqrt();
+        let mut sum = [0f64; 4];
+        let mut add = |s: f64, t: f64| {
+            let p = [a[0] + s * e1[0] + t * e2[0], a[1] + s * e1[1] + t * e2[1]];
+            let v = self.eval(p, footprint);
+            for k in 0..4 {
+                sum[k] += v[k] as f64;
+            }
+        };
+        let nf = n as f64;
+        for i in 0..n {
+            for j in 0..n - i {
+                // The cell (i, j) pointing like the triangle, and the inverted one beside it.
+                add((i as f64 + 1.0 / 3.0) / nf, (j as f64 + 1.0 / 3.0) / nf);
+                if i + j + 1 < n {
+                    add((i as f64 + 2.0 / 3.0) / nf, (j as f64 + 2.0 / 3.0) / nf);
+                }
+            }
+        }
+        sum.map(|s| s / (n * n) as f64)
+    }
+}
+
+/// The first bytes of an encoded texture.
+const ENCODED_MAGIC: &[u8; 4] = b"LXTX";
+/// Bumped whenever the encoded layout changes.
+const ENCODED_VERSION: u32 = 1;
+/// Magic, version, width, height, storage, encoding, wrap, filter, alpha, 3 reserved bytes and
+/// the six f64 of the UV transform.
+const ENCODED_HEADER_LEN: usize = 4 + 4 + 4 + 4 + 8 + 48;
+
+impl Texture {
+    /// Appends the texture as the compiled scene stores it (little-endian):
+    ///
+    /// ```text
+    /// magic "LXTX", version u32, width u32, height u32,
+    /// storage u8 (0: 8-bit, 1: f32), encoding u8 (0: sRGB, 1: linear),
+    /// wrap u8 (0: repeat, 1: mirror, 2: clamp), filter u8 (0: bilinear, 1: nearest),
+    /// has_alpha u8, 3 reserved bytes 0, UV transform 6 f64 (row-major),
+    /// level 0 texels, RGBA row-major from the top: 4 bytes (8-bit) or 4 f32 (f32) each.
+    /// ```
+    ///
+    /// Mip levels are not stored: [`Texture::decode`] rebuilds them.
+    pub fn encode(&self, out: &mut Vec<u8>) {
+        let base = &self.levels[0];
+        out.extend_from_slice(ENCODED_MAGIC);
+        out.extend_from_slice(&ENCODED_VERSION.to_le_bytes());
+        out.extend_from_slice(&(base.width as u32).to_le_bytes());
+        out.extend_from_slice(&(base.height as u32).to_le_bytes());
+        out.push(match base.texels {
+            Texels::U8(_) => 0,
+            Texels::F32(_) => 1,
+        });
+        out.push(match self.encoding {
+            Encoding::Srgb => 0,
+            Encoding::Linear => 1,
+        });
+        out.push(match self.wrap {
+            Wrap::Repeat => 0,
+            Wrap::Mirror => 1,
+            Wrap::Clamp => 2,
+        });
+        out.push(match self.filter {
+            Filter::Bilinear => 0,
+            Filter::Nearest => 1,
+        });
+        out.push(self.has_alpha as u8);
+        out.extend_from_slice(&[0; 3]);
+        for v in self.uv_transform.0.iter().flatten() {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        match &base.texels {
+            Texels::U8(v) => {
+                out.reserve(v.len() * 4);
+                for p in v {
+                    out.extend_from_slice(p);
+                }
+            }
+            Texels::F32(v) => {
+                out.reserve(v.len() * 16);
+                for x in v.iter().flatten() {
+                    out.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+        }
+    }
+
+    /// Reads a texture written by [`Texture::encode`] from the start of `bytes`; returns it and
+    /// the number of bytes it took. Every field is checked (tags, sizes against
+    /// [`MAX_TEXTURE_SIDE`] and the memory available, the length, finite values), so corrupt
+    /// bytes are an error naming `path`, never a panic.
+    pub fn decode(path: &Path, bytes: &[u8]) -> Result<(Texture, usize)> {
+        let bad = |m: String| Error::input(path, format!("corrupt texture in compiled scene: {m}"));
+        let header = bytes
+            .get(..ENCODED_HEADER_LEN)
+            .ok_or_else(|| bad("truncated header".into()))?;
+        if &header[..4] != ENCODED_MAGIC {
+            return Err(bad("bad magic".into()));
+        }
+        let u32_at = |i: usize| u32::from_le_bytes(header[i..i + 4].try_into().expect("4 bytes"));
+        let version = u32_at(4);
+        if version != ENCODED_VERSION {
+            return Err(bad(format!(
+                "version {version}, this program reads {ENCODED_VERSION}"
+            )));
+        }
+        let (width, height) = (u32_at(8) as u64, u32_at(12) as u64);
+        if width == 0 || height == 0 || width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
+            return Err(bad(format!(
+                "size {width}x{height} (sides from 1 to {MAX_TEXTURE_SIDE})"
+            )));
+        }
+        let tag = |i: usize, what: &str, n: u8| {
+            if header[i] < n {
+                Ok(header[i])
+            } else {
+                Err(bad(format!("{what} tag {}", header[i])))
+            }
+        };
+        let wide = tag(16, "storage", 2)? == 1;
+        let encoding = [Encoding::Srgb, Encoding::Linear][tag(17, "encoding", 2)? as usize];
+        let wrap = [Wrap::Repeat, Wrap::Mirror, Wrap::Clamp][tag(18, "wrap", 3)? as usize];
+        let filter = [Filter::Bilinear, Filter::Nearest][tag(19, "filter", 2)? as usize];
+        let has_alpha = tag(20, "alpha", 2)? == 1;
+        if header[21..24] != [0; 3] {
+            return Err(bad("reserved bytes not zero".into()));
+        }
+        let f64_at = |k: usize| {
+            let i = 24 + 8 * k;
+            f64::from_le_bytes(header[i..i + 8].try_into().expect("8 bytes"))
+        };
+        let uv_transform = UvTransform([
+            [f64_at(0), f64_at(1), f64_at(2)],
+            [f64_at(3), f64_at(4), f64_at(5)],
+        ]);
+        let texel_bytes: u64 = if wide { 16 } else { 4 };
+        luxest_io::limits::check_image("texture", width, height, texel_bytes * 2 + texel_bytes / 2)
+            .map_err(|m| Error::input(path, m))?;
+        let count = (width * height) as usize;
+        let len = ENCODED_HEADER_LEN + count * texel_bytes as usize;
+        let data = bytes.get(ENCODED_HEADER_LEN..len).ok_or_else(|| {
+            bad(format!(
+                "truncated texels ({width}x{height} need {} bytes, {} left)",
+                len - ENCODED_HEADER_LEN,
+                bytes.len() - ENCODED_HEADER_LEN
+            ))
+        })?;
+        let texels = if wide {
+            let values: Vec<[f32; 4]> = data
+                .chunks_exact(16)
+                .map(|c| {
+                    std::array::from_fn(|k| {
+                        f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().expect("4 bytes"))
+                    })
+                })
+                .collect();
+            if let Some(i) = values.iter().position(|p| p.iter().any(|x| !x.is_finite())) {
+                return Err(bad(format!("non-finite value in texel {i}")));
+            }
+            Texels::F32(values)
+        } else {
+            Texels::U8(
+                data.chunks_exact(4)
+                    .map(|c| [c[0], c[1], c[2], c[3]])
+                    .collect(),
+            )
+        };
+        let options = TextureOptions {
+            encoding: Some(encoding),
+            wrap,
+            filter,
+            uv_transform,
+        };
+        let base = Level {
+            width: width as usize,
+            height: height as usize,
+            texels,
+        };
+        let texture = Texture::build(base, encoding, &options, has_alpha).map_err(bad)?;
+        Ok((texture, len))
+    }
+}
+
+/// Cells along a side in [`Texture::mean_over_triangle`].
+pub const TRIANGLE_MEAN_CELLS: usize = 16;
+
+/// A texel coordinate kept where i64 indices (and index + 1) cannot overflow: far beyond any
+/// texture's side, where single texels are no longer resolved by f64 anyway.
+fn texel_coordinate(x: f64) -> f64 {
+    x.clamp(-1e15, 1e15)
+}
+
+/// The texel index of a side of `n` texels that index `i` wraps to.
+fn wrap(mode: Wrap, i: i64, n: usize) -> usize {
+    let n = n as i64;
+    (match mode {
+        Wrap::Repeat => i.rem_euclid(n),
+        Wrap::Clamp => i.clamp(0, n - 1),
+        Wrap::Mirror => {
+            let m = i.rem_euclid(n);
+            if i.div_euclid(n) % 2 == 0 {
+                m
+            } else {
+                n - 1 - m
+            }
+        }
+    }) as usize
+}
+
+/// The box-filter weights of resampling a side of `n` texels to `m` (m ≤ n): output texel j
+/// covers input texels [j n/m, (j + 1) n/m); the first input texel it overlaps and the
+/// overlapped fraction of each, normalised.
+fn box_weights(n: usize, m: usize) -> Vec<(usize, Vec<f64>)> {
+    let ratio = n as f64 / m as f64;
+    (0..m)
+        .map(|j| {
+            let (lo, hi) = (j as f64 * ratio, (j + 1) as f64 * ratio);
+            let first = lo.floor() as usize;
+            let last = (hi.ceil() as usize).min(n);
+            let weights = (first..last)
+                .map(|i| (hi.min(i as f64 + 1.0) - lo.max(i as f64)).max(0.0) / ratio)
+                .collect();
+            (first, weights)
+        })
+        .collect()
+}
+
+/// The next mip level of `level`: sides halved (rounded down, at least 1), each texel the
+/// box-filtered mean of the linear values it covers, stored as `level` is.
+fn downsample(level: &Level, encoding: Encoding, rgb_table: &[f32; 256]) -> Level {
+    let (w, h) = (level.width, level.height);
+    let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+    let wx = box_weights(w, nw);
+    let wy = box_weights(h, nh);
+    let linear = |index: usize| -> [f64; 4] {
+        match &level.texels {
+            Texels::U8(v) => {
+                let p = v[index];
+                [
+                    rgb_table[p[0] as usize] as f64,
+                    rgb_table[p[1] as usize] as f64,
+                    rgb_table[p[2] as usize] as f64,
+                    p[3] as f64 / 255.0,
+                ]
+            }
+            Texels::F32(v) => v[index].map(|x| x as f64),
+        }
+    };
+    let mut out = Vec::with_capacity(nw * nh);
+    let mut row = vec![[0f64; 4]; w];
+    for (y0, weights_y) in &wy {
+        row.fill([0.0; 4]);
+        for (dy, &wgt) in weights_y.iter().enumerate() {
+            for (x, r) in row.iter_mut().enumerate() {
+                let t = linear((y0 + dy) * w + x);
+                for c in 0..4 {
+                    r[c] += wgt * t[c];
+                }
+            }
+        }
+        for (x0, weights_x) in &wx {
+            let mut p = [0f64; 4];
+            for (dx, &wgt) in weights_x.iter().enumerate() {
+                for c in 0..4 {
+                    p[c] += wgt * row[x0 + dx][c];
+                }
+            }
+            out.push(p);
+        }
+    }
+    let texels = match level.texels {
+        Texels::U8(_) => {
+            let code = |v: f64| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+            let colour = |v: f64| match encoding {
+                Encoding::Srgb => code(luxest_io::color::srgb_encode(v)),
+                Encoding::Linear => code(v),
+            };
+            Texels::U8(
+                out.iter()
+                    .map(|p| [colour(p[0]), colour(p[1]), colour(p[2]), code(p[3])])
+                    .collect(),
+            )
+        }
+        Texels::F32(_) => Texels::F32(out.iter().map(|p| p.map(|v| v as f32)).collect()),
+    };
+    Level {
+        width: nw,
+        height: nh,
+        texels,
+    }
+}
