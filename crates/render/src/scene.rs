@@ -93,13 +93,14 @@ fn yes() -> bool {
     true
 }
 
-/// Opacity of a cut-out surface: `value` × the texture's alpha channel (its first channel if
-/// it has no alpha; 1 without a texture).
+/// Opacity of a cut-out surface: `value` × the texture's `channel` (1 without a texture).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Opacity {
     #[serde(default)]
     pub texture: Option<String>,
+    #[serde(default)]
+    pub channel: OpacityChannel,
     #[serde(default = "one")]
     pub value: f64,
     /// Opaque where the opacity reaches `cutoff`, transparent below (glTF `alphaMode: MASK`);
@@ -132,6 +133,18 @@ pub enum Environment {
 
 fn identity() -> [[f64; 3]; 3] {
     [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+}
+
+/// Which values of an opacity texture are the opacity.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum OpacityChannel {
+    /// Its alpha channel if it has one, else the luminance of its colour.
+    #[default]
+    Auto,
+    /// Its alpha channel (1 where it has none): glTF's base colour alpha.
+    Alpha,
+    /// The luminance of its colour, alpha ignored: Mitsuba 3's `mask` (its `bitmap` drops alpha).
+    Luminance,
 }
 
 /// Pinhole camera.

@@ -10,7 +10,7 @@ use crate::rt::{Hit, RayTracer};
 use crate::sampling::{
     cosine_hemisphere, uniform_sphere, uniform_triangle, Distribution1D, Rng, Sampler,
 };
-use crate::scene::Material;
+use crate::scene::{Material, OpacityChannel};
 use crate::texture::Texture;
 use luxest_io::color::Rgb;
 use luxest_io::error::Result;
@@ -107,14 +107,15 @@ pub struct World {
 /// cut-off, with probability α — decided by a hash of the hit and the ray, so that every ray
 /// draws independently and the result is the same at any thread count.
 fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
-    let per_material: Vec<Option<(Option<Texture>, f64, Option<f64>)>> = scene
+    type Cut = (Option<Texture>, OpacityChannel, f64, Option<f64>);
+    let per_material: Vec<Option<Cut>> = scene
         .header
         .surfaces
         .iter()
         .map(|s| {
             s.opacity.as_ref().map(|o| {
                 let texture = o.texture.map(|t| scene.textures[t as usize].clone());
-                (texture, o.value, o.cutoff)
+                (texture, o.channel, o.value, o.cutoff)
             })
         })
         .collect();
@@ -123,7 +124,7 @@ fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
     let uvs = scene.uvs.clone();
     Box::new(move |prim, u, v, ray| {
         let m = triangle_material[prim as usize] as usize;
-        let Some(Some((texture, value, cutoff))) = per_material.get(m) else {
+        let Some(Some((texture, channel, value, cutoff))) = per_material.get(m) else {
             return true;
         };
         let mut alpha = *value;
@@ -135,7 +136,7 @@ fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
                 a[0] as f64 * w + b[0] as f64 * u + c[0] as f64 * v,
                 a[1] as f64 * w + b[1] as f64 * u + c[1] as f64 * v,
             ];
-            alpha *= opacity(t, uv) as f64;
+            alpha *= opacity(t, uv, *channel);
         }
         match cutoff {
             Some(c) => alpha >= *c,
@@ -152,14 +153,19 @@ fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
     })
 }
 
-/// A texture's opacity at `uv`: its alpha channel, or its first channel without one.
+/// A texture's opacity at `uv` read from `channel`.
 #[inline]
-fn opacity(t: &Texture, uv: [f64; 2]) -> f32 {
-    let c = t.eval(uv, 0.0);
-    if t.has_alpha() {
-        c[3]
-    } else {
-        c[0]
+pub fn opacity(t: &Texture, uv: [f64; 2], channel: OpacityChannel) -> f64 {
+    opacity_of(t.eval(uv, 0.0), t.has_alpha(), channel)
+}
+
+/// The opacity in a texel (linear RGBA) of a texture that has alpha or not.
+pub fn opacity_of(c: [f32; 4], has_alpha: bool, channel: OpacityChannel) -> f64 {
+    let luminance = || Rgb([c[0] as f64, c[1] as f64, c[2] as f64]).luminance();
+    match channel {
+        OpacityChannel::Auto if has_alpha => c[3] as f64,
+        OpacityChannel::Alpha => c[3] as f64,
+        OpacityChannel::Auto | OpacityChannel::Luminance => luminance(),
     }
 }
 

@@ -38,6 +38,7 @@ use luxest_io::{Error, Result};
 use luxest_render::compiled::{CompiledScene, Emitter, NO_EMITTER};
 use luxest_render::scene::{Material, Microfacet, MicrofacetDistribution};
 use luxest_render::texture::{Filter, Texture, Wrap};
+use luxest_render::world::opacity_of;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -449,7 +450,7 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
                     let file = format!("opacity_{g:03}.exr");
                     let (value, cutoff, alpha) = (o.value, o.cutoff, t.has_alpha());
                     let baked = bake(t, |v| {
-                        let a = value * if alpha { v[3] } else { v[0] } as f64;
+                        let a = value * opacity_of(v, alpha, o.channel);
                         [match cutoff {
                             Some(c) => f64::from(u8::from(a >= c)),
                             None => a,

@@ -157,6 +157,7 @@ fn compile_surface(s: &Surface, tex: &dyn Fn(&Option<String>) -> Option<u32>) ->
         roughness: tex(&s.roughness),
         opacity: s.opacity.as_ref().map(|o| CompiledOpacity {
             texture: tex(&o.texture),
+            channel: o.channel,
             value: o.value,
             cutoff: o.cutoff,
         }),
