@@ -274,7 +274,7 @@ impl Material {
     /// The material at a textured point: `color` multiplies its main colour (Lambertian and
     /// Mirror reflectance, Glossy diffuse, Conductor specular reflectance, Plastic diffuse
     /// reflectance, both members of a Blend), `roughness` its microfacet α (Glossy: its
-    /// roughness). The smooth dielectrics are returned unchanged.
+    /// roughness; Conductor, RoughDielectric). Other parameters stay as they are.
     pub fn textured(&self, color: Option<Rgb>, roughness: Option<f64>) -> Material {
         let tint = |c: &Rgb| match color {
             Some(t) => *c * t,
@@ -326,7 +326,8 @@ impl Material {
                 specular_reflectance: *specular_reflectance,
                 ior: *ior,
                 nonlinear: *nonlinear,
-                roughness: rough(r),
+                // Its coating's tables are per α (validation refuses a roughness texture).
+                roughness: *r,
             },
             Material::RoughDielectric { ior, roughness: r } => Material::RoughDielectric {
                 ior: *ior,

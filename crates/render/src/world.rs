@@ -261,6 +261,9 @@ impl World {
     /// The world with the given kind of ray queries (the stage that loads it chooses:
     /// docs/architecture.md, *Crate graph*).
     pub fn with_traversal(scene: CompiledScene, traversal: Traversal) -> Result<World> {
+        for m in &scene.header.materials {
+            crate::bsdf::prepare(&m.model);
+        }
         let mask = scene.header.features.opacity.then(|| opacity_mask(&scene));
         let tracer = RayTracer::with_mask(
             &scene.positions,

@@ -70,6 +70,26 @@ pub fn reflect(w: Vec3, n: Vec3) -> Vec3 {
 
 /// Every lobe is a delta lobe: the material has no density over directions (`eval` and `pdf`
 /// are zero everywhere), so next-event estimation and connections skip it.
+/// Computes what a material's scattering looks up and computes once (a rough plastic's
+/// coating tables), so that the first scattering event does not pay for it: the stages'
+/// calibrations time samples after it.
+pub fn prepare(m: &Material) {
+    match m {
+        Material::Plastic {
+            roughness: Some(r),
+            ior,
+            ..
+        } => {
+            plastic::tables(r, *ior);
+        }
+        Material::Blend { first, second, .. } => {
+            prepare(first);
+            prepare(second);
+        }
+        _ => {}
+    }
+}
+
 pub fn is_delta(m: &Material) -> bool {
     match m {
         Material::Mirror { .. } | Material::Dielectric { .. } | Material::ThinDielectric { .. } => {
