@@ -535,7 +535,8 @@ mod tests {
         for block in doc.split("```ron\n").skip(1) {
             let block = &block[..block.find("```").unwrap()];
             if block.starts_with("materials: {") {
-                let m: Materials = ron::from_str(&format!("({block})"))
+                let path = std::path::Path::new("docs/scene-format.md");
+                let m: Materials = luxest_io::fsio::parse_ron(path, &format!("({block})"))
                     .unwrap_or_else(|e| panic!("{e}\n{block}"));
                 names.extend(m.materials.into_iter());
             }
