@@ -247,7 +247,10 @@ fn mitsuba_material_parameters_out_of_range_are_named() {
         ),
         (
             r#"Plastic(diffuse_reflectance: (0.5, 0.5, 0.5), ior: 1.0, roughness: Some((distribution: Beckmann, alpha: 0.1)))"#,
-            &["materials[\"w\"].ior", "a rough interface needs an index other than 1"][..],
+            &[
+                "materials[\"w\"].ior",
+                "a rough interface needs an index other than 1",
+            ][..],
         ),
         (
             r#"RoughDielectric(ior: 11.0, roughness: (distribution: Ggx, alpha: 0.1))"#,

@@ -341,15 +341,15 @@ mod tests {
     /// dielectric's 1; a blend's weighted sum.
     #[test]
     fn albedo_of_the_mitsuba_materials() {
-        let rough = Some(Microfacet {
+        let rough = Microfacet {
             distribution: MicrofacetDistribution::Ggx,
             alpha: 0.2,
-        });
+        };
         let metal = Material::Conductor {
             eta: Rgb([0.2, 1.0, 1.5]),
             k: Rgb([3.0, 2.0, 0.0]),
             specular_reflectance: Rgb([1.0, 0.5, 1.0]),
-            roughness: rough,
+            roughness: Some(rough),
         };
         let f0 = |n: f64, k: f64| ((n - 1.0) * (n - 1.0) + k * k) / ((n + 1.0) * (n + 1.0) + k * k);
         let expected = Rgb([f0(0.2, 3.0), 0.5 * f0(1.0, 2.0), f0(1.5, 0.0)]);
@@ -365,7 +365,7 @@ mod tests {
         assert!(close(albedo(&plastic), expected), "{:?}", albedo(&plastic));
         let glass = Material::RoughDielectric {
             ior: 1.5,
-            roughness: rough.unwrap(),
+            roughness: rough,
         };
         assert_eq!(albedo(&glass), Rgb::WHITE);
         assert_eq!(albedo(&Material::ThinDielectric { ior: 1.5 }), Rgb::WHITE);

@@ -538,7 +538,7 @@ mod tests {
                 let path = std::path::Path::new("docs/scene-format.md");
                 let m: Materials = luxest_io::fsio::parse_ron(path, &format!("({block})"))
                     .unwrap_or_else(|e| panic!("{e}\n{block}"));
-                names.extend(m.materials.into_iter());
+                names.extend(m.materials);
             }
         }
         let get = |n: &str| names.iter().find(|(k, _)| k == n).unwrap().1.clone();

@@ -634,9 +634,18 @@ mod tests {
     #[test]
     fn a_lossless_conductor_is_warned_about() {
         // Mitsuba's `none`: Fresnel reflectance 1 at every angle.
-        let (_, report) = compiled(&[("chrome", "Conductor(eta: (0.0, 0.0, 0.0), k: (1.0, 1.0, 1.0))")]);
-        assert!(report.warnings.iter().any(|w| w.contains("reflectance 1 in channel 0")));
-        let (_, report) = compiled(&[("gold", "Conductor(eta: (0.14, 0.37, 1.44), k: (3.98, 2.39, 1.60))")]);
+        let (_, report) = compiled(&[(
+            "chrome",
+            "Conductor(eta: (0.0, 0.0, 0.0), k: (1.0, 1.0, 1.0))",
+        )]);
+        assert!(report
+            .warnings
+            .iter()
+            .any(|w| w.contains("reflectance 1 in channel 0")));
+        let (_, report) = compiled(&[(
+            "gold",
+            "Conductor(eta: (0.14, 0.37, 1.44), k: (3.98, 2.39, 1.60))",
+        )]);
         assert!(!report.warnings.iter().any(|w| w.contains("reflectance 1")));
     }
 }

@@ -279,7 +279,9 @@ mod tests {
             r#"<bsdf type="twosided"><bsdf type="roughconductor"><string name="distribution" value="beckmann"/><float name="alpha" value="2e-1"/><rgb name="eta" value="2e-1, 4e-1, 1.4e0"/><rgb name="k" value="4e0, 2.4e0, 1.6e0"/><rgb name="specular_reflectance" value="1e0, 1e0, 1e0"/></bsdf></bsdf>"#
         );
         let smooth = element("Conductor(eta: (0.0, 0.0, 0.0), k: (1.0, 1.0, 1.0))");
-        assert!(smooth.starts_with(r#"<bsdf type="twosided"><bsdf type="conductor"><rgb name="eta""#));
+        assert!(
+            smooth.starts_with(r#"<bsdf type="twosided"><bsdf type="conductor"><rgb name="eta""#)
+        );
         let plastic = element(
             "Plastic(diffuse_reflectance: (0.5, 0.1, 0.1), nonlinear: true, roughness: Some((distribution: Ggx, alpha: 0.3)))",
         );

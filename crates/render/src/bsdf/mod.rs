@@ -9,12 +9,12 @@
 //! throughput is a running product of weights.
 //!
 //! One file per model family, the Mitsuba 3 plugins they are named after:
-//! - [`glossy`]: luxest's `Glossy` (a diffuse base plus an unweighted GGX lobe);
-//! - [`microfacet`]: Mitsuba's GGX and Beckmann distributions, visible-normal sampling, Smith G;
-//! - [`conductor`]: `conductor` and `roughconductor` (complex index of refraction);
-//! - [`plastic`]: `plastic` and `roughplastic`;
-//! - [`dielectric`]: `dielectric`, `roughdielectric` and `thindielectric`;
-//! - [`blend`]: `blendbsdf`.
+//! - [`glossy`], luxest's `Glossy` (a diffuse base plus an unweighted GGX lobe);
+//! - [`microfacet`], Mitsuba's GGX and Beckmann distributions, visible-normal sampling, Smith G;
+//! - [`conductor`], `conductor` and `roughconductor` (complex index of refraction);
+//! - [`plastic`], `plastic` and `roughplastic`;
+//! - [`dielectric`], `dielectric`, `roughdielectric` and `thindielectric`;
+//! - [`blend`], `blendbsdf`.
 //!
 //! Lambertian (`diffuse`) and the ideal mirror are here.
 
