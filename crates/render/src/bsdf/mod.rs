@@ -873,6 +873,17 @@ mod tests {
         let cases: Vec<Case> = ron::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
         let close = |a: f64, b: f64| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-6;
         let mut checked = 0;
+        // The largest relative differences of eval, of pdf and sample weight (GGX and the
+        // rest), and of Beckmann densities, reported on stderr.
+        let mut worst = [0.0f64; 3];
+        let rel = |a: f64, b: f64| {
+            let s = a.abs().max(b.abs());
+            if s > 1e-6 {
+                (a - b).abs() / s
+            } else {
+                0.0
+            }
+        };
         for case in &cases {
             let m = &case.material;
             let mut beckmann = false;
@@ -905,7 +916,10 @@ mod tests {
                         // Mitsuba's eval includes the cosine of the new direction.
                         let f = eval_transport(m, row.wo, row.wi, UP, UP, mode) * row.wi.z.abs();
                         let p = pdf(m, row.wo, row.wi, UP, UP);
+                        worst[if beckmann { 2 } else { 1 }] =
+                            worst[if beckmann { 2 } else { 1 }].max(rel(p, row.pdf));
                         for c in 0..3 {
+                            worst[0] = worst[0].max(rel(f.0[c], row.value.0[c]));
                             assert!(
                                 close(f.0[c], row.value.0[c]),
                                 "{at}: eval {f:?} vs Mitsuba {:?}",
@@ -954,6 +968,11 @@ mod tests {
                 checked += 1;
             }
         }
+        eprintln!(
+            "{checked} rows: largest relative difference of eval {:.1e}, of pdf {:.1e} \
+             (Beckmann {:.1e})",
+            worst[0], worst[1], worst[2]
+        );
         assert!(checked > 500, "{checked} rows");
     }
 
