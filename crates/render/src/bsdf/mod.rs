@@ -16,7 +16,7 @@
 //! - [`dielectric`], `dielectric`, `roughdielectric` and `thindielectric`;
 //! - [`blend`], `blendbsdf`.
 //!
-//! Lambertian (`diffuse`) and the ideal mirror are here.
+//! Lambertian (`diffuse`), the ideal mirror and the smooth dielectric's sampling are here.
 
 pub mod blend;
 pub mod conductor;
