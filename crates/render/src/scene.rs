@@ -759,3 +759,46 @@ pub enum GridSpacing {
     /// Explicit point counts along u and v.
     Counts(u32, u32),
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Deserialize)]
+    struct Materials {
+        materials: BTreeMap<String, Material>,
+    }
+
+    /// Every `materials: { … }` example of `docs/scene-format.md` parses, with the defaults the
+    /// docs state.
+    #[test]
+    fn the_documented_materials_parse() {
+        let doc = include_str!("../../../docs/scene-format.md");
+        let mut names = Vec::new();
+        for block in doc.split("```ron\n").skip(1) {
+            let block = &block[..block.find("```").unwrap()];
+            if block.starts_with("materials: {") {
+                let path = std::path::Path::new("docs/scene-format.md");
+                let m: Materials = luxest_io::fsio::parse_ron(path, &format!("({block})"))
+                    .unwrap_or_else(|e| panic!("{e}\n{block}"));
+                names.extend(m.materials);
+            }
+        }
+        let get = |n: &str| names.iter().find(|(k, _)| k == n).unwrap().1.clone();
+        assert_eq!(
+            get("red plastic"),
+            Material::Plastic {
+                diffuse_reflectance: Rgb([0.6, 0.05, 0.05]),
+                specular_reflectance: Rgb::WHITE,
+                ior: 1.49 / 1.000277,
+                nonlinear: false,
+                roughness: Some(Microfacet {
+                    distribution: MicrofacetDistribution::Beckmann,
+                    alpha: 0.1
+                }),
+            }
+        );
+        assert_eq!(get("worn metal").kind(), MaterialKind::Blend);
+        assert!(names.len() >= 9, "{names:?}");
+    }
+}
