@@ -491,3 +491,58 @@ fn sensor_points_in_the_open_see_the_sky_from_every_side_they_face() {
         1e-4,
     );
 }
+
+#[test]
+fn mitsuba_export_writes_spots_and_environments() {
+    // The spot as Mitsuba's `spot` looking along its axis, the map as `envmap` with its texels
+    // in environment.exr and its rotation as a 4 × 4 matrix, a constant sky as `constant`.
+    let dir = TempDir::new("env-export");
+    let pixels: Vec<[f32; 3]> = (0..12).map(|k| [k as f32 + 0.5, 1.0, 2.0]).collect();
+    let image = luxest_io::image::RgbImage {
+        width: 4,
+        height: 3,
+        pixels: pixels.clone(),
+        attributes: Vec::new(),
+    };
+    luxest_io::exr::write_rgb(&dir.path().join("sky.exr"), &image).unwrap();
+    let scene = |env: &str| {
+        format!(
+            r#"Scene(
+            materials: {{ "grey": Lambertian(reflectance: (0.5, 0.5, 0.5)) }},
+            objects: [(shape: Quad(corner: (-2, 0, 2), u: (4, 0, 0), v: (0, 0, -4)), material: "grey")],
+            {SPOT},
+            environment: Some({env}))"#
+        )
+    };
+    let export = |name: &str, text: &str| {
+        let path = compile_text(&dir, name, text);
+        let compiled = luxest_render::compiled::CompiledScene::load(&path).unwrap();
+        scene_compile::mitsuba::export(&compiled, &path).unwrap()
+    };
+    let files = export(
+        "map",
+        &scene(r#"Map(path: "sky.exr", scale: 3.0, to_world: ((0, 0, 1), (0, 1, 0), (-1, 0, 0)))"#),
+    );
+    let xml = String::from_utf8(files[0].1.clone()).unwrap();
+    assert!(
+        xml.contains(r#"<emitter type="spot"><transform name="to_world"><lookat origin="0e0, 2e0, 0e0" target="0e0, 1e0, 0e0""#),
+        "{xml}"
+    );
+    assert!(xml.contains(r#"<float name="cutoff_angle" value="3e1"/><float name="beam_width" value="2e1"/><rgb name="intensity" value="1e2, 1e2, 1e2"/>"#));
+    assert!(xml.contains(r#"<emitter type="envmap"><string name="filename" value="environment.exr"/><float name="scale" value="3e0"/><transform name="to_world"><matrix value="0e0 0e0 1e0 0 0e0 1e0 0e0 0 -1e0 0e0 0e0 0 0 0 0 1"/>"#), "{xml}");
+    let (_, exr) = files
+        .iter()
+        .find(|(name, _)| name == "environment.exr")
+        .unwrap();
+    let back = luxest_io::exr::read_rgb_bytes(std::path::Path::new("environment.exr"), exr.clone())
+        .unwrap();
+    assert_eq!((back.width, back.height, back.pixels), (4, 3, pixels));
+    let files = export("constant", &scene("Constant((1.5, 2, 2.5))"));
+    let xml = String::from_utf8(files[0].1.clone()).unwrap();
+    assert!(
+        xml.contains(
+            r#"<emitter type="constant"><rgb name="radiance" value="1.5e0, 2e0, 2.5e0"/></emitter>"#
+        ),
+        "{xml}"
+    );
+}
