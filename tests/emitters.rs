@@ -546,3 +546,76 @@ fn mitsuba_export_writes_spots_and_environments() {
         "{xml}"
     );
 }
+
+#[test]
+fn bad_environments_and_spots_are_one_line_errors() {
+    // Each: exit code 1, one line naming the file and the problem, no output.
+    let dir = TempDir::new("env-errors");
+    dir.write("garbage.exr", b"not an exr at all");
+    let image = luxest_io::image::RgbImage {
+        width: 3,
+        height: 2,
+        pixels: vec![[0.0; 3]; 6],
+        attributes: Vec::new(),
+    };
+    luxest_io::exr::write_rgb(&dir.path().join("black.exr"), &image).unwrap();
+    let base = |extra: &str| {
+        format!(
+            r#"Scene(
+            materials: {{ "grey": Lambertian(reflectance: (0.5, 0.5, 0.5)) }},
+            objects: [(shape: Quad(corner: (-2, 0, 2), u: (4, 0, 0), v: (0, 0, -4)), material: "grey")],
+            {extra})"#
+        )
+    };
+    let cases = [
+        (
+            r#"environment: Some(Map(path: "missing.exr"))"#,
+            "missing.exr not found",
+        ),
+        (
+            r#"environment: Some(Map(path: "garbage.exr"))"#,
+            "garbage.exr: not a readable OpenEXR file",
+        ),
+        (
+            r#"environment: Some(Map(path: "black.exr"))"#,
+            "black.exr: environment map is black",
+        ),
+        (
+            r#"environment: Some(Map(path: "black.exr", to_world: ((1, 0, 0), (0, 2, 0), (0, 0, 1))))"#,
+            "environment.to_world: environment to_world",
+        ),
+        (
+            r#"environment: Some(Map(path: "black.exr", scale: -1))"#,
+            "environment.scale: the map's scale must be positive",
+        ),
+        (
+            r#"environment: Some(Constant((0, 0, 0)))"#,
+            "environment.Constant: emitter has zero power",
+        ),
+        (
+            r#"point_lights: [(position: (0, 1, 0), power: Intensity(1.0),
+                spot: Some((direction: (0, -1, 0), cutoff_deg: 20.0, beam_width_deg: 25.0)))]"#,
+            "point_lights[0].spot.beam_width_deg: the beam width must be in [0, cutoff_deg = 20]",
+        ),
+        (
+            r#"point_lights: [(position: (0, 1, 0), power: Intensity(1.0),
+                spot: Some((direction: (0, 0, 0), cutoff_deg: 20.0, beam_width_deg: 10.0)))]"#,
+            "point_lights[0].spot.direction: must not be the zero vector",
+        ),
+        (
+            r#"point_lights: [(position: (0, 1, 0), power: Intensity(1.0),
+                spot: Some((direction: (0, -1, 0), cutoff_deg: 200.0, beam_width_deg: 10.0)))]"#,
+            "point_lights[0].spot.cutoff_deg: the cutoff must be in (0, 180]",
+        ),
+    ];
+    for (k, (extra, want)) in cases.iter().enumerate() {
+        let path = dir.write(&format!("bad{k}.ron"), base(extra));
+        let out = dir.path().join(format!("bad{k}.lxs"));
+        let (code, msg) =
+            crate::util::scene_compile(&[path.to_str().unwrap(), "-o", out.to_str().unwrap()])
+                .expect_err("bad input must fail");
+        assert_eq!(code, 1, "{msg}");
+        assert!(!msg.contains('\n') && msg.contains(want), "case {k}: {msg}");
+        assert!(!out.exists());
+    }
+}
