@@ -144,11 +144,25 @@ fn sensor_in_a_black_box_sees_the_sky_through_its_hole() {
     );
     let world = world_at(&compile_text(&dir, "box", &text));
     let expected = SKY * 4.0 * corner_rectangle(0.5, 0.5, 2.0);
-    let [le, g] = sensor_estimates(&world, 2_000, 200_000);
+    let [le, g] = sensor_estimates(&world, 2_000, 100_000);
     assert_close("local estimate", le[0], expected, 0.0);
     assert_close("gather", g[0], expected, 0.0);
     // The test can fail: the standard error is a few per cent of the value.
     assert!(le[0].1 < 0.05 * expected, "{:?}", le[0]);
+
+    // Grey walls: the sky's light reflected inside the box reaches the sensor by light paths
+    // entering through the hole (local estimate) and by backward paths with next-event
+    // estimation of the sky (gather), two independent estimates of the same illuminance.
+    let grey = text.replace("reflectance: (0, 0, 0)", "reflectance: (0.6, 0.6, 0.6)");
+    let world = world_at(&compile_text(&dir, "grey-box", &grey));
+    let [le, g] = sensor_estimates(&world, 60_000, 30_000);
+    let se = (le[0].1.powi(2) + g[0].1.powi(2)).sqrt();
+    assert!(
+        (le[0].0 - g[0].0).abs() <= 4.0 * se && le[0].0 > 1.2 * expected,
+        "grey box: local {:?} vs gather {:?} (direct alone {expected})",
+        le[0],
+        g[0]
+    );
 }
 
 #[test]
