@@ -2,8 +2,8 @@
 //! estimator's own standard error as the tolerance: a sensor under an open sky (E = π L), a
 //! diffuse plane under a constant sky seen by the camera (L = ρ L_sky: trace, light tracing,
 //! double local estimate), a sensor in a black box lit through a square hole (E = L times the
-//! hole's projected solid angle), a sensor under an environment map (E by quadrature of the
-//! map), and a spot light over a plane (E = I₀ falloff(θ) cos θ / d², and the plane's
+//! hole's projected solid angle), a sensor and a plane under an environment map (E by
+//! quadrature of the map, the plane's luminance ρ E / π), and a spot light over a plane (E = I₀ falloff(θ) cos θ / d², and the plane's
 //! luminance ρ E / π in the camera's pixels).
 
 use crate::util::{compile_text, TempDir};
@@ -188,6 +188,7 @@ fn sensor_under_an_environment_map_matches_its_quadrature() {
     let (s, c) = 25f64.to_radians().sin_cos();
     let text = format!(
         r#"Scene(
+        camera: Some(Camera(position: (0.01, 3, 0.02), look_at: (0, 0, 0), up: (0, 0, -1), vfov_deg: 25.0, resolution: (8, 6))),
         materials: {{ "ground": Lambertian(reflectance: (0.5, 0.5, 0.5)) }},
         objects: [(shape: Quad(corner: (-2, 0, 2), u: (4, 0, 0), v: (0, 0, -4)), material: "ground")],
         environment: Some(Map(path: "sky.exr", scale: 1.5,
@@ -195,7 +196,8 @@ fn sensor_under_an_environment_map_matches_its_quadrature() {
         sensors: [Points(name: "up", points: [(position: (0, 0, 0), normal: (0, 1, 0))])])"#,
         ms = -s
     );
-    let world = world_at(&compile_text(&dir, "map", &text));
+    let scene = compile_text(&dir, "map", &text);
+    let world = world_at(&scene);
     let env = world.environment().unwrap();
     let (nt, np) = (400, 800);
     let mut exact = 0.0;
@@ -213,6 +215,29 @@ fn sensor_under_an_environment_map_matches_its_quadrature() {
     // The quadrature's own error is below 1e-3 of the value.
     assert_close("local estimate", le[0], exact, 1e-3);
     assert_close("gather", g[0], exact, 1e-3);
+
+    // The plane's luminance seen from above is ρ E / π everywhere: trace (the map's next-event
+    // directions and escaping paths by MIS) and light tracing (light paths drawn from the map).
+    let expected = 0.5 * exact / PI;
+    let (world, cam) = trace::load(&scene, None).unwrap();
+    let mut film = Film::new(cam.width as usize, cam.height as usize);
+    Renderer::new(&world, cam, 2, 2, 1000).advance(&mut film, 128, false, &Progress::off());
+    let mean: Vec<f64> = film.mean().iter().map(|c| c.luminance()).collect();
+    check_image("trace", &mean, &film.standard_error(), expected, 4.0);
+    let (world, cam) = load_with_camera(&scene, None, Traversal::Robust).unwrap();
+    let lt = estimate::light_tracing::render(
+        &world,
+        &cam,
+        &estimate::light_tracing::LightTraceConfig {
+            paths: 300_000,
+            seed: 3,
+            threads: 2,
+            max_depth: 1000,
+        },
+        &Progress::off(),
+    );
+    let mean: Vec<f64> = lt.rgb.iter().map(|c| c.luminance()).collect();
+    check_image("light tracing", &mean, &lt.standard_error, expected, 8.0);
 }
 
 const PLANE_UNDER_SKY: &str = r#"Scene(
