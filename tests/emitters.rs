@@ -217,7 +217,8 @@ fn sensor_under_an_environment_map_matches_its_quadrature() {
     assert_close("gather", g[0], exact, 1e-3);
 
     // The plane's luminance seen from above is ρ E / π everywhere: trace (the map's next-event
-    // directions and escaping paths by MIS) and light tracing (light paths drawn from the map).
+    // directions and escaping paths by MIS), light tracing (light paths drawn from the map) and
+    // the double local estimate (the map's light reflected at the points the camera sees).
     let expected = 0.5 * exact / PI;
     let (world, cam) = trace::load(&scene, None).unwrap();
     let mut film = Film::new(cam.width as usize, cam.height as usize);
@@ -238,6 +239,28 @@ fn sensor_under_an_environment_map_matches_its_quadrature() {
     );
     let mean: Vec<f64> = lt.rgb.iter().map(|c| c.luminance()).collect();
     check_image("light tracing", &mean, &lt.standard_error, expected, 8.0);
+    let dle = estimate::double_local_estimate::render(
+        &world,
+        &cam,
+        &estimate::double_local_estimate::ImageConfig {
+            paths: 4_000,
+            pixel_samples: 1,
+            seed: 4,
+            threads: 2,
+            singularity: Singularity::Ball { eps: 1e-3 },
+            max_depth: 1000,
+            mis_paths: 1,
+        },
+        &Console::QUIET,
+    );
+    let mean: Vec<f64> = dle.rgb.iter().map(|c| c.luminance()).collect();
+    check_image(
+        "double local estimate",
+        &mean,
+        &dle.standard_error,
+        expected,
+        8.0,
+    );
 }
 
 const PLANE_UNDER_SKY: &str = r#"Scene(
