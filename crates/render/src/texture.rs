@@ -714,3 +714,218 @@ fn downsample(level: &Level, encoding: Encoding, rgb_table: &[f32; 256]) -> Leve
         texels,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn data(name: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/texture")
+            .join(name)
+    }
+
+    /// A linear f32 texture of `w` x `h` texels `f(x, y)` (RGBA).
+    fn linear(
+        w: usize,
+        h: usize,
+        options: TextureOptions,
+        f: impl Fn(usize, usize) -> [f32; 4],
+    ) -> Texture {
+        let samples = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .flat_map(|(x, y)| f(x, y))
+            .collect();
+        let image = TextureImage {
+            width: w,
+            height: h,
+            channels: 4,
+            samples: Samples::F32(samples),
+            format: ImageFormat::Exr,
+        };
+        Texture::from_image(&image, &options).unwrap()
+    }
+
+    fn options(wrap: Wrap, filter: Filter) -> TextureOptions {
+        TextureOptions {
+            wrap,
+            filter,
+            ..TextureOptions::default()
+        }
+    }
+
+    #[test]
+    fn srgb_table_holds_the_iec_61966_2_1_curve() {
+        assert_eq!(srgb8_to_linear(0), 0.0);
+        assert_eq!(srgb8_to_linear(255), 1.0);
+        // Linear segment below 0.04045 (code 10), power segment from code 11.
+        assert_eq!(srgb8_to_linear(10), (10.0 / 255.0 / 12.92) as f32);
+        assert_eq!(srgb8_to_linear(11), 0.003_346_535_8);
+        assert_eq!(srgb8_to_linear(128), 0.215_860_5);
+        assert_eq!(srgb8_to_linear(188), 0.502_886_5);
+        assert!((1..=255).all(|k| srgb8_to_linear(k) > srgb8_to_linear(k - 1)));
+    }
+
+    #[test]
+    fn wrap_modes_and_filters_match_hand_computed_lookups() {
+        // One row of three texels, red 0, 1, 10; centres at u = 1/6, 1/2, 5/6.
+        let row = |wrap, filter| {
+            linear(3, 1, options(wrap, filter), |x, _| {
+                [[0.0, 1.0, 10.0][x], 0.0, 0.0, 1.0]
+            })
+        };
+        let red = |t: &Texture, u: f64| t.eval([u, 0.5], 0.0)[0];
+        use {Filter::*, Wrap::*};
+        // Nearest: texel ⌊3u⌋, wrapped.
+        for (u, repeat, mirror, clamp) in [
+            (0.5, 1.0, 1.0, 1.0),
+            (-0.2, 10.0, 0.0, 0.0),   // index −1
+            (-0.4, 1.0, 1.0, 0.0),    // index −2
+            (1.1, 0.0, 10.0, 10.0),   // index 3
+            (1.5, 1.0, 1.0, 10.0),    // index 4
+            (2.2, 0.0, 0.0, 10.0),    // index 6: period 2, not mirrored
+            (-1.05, 10.0, 10.0, 0.0), // index −4: period −2, not mirrored: texel 2
+        ] {
+            assert_eq!(red(&row(Repeat, Nearest), u), repeat, "repeat u={u}");
+            assert_eq!(red(&row(Mirror, Nearest), u), mirror, "mirror u={u}");
+            assert_eq!(red(&row(Clamp, Nearest), u), clamp, "clamp u={u}");
+        }
+        // Bilinear: x = 3u − ½ between texels ⌊x⌋ and ⌊x⌋ + 1.
+        for (u, repeat, mirror, clamp) in [
+            (0.5, 1.0, 1.0, 1.0),
+            (0.25, 0.25, 0.25, 0.25), // x = 0.25
+            (0.0, 5.0, 0.0, 0.0),     // x = −0.5: texels −1 and 0
+            (1.0, 5.0, 10.0, 10.0),   // x = 2.5: texels 2 and 3
+            (0.75, 7.75, 7.75, 7.75), // x = 1.75
+            (-0.25, 7.75, 0.25, 0.0), // x = −1.25: ¼ texel −2 (1 / 1 / 0), ¾ −1 (10 / 0 / 0)
+        ] {
+            let close = |a: f32, b: f64| (a as f64 - b).abs() < 1e-6;
+            assert!(
+                close(red(&row(Repeat, Bilinear), u), repeat),
+                "repeat u={u}"
+            );
+            assert!(
+                close(red(&row(Mirror, Bilinear), u), mirror),
+                "mirror u={u}"
+            );
+            assert!(close(red(&row(Clamp, Bilinear), u), clamp), "clamp u={u}");
+        }
+        // Two dimensions: the four texels around (u w − ½, v h − ½), weights (1 − fx)(1 − fy)...
+        let t = linear(2, 2, options(Clamp, Bilinear), |x, y| {
+            [(x + 2 * y) as f32, 0.0, 0.0, 1.0]
+        });
+        let v = t.eval([0.5, 0.5], 0.0)[0] as f64;
+        assert!((v - 1.5).abs() < 1e-6, "{v}");
+        let v = t.eval([0.4, 0.6], 0.0)[0] as f64;
+        // x = 0.3, y = 0.7: 0·0.7·0.3 + 1·0.3·0.3 + 2·0.7·0.7 + 3·0.3·0.7.
+        assert!((v - (0.09 + 0.98 + 0.63)).abs() < 1e-6, "{v}");
+        // The UV transform applies first: u' = 2u + 0.1, v' = v.
+        let scaled = linear(
+            3,
+            1,
+            TextureOptions {
+                uv_transform: UvTransform([[2.0, 0.0, 0.1], [0.0, 1.0, 0.0]]),
+                ..options(Clamp, Bilinear)
+            },
+            |x, _| [[0.0, 1.0, 10.0][x], 0.0, 0.0, 1.0],
+        );
+        // u = 0.075 → u' = 0.25 → 0.25 as above.
+        assert!((red(&scaled, 0.075) - 0.25).abs() < 1e-6);
+        // Non-finite UVs read as (0, 0).
+        assert_eq!(red(&row(Clamp, Nearest), f64::NAN), 0.0);
+    }
+
+    /// The rows of a committed CSV table (header skipped), split at commas.
+    fn table(name: &str) -> Vec<Vec<String>> {
+        let text = std::fs::read_to_string(data(name)).unwrap();
+        text.lines()
+            .skip(1)
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect()
+    }
+
+    #[test]
+    fn lookups_match_mitsuba_3_bitmap() {
+        // crates/render/tests/data/texture/mitsuba_bitmap.py: Mitsuba 3.9 `bitmap` of a 5x3
+        // 8-bit sRGB PNG, every wrap mode x filter x raw/sRGB x two `to_uv`, at 36 UVs each.
+        let rows = table("mitsuba_bitmap.csv");
+        assert_eq!(rows.len(), 3 * 2 * 2 * 2 * 36);
+        let affine = UvTransform([[2.0, 0.5, 0.1], [-0.3, 1.5, 0.25]]);
+        let mut worst = 0f64;
+        for row in &rows {
+            let wrap = match row[0].as_str() {
+                "repeat" => Wrap::Repeat,
+                "mirror" => Wrap::Mirror,
+                _ => Wrap::Clamp,
+            };
+            let filter = match row[1].as_str() {
+                "bilinear" => Filter::Bilinear,
+                _ => Filter::Nearest,
+            };
+            let options = TextureOptions {
+                encoding: Some(if row[2] == "1" {
+                    Encoding::Linear
+                } else {
+                    Encoding::Srgb
+                }),
+                wrap,
+                filter,
+                uv_transform: if row[3] == "1" {
+                    affine
+                } else {
+                    UvTransform::IDENTITY
+                },
+            };
+            let texture = Texture::load(&data("bitmap.png"), &options).unwrap();
+            let num = |i: usize| row[i].parse::<f64>().unwrap();
+            let got = texture.eval([num(4), num(5)], 0.0);
+            for c in 0..3 {
+                let error = (got[c] as f64 - num(6 + c)).abs();
+                worst = worst.max(error);
+                assert!(error < 2e-6, "{row:?}: ours {got:?}");
+            }
+            assert_eq!(got[3], 1.0);
+        }
+        assert!(worst < 2e-6, "{worst}");
+    }
+
+    #[test]
+    fn mip_levels_are_exact_box_filters_of_odd_sizes() {
+        // 5x3, red = x, green = y: level 1 is 2x1, texel 0 covers x ∈ [0, 2.5) (weights 0.4,
+        // 0.4, 0.2), texel 1 covers [2.5, 5); one row covering y ∈ [0, 3).
+        let t = linear(5, 3, TextureOptions::default(), |x, y| {
+            [x as f32, y as f32, 0.0, 1.0]
+        });
+        assert_eq!(t.level_count(), 3);
+        assert_eq!((t.level_size(1), t.level_size(2)), ((2, 1), (1, 1)));
+        let close = |a: [f32; 4], b: [f32; 4]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
+        assert!(
+            close(t.texel(1, 0, 0), [0.8, 1.0, 0.0, 1.0]),
+            "{:?}",
+            t.texel(1, 0, 0)
+        );
+        assert!(
+            close(t.texel(1, 1, 0), [3.2, 1.0, 0.0, 1.0]),
+            "{:?}",
+            t.texel(1, 1, 0)
+        );
+        assert!(close(t.texel(2, 0, 0), [2.0, 1.0, 0.0, 1.0]));
+        // Every level keeps the image's mean, whatever the sizes.
+        let t = linear(37, 23, TextureOptions::default(), |x, y| {
+            let h = ((x * 7919 + y * 104_729) as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+            [(h >> 40) as f32 / (1u64 << 24) as f32, 0.5, 0.0, 1.0]
+        });
+        let sizes: Vec<_> = (0..t.level_count()).map(|l| t.level_size(l)).collect();
+        assert_eq!(sizes, [(37, 23), (18, 11), (9, 5), (4, 2), (2, 1), (1, 1)]);
+        let mean = t.average()[0];
+        for l in 0..t.level_count() {
+            let (w, h) = t.level_size(l);
+            let sum: f64 = (0..h)
+                .flat_map(|y| (0..w).map(move |x| (x, y)))
+                .map(|(x, y)| t.texel(l, x, y)[0] as f64)
+                .sum();
+            assert!((sum / (w * h) as f64 - mean).abs() < 1e-6, "level {l}");
+        }
+    }
+}
