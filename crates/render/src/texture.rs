@@ -1055,4 +1055,281 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn jpeg_fixtures_decode_to_their_blocks_as_mitsuba_does() {
+        // crates/render/tests/data/texture/mitsuba_bitmap.py: flat 16x16 blocks at quality 100,
+        // and Mitsuba 3's (libjpeg's) decoding of each block's centre.
+        let blocks = [
+            [[200, 30, 40], [20, 180, 60], [30, 50, 220]],
+            [[250, 250, 250], [128, 128, 128], [240, 200, 10]],
+        ];
+        let decode = |name: &str| {
+            let bytes = std::fs::read(data(name)).unwrap();
+            luxest_io::texture_image::decode_texture_image(&data(name), bytes).unwrap()
+        };
+        let rgb = decode("pattern.jpg");
+        assert_eq!((rgb.width, rgb.height, rgb.channels), (48, 32, 3));
+        let grey = decode("pattern_grey.jpg");
+        assert_eq!((grey.width, grey.height, grey.channels), (32, 16, 1));
+        let (Samples::U8(rgb_samples), Samples::U8(grey_samples)) = (&rgb.samples, &grey.samples)
+        else {
+            panic!("8-bit samples expected");
+        };
+        // Every pixel within 3 codes of its block's colour.
+        for y in 0..32 {
+            for x in 0..48 {
+                for c in 0..3 {
+                    let got = rgb_samples[(y * 48 + x) * 3 + c] as i32;
+                    let want = blocks[y / 16][x / 16][c];
+                    assert!(
+                        (got - want).abs() <= 3,
+                        "({x}, {y}) channel {c}: {got} vs {want}"
+                    );
+                }
+            }
+        }
+        for y in 0..16 {
+            for x in 0..32 {
+                let got = grey_samples[y * 32 + x] as i32;
+                assert!(
+                    (got - [40, 210][x / 16]).abs() <= 3,
+                    "grey ({x}, {y}): {got}"
+                );
+            }
+        }
+        // Block centres as Mitsuba decodes them, within one code (IDCTs differ in rounding).
+        for row in table("jpeg_mitsuba.csv") {
+            let n = |i: usize| row[i].parse::<usize>().unwrap();
+            let (x, y) = (n(1), n(2));
+            for c in 0..3 {
+                let ours = if row[0] == "pattern.jpg" {
+                    rgb_samples[(y * 48 + x) * 3 + c]
+                } else {
+                    grey_samples[y * 32 + x]
+                };
+                assert!(
+                    (ours as i64 - n(3 + c) as i64).abs() <= 1,
+                    "{row:?}: {ours}"
+                );
+            }
+        }
+        // Through a texture: sRGB-decoded, grey replicated, alpha 1.
+        let t = Texture::load(&data("pattern_grey.jpg"), &TextureOptions::default()).unwrap();
+        let texel = t.texel(0, 8, 8);
+        let expected = srgb8_to_linear(grey_samples[8 * 32 + 8]);
+        assert_eq!(texel, [expected, expected, expected, 1.0]);
+        assert!(!t.has_alpha());
+    }
+
+    #[test]
+    fn bad_jpegs_are_one_line_errors_naming_the_file() {
+        let path = data("pattern.jpg");
+        let jpeg = std::fs::read(&path).unwrap();
+        let error = |bytes: Vec<u8>| {
+            luxest_io::texture_image::decode_texture_image(&path, bytes)
+                .unwrap_err()
+                .to_string()
+        };
+        // Every prefix that cuts into the scan (the last two bytes are the end-of-image marker).
+        for len in 0..jpeg.len() - 2 {
+            let e = error(jpeg[..len].to_vec());
+            assert!(
+                e.contains("pattern.jpg: ") && !e.contains('\n'),
+                "{len}: {e}"
+            );
+        }
+        // A frame header (SOF0: FF C0, length, precision, height, width) claiming 65535².
+        let sof = jpeg.windows(2).position(|w| w == [0xff, 0xc0]).unwrap();
+        let mut huge = jpeg.clone();
+        huge[sof + 5..sof + 9].copy_from_slice(&[0xff, 0xff, 0xff, 0xff]);
+        let e = error(huge);
+        assert!(e.contains("a 65535x65535 texture needs 146.0 GB"), "{e}");
+        let mut zero = jpeg.clone();
+        zero[sof + 7..sof + 9].copy_from_slice(&[0, 0]);
+        let e = error(zero);
+        assert!(e.contains("pattern.jpg: "), "{e}");
+    }
+
+    #[test]
+    fn exr_fixtures_decode_linear_with_alpha_and_luminance() {
+        // Half-float RGBA with PIZ compression, texel (i, j) = (i/4, j/8, −(i + j), 1 − i/8).
+        let t = Texture::load(&data("rgba_half.exr"), &TextureOptions::default()).unwrap();
+        assert_eq!(
+            (t.width(), t.height(), t.encoding()),
+            (4, 3, Encoding::Linear)
+        );
+        assert!(t.has_alpha());
+        for j in 0..3 {
+            for i in 0..4 {
+                let (x, y) = (i as f32, j as f32);
+                assert_eq!(
+                    t.texel(0, i, j),
+                    [x / 4.0, y / 8.0, -(x + y), 1.0 - x / 8.0]
+                );
+            }
+        }
+        // One Y channel, texel (i, j) = i + 10 j, replicated into R, G, B.
+        let t = Texture::load(&data("luminance.exr"), &TextureOptions::default()).unwrap();
+        assert_eq!(t.texel(0, 2, 1), [12.0, 12.0, 12.0, 1.0]);
+        assert!(!t.has_alpha());
+        let srgb = TextureOptions {
+            encoding: Some(Encoding::Srgb),
+            ..TextureOptions::default()
+        };
+        let e = Texture::load(&data("luminance.exr"), &srgb)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.ends_with(
+                "luminance.exr: an OpenEXR texture is linear; encoding Srgb does not apply"
+            ),
+            "{e}"
+        );
+        let bytes = std::fs::read(data("rgba_half.exr")).unwrap();
+        for len in 0..bytes.len() {
+            let path = data("rgba_half.exr");
+            let e = luxest_io::texture_image::decode_texture_image(&path, bytes[..len].to_vec());
+            assert!(e.unwrap_err().to_string().contains("rgba_half.exr: "));
+        }
+    }
+
+    #[test]
+    fn sixteen_bit_samples_decode_with_their_encoding_and_alpha_stays_linear() {
+        let image = TextureImage {
+            width: 2,
+            height: 1,
+            channels: 2,
+            samples: Samples::U16(vec![65535, 32768, 0, 13107]),
+            format: ImageFormat::Png,
+        };
+        let t = Texture::from_image(&image, &TextureOptions::default()).unwrap();
+        // Grey 1 and 0; alpha 32768/65535 and 0.2 linear, not sRGB-decoded.
+        assert_eq!(
+            t.texel(0, 0, 0),
+            [1.0, 1.0, 1.0, (32768.0f64 / 65535.0) as f32]
+        );
+        assert_eq!(t.texel(0, 1, 0), [0.0, 0.0, 0.0, 0.2]);
+        let mid = TextureImage {
+            samples: Samples::U16(vec![32768, 0, 13107, 0]),
+            ..image.clone()
+        };
+        let t = Texture::from_image(&mid, &TextureOptions::default()).unwrap();
+        let srgb = luxest_io::color::srgb_decode(32768.0 / 65535.0) as f32;
+        assert_eq!(t.texel(0, 0, 0), [srgb, srgb, srgb, 0.0]);
+        let linear = TextureOptions {
+            encoding: Some(Encoding::Linear),
+            ..TextureOptions::default()
+        };
+        let t = Texture::from_image(&image, &linear).unwrap();
+        assert_eq!(t.texel(0, 0, 0)[0], 1.0);
+        assert!(t.has_alpha());
+    }
+
+    #[test]
+    fn averages_over_the_image_and_over_triangles() {
+        // A checkerboard of 0 and 1 (sRGB codes 0 and 255): mean ½ exactly.
+        let t = checkerboard(96);
+        assert_eq!(t.average(), [0.5, 0.5, 0.5, 1.0]);
+        // A linear ramp red = u (texel centres (i + ½)/64), clamped: over the triangle (0, 0),
+        // (1, 0), (0, 1) the mean of u is 1/3; green = v the same, blue = u v has 1/12.
+        let ramp = linear(64, 64, options(Wrap::Clamp, Filter::Bilinear), |x, y| {
+            let (u, v) = ((x as f32 + 0.5) / 64.0, (y as f32 + 0.5) / 64.0);
+            [u, v, u * v, 1.0]
+        });
+        let m = ramp.mean_over_triangle([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
+        eprintln!("ramp triangle mean {m:?}");
+        // The clamped half texel at each edge and the filter's width near the edges: ~1e-3.
+        assert!((m[0] - 1.0 / 3.0).abs() < 2e-3, "{m:?}");
+        assert!((m[1] - 1.0 / 3.0).abs() < 2e-3, "{m:?}");
+        assert!((m[2] - 1.0 / 12.0).abs() < 2e-3, "{m:?}");
+        // Binary detail against a brute-force mean of 2^16 point lookups on the triangle.
+        let text = text_like(128);
+        let tri = [[0.1, 0.2], [0.45, 0.3], [0.2, 0.6]];
+        let mut brute = 0.0;
+        let n = 256;
+        for i in 0..n {
+            for j in 0..n {
+                // Cell centres of an n x n grid of the unit square, folded onto the triangle.
+                let (mut s, mut t) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                if s + t > 1.0 {
+                    (s, t) = (1.0 - s, 1.0 - t);
+                }
+                let p = [0, 1]
+                    .map(|k| tri[0][k] + s * (tri[1][k] - tri[0][k]) + t * (tri[2][k] - tri[0][k]));
+                brute += text.eval(p, 0.0)[0] as f64;
+            }
+        }
+        brute /= (n * n) as f64;
+        let m = text.mean_over_triangle(tri)[0];
+        eprintln!("text-like triangle mean {m:.5}, brute force {brute:.5}");
+        assert!((m - brute).abs() < 0.01, "{m} vs {brute}");
+        // A triangle over many periods of a repeating texture: its average.
+        let m = text.mean_over_triangle([[0.0, 0.0], [40.0, 0.0], [0.0, 40.0]])[0];
+        assert!(
+            (m - text.average()[0]).abs() < 1e-3,
+            "{m} vs {:?}",
+            text.average()
+        );
+    }
+
+    #[test]
+    fn encoded_textures_decode_to_the_same_texture_and_corruption_is_an_error() {
+        let path = Path::new("scenes/room.lxs");
+        let png = TextureOptions {
+            wrap: Wrap::Mirror,
+            filter: Filter::Nearest,
+            uv_transform: UvTransform([[2.0, 0.5, 0.1], [-0.3, 1.5, 0.25]]),
+            ..TextureOptions::default()
+        };
+        let textures = [
+            Texture::load(&data("bitmap.png"), &png).unwrap(),
+            Texture::load(&data("rgba_half.exr"), &TextureOptions::default()).unwrap(),
+            checkerboard(20),
+        ];
+        let mut bytes = Vec::new();
+        for t in &textures {
+            t.encode(&mut bytes);
+        }
+        bytes.extend_from_slice(b"rest");
+        let mut at = 0;
+        for t in &textures {
+            let (back, len) = Texture::decode(path, &bytes[at..]).unwrap();
+            assert_eq!(&back, t);
+            at += len;
+        }
+        assert_eq!(&bytes[at..], b"rest");
+        let mut one = Vec::new();
+        textures[1].encode(&mut one);
+        let error = |b: &[u8]| {
+            let e = Texture::decode(path, b).unwrap_err().to_string();
+            assert!(
+                e.starts_with("scenes/room.lxs: ") && !e.contains('\n'),
+                "{e}"
+            );
+            e
+        };
+        for len in 0..one.len() {
+            error(&one[..len]);
+        }
+        let patched = |offset: usize, value: &[u8]| {
+            let mut b = one.clone();
+            b[offset..offset + value.len()].copy_from_slice(value);
+            error(&b)
+        };
+        assert!(patched(0, b"LXTY").contains("bad magic"));
+        assert!(patched(8, &0u32.to_le_bytes()).contains("size 0x3"));
+        assert!(patched(8, &70000u32.to_le_bytes()).contains("size 70000x3"));
+        let e = patched(8, &65536u32.to_le_bytes());
+        assert!(e.contains("truncated texels"), "{e}");
+        let e = patched(12, &65536u32.to_le_bytes());
+        assert!(
+            e.contains("texture needs") || e.contains("truncated texels"),
+            "{e}"
+        );
+        assert!(patched(16, &[3]).contains("storage tag 3"));
+        assert!(patched(18, &[3]).contains("wrap tag 3"));
+        assert!(patched(24, &f64::NAN.to_le_bytes()).contains("is not finite"));
+        assert!(patched(72, &f32::INFINITY.to_le_bytes()).contains("non-finite value in texel 0"));
+    }
 }
