@@ -223,7 +223,7 @@ fn use_texture_image(
     }
 }
 
-/// The lookups a renderer makes of a texture.
+/// The lookups a renderer makes of a texture; all must be finite (the texels are).
 fn use_texture(texture: &luxest_render::texture::Texture) {
     for (uv, footprint) in [
         ([0.3, 0.7], 0.0),
@@ -232,10 +232,15 @@ fn use_texture(texture: &luxest_render::texture::Texture) {
         ([1e12, -1e300], 2.0),
         ([f64::NAN, 0.1], f64::INFINITY),
     ] {
-        let _ = texture.eval(uv, footprint);
+        let v = texture.eval(uv, footprint);
+        assert!(v.iter().all(|c| c.is_finite()), "lookup {v:?}");
     }
-    let _ = texture.average();
-    let _ = texture.mean_over_triangle([[0.0, 0.0], [1.0, 0.2], [0.3, 0.9]]);
+    let a = texture.average();
+    let m = texture.mean_over_triangle([[0.0, 0.0], [1.0, 0.2], [0.3, 0.9]]);
+    assert!(
+        a.iter().chain(&m).all(|c| c.is_finite()),
+        "means {a:?} {m:?}"
+    );
 }
 
 /// The queries the compiler and the estimators make of a parsed photometric file.

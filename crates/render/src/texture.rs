@@ -345,11 +345,11 @@ impl Texture {
 
     /// The texture's linear RGBA at `uv` (before the UV transform), averaged over a square
     /// of side `footprint` in UV units (0: no minification filtering; see the module
-    /// documentation). A non-finite UV is read as (0, 0), a non-finite or negative footprint as
-    /// 0.
+    /// documentation). A non-finite UV (given, or after the transform) is read as 0, a
+    /// non-finite or negative footprint as 0.
     pub fn eval(&self, uv: [f64; 2], footprint: f64) -> [f32; 4] {
-        let uv = uv.map(|x| if x.is_finite() { x } else { 0.0 });
-        let uv = self.uv_transform.apply(uv);
+        let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
+        let uv = self.uv_transform.apply(uv.map(finite)).map(finite);
         let width = footprint * self.uv_transform.scale();
         // The footprint in level-0 texels along the longer side.
         let texels = if width.is_finite() {
@@ -361,7 +361,7 @@ impl Texture {
             let level = texels.max(1.0).log2().round() as usize;
             return self.nearest(level.min(self.levels.len() - 1), uv);
         }
-        if !(texels > 1.0) {
+        if texels <= 1.0 {
             return self.bilinear(0, uv);
         }
         // 2 x 2 trilinear lookups, each over a quarter of the footprint.
@@ -867,8 +867,9 @@ mod tests {
         );
         // u = 0.075 → u' = 0.25 → 0.25 as above.
         assert!((red(&scaled, 0.075) - 0.25).abs() < 1e-6);
-        // Non-finite UVs read as (0, 0).
+        // Non-finite UVs read as (0, 0), also where the transform overflows.
         assert_eq!(red(&row(Clamp, Nearest), f64::NAN), 0.0);
+        assert_eq!(red(&scaled, 1e308), 0.0);
     }
 
     /// The rows of a committed CSV table (header skipped), split at commas.
