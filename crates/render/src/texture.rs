@@ -141,7 +141,7 @@ impl Texels {
                     rgb_table[p[0] as usize],
                     rgb_table[p[1] as usize],
                     rgb_table[p[2] as usize],
-                    UNORM8[p[3] as usize],
+                    p[3] as f32 / 255.0,
                 ]
             }
             Texels::U16(v) => v[index].map(|k| k as f32 * (1.0 / 65535.0)),
@@ -399,26 +399,26 @@ impl Texture {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);
-        let xs = [
+        let (xa, xb) = (
             wrap(self.wrap, x0, l.width),
             wrap(self.wrap, x0 + 1, l.width),
+        );
+        let (ya, yb) = (
+            wrap(self.wrap, y0, l.height) * l.width,
+            wrap(self.wrap, y0 + 1, l.height) * l.width,
+        );
+        let texels = [ya + xa, ya + xb, yb + xa, yb + xb].map(|i| self.decode_texel(l, i));
+        let weights = [
+            (1.0 - fx) * (1.0 - fy),
+            fx * (1.0 - fy),
+            (1.0 - fx) * fy,
+            fx * fy,
         ];
-        let ys = [
-            wrap(self.wrap, y0, l.height),
-            wrap(self.wrap, y0 + 1, l.height),
-        ];
-        let mut out = [0f64; 4];
-        for (j, &ty) in ys.iter().enumerate() {
-            let wy = if j == 0 { 1.0 - fy } else { fy };
-            for (i, &tx) in xs.iter().enumerate() {
-                let w = wy * if i == 0 { 1.0 - fx } else { fx };
-                let t = self.decode_texel(l, ty * l.width + tx);
-                for c in 0..4 {
-                    out[c] += w * t[c] as f64;
-                }
-            }
-        }
-        out.map(|v| v as f32)
+        std::array::from_fn(|c| {
+            (0..4)
+                .map(|k| weights[k] * texels[k][c] as f64)
+                .sum::<f64>() as f32
+        })
     }
 
     /// Nearest-texel lookup of level `level` at (transformed) `uv`.
