@@ -791,6 +791,12 @@ mod tests {
     }
 
     #[test]
+    fn textures_are_shared_between_render_threads() {
+        fn shared<T: Send + Sync>() {}
+        shared::<Texture>();
+    }
+
+    #[test]
     fn srgb_table_holds_the_iec_61966_2_1_curve() {
         assert_eq!(srgb8_to_linear(0), 0.0);
         assert_eq!(srgb8_to_linear(255), 1.0);
