@@ -67,8 +67,10 @@ pub enum Encoding {
 }
 
 /// An affine map of texture coordinates, uv' = M · (u, v, 1), rows of M (glTF's
-/// `KHR_texture_transform` and Mitsuba 3's `to_uv` as a matrix).
+/// `KHR_texture_transform` and Mitsuba 3's `to_uv` as a matrix). Serialised as the matrix
+/// alone: in RON `((m00, m01, m02), (m10, m11, m12))`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
 pub struct UvTransform(pub [[f64; 3]; 2]);
 
 impl UvTransform {
@@ -1346,5 +1348,26 @@ mod tests {
         assert!(patched(18, &[3]).contains("wrap tag 3"));
         assert!(patched(24, &f64::NAN.to_le_bytes()).contains("is not finite"));
         assert!(patched(72, &f32::INFINITY.to_le_bytes()).contains("non-finite value in texel 0"));
+    }
+
+    #[test]
+    fn texture_options_read_from_ron() {
+        #[derive(Debug, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Desc {
+            encoding: Option<Encoding>,
+            wrap: Wrap,
+            filter: Filter,
+            uv_transform: Option<UvTransform>,
+        }
+        let text = "(encoding: Linear, wrap: Mirror, filter: Nearest, \
+                    uv_transform: ((2.0, 0.0, 0.5), (0.0, 2.0, 0.0)))";
+        let d: Desc = luxest_io::fsio::parse_ron(Path::new("t.ron"), text).unwrap();
+        assert_eq!(d.encoding, Some(Encoding::Linear));
+        assert_eq!((d.wrap, d.filter), (Wrap::Mirror, Filter::Nearest));
+        let m = d.uv_transform.unwrap();
+        assert_eq!(m, UvTransform([[2.0, 0.0, 0.5], [0.0, 2.0, 0.0]]));
+        assert_eq!(m.apply([0.25, 0.5]), [1.0, 1.0]);
+        assert_eq!(m.scale(), 2.0);
     }
 }
