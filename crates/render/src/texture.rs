@@ -24,14 +24,14 @@
 //!   continuous level λ = log2(½ footprint · max(w, h)) (bilinear lookups of the two levels
 //!   around λ, interpolated). Against a supersampled box filter of the footprint this has a
 //!   third to a fifth of a single trilinear lookup's error on binary detail at footprints of 3
-//!   to 6 texels (tests: `trilinear_lookups_approach_the_box_filtered_reference`).
+//!   to 6 texels (test `minified_lookups_approach_the_box_filtered_reference`).
 //!   `footprint = 0`, or one of a texel or less, is the bilinear lookup of level 0, Mitsuba's.
 //!   `Nearest` takes the nearest texel of the level nearest log2 of the footprint in texels.
 //!   Channels are filtered independently (alpha is not premultiplied), in linear values.
 //!
 //! Storage: 8-bit images stay 8-bit and are decoded on lookup (their mip levels are 16-bit
-//! linear); 16-bit and EXR images are stored as f32. The compiled
-//! scene stores the base level and the options ([`Texture::encode`]); levels are rebuilt on load.
+//! linear); 16-bit and EXR images are stored as f32. The compiled scene stores the base level
+//! and the options ([`Texture::encode`]); the levels are rebuilt on load.
 
 use luxest_io::color::srgb_decode;
 use luxest_io::error::{Error, Result};
@@ -202,11 +202,11 @@ impl Texture {
             (None, _) => Encoding::Linear,
         };
         // Grey, grey + alpha, RGB, RGBA → RGBA.
-        let rgba = |s: &[f32], one: f32| -> [f32; 4] {
+        let rgba = |s: &[f32]| -> [f32; 4] {
             match s.len() {
-                1 => [s[0], s[0], s[0], one],
+                1 => [s[0], s[0], s[0], 1.0],
                 2 => [s[0], s[0], s[0], s[1]],
-                3 => [s[0], s[1], s[2], one],
+                3 => [s[0], s[1], s[2], 1.0],
                 _ => [s[0], s[1], s[2], s[3]],
             }
         };
@@ -233,7 +233,7 @@ impl Texture {
                                 let srgb = i < colour_samples && encoding == Encoding::Srgb;
                                 p[i] = if srgb { srgb_decode(x) } else { x } as f32;
                             }
-                            rgba(&p[..c], 1.0)
+                            rgba(&p[..c])
                         })
                         .collect(),
                 )
@@ -242,7 +242,7 @@ impl Texture {
                 if let Some(x) = v.iter().find(|x| !x.is_finite()) {
                     return Err(format!("non-finite texel value {x}"));
                 }
-                Texels::F32(v.chunks_exact(c).map(|s| rgba(s, 1.0)).collect())
+                Texels::F32(v.chunks_exact(c).map(rgba).collect())
             }
         };
         Texture::build(
