@@ -16,9 +16,17 @@ use std::path::Path;
 /// The largest width or height of a texture, in pixels.
 pub const MAX_TEXTURE_SIDE: u64 = 1 << 16;
 
-/// Bytes a texel of the texture built from an image can take, mip-maps included (RGBA f32
-/// and a pyramid of a third more): what the size check reserves beyond the decoded samples.
-pub const TEXTURE_BYTES_PER_TEXEL: u64 = 22;
+/// Bytes a texel of the texture built from an image takes, mip-maps included (rounded up):
+/// 8-bit images keep 4 bytes of RGBA and a pyramid of a third as many 8-byte texels; others
+/// 16 bytes (RGBA f32) and a third more. What the size check reserves beyond the decoded
+/// samples.
+pub fn texture_bytes_per_texel(eight_bit: bool) -> u64 {
+    if eight_bit {
+        7
+    } else {
+        22
+    }
+}
 
 /// The file format an image was decoded from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,8 +110,13 @@ pub fn decode_texture_image(path: &Path, bytes: Vec<u8>) -> Result<TextureImage>
 }
 
 /// Checks a `width` x `height` image of `decoded_bytes` per pixel (and the texture built from
-/// it) before anything of that size is allocated.
-fn check_size(path: &Path, width: u64, height: u64, decoded_bytes: u64) -> Result<()> {
+/// it, of 8-bit samples or not) before anything of that size is allocated.
+fn check_size(
+    path: &Path,
+    (width, height): (u64, u64),
+    decoded_bytes: u64,
+    eight_bit: bool,
+) -> Result<()> {
     if width == 0 || height == 0 {
         return Err(Error::input(
             path,
@@ -123,7 +136,7 @@ fn check_size(path: &Path, width: u64, height: u64, decoded_bytes: u64) -> Resul
         "texture",
         width,
         height,
-        decoded_bytes + TEXTURE_BYTES_PER_TEXEL,
+        decoded_bytes + texture_bytes_per_texel(eight_bit),
     )
     .map_err(|m| Error::input(path, m))
 }
@@ -136,8 +149,10 @@ pub fn decode_png(path: &Path, bytes: &[u8]) -> Result<TextureImage> {
     decoder.set_transformations(::png::Transformations::EXPAND);
     let header = decoder.read_header_info().map_err(bad)?;
     let (width, height) = (header.width as u64, header.height as u64);
-    // The largest output a PNG can have: 16-bit RGBA.
-    check_size(path, width, height, 8)?;
+    // At most 4 samples a pixel after expansion.
+    let eight_bit = header.bit_depth != ::png::BitDepth::Sixteen;
+    let sample_bytes = if eight_bit { 1 } else { 2 };
+    check_size(path, (width, height), 4 * sample_bytes, eight_bit)?;
     let mut reader = decoder.read_info().map_err(bad)?;
     let (color, depth) = reader.output_color_type();
     let channels = color.samples();
@@ -192,7 +207,8 @@ pub fn decode_jpeg(path: &Path, bytes: &[u8]) -> Result<TextureImage> {
     let (width, height) = (info.width as u64, info.height as u64);
     // Decoded samples (at most 4 bytes a pixel) and the decoder's coefficients of a progressive
     // image (2 bytes a sample, up to 4 components).
-    check_size(path, width, height, 4 + 8)?;
+    let eight_bit = info.pixel_format != jpeg_decoder::PixelFormat::L16;
+    check_size(path, (width, height), 4 + 8, eight_bit)?;
     decoder.set_max_decoding_buffer_size((width * height * 4) as usize);
     let pixels = decoder.decode().map_err(bad)?;
     let (width, height) = (width as usize, height as usize);
@@ -248,7 +264,7 @@ pub fn decode_exr(path: &Path, bytes: Vec<u8>) -> Result<TextureImage> {
         .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.width(), layer.size.height());
-    check_size(path, width as u64, height as u64, 16)?;
+    check_size(path, (width as u64, height as u64), 16, false)?;
     let list = &layer.channel_data.list;
     let names: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
     let find = |want: &str| names.iter().position(|n| n == want);
@@ -480,7 +496,7 @@ mod tests {
             "{e}"
         );
         let e = error(with_png_size(&png, 65_536, 65_536));
-        assert!(e.contains("a 65536x65536 texture needs 128.8 GB"), "{e}");
+        assert!(e.contains("a 65536x65536 texture needs 47.2 GB"), "{e}");
         let e = error(with_png_size(&png, 0, 8));
         assert!(e.contains("not a readable PNG file"), "{e}");
         let e = error(b"GIF89a".to_vec());
