@@ -16,6 +16,10 @@ SECS=${SECONDS_PER_TARGET:-600}
 TARGETS=("$@")
 [ ${#TARGETS[@]} -gt 0 ] || TARGETS=(scene obj gltf compiled exr ies ldt sensors scene_info peer texture_png texture_jpeg texture_exr texture_encoded)
 export RUSTC_BOOTSTRAP=1
+# jpeg-decoder's package carries a rust-toolchain file (1.61.0): under cargo-fuzz, rustup would
+# pick it up when compiling that crate unless the toolchain is named in the environment.
+RUSTUP_TOOLCHAIN=${RUSTUP_TOOLCHAIN:-$(rustup show active-toolchain | cut -d' ' -f1)}
+export RUSTUP_TOOLCHAIN
 
 command -v cargo-fuzz >/dev/null || {
     echo "error: cargo-fuzz is not installed: cargo install cargo-fuzz --locked" >&2
