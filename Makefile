@@ -154,7 +154,9 @@ rust-test:
 
 # The Make DAG through a real single-node Slurm cluster (pipelines/tests/test_slurm.py; set up by
 # scripts/slurm-cluster.sh, Slurm and munge from scripts/setup.sh), with the debug stage programs
-# make test builds: about a minute, so a target of its own, which CI runs after make test.
+# make test builds: about a minute, so a target of its own, which CI runs after make test. With
+# the same programs, every generated room compiled with its textures
+# (pipelines/tests/test_generated_scenes.py, seconds).
 test-slurm: $(VENV)/$(VENV_STAMP)
 	$(CLIPPY_BUILD) $(CARGO) build $(addprefix -p ,$(STAGE_BINS)) --bins
 	MAKEFLAGS= MAKELEVEL= LUXEST_BIN_DIR=target/debug $(PYTHON) -m pytest pipelines/tests -q

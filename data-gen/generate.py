@@ -57,6 +57,8 @@ TEXTURE_SIDE = 256
 FLOORS = {"wood-planks": 0.9, "tiles": 1.2, "marble": 1.6, "fabric": 0.35}
 WALLS = {"plaster": 2.0, "tiles": 0.9, "fabric": 0.5, "wood-planks": 1.0, "marble": 1.8, "paper-text": 0.8}
 FURNITURE = {"wood-planks": 0.8, "marble": 0.9, "fabric": 0.3, "tiles": 0.6, "plaster": 1.2}
+# Length along the meshes' u (the ring, the knot) over the length around their tube (v).
+MESH_ASPECT = {"torus.obj": 3, "trefoil.glb": 12}
 PICTURES = ("photo-landscape", "photo-still-life", "paper-text")
 # Images whose own colour is their point: their material's colour only tints them a little.
 COLOURED = {"wood-planks", "photo-landscape", "photo-still-life", "leaves", "paper-text"}
@@ -260,8 +262,10 @@ def scene(preset, index, seed, side, scene_dir=None):
             shape = f'Obj(path: "{rel}")' if mesh.endswith(".obj") else f'Gltf(path: "{rel}")'
             tex = maybe(FURNITURE, 1.0, 1.0, 0.7)
             if tex is not None:
-                # The meshes' texture coordinates run once around the ring and the tube.
-                tex = (tex[0], float(rng.randint(2, 8)), float(rng.randint(1, 3)), False)
+                # The meshes' texture coordinates run once along the ring (the knot) and once
+                # around the tube, which is a third (a twelfth) as long: repeats in that ratio.
+                reps = rng.randint(1, 3)
+                tex = (tex[0], float(MESH_ASPECT[mesh] * reps), float(reps), False)
             m = material(tex=tex)
             sc = rng.uniform(0.6, 1.5)
             objects.append(
