@@ -35,6 +35,7 @@ fn config(paths: u64, seed: u64, threads: usize, world: &World) -> LocalConfig {
         },
         max_depth: 100_000,
         near_field: None,
+        environment_samples: 0,
     }
 }
 

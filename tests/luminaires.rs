@@ -47,6 +47,7 @@ fn config(paths: u64, world: &World) -> LocalConfig {
         },
         max_depth: 100_000,
         near_field: None,
+        environment_samples: 0,
     }
 }
 

@@ -4,6 +4,7 @@
 mod architecture;
 mod contract;
 mod denoise_cli;
+mod emitters;
 mod estimate_cli;
 mod estimate_validation;
 mod evaluate_cli;

@@ -1146,10 +1146,30 @@ fn scene_compile_never_overwrites_its_sources() {
     );
     let (_, report) = scene_compile::compile_file(&white).unwrap();
     assert!(
-        report.warnings.iter().any(
-            |w| w.contains("materials[\"w\"]: reflectance 1 in channel 0")
-                && w.contains("--max-depth")
+        report
+            .warnings
+            .iter()
+            .any(|w| w.contains("no material absorbs light in channel 0")
+                && w.contains("--max-depth")),
+        "{:?}",
+        report.warnings
+    );
+    // The same white beside a material that absorbs: light is not trapped, no warning.
+    let room = dir.write(
+        "room.ron",
+        scene(
+            r#"materials: { "w": Lambertian(reflectance: (1.0, 0.5, 0.5)),
+                            "grey": Lambertian(reflectance: (0.5, 0.5, 0.5)) },"#,
+            &format!(
+                "{FLOOR} (shape: Quad(corner: (0.0, 1.0, 0.0), u: (1.0, 0.0, 0.0), \
+                 v: (0.0, 0.0, 1.0)), material: \"grey\")"
+            ),
+            LIGHT,
         ),
+    );
+    let (_, report) = scene_compile::compile_file(&room).unwrap();
+    assert!(
+        !report.warnings.iter().any(|w| w.contains("absorbs")),
         "{:?}",
         report.warnings
     );

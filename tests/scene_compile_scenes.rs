@@ -427,6 +427,11 @@ fn mitsuba_export_carries_every_triangle_material_emitter_and_the_camera() {
                     assert!(xml.contains(&want), "{name}: {want}");
                 }
                 Emitter::Luminaire { .. } => unreachable!(),
+                Emitter::Environment { map, .. } => {
+                    let kind = if map.is_some() { "envmap" } else { "constant" };
+                    let want = format!(r#"<emitter type="{kind}">"#);
+                    assert!(xml.contains(&want), "{name}: {want}");
+                }
             }
         }
         if name == "gltf-trefoil" {

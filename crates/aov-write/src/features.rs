@@ -1,6 +1,6 @@
 //! The denoiser's features of a camera ray and their per-pixel f64 sums: albedo as the denoiser
 //! sees it and the shading normal facing the ray, both of the first non-delta surface (through
-//! mirrors and smooth glass, [`first_hit`]), the hit distance, the emitted radiance seen directly
+//! mirrors, smooth metals and smooth glass, [`first_hit`]), the hit distance, the emitted radiance seen directly
 //! or in a mirror (the part of `trace`'s image a denoiser must leave untouched) — averaged over exactly the pixel samples
 //! `trace` uses ([`pixel_jitter`] with the same seed), and extendable like trace's film, so the
 //! features at n samples do not depend on the snapshots taken on the way.
@@ -14,14 +14,40 @@ use luxest_render::parallel::run_batches;
 use luxest_render::scene::Material;
 use luxest_render::world::World;
 
-/// Albedo of a material as the denoiser sees it.
+/// Albedo of a material as the denoiser sees it (Intel Open Image Denoise's definition): a
+/// diffuse surface's colour; a metal's reflectivity at normal incidence; 1 for a dielectric
+/// (where the ray does not follow it, see [`first_hit`]); for a layered material (`Glossy`, a
+/// plastic's coating over its base) the sum of its layers' albedos; for a blend the weighted sum
+/// of its materials'.
 pub fn albedo(m: &Material) -> Rgb {
     match m {
         Material::Lambertian { reflectance } | Material::Mirror { reflectance } => *reflectance,
         Material::Glossy {
             diffuse, specular, ..
         } => *diffuse + *specular,
-        Material::Dielectric { .. } => Rgb::WHITE,
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            ..
+        } => bsdf::conductor::reflectance(1.0, eta, k, specular_reflectance),
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            ..
+        } => {
+            let f0 = bsdf::fresnel_dielectric(1.0, *ior).0;
+            *specular_reflectance * f0 + *diffuse_reflectance * (1.0 - f0)
+        }
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => albedo(first) * (1.0 - weight) + albedo(second) * *weight,
+        Material::Dielectric { .. }
+        | Material::RoughDielectric { .. }
+        | Material::ThinDielectric { .. } => Rgb::WHITE,
     }
 }
 
@@ -34,9 +60,10 @@ pub struct FirstHit {
     /// Distance in m to the first surface hit (zero where the ray escapes).
     pub depth: f64,
     /// Radiance emitted towards the camera by the surface hit or, through one mirror at the
-    /// first hit, by the surface seen in it: exactly the terms `trace` adds at those vertices
-    /// (weight one at the first, the mirror's reflectance at the second: nothing is sampled
-    /// before them, and Russian roulette starts later).
+    /// first hit, by the surface seen in it — or the environment's where the ray leaves the
+    /// scene: exactly the terms `trace` adds at those vertices (weight one at the first, the
+    /// mirror's reflectance at the second: nothing is sampled before them, and Russian roulette
+    /// starts later).
     pub emission: Rgb,
 }
 
@@ -54,21 +81,34 @@ pub const MAX_DELTA_VERTICES: u32 = 8;
 
 /// Features of one camera ray, as Intel Open Image Denoise recommends for perfect specular
 /// surfaces: albedo and normal of the first non-delta (diffuse or glossy) surface along the
-/// delta path — through a mirror, its reflectance times the albedo of the surface seen in it;
-/// at the first smooth dielectric, the Fresnel blend of the reflected and transmitted paths'
+/// delta path — through a mirror or a smooth metal, its reflectance times the albedo of the
+/// surface seen in it; at the first smooth dielectric or thin sheet, the Fresnel blend of the reflected and transmitted paths'
 /// features, at a later one its likelier branch alone (no random choice: the features stay
 /// noise-free); at most [`MAX_DELTA_VERTICES`] delta vertices, the last one's own features. The
 /// emission: see [`FirstHit::emission`]. The geometry is `trace`'s (flat normals, its offsets).
-pub fn first_hit(world: &World, origin: Vec3, dir: Vec3) -> FirstHit {
-    along(world, origin, dir, 0, false)
+/// Textures are filtered over the ray's footprint, `spread` radians wide (the camera's pixel,
+/// [`PinholeCamera::pixel_spread`]) and widening with the distance along the delta path, so that
+/// one sample's albedo is already the pixel's average of a minified texture.
+pub fn first_hit(world: &World, origin: Vec3, dir: Vec3, spread: f64) -> FirstHit {
+    along(world, (origin, dir), (0, false), (spread, 0.0))
 }
 
-fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> FirstHit {
+fn along(
+    world: &World,
+    (origin, dir): (Vec3, Vec3),
+    (vertices, split): (u32, bool),
+    (spread, travelled): (f64, f64),
+) -> FirstHit {
     let Some(sp) = world.intersect(origin, dir) else {
-        return FirstHit::MISS;
+        return FirstHit {
+            emission: world.environment_radiance(dir),
+            ..FirstHit::MISS
+        };
     };
     let wo = -dir;
-    let m = world.material_seen(&sp, wo);
+    let travelled = travelled + sp.distance;
+    let footprint = world.uv_footprint(&sp, wo, spread * travelled);
+    let m = world.material_filtered(sp.triangle, sp.uv, wo, footprint);
     let m = &*m;
     let own = FirstHit {
         albedo: albedo(m),
@@ -81,33 +121,51 @@ fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> 
     }
     // A branch of the delta path: trace's own sample (uc picks reflection below the Fresnel
     // reflectance, refraction above it) and the features where it leads.
+    // The sample's weight is the lobe's (a mirror's reflectance, a smooth metal's Fresnel
+    // reflectance).
     let branch = |uc: f64, split: bool| {
         let s = bsdf::sample(m, wo, sp.ng, sp.ng, (0.5, 0.5), uc, Transport::Radiance)?;
-        Some(along(
-            world,
-            world.offset(sp.position, sp.ng, s.wi),
-            s.wi,
-            vertices + 1,
-            split,
+        Some((
+            s.weight,
+            along(
+                world,
+                (world.offset(sp.position, sp.ng, s.wi), s.wi),
+                (vertices + 1, split),
+                (spread, travelled),
+            ),
         ))
     };
-    match m {
-        Material::Mirror { reflectance } => match branch(0.0, split) {
-            Some(next) => FirstHit {
-                albedo: *reflectance * next.albedo,
+    let fresnel = match m {
+        // trace's Fresnel reflectance at this vertex (bsdf::sample with flat normals).
+        Material::Dielectric { ior } => {
+            Some(bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance)
+        }
+        Material::ThinDielectric { ior } => {
+            Some(bsdf::dielectric::thin_reflectance(wo.dot(sp.ng), *ior))
+        }
+        _ => None,
+    };
+    match (m, fresnel) {
+        (
+            Material::Mirror { .. }
+            | Material::Conductor {
+                roughness: None, ..
+            },
+            _,
+        ) => match branch(0.0, split) {
+            Some((reflectance, next)) => FirstHit {
+                albedo: reflectance * next.albedo,
                 normal: next.normal,
                 depth: own.depth,
                 emission: if vertices == 0 {
-                    own.emission + *reflectance * next.emission
+                    own.emission + reflectance * next.emission
                 } else {
                     own.emission
                 },
             },
             None => own,
         },
-        Material::Dielectric { ior } => {
-            // trace's Fresnel reflectance at this vertex (bsdf::sample with flat normals).
-            let f = bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance;
+        (_, Some(f)) => {
             // Weights of the reflected and transmitted branches; at later dielectrics the
             // likelier branch alone, so that one camera ray's features stay one path (no
             // noise, no blow-up).
@@ -119,7 +177,7 @@ fn along(world: &World, origin: Vec3, dir: Vec3, vertices: u32, split: bool) -> 
             let (mut a, mut nrm) = (Rgb::BLACK, Vec3::ZERO);
             for (uc, w) in [(0.0, reflected), (1.0, transmitted)] {
                 if w > 0.0 {
-                    if let Some(h) = branch(uc, true) {
+                    if let Some((_, h)) = branch(uc, true) {
                         a = a + h.albedo * w;
                         nrm += h.normal * w;
                     }
@@ -179,7 +237,7 @@ impl FeatureFilm {
             let pixel = (k * 7919) % pixels;
             let (u, v) = pixel_jitter(0x00ca_11b2_a7e2, pixel, k);
             let dir = cam.direction((pixel % w) as f64 + u, (pixel / w) as f64 + v);
-            first_hit(world, cam.position, dir);
+            first_hit(world, cam.position, dir, cam.pixel_spread());
         });
         let total = (pixels * samples as u64) as f64;
         let threads = threads.min(self.height).max(1);
@@ -219,6 +277,7 @@ impl FeatureFilm {
                             world,
                             cam.position,
                             cam.direction(x as f64 + u, y as f64 + v),
+                            cam.pixel_spread(),
                         );
                         a = a + hit.albedo;
                         n += hit.normal;

@@ -58,6 +58,7 @@ fn run(w: &World, s: &[SensorPoint], method: Method, paths: u64) -> SensorEstima
                 singularity,
                 max_depth: 100_000,
                 near_field: None,
+                environment_samples: 0,
             };
             local::estimate(w, s, &vec![0.0; s.len()], &cfg, &Progress::off())
         }

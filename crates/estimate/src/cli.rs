@@ -607,6 +607,8 @@ fn sensors(
         singularity: sing,
         max_depth: run.max_depth,
         near_field,
+        // The environment's direct term: as many samples per sensor as the near field's.
+        environment_samples: paths.min(DEFAULT_NEAR_SAMPLES),
     };
     // Each batch takes at least one near-field sample per sensor.
     let near_total = match cfg.near_field {

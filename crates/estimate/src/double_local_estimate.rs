@@ -34,11 +34,20 @@
 //!
 //! Diffuse (Lambertian or emitter) pairs, nearly all pairs of a room, take a short path that
 //! needs no BSDF call: per record and per view point the constant factors are computed once.
+//!
+//! The environment: a camera ray (or its specular chain) that leaves the scene sees it; its
+//! light reflected at a view point towards the camera is estimated there, once per round, by
+//! [`crate::transport::environment_reflected`] (a direction from the map and one from the BSDF,
+//! balance heuristic), so light tracing leaves collisions reached straight from the
+//! environment to it, as it leaves those reached from delta lights to the exact term; light
+//! paths from the environment connect from their first collision on.
 
 use crate::image::{ImageResult, BATCHES};
 use crate::light_tracing::connect_to_camera;
 use crate::singularity::Singularity;
-use crate::transport::{delta_light_reflected, survival, walk_light_path, Arrival, LightVertex};
+use crate::transport::{
+    delta_light_reflected, environment_reflected, survival, walk_light_path, Arrival, LightVertex,
+};
 use luxest_io::cli::Console;
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
@@ -138,6 +147,8 @@ pub const RR_ALPHA: f64 = 3.0;
 /// Paths of a batch connected without roulette before its threshold is set (measured on the
 /// Cornell box: a threshold from the first path alone doubled the relMSE at equal paths).
 const RR_WARMUP: u64 = ROUND_PATHS;
+/// Salt of the streams of the environment's direct term at the view points.
+const ENVIRONMENT_SALT: u64 = 0x00e4_7a1b_5c3d;
 /// Salt of the connections' roulette numbers.
 const RR_SALT: u64 = 0x00c0_ffee_5a17;
 
@@ -180,6 +191,7 @@ fn view_points(
             let mut weight = Rgb::splat(1.0 / spp as f64);
             for bounce in 0..16 {
                 let Some(sp) = world.intersect(origin, dir) else {
+                    *emitted_px = *emitted_px + weight * world.environment_radiance(dir);
                     break;
                 };
                 // Emitters seen directly are light tracing's when it runs (its emission points
@@ -345,13 +357,15 @@ fn light_tracing(
                     sp, dir, arrival, ..
                 } => (sp, dir, arrival),
             };
-            if arrival == Arrival::DeltaLight {
-                return; // the exact direct term's
+            if matches!(arrival, Arrival::DeltaLight | Arrival::Environment) {
+                return; // the exact direct term's, or the environment's at the view points
             }
             let (wo, ng) = (-dir, sp.ng);
             let m = world.material_seen(&sp, wo);
             let m = &*m;
-            let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+            // A light path's vertex: the adjoint BSDF (wo towards the light).
+            let f_cos =
+                |w: Vec3| bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs();
             if let Some(link) =
                 connect_to_camera(world, cam, sp.position, ng, f_cos, &mut shadow_rays)
             {
@@ -419,7 +433,7 @@ fn contribution(
         }
         Some(t) => {
             let m = world.material_at(t, r.uv, r.wo);
-            let (f, p) = bsdf::eval_and_pdf(&m, r.wo, w, r.ng, r.ng);
+            let (f, p) = bsdf::eval_and_pdf_transport(&m, r.wo, w, r.ng, r.ng, Transport::Flux);
             let f = f * w.dot(r.ng).abs();
             let pdf = if p > 0.0 {
                 p * survival(f * (1.0 / p))
@@ -553,6 +567,18 @@ pub fn render(
                 }
                 for (&k, d) in view_local.iter().zip(&direct) {
                     acc[b][k] = acc[b][k] + *d * weight;
+                }
+                if world.environment().is_some() {
+                    // One sample per camera point and round, on a stream of the round's own.
+                    let mut rng = Rng::new(
+                        cfg.seed ^ splitmix64(round ^ ENVIRONMENT_SALT),
+                        pixels[0] as u64,
+                    );
+                    for (v, &k) in views.iter().zip(&view_local) {
+                        let m = world.material(v.material);
+                        let l = environment_reflected(world, (v.position, v.ng, v.wo), m, &mut rng);
+                        acc[b][k] = acc[b][k] + l * v.weight * weight;
+                    }
                 }
                 let end = (r + 1) * ROUND_PATHS;
                 while next < recs.len() && recs[next].path < end {

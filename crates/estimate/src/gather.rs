@@ -2,13 +2,16 @@
 //! estimate and free of its singularity: used as the reference at edges and corners.
 //!
 //! E(p) = direct + ∫ L_r(ω) cos θ dω. Direct light: exact for point sources, light-sampled for
-//! area emitters. Indirect light: a cosine-distributed direction from p (weight π) and a path
-//! traced from there with next-event estimation at every vertex and analog Russian roulette;
-//! emission found by BSDF sampling is ignored (it is all counted by next-event estimation), so
-//! the estimator needs a scene without specular paths, and is unbiased with bounded variance
-//! wherever the sensor is.
+//! area emitters, and for the environment [`crate::transport::environment_illuminance`] (a
+//! direction from the map and one about the normal, by multiple importance sampling).
+//! Indirect light: a cosine-distributed direction from p (weight π) and a path traced from
+//! there with next-event estimation at every vertex (the environment by a direction drawn from
+//! its map) and analog Russian roulette; emission found by BSDF sampling, and the environment
+//! met by a path that leaves the scene, are ignored (they are all counted by next-event
+//! estimation), so the estimator needs a scene without specular paths, and is unbiased with
+//! bounded variance wherever the sensor is.
 
-use crate::transport::{delta_light_illuminance, scatter};
+use crate::transport::{delta_light_illuminance, environment_illuminance, scatter};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_io::progress::Progress;
@@ -16,7 +19,7 @@ use luxest_render::bsdf::{self, Transport};
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
 use luxest_render::sampling::{cosine_hemisphere, Rng};
 use luxest_render::scene::SensorPoint;
-use luxest_render::world::{SurfacePoint, World};
+use luxest_render::world::{LightSample, SurfacePoint, World};
 use std::f64::consts::PI;
 
 #[derive(Clone, Debug)]
@@ -30,17 +33,32 @@ pub struct GatherConfig {
 }
 
 /// Light arriving at `x` (surface normal `n`, towards directions on `n`'s side) from one
-/// sampled light point, times `f cos` evaluated by `response(w_to_light)`: the next-event
-/// estimate for area and point emitters. Point sources are skipped when `skip_points`.
+/// sampled light point or environment direction, times `f cos` evaluated by
+/// `response(w_to_light)`: the next-event estimate for area and point emitters and the
+/// environment. Point sources and the environment are skipped when `skip_exact` (the sensor's
+/// own direct light, which is computed exactly or by [`environment_illuminance`]).
 fn next_event(
     world: &World,
     x: Vec3,
     n: Vec3,
     rng: &mut Rng,
     response: impl Fn(Vec3) -> Rgb,
-    skip_points: bool,
+    skip_exact: bool,
 ) -> Rgb {
-    let l = world.sample_light_point(rng, x);
+    let l = match world.sample_light_point(rng, x) {
+        LightSample::Point(l) => l,
+        LightSample::Environment(_) if skip_exact => return Rgb::BLACK,
+        LightSample::Environment(es) => {
+            let r = response(es.direction);
+            if es.pdf <= 0.0
+                || r.max_component() <= 0.0
+                || !world.escapes(world.offset(x, n, es.direction), es.direction)
+            {
+                return Rgb::BLACK;
+            }
+            return es.radiance * r * (1.0 / es.pdf);
+        }
+    };
     let v = l.position - x;
     let d2 = v.length_squared();
     if d2 <= 0.0 {
@@ -56,7 +74,7 @@ fn next_event(
             }
             c / d2
         }
-        None if skip_points => return Rgb::BLACK,
+        None if skip_exact => return Rgb::BLACK,
         None => 1.0 / d2,
     };
     let r = response(w);
@@ -154,8 +172,10 @@ fn sensor_ray(world: &World, s: &SensorPoint, rng: &mut Rng) -> (Vec3, Vec3) {
 
 fn sample_once(world: &World, s: &SensorPoint, rng: &mut Rng, max_depth: u32) -> Rgb {
     let n = s.normal;
-    // Direct light from area emitters (point sources are added exactly by the caller).
-    let mut e = next_event(
+    // Direct light from the environment, then from area emitters (point sources are added
+    // exactly by the caller).
+    let mut e = environment_illuminance(world, s, rng, &mut 0);
+    e = e + next_event(
         world,
         s.position,
         n,

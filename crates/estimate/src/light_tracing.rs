@@ -18,7 +18,13 @@
 //!
 //! Specular surfaces cannot be connected to a pinhole (a delta BSDF has no value towards it),
 //! so a scene whose camera sees mirrors or glass is refused; point sources are invisible to the
-//! camera, as in `trace`. Per-pixel standard errors come from [`BATCHES`] independent batches;
+//! camera, as in `trace`.
+//!
+//! The environment: its light paths enter from the disk around the scene and connect from
+//! their first collision on (the sky lighting a surface the camera sees); the sky the camera
+//! sees directly cannot be reached from a light path, so each batch adds it with
+//! [`BACKGROUND_SAMPLES`] camera rays per pixel (the environment's radiance along each that
+//! leaves the scene). Per-pixel standard errors come from [`BATCHES`] independent batches;
 //! the image is bit-identical at any thread count.
 
 use crate::image::{ImageResult, BATCHES};
@@ -26,11 +32,17 @@ use crate::transport::{walk_light_path, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_io::progress::Progress;
-use luxest_render::bsdf;
-use luxest_render::camera::PinholeCamera;
+use luxest_render::bsdf::{self, Transport};
+use luxest_render::camera::{pixel_jitter, PinholeCamera};
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
 use luxest_render::sampling::Rng;
 use luxest_render::world::World;
+
+/// Camera rays per pixel and batch for the environment seen directly.
+pub const BACKGROUND_SAMPLES: u32 = 4;
+
+/// Salt of the background camera rays' pixel positions.
+const BACKGROUND_SALT: u64 = 0x00ba_c6a0_0d5e;
 
 #[derive(Clone, Debug)]
 pub struct LightTraceConfig {
@@ -135,12 +147,33 @@ fn run_batch(
                     let (wo, ng) = (-dir, sp.ng);
                     let m = world.material_seen(&sp, wo);
                     let m = &*m;
-                    let f_cos = |w: Vec3| bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+                    // The adjoint BSDF (wo towards the light).
+                    let f_cos = |w: Vec3| {
+                        bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs()
+                    };
                     splat(world, cam, sp.position, ng, q, f_cos, &mut film);
                 }
             }
         });
         tally.add(1);
+    }
+    if world.environment().is_some() {
+        // Stored as a sum over the batch's paths, as the connections are.
+        let scale = paths.max(1) as f64 / BACKGROUND_SAMPLES as f64;
+        for (pixel, sum) in film.sums.iter_mut().enumerate() {
+            let (x, y) = (pixel % cam.width as usize, pixel / cam.width as usize);
+            for k in 0..BACKGROUND_SAMPLES {
+                let sample = batch as u64 * BACKGROUND_SAMPLES as u64 + k as u64;
+                let (u, v) = pixel_jitter(cfg.seed ^ BACKGROUND_SALT, pixel as u64, sample);
+                let dir = cam.direction(x as f64 + u, y as f64 + v);
+                if world.intersect(cam.position, dir).is_none() {
+                    let l = world.environment_radiance(dir) * scale;
+                    for (a, c) in sum.iter_mut().zip(l.0) {
+                        *a += c;
+                    }
+                }
+            }
+        }
     }
     film
 }

@@ -21,6 +21,14 @@
 //! the local estimate's connection estimates L(ω) dω. The near-field split (a backward estimate
 //! sampling the cosine about the normal) applies to planar sensors only.
 //!
+//! Environment light ([`luxest_render::environment`]): light paths enter from the disk around
+//! the scene and connect from their first collision on, as any other; the environment's direct
+//! illuminance at a sensor has no emission vertex to connect from, so each batch estimates it
+//! at every sensor with `environment_samples / batches` samples of
+//! [`crate::transport::environment_illuminance`] (a direction from the map and one about the
+//! sensor, by multiple importance sampling, with shadow rays to infinity): a sensor facing a
+//! window sees the sky through it. Spot lights are delta lights like point sources.
+//!
 //! The walk and the exact point-source term are shared with the other estimators
 //! ([`crate::transport`]): scattering uses the geometric normal. Standard errors come from
 //! independent batches ([`crate::sensor_batches`]); all sums are f64. Direct simulation, the
@@ -28,11 +36,13 @@
 
 use crate::sensor_batches::{self, BatchSums, Batches, SensorEstimates};
 pub use crate::singularity::Singularity;
-use crate::transport::{delta_light_illuminance, walk_light_path, LightVertex};
+use crate::transport::{
+    delta_light_illuminance, environment_illuminance, walk_light_path, LightVertex,
+};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_io::progress::Progress;
-use luxest_render::bsdf;
+use luxest_render::bsdf::{self, Transport};
 use luxest_render::rt::Ray;
 use luxest_render::sampling::Rng;
 use luxest_render::scene::{Material, SensorPoint};
@@ -56,6 +66,9 @@ pub struct LocalConfig {
     pub max_depth: u32,
     /// Near-field split, applied to the sensors with a near-field radius.
     pub near_field: Option<NearField>,
+    /// Samples per sensor of the environment's direct illuminance, over all batches (each
+    /// batch takes at least one); unused without an environment.
+    pub environment_samples: u64,
 }
 
 /// Per-thread scratch buffers, reused across collisions.
@@ -119,7 +132,8 @@ fn connect(
                 ng,
                 ns,
             } => {
-                let f = bsdf::eval(material, *wo, w, *ng, *ns);
+                // The adjoint BSDF (wo towards the light).
+                let f = bsdf::eval_transport(material, *wo, w, *ng, *ns, Transport::Flux);
                 f * w.dot(*ns).abs()
             }
             Source::Emitter { normal } => {
@@ -231,6 +245,18 @@ fn run_batch(
                 out.add(i, emitted * scale, true);
                 out.add(i, reflected * scale, false);
             }
+        }
+    }
+    if world.environment().is_some() {
+        let samples = (cfg.environment_samples / cfg.batches.count() as u64).max(1);
+        // Stored as a sum over the batch's paths, which the common division turns into the mean.
+        let scale = paths.max(1) as f64 / samples as f64;
+        for (i, s) in sensors.iter().enumerate() {
+            let mut e = Rgb::BLACK;
+            for _ in 0..samples {
+                e = e + environment_illuminance(world, s, &mut rng, &mut out.shadow_rays);
+            }
+            out.add(i, e * scale, true);
         }
     }
     out

@@ -7,11 +7,20 @@
 //! goniometric luminaires ([`luxest_render::luminaire`]) — are never hit by a walk, so their
 //! direct contribution is always computed exactly, with a visibility ray: `I(ω) g(ω) / d²` for a
 //! sensor of response g (the cosine for planar sensors), `f I(ω) cos / d²` for reflected light.
+//! Spot lights are delta lights whose intensity carries the cone's falloff.
+//!
+//! The environment ([`luxest_render::environment`]) starts light paths on a disk outside the
+//! scene: the walk's first collision is reached from it ([`Arrival::Environment`]) and there is
+//! no emission vertex to connect. Its direct light at a receiver is therefore estimated at the
+//! receiver: [`environment_illuminance`] at a sensor and [`environment_reflected`] at a point
+//! the camera sees, each combining a direction drawn from the map with one drawn about the
+//! receiver (the sensor's response, or the BSDF) by the balance heuristic, with a shadow ray to
+//! infinity.
 
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
-use luxest_render::sampling::Rng;
+use luxest_render::sampling::{cosine_hemisphere, uniform_sphere, Rng};
 use luxest_render::scene::IlluminanceKind;
 use luxest_render::scene::SensorPoint;
 use luxest_render::world::{SurfacePoint, World};
@@ -38,6 +47,9 @@ pub enum Arrival {
     /// Straight from a delta light (isotropic point source, goniometric luminaire), whose
     /// direct light the estimators compute exactly.
     DeltaLight,
+    /// Straight from the environment, whose direct light the estimators estimate at the
+    /// receivers ([`environment_illuminance`], [`environment_reflected`]).
+    Environment,
     /// After a specular bounce (no connection can end at a delta vertex).
     Specular,
     /// Sampled at the non-specular vertex `from` (an area emitter's emission point or a
@@ -110,7 +122,11 @@ fn walk(world: &World, rng: &mut Rng, max_depth: u32, mut visit: impl FnMut(Step
     let e = world.sample_emission(rng);
     let mut q = e.flux;
     let mut origin = e.position;
-    let mut arrival = Arrival::DeltaLight;
+    let mut arrival = if e.environment {
+        Arrival::Environment
+    } else {
+        Arrival::DeltaLight
+    };
     if let Some(n) = e.normal {
         visit(
             Step::Vertex(LightVertex::Emission {
@@ -128,7 +144,7 @@ fn walk(world: &World, rng: &mut Rng, max_depth: u32, mut visit: impl FnMut(Step
     }
     let mut dir = e.direction;
     // A point light or luminaire source may sit on a surface: its first ray starts beyond.
-    let mut from_source = e.normal.is_none();
+    let mut from_source = e.normal.is_none() && !e.environment;
     let mut end = PathEnd::default();
     for depth in 0..max_depth {
         let hit = if from_source {
@@ -270,4 +286,105 @@ pub fn delta_light_reflected(world: &World, points: &[ViewedPoint]) -> Vec<Rgb> 
             l * weight
         })
         .collect()
+}
+
+/// A direction about a sensor for its environment term, with its solid-angle density:
+/// cosine-distributed about the normal for planar sensors, uniform over the sphere for the
+/// others (which respond to light from every side).
+fn sensor_direction(s: &SensorPoint, rng: &mut Rng) -> (Vec3, f64) {
+    if s.kind.is_planar() {
+        let local = cosine_hemisphere(rng.next_f64(), rng.next_f64());
+        let (t, b) = s.normal.orthonormal_basis();
+        (
+            t * local.x + b * local.y + s.normal * local.z,
+            local.z / std::f64::consts::PI,
+        )
+    } else {
+        (
+            uniform_sphere(rng.next_f64(), rng.next_f64()),
+            0.25 / std::f64::consts::PI,
+        )
+    }
+}
+
+/// The density of [`sensor_direction`] for `w`.
+fn sensor_direction_pdf(s: &SensorPoint, w: Vec3) -> f64 {
+    if s.kind.is_planar() {
+        s.normal.dot(w).max(0.0) / std::f64::consts::PI
+    } else {
+        0.25 / std::f64::consts::PI
+    }
+}
+
+/// One sample of the direct illuminance from the environment at sensor `s` (RGB, lx; black
+/// without an environment): E = ∫ L(ω) g(ω) V(ω) dω, from a direction drawn from the map and
+/// one drawn about the sensor ([`sensor_direction`]), combined by the balance heuristic, each
+/// tested with a shadow ray to infinity. Two shadow rays at most; `shadow_rays` counts them.
+pub fn environment_illuminance(
+    world: &World,
+    s: &SensorPoint,
+    rng: &mut Rng,
+    shadow_rays: &mut u64,
+) -> Rgb {
+    let Some(env) = world.environment() else {
+        return Rgb::BLACK;
+    };
+    let mut e = Rgb::BLACK;
+    let mut seen = |w: Vec3| {
+        *shadow_rays += 1;
+        world.escapes(world.offset(s.position, s.normal, w), w)
+    };
+    let from_map = env.sample(rng.next_f64(), rng.next_f64());
+    let g = s.response(from_map.direction);
+    if g > 0.0 && from_map.pdf > 0.0 && seen(from_map.direction) {
+        let p_s = sensor_direction_pdf(s, from_map.direction);
+        e = e + from_map.radiance * (g / (from_map.pdf + p_s));
+    }
+    let (w, p_s) = sensor_direction(s, rng);
+    let g = s.response(w);
+    if g > 0.0 && p_s > 0.0 {
+        let l = env.radiance(w);
+        if l.max_component() > 0.0 && seen(w) {
+            e = e + l * (g / (p_s + env.pdf(w)));
+        }
+    }
+    e
+}
+
+/// One sample of the environment's light reflected at the surface point `x` (geometric normal
+/// `ng`, material `m`) towards `wo` (RGB luminance; black without an environment): a direction
+/// drawn from the map and one drawn from the BSDF, combined by the balance heuristic (a delta
+/// lobe's sample has weight 1: the map cannot draw it), each with a shadow ray to infinity.
+pub fn environment_reflected(
+    world: &World,
+    (x, ng, wo): (Vec3, Vec3, Vec3),
+    m: &luxest_render::scene::Material,
+    rng: &mut Rng,
+) -> Rgb {
+    let Some(env) = world.environment() else {
+        return Rgb::BLACK;
+    };
+    let mut l = Rgb::BLACK;
+    let seen = |w: Vec3| world.escapes(world.offset(x, ng, w), w);
+    let from_map = env.sample(rng.next_f64(), rng.next_f64());
+    let w = from_map.direction;
+    let (f, p_b) = bsdf::eval_and_pdf(m, wo, w, ng, ng);
+    let f = f * w.dot(ng).abs();
+    if f.max_component() > 0.0 && from_map.pdf > 0.0 && seen(w) {
+        l = l + f * from_map.radiance * (1.0 / (from_map.pdf + p_b));
+    }
+    if let Some(b) = bsdf::sample_flat(m, wo, ng, rng, Transport::Radiance) {
+        let radiance = env.radiance(b.wi);
+        if radiance.max_component() > 0.0 && b.weight.max_component() > 0.0 {
+            let weight = if b.delta {
+                1.0
+            } else {
+                b.pdf / (b.pdf + env.pdf(b.wi))
+            };
+            if weight > 0.0 && seen(b.wi) {
+                l = l + b.weight * radiance * weight;
+            }
+        }
+    }
+    l
 }

@@ -45,6 +45,12 @@ impl PinholeCamera {
             .expect("finite camera ray")
     }
 
+    /// The angle one pixel subtends at the image centre, radians: a camera ray's footprint
+    /// grows by this much per metre travelled (for texture filtering).
+    pub fn pixel_spread(&self) -> f64 {
+        2.0 * self.tan_half / self.height as f64
+    }
+
     pub fn forward(&self) -> Vec3 {
         self.forward
     }

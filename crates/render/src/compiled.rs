@@ -13,6 +13,8 @@
 //!          triangle material u32 x T, triangle emitter u32 x T (NO_EMITTER if none),
 //!          texture coordinates [f32;2] x V (only if `features.uvs`),
 //!          each texture of `header.textures`, in order ([`Texture::encode`])
+//!          environment map texels [f32;3] x W·H (row-major, top row first; only with an
+//!          `Emitter::Environment` that has a map)
 //! ```
 //!
 //! Geometry is in world space; the small metadata stays human-readable RON while the bulk arrays
@@ -21,6 +23,7 @@
 //! "flat: use the geometric normal".
 
 use crate::scene::{Camera, Material, MaterialKind};
+pub use crate::spot::SpotCone;
 use crate::texture::Texture;
 use luxest_io::color::Rgb;
 use luxest_io::error::{Error, Result};
@@ -30,8 +33,9 @@ use std::path::Path;
 
 pub const MAGIC: &[u8; 8] = luxest_io::meta::COMPILED_MAGIC;
 /// Bumped whenever the layout or the meaning of a field changes.
-/// 3: texture coordinates, textures, surfaces (textured, one-sided and cut-out materials),
-/// textured area emitters.
+/// 3: environment light (`Emitter::Environment`, its map's texels after the other arrays), spot
+/// lights (`Emitter::Point::spot`); texture coordinates, textures, surfaces (textured,
+/// one-sided and cut-out materials), textured area emitters.
 /// 2: goniometric luminaires (`Emitter::Luminaire`, `photometries`), sensor kinds and
 /// calculation-grid layouts.
 pub const SCHEMA_VERSION: u32 = 3;
@@ -151,12 +155,16 @@ pub struct NamedMaterial {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum Emitter {
-    /// Isotropic point source: intensity per RGB channel in cd (Y = luminous intensity).
+    /// Point source: intensity per RGB channel in cd (Y = luminous intensity), the same in
+    /// every direction, or for a spot light the on-axis intensity times the cone's falloff.
     Point {
         name: String,
         position: Vec3,
         intensity_rgb: Rgb,
         flux_rgb: Rgb,
+        /// A spot light's cone (see [`crate::spot`]); `None`: isotropic.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        spot: Option<SpotCone>,
     },
     /// Lambertian area emitter over a contiguous triangle range, emitting from front sides.
     Area {
@@ -192,6 +200,31 @@ pub enum Emitter {
         #[serde(default, skip_serializing_if = "Vec::is_empty")]
         opening_points: Vec<Vec3>,
     },
+    /// Light arriving from infinitely far away along every ray that leaves the scene (see
+    /// [`crate::environment`]); at most one per scene.
+    Environment {
+        name: String,
+        /// Constant environment: its radiance, cd/m² per channel; map: the scale (the same in
+        /// every channel).
+        radiance_rgb: Rgb,
+        /// The equirectangular map, its texels in the array section; `None`: constant.
+        map: Option<EnvironmentMap>,
+        /// The flux through the disk of the scene's bounding sphere
+        /// ([`SceneHeader::bounding_sphere`]): π R² ∫ L dω, lm per channel.
+        flux_rgb: Rgb,
+    },
+}
+
+/// An environment map's size and orientation (its texels follow the triangle arrays).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentMap {
+    /// The file as the scene named it (for reports).
+    pub source: String,
+    pub width: u32,
+    pub height: u32,
+    /// Map-to-world rotation, row-major: world = to_world · local.
+    pub to_world: [[f64; 3]; 3],
 }
 
 impl Emitter {
@@ -199,7 +232,8 @@ impl Emitter {
         match self {
             Emitter::Point { name, .. }
             | Emitter::Area { name, .. }
-            | Emitter::Luminaire { name, .. } => name,
+            | Emitter::Luminaire { name, .. }
+            | Emitter::Environment { name, .. } => name,
         }
     }
     /// Luminous flux in lm (Y of the RGB flux).
@@ -207,8 +241,40 @@ impl Emitter {
         match self {
             Emitter::Point { flux_rgb, .. }
             | Emitter::Area { flux_rgb, .. }
-            | Emitter::Luminaire { flux_rgb, .. } => flux_rgb.luminance(),
+            | Emitter::Luminaire { flux_rgb, .. }
+            | Emitter::Environment { flux_rgb, .. } => flux_rgb.luminance(),
         }
+    }
+}
+
+impl SceneHeader {
+    /// The sphere environment light enters through (centre, radius, m): the one around the
+    /// box of the geometry, the delta lights and the sensors, enlarged by 1e-6 of itself (at
+    /// least 1e-6 m). Scene-compile and the world both take it from here, so the
+    /// environment's flux and its light paths agree.
+    pub fn bounding_sphere(&self) -> (Vec3, f64) {
+        let mut lo = Vec3::splat(f64::INFINITY);
+        let mut hi = Vec3::splat(f64::NEG_INFINITY);
+        let s = &self.stats;
+        if s.triangles > 0 && s.bounds_min.is_finite() && s.bounds_max.is_finite() {
+            lo = s.bounds_min;
+            hi = s.bounds_max;
+        }
+        for e in &self.emitters {
+            if let Emitter::Point { position, .. } | Emitter::Luminaire { position, .. } = e {
+                lo = lo.min(*position);
+                hi = hi.max(*position);
+            }
+        }
+        for p in self.sensors.iter().flat_map(|s| &s.points) {
+            lo = lo.min(p.position);
+            hi = hi.max(p.position);
+        }
+        if !(lo.is_finite() && hi.is_finite()) {
+            return (Vec3::ZERO, 1e-6);
+        }
+        let radius = 0.5 * (hi - lo).length();
+        ((lo + hi) * 0.5, (radius * (1.0 + 1e-6)).max(1e-6))
     }
 }
 
@@ -288,6 +354,9 @@ pub struct Features {
     /// Any cut-out (opacity) surface: every ray query skips its transparent points.
     #[serde(default)]
     pub opacity: bool,
+    /// An environment emitter (`Emitter::Environment`): rays that leave the scene carry light.
+    #[serde(default)]
+    pub environment: bool,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -316,6 +385,8 @@ pub struct CompiledScene {
     pub uvs: Vec<[f32; 2]>,
     /// Decoded textures, indexed like `header.textures`.
     pub textures: Vec<Texture>,
+    /// The environment map's texels (linear RGB, row-major, top row first); empty without one.
+    pub environment_texels: Vec<[f32; 3]>,
     /// xxh3-128 content hash as 32 hex digits (set by `encode` / `decode`).
     pub content_hash: String,
 }
@@ -421,6 +492,7 @@ impl CompiledScene {
         for t in &self.textures {
             t.encode(&mut body);
         }
+        push_f32x3(&mut body, &self.environment_texels);
         let hash = xxhash_rust::xxh3::xxh3_128(&body);
         self.content_hash = format!("{hash:032x}");
         let mut out = Vec::with_capacity(PREAMBLE_LEN + body.len());
@@ -496,6 +568,10 @@ impl CompiledScene {
             r.pos += used;
             textures.push(t);
         }
+        let texels = header
+            .environment_map()
+            .map_or(0, |m| (m.width as usize).saturating_mul(m.height as usize));
+        let environment_texels = r.f32x3(texels, "environment map texels")?;
         if r.pos != body.len() {
             return Err(Error::input(
                 path,
@@ -511,6 +587,7 @@ impl CompiledScene {
             triangle_emitter,
             uvs,
             textures,
+            environment_texels,
             content_hash: format!("{hash:032x}"),
         };
         scene
@@ -582,6 +659,52 @@ impl CompiledScene {
         if self.header.features.uvs && self.uvs.len() != self.positions.len() {
             return Err("texture coordinates and vertices differ in number".into());
         }
+        let environments = self
+            .header
+            .emitters
+            .iter()
+            .filter(|e| matches!(e, Emitter::Environment { .. }))
+            .count();
+        if environments > 1 {
+            return Err(format!("{environments} environment emitters (at most one)"));
+        }
+        for e in &self.header.emitters {
+            match e {
+                Emitter::Point {
+                    spot: Some(cone), ..
+                } => cone.check()?,
+                Emitter::Environment {
+                    radiance_rgb, map, ..
+                } => {
+                    if !(radiance_rgb.is_finite() && radiance_rgb.min_component() >= 0.0) {
+                        return Err("environment radiance is negative or not finite".into());
+                    }
+                    if let Some(m) = map {
+                        check_rotation(&m.to_world)?;
+                    }
+                }
+                _ => {}
+            }
+        }
+        let texels = self
+            .header
+            .environment_map()
+            .map_or(0, |m| (m.width as usize).saturating_mul(m.height as usize));
+        if self.environment_texels.len() != texels {
+            return Err(format!(
+                "{} environment map texels for a map of {texels}",
+                self.environment_texels.len()
+            ));
+        }
+        if let Some(k) = self
+            .environment_texels
+            .iter()
+            .position(|t| t.iter().any(|c| !(c.is_finite() && *c >= 0.0)))
+        {
+            return Err(format!(
+                "environment map texel {k} is negative or not finite"
+            ));
+        }
         let np = self.header.photometries.len() as u32;
         for e in &self.header.emitters {
             if let Emitter::Luminaire { photometry, .. } = e {
@@ -614,6 +737,33 @@ impl CompiledScene {
 
     pub fn material_of(&self, t: usize) -> &Material {
         &self.header.materials[self.triangle_material[t] as usize].model
+    }
+}
+
+impl SceneHeader {
+    /// The environment emitter's map, if the scene has one.
+    pub fn environment_map(&self) -> Option<&EnvironmentMap> {
+        self.emitters.iter().find_map(|e| match e {
+            Emitter::Environment { map: Some(m), .. } => Some(m),
+            _ => None,
+        })
+    }
+}
+
+/// Whether `m` is a rotation (orthonormal rows, determinant +1, within 1e-6).
+pub fn check_rotation(m: &[[f64; 3]; 3]) -> std::result::Result<(), String> {
+    let row = |i: usize| Vec3::from(m[i]);
+    let det = row(0).dot(row(1).cross(row(2)));
+    let orthonormal = (0..3).all(|i| {
+        (0..3).all(|j| {
+            let want = if i == j { 1.0 } else { 0.0 };
+            (row(i).dot(row(j)) - want).abs() < 1e-6
+        })
+    });
+    if orthonormal && (det - 1.0).abs() < 1e-6 {
+        Ok(())
+    } else {
+        Err(format!("environment to_world {m:?} is not a rotation"))
     }
 }
 
@@ -654,6 +804,7 @@ mod tests {
             triangle_emitter: vec![NO_EMITTER],
             uvs: vec![],
             textures: vec![],
+            environment_texels: vec![],
             content_hash: String::new(),
         }
     }
@@ -664,6 +815,41 @@ mod tests {
         let bytes = s.encode();
         let back = CompiledScene::decode(Path::new("t.lxs"), &bytes).unwrap();
         assert_eq!(back, s);
+    }
+
+    #[test]
+    fn environment_map_round_trips_and_is_validated() {
+        let mut s = tiny();
+        s.header.emitters.push(Emitter::Environment {
+            name: "sky".into(),
+            radiance_rgb: Rgb::splat(2.0),
+            map: Some(EnvironmentMap {
+                source: "sky.exr".into(),
+                width: 2,
+                height: 2,
+                to_world: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            }),
+            flux_rgb: Rgb::splat(1.0),
+        });
+        s.header.emitter_cdf.push(1.0);
+        s.environment_texels = vec![[1.0, 2.0, 3.0]; 4];
+        let bytes = s.encode();
+        let back = CompiledScene::decode(Path::new("t.lxs"), &bytes).unwrap();
+        assert_eq!(back, s);
+        let mut bad = s.clone();
+        bad.environment_texels[3][1] = -1.0;
+        let e = CompiledScene::decode(Path::new("t.lxs"), &bad.encode())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("texel 3 is negative"), "{e}");
+        let mut bad = s.clone();
+        if let Emitter::Environment { map: Some(m), .. } = &mut bad.header.emitters[0] {
+            m.to_world[0][0] = 2.0;
+        }
+        let e = CompiledScene::decode(Path::new("t.lxs"), &bad.encode())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is not a rotation"), "{e}");
     }
 
     #[test]

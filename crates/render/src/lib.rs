@@ -9,6 +9,8 @@
 //! - [`texture`]: bitmap textures (sRGB or linear, Mitsuba 3's wrap modes and filters,
 //!   mip-mapped minification);
 //! - [`luminaire`]: goniometric luminaires (photometric files) as delta lights and emitters;
+//!   [`spot`]: spot lights' cones; [`environment`]: the environment emitter (constant sky,
+//!   equirectangular map) and its sampling;
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
 //! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
 //!   flush-to-zero mode, hence here and not in `luxest-io`).
@@ -16,11 +18,13 @@
 pub mod bsdf;
 pub mod camera;
 pub mod compiled;
+pub mod environment;
 pub mod luminaire;
 pub mod parallel;
 pub mod rt;
 pub mod sampling;
 pub mod scene;
 pub mod sobol;
+pub mod spot;
 pub mod texture;
 pub mod world;

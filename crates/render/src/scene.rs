@@ -43,6 +43,9 @@ pub struct Scene {
     /// is untextured, opaque and two-sided.
     #[serde(default, deserialize_with = "luxest_io::fsio::unique_keys")]
     pub surfaces: BTreeMap<String, Surface>,
+    /// Light arriving from infinitely far away (sky, HDR environment map); see [`Environment`].
+    #[serde(default)]
+    pub environment: Option<Environment>,
 }
 
 /// A bitmap texture: a PNG, JPEG or EXR file and how it is looked up.
@@ -105,6 +108,32 @@ pub struct Opacity {
     pub cutoff: Option<f64>,
 }
 
+/// An environment emitter: radiance arriving from every direction that leaves the scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Environment {
+    /// The same luminance from every direction, cd/m² per RGB channel (Mitsuba 3 `constant`).
+    Constant(Rgb),
+    /// An equirectangular (latitude-longitude) map, linear RGB in cd/m², as Mitsuba 3 `envmap`
+    /// reads it: for the map-local unit direction d, u = atan2(d.x, −d.z) / 2π (wrapped to
+    /// [0, 1)) runs along the image's width, v = acos(d.y) / π down its height (the top row
+    /// is +y); bilinear between texel centres, wrapping in u.
+    Map {
+        /// OpenEXR file (R, G, B), relative to the scene file.
+        path: String,
+        /// Multiplies every texel.
+        #[serde(default = "one")]
+        scale: f64,
+        /// Map-to-world rotation, row-major: world = to_world · local.
+        #[serde(default = "identity")]
+        to_world: [[f64; 3]; 3],
+    },
+}
+
+fn identity() -> [[f64; 3]; 3] {
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+}
+
 /// Pinhole camera.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -126,7 +155,9 @@ fn default_up() -> Vec3 {
     Vec3::new(0.0, 1.0, 0.0)
 }
 
-/// Surface scattering models. Reflectances are linear RGB in [0, 1].
+/// Surface scattering models. Reflectances are linear RGB in [0, 1]. The models after `Glossy`
+/// are Mitsuba 3's plugins of the same name (named per variant), with Mitsuba's parameters and
+/// semantics; `docs/scene-format.md` documents each.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum Material {
@@ -147,6 +178,69 @@ pub enum Material {
         specular: Rgb,
         roughness: f64,
     },
+    /// A metal with the complex index of refraction `eta + i k` per channel (relative to the
+    /// outside): smooth without `roughness` (Mitsuba `conductor`), a microfacet surface with it
+    /// (`roughconductor`); the Fresnel reflectance is scaled by `specular_reflectance`.
+    Conductor {
+        eta: Rgb,
+        k: Rgb,
+        #[serde(default = "white")]
+        specular_reflectance: Rgb,
+        #[serde(default)]
+        roughness: Option<Microfacet>,
+    },
+    /// A diffuse base under a dielectric coating (Mitsuba `plastic`, or `roughplastic` with
+    /// `roughness`), with the internal scattering between base and coating.
+    Plastic {
+        diffuse_reflectance: Rgb,
+        #[serde(default = "white")]
+        specular_reflectance: Rgb,
+        /// int_ior / ext_ior (Mitsuba's default: polypropylene in air).
+        #[serde(default = "plastic_ior")]
+        ior: f64,
+        /// Mitsuba's `nonlinear`: the diffuse colour darkens and saturates through internal
+        /// scattering, as in wet or varnished materials.
+        #[serde(default)]
+        nonlinear: bool,
+        #[serde(default)]
+        roughness: Option<Microfacet>,
+    },
+    /// A rough dielectric interface with reflection and transmission (Mitsuba
+    /// `roughdielectric`); `ior` as for `Dielectric`.
+    RoughDielectric { ior: f64, roughness: Microfacet },
+    /// A thin dielectric sheet (a window pane): reflection with the internal reflections of
+    /// both faces summed, transmission straight through (Mitsuba `thindielectric`).
+    ThinDielectric { ior: f64 },
+    /// (1 − weight) · first + weight · second (Mitsuba `blendbsdf`).
+    Blend {
+        weight: f64,
+        first: Box<Material>,
+        second: Box<Material>,
+    },
+}
+
+/// Microfacet roughness (isotropic), Mitsuba 3's convention: `alpha` is the distribution's α
+/// (the root-mean-square slope for Beckmann).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Microfacet {
+    pub distribution: MicrofacetDistribution,
+    pub alpha: f64,
+}
+
+/// The microfacet normal distributions of Mitsuba 3.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum MicrofacetDistribution {
+    /// GGX / Trowbridge-Reitz.
+    Ggx,
+    /// Beckmann (Gaussian slopes).
+    Beckmann,
+}
+
+/// Mitsuba 3's default `int_ior / ext_ior` of `plastic` and `roughplastic`: polypropylene (1.49)
+/// in air (1.000277), from its table of indices (`include/mitsuba/render/ior.h`).
+pub fn plastic_ior() -> f64 {
+    1.49 / 1.000277
 }
 
 /// The kind of a material, as listed in the features manifest.
@@ -156,16 +250,30 @@ pub enum MaterialKind {
     Mirror,
     Dielectric,
     Glossy,
+    Conductor,
+    Plastic,
+    RoughDielectric,
+    ThinDielectric,
+    Blend,
 }
 
 impl Material {
     /// The material at a textured point: `color` multiplies its main colour (Lambertian and
-    /// Mirror reflectance, Glossy diffuse), `roughness` its microfacet roughness. Models
-    /// without such a parameter are returned unchanged.
+    /// Mirror reflectance, Glossy diffuse, Conductor specular reflectance, Plastic diffuse
+    /// reflectance, both members of a Blend), `roughness` its microfacet α (Glossy: its
+    /// roughness). The smooth dielectrics are returned unchanged.
     pub fn textured(&self, color: Option<Rgb>, roughness: Option<f64>) -> Material {
         let tint = |c: &Rgb| match color {
             Some(t) => *c * t,
             None => *c,
+        };
+        // α scaled by the texture, kept within the range validation allows.
+        let rough = |r: &Option<Microfacet>| match (r, roughness) {
+            (Some(m), Some(s)) => Some(Microfacet {
+                distribution: m.distribution,
+                alpha: (m.alpha * s).clamp(1e-4, 4.0),
+            }),
+            _ => *r,
         };
         match self {
             Material::Lambertian { reflectance } => Material::Lambertian {
@@ -174,7 +282,6 @@ impl Material {
             Material::Mirror { reflectance } => Material::Mirror {
                 reflectance: tint(reflectance),
             },
-            Material::Dielectric { .. } => self.clone(),
             Material::Glossy {
                 diffuse,
                 specular,
@@ -182,8 +289,46 @@ impl Material {
             } => Material::Glossy {
                 diffuse: tint(diffuse),
                 specular: *specular,
-                roughness: roughness.map_or(*r, |s| (r * s).clamp(0.0, 1.0)),
+                roughness: roughness.map_or(*r, |s| (r * s).clamp(1e-4, 1.0)),
             },
+            Material::Conductor {
+                eta,
+                k,
+                specular_reflectance,
+                roughness: r,
+            } => Material::Conductor {
+                eta: *eta,
+                k: *k,
+                specular_reflectance: tint(specular_reflectance),
+                roughness: rough(r),
+            },
+            Material::Plastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                ior,
+                nonlinear,
+                roughness: r,
+            } => Material::Plastic {
+                diffuse_reflectance: tint(diffuse_reflectance),
+                specular_reflectance: *specular_reflectance,
+                ior: *ior,
+                nonlinear: *nonlinear,
+                roughness: rough(r),
+            },
+            Material::RoughDielectric { ior, roughness: r } => Material::RoughDielectric {
+                ior: *ior,
+                roughness: rough(&Some(*r)).unwrap_or(*r),
+            },
+            Material::Blend {
+                weight,
+                first,
+                second,
+            } => Material::Blend {
+                weight: *weight,
+                first: Box::new(first.textured(color, roughness)),
+                second: Box::new(second.textured(color, roughness)),
+            },
+            Material::Dielectric { .. } | Material::ThinDielectric { .. } => self.clone(),
         }
     }
 
@@ -193,6 +338,20 @@ impl Material {
             Material::Mirror { .. } => MaterialKind::Mirror,
             Material::Dielectric { .. } => MaterialKind::Dielectric,
             Material::Glossy { .. } => MaterialKind::Glossy,
+            Material::Conductor { .. } => MaterialKind::Conductor,
+            Material::Plastic { .. } => MaterialKind::Plastic,
+            Material::RoughDielectric { .. } => MaterialKind::RoughDielectric,
+            Material::ThinDielectric { .. } => MaterialKind::ThinDielectric,
+            Material::Blend { .. } => MaterialKind::Blend,
+        }
+    }
+
+    /// This material and, for a blend, the materials it blends (depth first).
+    pub fn for_each(&self, f: &mut impl FnMut(&Material)) {
+        f(self);
+        if let Material::Blend { first, second, .. } = self {
+            first.for_each(f);
+            second.for_each(f);
         }
     }
 }
@@ -302,6 +461,25 @@ pub struct PointLight {
     /// Tint; rescaled so that its luminance is 1 (the photometric magnitude is `power`).
     #[serde(default = "white")]
     pub color: Rgb,
+    /// Makes the source a spot light (Mitsuba 3 `spot`); `None`: isotropic.
+    #[serde(default)]
+    pub spot: Option<Spot>,
+}
+
+/// A spot light's cone: intensity I(θ) = I₀ · falloff(θ), θ the angle to `direction`, with
+/// Mitsuba 3's linear falloff: 1 for θ ≤ beam width, (cutoff − θ)/(cutoff − beam width)
+/// between, 0 beyond the cutoff. `PointPower::Intensity` is I₀ (on the axis); `Flux` the
+/// whole cone's flux, 2π I₀ (1 − (sin c − sin b)/(c − b)) (c, b the angles in radians).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spot {
+    /// The cone's axis (need not be unit length).
+    pub direction: Vec3,
+    /// Half-angle beyond which nothing is emitted, degrees in (0, 180] (Mitsuba's default 20).
+    pub cutoff_deg: f64,
+    /// Half-angle of the full-intensity core, degrees in [0, cutoff] (Mitsuba's default: 3/4
+    /// of the cutoff).
+    pub beam_width_deg: f64,
 }
 
 fn white() -> Rgb {

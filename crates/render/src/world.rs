@@ -1,8 +1,10 @@
 //! A compiled scene ready for Monte Carlo: the Embree tracer plus the queries every estimator
 //! needs — surface interactions at hits, emitter choice by flux, emission sampling, points on
-//! area emitters for next-event estimation, and scale-aware ray offsets.
+//! area emitters and directions towards the environment for next-event estimation, the
+//! environment's radiance along rays that leave the scene, and scale-aware ray offsets.
 
 use crate::compiled::{CompiledScene, Emitter, NO_EMITTER};
+use crate::environment::{EnvironmentLight, EnvironmentSample};
 use crate::luminaire::GoniometricLight;
 use crate::rt::{Hit, RayTracer};
 use crate::sampling::{
@@ -35,12 +37,25 @@ pub struct SurfacePoint {
 #[derive(Clone, Copy, Debug)]
 pub struct EmissionSample {
     pub position: Vec3,
-    /// Unit normal of an area emitter; `None` for a point source.
+    /// Unit normal of an area emitter; `None` for a point source and the environment.
     pub normal: Option<Vec3>,
     pub direction: Vec3,
+    /// The path enters from the environment: `position` lies on the disk outside the scene's
+    /// bounding sphere and is no vertex of the path (no connection starts there).
+    pub environment: bool,
     /// Flux weight (lm per RGB channel) of the path: emitter flux / selection probability.
     pub flux: Rgb,
     pub emitter: u32,
+}
+
+/// What next-event estimation draws: a point on a light, or a direction towards the
+/// environment.
+#[derive(Clone, Copy, Debug)]
+pub enum LightSample {
+    Point(LightPoint),
+    /// A direction towards the environment; its `pdf` (solid angle) includes the emitter
+    /// choice.
+    Environment(EnvironmentSample),
 }
 
 /// A point on an area emitter or a point source, for next-event estimation.
@@ -83,6 +98,8 @@ pub struct World {
     /// The area emitters alone, by flux (indexed like the emitters, others weigh 0); `None`
     /// without area emitters.
     area_choice: Option<Distribution1D>,
+    /// The environment emitter and its index, if the scene has one.
+    environment: Option<(u32, EnvironmentLight)>,
 }
 
 /// The cut-out test of a scene with opacity: a hit on a surface of opacity α (its `value`
@@ -271,7 +288,9 @@ impl World {
                         [a, b - a, c - a, n]
                     })
                     .collect(),
-                Emitter::Point { .. } | Emitter::Luminaire { .. } => Vec::new(),
+                Emitter::Point { .. } | Emitter::Luminaire { .. } | Emitter::Environment { .. } => {
+                    Vec::new()
+                }
             })
             .collect();
         let triangle_choice = emitter_triangles
@@ -290,6 +309,8 @@ impl World {
         } else {
             Vec::new()
         };
+        let environment = environment_light(&scene)
+            .map_err(|m| luxest_io::Error::input(&scene.header.name, m))?;
         let smooth = scene.header.features.smooth_normals;
         let triangle_normals = (0..scene.triangle_count())
             .map(|t| {
@@ -370,6 +391,7 @@ impl World {
             diagonal,
             room_scale,
             area_choice,
+            environment,
         })
     }
 
@@ -384,6 +406,19 @@ impl World {
     /// back. Borrowed (no copy) for untextured two-sided materials.
     #[inline]
     pub fn material_at(&self, triangle: u32, uv: [f64; 2], wo: Vec3) -> Cow<'_, Material> {
+        self.material_filtered(triangle, uv, wo, 0.0)
+    }
+
+    /// [`World::material_at`] with textures filtered over a footprint `footprint` wide in uv
+    /// space (mip-mapped; 0: the finest level, as the estimators look textures up — their
+    /// pixel samples do the filtering).
+    pub fn material_filtered(
+        &self,
+        triangle: u32,
+        uv: [f64; 2],
+        wo: Vec3,
+        footprint: f64,
+    ) -> Cow<'_, Material> {
         let mi = self.scene.triangle_material[triangle as usize] as usize;
         let m = &self.scene.header.materials[mi].model;
         let Some(s) = self.scene.header.surfaces.get(mi) else {
@@ -396,10 +431,12 @@ impl World {
             return Cow::Borrowed(m);
         }
         let color = s.color.map(|t| {
-            let [r, g, b, _] = self.texture(t).eval(uv, 0.0);
+            let [r, g, b, _] = self.texture(t).eval(uv, footprint);
             Rgb([r as f64, g as f64, b as f64])
         });
-        let roughness = s.roughness.map(|t| self.texture(t).eval(uv, 0.0)[0] as f64);
+        let roughness = s
+            .roughness
+            .map(|t| self.texture(t).eval(uv, footprint)[0] as f64);
         Cow::Owned(m.textured(color, roughness))
     }
 
@@ -411,6 +448,27 @@ impl World {
 
     fn texture(&self, t: u32) -> &Texture {
         &self.scene.textures[t as usize]
+    }
+
+    /// The uv-space width of a footprint `width` metres wide on the surface at `sp` seen from
+    /// direction `wo`: the footprint stretches by 1/√|cos θ| on average over its two axes, and
+    /// the triangle maps metres to uv units by √(uv area / area). Zero without texture
+    /// coordinates.
+    pub fn uv_footprint(&self, sp: &SurfacePoint, wo: Vec3, width: f64) -> f64 {
+        if !self.scene.header.features.uvs {
+            return 0.0;
+        }
+        let idx = self.scene.indices[sp.triangle as usize];
+        let [a, b, c] = idx.map(|i| Vec3::from(self.scene.positions[i as usize]));
+        let [ta, tb, tc] = idx.map(|i| self.scene.uvs[i as usize].map(|x| x as f64));
+        let area = (b - a).cross(c - a).length();
+        let uv_area = ((tb[0] - ta[0]) * (tc[1] - ta[1]) - (tb[1] - ta[1]) * (tc[0] - ta[0])).abs();
+        let cos = wo.dot(sp.ng).abs().max(1e-3);
+        if area > 0.0 {
+            width * (uv_area / area).sqrt() / cos.sqrt()
+        } else {
+            0.0
+        }
     }
 
     /// Texture coordinates at barycentric (u, v) of a triangle (zero without stored ones).
@@ -537,18 +595,22 @@ impl World {
         self.luminaires.get(ei).and_then(Option::as_ref)
     }
 
-    /// For a delta light (isotropic point or luminaire) `ei`: calls `f(position, intensity)`
-    /// for each of its point sources with the intensity per channel (cd) it radiates towards
-    /// `receiver` (one source, except for a luminaire's area opening); nothing for area
-    /// emitters.
+    /// For a delta light (isotropic point, spot or luminaire) `ei`: calls
+    /// `f(position, intensity)` for each of its point sources with the intensity per channel
+    /// (cd) it radiates towards `receiver` (one source, except for a luminaire's area opening);
+    /// nothing for area emitters and the environment.
     #[inline]
     pub fn for_each_delta_source(&self, ei: usize, receiver: Vec3, mut f: impl FnMut(Vec3, Rgb)) {
         match &self.scene.header.emitters[ei] {
             Emitter::Point {
                 position,
                 intensity_rgb,
+                spot,
                 ..
-            } => f(*position, *intensity_rgb),
+            } => f(
+                *position,
+                point_intensity(*intensity_rgb, spot, receiver - *position),
+            ),
             Emitter::Luminaire { .. } => {
                 let l = self
                     .luminaire(ei)
@@ -557,25 +619,97 @@ impl World {
                     f(s, l.source_intensity_toward(s, receiver));
                 }
             }
-            Emitter::Area { .. } => {}
+            Emitter::Area { .. } | Emitter::Environment { .. } => {}
         }
     }
 
+    /// The environment emitter, if the scene has one.
+    #[inline]
+    pub fn environment(&self) -> Option<&EnvironmentLight> {
+        self.environment.as_ref().map(|(_, e)| e)
+    }
+
+    /// Radiance per channel arriving along the unit direction `w` from outside the scene (what
+    /// a ray travelling along `w` that escapes sees); black without an environment.
+    #[inline]
+    pub fn environment_radiance(&self, w: Vec3) -> Rgb {
+        self.environment().map_or(Rgb::BLACK, |e| e.radiance(w))
+    }
+
+    /// Solid-angle density with which [`World::sample_light_point`] draws the direction `w`
+    /// towards the environment (the emitter choice included), for multiple importance
+    /// sampling; 0 without an environment.
+    pub fn environment_pdf(&self, w: Vec3) -> f64 {
+        match &self.environment {
+            Some((ei, e)) => self.emitter_choice.pmf(*ei as usize) * e.pdf(w),
+            None => 0.0,
+        }
+    }
+
+    /// Whether a ray from `from` (already offset from its surface) along the unit direction
+    /// `w` leaves the scene without hitting anything.
+    pub fn escapes(&self, from: Vec3, w: Vec3) -> bool {
+        !self
+            .tracer
+            .occluded(from, w, self.margin(from, from), f64::INFINITY)
+    }
+
     /// Starts a light path: an emitter chosen by flux, a point on it and a direction
-    /// (isotropic for point sources, from the intensity table for luminaires (see
-    /// [`crate::luminaire`]), cosine-distributed from the front of area emitters).
+    /// (isotropic for point sources, uniform over the cone for spots, from the intensity table
+    /// for luminaires (see [`crate::luminaire`]), cosine-distributed from the front of area
+    /// emitters, from the map through the bounding disk for the environment (see
+    /// [`crate::environment`])).
     pub fn sample_emission(&self, rng: &mut Rng) -> EmissionSample {
         let (ei, p_e) = self.emitter_choice.sample(rng.next_f64());
         match &self.scene.header.emitters[ei] {
             Emitter::Point {
-                position, flux_rgb, ..
+                position,
+                flux_rgb,
+                spot: None,
+                ..
             } => EmissionSample {
                 position: *position,
                 normal: None,
                 direction: uniform_sphere(rng.next_f64(), rng.next_f64()),
                 flux: *flux_rgb * (1.0 / p_e),
                 emitter: ei as u32,
+                environment: false,
             },
+            Emitter::Point {
+                position,
+                intensity_rgb,
+                spot: Some(cone),
+                ..
+            } => {
+                let direction = cone.sample(rng.next_f64(), rng.next_f64());
+                let weight = cone.falloff(direction) * cone.cone_solid_angle() / p_e;
+                EmissionSample {
+                    position: *position,
+                    normal: None,
+                    direction,
+                    flux: *intensity_rgb * weight,
+                    emitter: ei as u32,
+                    environment: false,
+                }
+            }
+            Emitter::Environment { .. } => {
+                let env = self.environment().expect("the environment is built");
+                let u = [
+                    rng.next_f64(),
+                    rng.next_f64(),
+                    rng.next_f64(),
+                    rng.next_f64(),
+                ];
+                let (position, direction, weight) = env.sample_emission(u);
+                EmissionSample {
+                    position,
+                    normal: None,
+                    direction,
+                    flux: weight * (1.0 / p_e),
+                    emitter: ei as u32,
+                    environment: true,
+                }
+            }
             Emitter::Luminaire { .. } => {
                 let l = self
                     .luminaire(ei)
@@ -588,6 +722,7 @@ impl World {
                     direction,
                     flux: weight * (1.0 / p_e),
                     emitter: ei as u32,
+                    environment: false,
                 }
             }
             Emitter::Area {
@@ -611,6 +746,7 @@ impl World {
                     direction: t * local.x + b * local.y + normal * local.z,
                     flux: flux * (1.0 / p_e),
                     emitter: ei as u32,
+                    environment: false,
                 }
             }
         }
@@ -645,9 +781,10 @@ impl World {
         (a + e1 * b1 + e2 * b2, n, radiance)
     }
 
-    /// A point on a light chosen by flux, for next-event estimation at `receiver` (a
-    /// luminaire's intensity depends on the direction towards it).
-    pub fn sample_light_point(&self, rng: &mut impl Sampler, receiver: Vec3) -> LightPoint {
+    /// A point on a light chosen by flux, or a direction towards the environment, for
+    /// next-event estimation at `receiver` (a luminaire's or spot's intensity depends on the
+    /// direction towards it).
+    pub fn sample_light_point(&self, rng: &mut impl Sampler, receiver: Vec3) -> LightSample {
         // One emitter needs no choice (no random number drawn).
         let (ei, p_e) = if self.scene.header.emitters.len() == 1 {
             (0, 1.0)
@@ -662,24 +799,32 @@ impl World {
                     .luminaire(ei)
                     .expect("luminaires are built for luminaire scenes");
                 let position = l.choose_source(rng);
-                LightPoint {
+                LightSample::Point(LightPoint {
                     position,
                     normal: None,
                     emitted: l.intensity_toward(receiver - position),
                     pdf: p_e,
-                }
+                })
             }
             Emitter::Point {
                 position,
                 intensity_rgb,
+                spot,
                 ..
-            } => LightPoint {
+            } => LightSample::Point(LightPoint {
                 position: *position,
                 normal: None,
-                emitted: *intensity_rgb,
+                emitted: point_intensity(*intensity_rgb, spot, receiver - *position),
                 pdf: p_e,
-            },
-            Emitter::Area { .. } => self.area_light_point(ei, p_e, rng),
+            }),
+            Emitter::Area { .. } => LightSample::Point(self.area_light_point(ei, p_e, rng)),
+            Emitter::Environment { .. } => {
+                let env = self.environment().expect("the environment is built");
+                let (u1, u2) = rng.next_2d();
+                let mut s = env.sample(u1, u2);
+                s.pdf *= p_e;
+                LightSample::Environment(s)
+            }
         }
     }
 
@@ -724,7 +869,7 @@ impl World {
         let p_e = self.emitter_choice.pmf(emitter as usize);
         match &self.scene.header.emitters[emitter as usize] {
             Emitter::Area { area_m2, .. } => p_e / area_m2,
-            Emitter::Point { .. } | Emitter::Luminaire { .. } => 0.0,
+            Emitter::Point { .. } | Emitter::Luminaire { .. } | Emitter::Environment { .. } => 0.0,
         }
     }
 
@@ -762,4 +907,43 @@ impl World {
             }
         }
     }
+}
+
+/// A point source's intensity towards `toward`: the same in every direction, or a spot's
+/// on-axis intensity times its falloff.
+#[inline]
+fn point_intensity(intensity: Rgb, spot: &Option<crate::spot::SpotCone>, toward: Vec3) -> Rgb {
+    match spot {
+        None => intensity,
+        Some(cone) => intensity * cone.falloff(toward),
+    }
+}
+
+/// The run-time environment emitter of a compiled scene, with its index.
+fn environment_light(
+    scene: &CompiledScene,
+) -> std::result::Result<Option<(u32, EnvironmentLight)>, String> {
+    let sphere = scene.header.bounding_sphere();
+    for (ei, e) in scene.header.emitters.iter().enumerate() {
+        if let Emitter::Environment {
+            radiance_rgb, map, ..
+        } = e
+        {
+            let light = match map {
+                None => EnvironmentLight::constant(*radiance_rgb, sphere),
+                Some(m) => EnvironmentLight::map(
+                    (
+                        m.width as usize,
+                        m.height as usize,
+                        scene.environment_texels.clone(),
+                    ),
+                    radiance_rgb.0[0],
+                    m.to_world,
+                    sphere,
+                )?,
+            };
+            return Ok(Some((ei as u32, light)));
+        }
+    }
+    Ok(None)
 }

@@ -34,6 +34,11 @@ pub enum Emitter {
         name: String,
         flux_rgb: Rgb,
     },
+    /// The environment; its flux is the light through the scene's bounding disk.
+    Environment {
+        name: String,
+        flux_rgb: Rgb,
+    },
     Luminaire {
         name: String,
         position: Vec3,
@@ -179,7 +184,9 @@ fn group(path: &Path, h: &SceneHeader) -> Result<LightSources> {
     let mut out = LightSources::default();
     for e in &h.emitters {
         match e {
-            Emitter::Point { name, flux_rgb } | Emitter::Area { name, flux_rgb } => {
+            Emitter::Point { name, flux_rgb }
+            | Emitter::Area { name, flux_rgb }
+            | Emitter::Environment { name, flux_rgb } => {
                 out.other.push((name.clone(), flux_rgb.luminance()))
             }
             Emitter::Luminaire {

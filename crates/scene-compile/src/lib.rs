@@ -8,11 +8,12 @@
 //! expansion (with calculation surfaces, [`surfaces`]).
 //!
 //! Modules: [`cli`] (arguments and run), [`validate`], [`shapes`] (tessellation), [`meshes`]
-//! (OBJ and glTF), [`luminaires`], [`surfaces`], [`textures`] (bitmap textures and the
-//! per-material surfaces), [`mitsuba`] (export to Mitsuba 3); this file assembles the
-//! world-space scene.
+//! (OBJ and glTF), [`luminaires`], [`environment`] (the environment emitter and its map),
+//! [`surfaces`], [`textures`] (bitmap textures and the per-material surfaces), [`mitsuba`]
+//! (export to Mitsuba 3); this file assembles the world-space scene.
 
 pub mod cli;
+pub mod environment;
 pub mod luminaires;
 pub mod meshes;
 pub mod mitsuba;
@@ -26,9 +27,10 @@ pub use cli::{run, Args};
 use luxest_io::math::Vec3;
 use luxest_io::num::show;
 use luxest_io::{Error, Result};
+use luxest_render::bsdf;
 use luxest_render::compiled::{
     CompiledScene, Emitter, Features, GridLayout, NamedMaterial, ObjectRange, SceneHeader,
-    SensorSet, Stats, NO_EMITTER,
+    SensorSet, SpotCone, Stats, NO_EMITTER,
 };
 use luxest_render::scene::{Emission, Material, PointPower, Scene, Sensor, SensorPoint, Shape};
 use shapes::LocalMesh;
@@ -61,7 +63,11 @@ pub fn referenced_files(scene: &Scene, path: &Path) -> Vec<PathBuf> {
         _ => None,
     });
     let photometry = scene.luminaires.iter().map(|l| dir.join(&l.file));
-    meshes.chain(photometry).collect()
+    let environment = match &scene.environment {
+        Some(luxest_render::scene::Environment::Map { path, .. }) => Some(dir.join(path)),
+        _ => None,
+    };
+    meshes.chain(photometry).chain(environment).collect()
 }
 
 /// Reads, validates and compiles an authored scene file.
@@ -285,6 +291,41 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
     })
 }
 
+/// The fraction of light in channel `c` a reflecting material returns at normal incidence, for
+/// the warning on scenes where nothing absorbs (dielectrics: 0 here; that check counts them as
+/// lossless).
+fn lossless_albedo(m: &Material, c: usize) -> f64 {
+    match m {
+        Material::Lambertian { reflectance } | Material::Mirror { reflectance } => reflectance.0[c],
+        Material::Glossy {
+            diffuse, specular, ..
+        } => diffuse.0[c] + specular.0[c],
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            ..
+        } => specular_reflectance.0[c] * bsdf::conductor::fresnel_conductor(1.0, eta.0[c], k.0[c]),
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            ..
+        } => {
+            let f0 = bsdf::fresnel_dielectric(1.0, *ior).0;
+            f0 * specular_reflectance.0[c] + (1.0 - f0) * diffuse_reflectance.0[c]
+        }
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => (1.0 - weight) * lossless_albedo(first, c) + weight * lossless_albedo(second, c),
+        Material::Dielectric { .. }
+        | Material::RoughDielectric { .. }
+        | Material::ThinDielectric { .. } => 0.0,
+    }
+}
+
 /// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
 pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     validate::check_scene(path, scene)?;
@@ -427,10 +468,16 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         });
     }
     for (i, l) in scene.point_lights.iter().enumerate() {
-        // Isotropic source: flux = 4 pi I.
+        // Isotropic source: flux = 4π I; a spot: its cone's factor (luxest_render::spot).
+        let spot = l.spot.as_ref().map(|s| SpotCone {
+            direction: s.direction.try_normalize().expect("validated"),
+            cutoff_deg: s.cutoff_deg,
+            beam_width_deg: s.beam_width_deg,
+        });
+        let solid_angle = spot.as_ref().map_or(4.0 * PI, SpotCone::solid_angle_factor);
         let intensity = match l.power {
             PointPower::Intensity(cd) => cd,
-            PointPower::Flux(lm) => lm / (4.0 * PI),
+            PointPower::Flux(lm) => lm / solid_angle,
         };
         let intensity_rgb = l.color.with_luminance(intensity).expect("validated");
         emitters.push(Emitter::Point {
@@ -440,17 +487,13 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
                 .unwrap_or_else(|| format!("point_lights[{i}]")),
             position: l.position,
             intensity_rgb,
-            flux_rgb: intensity_rgb * (4.0 * PI),
+            flux_rgb: intensity_rgb * solid_angle,
+            spot,
         });
     }
     let lum = luminaires::compile(path, &scene.luminaires)?;
     report.warnings.extend(lum.warnings);
     emitters.extend(lum.emitters);
-    let fluxes: Vec<f64> = emitters.iter().map(Emitter::flux_lm).collect();
-    let emitter_cdf = luxest_render::sampling::Distribution1D::new(&fluxes)
-        .ok_or_else(|| Error::input(path, "emitters have no finite positive total flux"))?
-        .cdf()
-        .to_vec();
 
     let used: std::collections::BTreeSet<u32> = b.triangle_material.iter().copied().collect();
     let materials: Vec<NamedMaterial> = scene
@@ -473,15 +516,13 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     // Light is trapped (walks end only at --max-depth) where no surface absorbs it: in a
     // channel where every used material reflects or transmits all of it. A white wall in a
     // room with any absorbing surface is not such a case.
-    let lossless = |m: &Material, c: usize| match m {
-        Material::Lambertian { reflectance } | Material::Mirror { reflectance } => {
-            reflectance.0[c] >= 1.0
-        }
-        Material::Glossy {
-            diffuse, specular, ..
-        } => diffuse.0[c] + specular.0[c] >= 1.0,
-        // A smooth dielectric absorbs nothing.
-        Material::Dielectric { .. } => true,
+    let lossless = |m: &Material, c: usize| {
+        matches!(
+            m,
+            Material::Dielectric { .. }
+                | Material::RoughDielectric { .. }
+                | Material::ThinDielectric { .. }
+        ) || lossless_albedo(m, c) >= 1.0
     };
     if let Some(c) = (0..3).find(|&c| {
         !used.is_empty()
@@ -499,7 +540,10 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         ));
     }
     let used_models: Vec<&Material> = used.iter().map(|&i| &materials[i as usize].model).collect();
-    let mut material_kinds: Vec<_> = used_models.iter().map(|m| m.kind()).collect();
+    let mut material_kinds = Vec::new();
+    for m in &used_models {
+        m.for_each(&mut |m| material_kinds.push(m.kind()));
+    }
     material_kinds.sort();
     material_kinds.dedup();
     let any = |f: fn(&Material) -> bool| used_models.iter().any(|m| f(m));
@@ -507,9 +551,9 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         material_kinds,
         point_emitters: emitters.iter().any(|e| matches!(e, Emitter::Point { .. })),
         area_emitters: emitters.iter().any(|e| matches!(e, Emitter::Area { .. })),
-        specular_paths: any(|m| matches!(m, Material::Mirror { .. } | Material::Dielectric { .. })),
-        transmission: any(|m| matches!(m, Material::Dielectric { .. })),
-        glossy: any(|m| matches!(m, Material::Glossy { .. })),
+        specular_paths: any(bsdf::has_delta_lobe),
+        transmission: any(bsdf::transmits),
+        glossy: any(bsdf::is_glossy),
         smooth_normals: b.normals.iter().any(|n| *n != [0.0; 3]),
         spectral: false,
         camera: scene.camera.is_some(),
@@ -519,6 +563,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         textures: !loaded.textures.is_empty(),
         one_sided: scene.surfaces.values().any(|s| !s.two_sided),
         opacity: scene.surfaces.values().any(|s| s.opacity.is_some()),
+        environment: scene.environment.is_some(),
     };
     let name = scene_name(scene, path);
     let stats = Stats {
@@ -586,13 +631,13 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             }
         }
     }
-    let header = SceneHeader {
+    let mut header = SceneHeader {
         name,
         compiler_version: luxest_io::meta::PROGRAM_VERSION.to_string(),
         camera: scene.camera.clone(),
         materials,
         emitters,
-        emitter_cdf,
+        emitter_cdf: Vec::new(),
         objects,
         sensors,
         photometries: lum.tables,
@@ -601,6 +646,19 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         features,
         stats,
     };
+    // The environment's flux is its light through the disk of the bounding sphere of
+    // everything else, so it comes last.
+    let mut environment_texels = Vec::new();
+    if let Some(env) = &scene.environment {
+        let (emitter, texels) = environment::compile(path, env, &header)?;
+        header.emitters.push(emitter);
+        environment_texels = texels;
+    }
+    let fluxes: Vec<f64> = header.emitters.iter().map(Emitter::flux_lm).collect();
+    header.emitter_cdf = luxest_render::sampling::Distribution1D::new(&fluxes)
+        .ok_or_else(|| Error::input(path, "emitters have no finite positive total flux"))?
+        .cdf()
+        .to_vec();
     let compiled = CompiledScene {
         header,
         positions: b.positions,
@@ -610,6 +668,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         triangle_emitter: b.triangle_emitter,
         uvs: if any_uvs { b.uvs } else { Vec::new() },
         textures: loaded.textures,
+        environment_texels,
         content_hash: String::new(),
     };
     compiled

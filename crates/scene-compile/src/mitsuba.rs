@@ -13,8 +13,16 @@
 //! | `Mirror` | `twosided` `conductor`, `material="none"` (Fresnel 1), `specular_reflectance` |
 //! | `Dielectric` (ior inside / outside) | `dielectric`, `int_ior = ior`, `ext_ior = 1` |
 //! | `Glossy` = diffuse/π + specular · GGX(α = roughness²) | `twosided` `blendbsdf` of weight ½ over `diffuse` (2 · diffuse) and `roughconductor` (`ggx`, α, `material="none"`, 2 · specular): the sum of the two lobes |
+//! | `Conductor` (η + ik per channel) | `twosided` `conductor`, or `roughconductor` with `distribution` and `alpha`; `eta`, `k`, `specular_reflectance` |
+//! | `Plastic` (ior = int / ext) | `twosided` `plastic`, or `roughplastic` with `distribution` and `alpha`; `diffuse_reflectance`, `specular_reflectance`, `int_ior = ior`, `ext_ior = 1`, `nonlinear` |
+//! | `RoughDielectric` | `roughdielectric`, `distribution`, `alpha`, `int_ior = ior`, `ext_ior = 1` |
+//! | `ThinDielectric` | `thindielectric`, `int_ior = ior`, `ext_ior = 1` |
+//! | `Blend` | `blendbsdf` with `weight`, over the two materials' own elements |
 //! | area emitter (front side, luminance L) | `area` emitter, `radiance` = L |
 //! | point source (intensity I per channel) | `point` emitter, `intensity` = I |
+//! | spot light (on-axis intensity I₀, cutoff, beam width) | `spot` emitter, `intensity` = I₀, `cutoff_angle`, `beam_width`, `to_world` a `lookat` along the axis |
+//! | constant environment (radiance L) | `constant` emitter, `radiance` = L |
+//! | environment map (texels, scale, rotation) | `envmap` emitter reading `environment.exr` (the compiled texels, written as f32 RGB), `scale`, `to_world` the rotation as a 4 × 4 `matrix` |
 //! | camera (pinhole, vertical field of view) | `perspective`, `fov_axis="y"`, `look_at` with the same up vector; `hdrfilm` with a `box` filter |
 //!
 //! Goniometric luminaires have no Mitsuba equivalent and are refused. The integrator is `path`
@@ -23,7 +31,7 @@
 use luxest_io::math::Vec3;
 use luxest_io::{Error, Result};
 use luxest_render::compiled::{CompiledScene, Emitter, NO_EMITTER};
-use luxest_render::scene::Material;
+use luxest_render::scene::{Material, Microfacet, MicrofacetDistribution};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -66,6 +74,73 @@ fn bsdf(m: &Material) -> String {
             roughness * roughness,
             rgb("specular_reflectance", specular.0.map(|v| 2.0 * v))
         ),
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            roughness,
+        } => format!(
+            r#"<bsdf type="twosided"><bsdf type="{}">{}{}{}{}</bsdf></bsdf>"#,
+            if roughness.is_some() {
+                "roughconductor"
+            } else {
+                "conductor"
+            },
+            microfacet(roughness.as_ref()),
+            rgb("eta", eta.0),
+            rgb("k", k.0),
+            rgb("specular_reflectance", specular_reflectance.0)
+        ),
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            nonlinear,
+            roughness,
+        } => format!(
+            r#"<bsdf type="twosided"><bsdf type="{}">{}{}{}<float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/><boolean name="nonlinear" value="{nonlinear}"/></bsdf></bsdf>"#,
+            if roughness.is_some() {
+                "roughplastic"
+            } else {
+                "plastic"
+            },
+            microfacet(roughness.as_ref()),
+            rgb("diffuse_reflectance", diffuse_reflectance.0),
+            rgb("specular_reflectance", specular_reflectance.0)
+        ),
+        Material::RoughDielectric { ior, roughness } => format!(
+            r#"<bsdf type="roughdielectric">{}<float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/></bsdf>"#,
+            microfacet(Some(roughness))
+        ),
+        Material::ThinDielectric { ior } => format!(
+            r#"<bsdf type="thindielectric"><float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/></bsdf>"#
+        ),
+        // Each blended material keeps its own element (a two-sided reflector stays wrapped in
+        // `twosided`; Mitsuba's `twosided` cannot hold a transmitting blend).
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => format!(
+            r#"<bsdf type="blendbsdf"><float name="weight" value="{weight:e}"/>{}{}</bsdf>"#,
+            bsdf(first),
+            bsdf(second)
+        ),
+    }
+}
+
+/// The `distribution` and `alpha` of a microfacet model (nothing for a smooth one).
+fn microfacet(r: Option<&Microfacet>) -> String {
+    match r {
+        Some(r) => format!(
+            r#"<string name="distribution" value="{}"/><float name="alpha" value="{:e}"/>"#,
+            match r.distribution {
+                MicrofacetDistribution::Ggx => "ggx",
+                MicrofacetDistribution::Beckmann => "beckmann",
+            },
+            r.alpha
+        ),
+        None => String::new(),
     }
 }
 
@@ -114,19 +189,81 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
             c.resolution.1
         );
     }
+    let mut files = Vec::new();
     for e in &h.emitters {
-        if let Emitter::Point {
-            position,
-            intensity_rgb,
-            ..
-        } = e
-        {
-            let _ = writeln!(
-                xml,
-                r#"  <emitter type="point"><point name="position" value="{}"/>{}</emitter>"#,
-                vec3(*position),
-                rgb("intensity", intensity_rgb.0)
-            );
+        match e {
+            Emitter::Point {
+                position,
+                intensity_rgb,
+                spot: None,
+                ..
+            } => {
+                let _ = writeln!(
+                    xml,
+                    r#"  <emitter type="point"><point name="position" value="{}"/>{}</emitter>"#,
+                    vec3(*position),
+                    rgb("intensity", intensity_rgb.0)
+                );
+            }
+            Emitter::Point {
+                position,
+                intensity_rgb,
+                spot: Some(cone),
+                ..
+            } => {
+                // Mitsuba's spot points along its local +z: look from the position along the
+                // axis, with any up vector not parallel to it.
+                let up = cone.direction.orthonormal_basis().0;
+                let _ = writeln!(
+                    xml,
+                    r#"  <emitter type="spot"><transform name="to_world"><lookat origin="{}" target="{}" up="{}"/></transform><float name="cutoff_angle" value="{:e}"/><float name="beam_width" value="{:e}"/>{}</emitter>"#,
+                    vec3(*position),
+                    vec3(*position + cone.direction),
+                    vec3(up),
+                    cone.cutoff_deg,
+                    cone.beam_width_deg,
+                    rgb("intensity", intensity_rgb.0)
+                );
+            }
+            Emitter::Environment {
+                radiance_rgb,
+                map: None,
+                ..
+            } => {
+                let _ = writeln!(
+                    xml,
+                    r#"  <emitter type="constant">{}</emitter>"#,
+                    rgb("radiance", radiance_rgb.0)
+                );
+            }
+            Emitter::Environment {
+                radiance_rgb,
+                map: Some(m),
+                ..
+            } => {
+                let file = "environment.exr";
+                let image = luxest_io::image::RgbImage {
+                    width: m.width as usize,
+                    height: m.height as usize,
+                    pixels: scene.environment_texels.clone(),
+                    attributes: Vec::new(),
+                };
+                files.push((
+                    file.to_string(),
+                    luxest_io::exr::encode_rgb(Path::new(file), &image)?,
+                ));
+                let r = m.to_world;
+                let matrix = format!(
+                    "{:e} {:e} {:e} 0 {:e} {:e} {:e} 0 {:e} {:e} {:e} 0 0 0 0 1",
+                    r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2]
+                );
+                let _ = writeln!(
+                    xml,
+                    r#"  <emitter type="envmap"><string name="filename" value="{file}"/><float name="scale" value="{:e}"/><transform name="to_world"><matrix value="{matrix}"/></transform></emitter>"#,
+                    radiance_rgb.0[0]
+                );
+            }
+            Emitter::Area { .. } | Emitter::Luminaire { .. } => {}
         }
     }
     // Triangles grouped by (material, emitter), in order of first appearance.
@@ -139,7 +276,6 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
     {
         groups.entry((m, e)).or_default().push(t);
     }
-    let mut files = Vec::new();
     for (g, ((m, e), triangles)) in groups.iter().enumerate() {
         let material = &h.materials[*m as usize];
         let file = format!("mesh_{g:03}.obj");

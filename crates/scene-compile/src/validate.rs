@@ -6,7 +6,8 @@ use luxest_io::math::Vec3;
 use luxest_io::num::show;
 use luxest_io::{Error, Result};
 use luxest_render::scene::{
-    Camera, Emission, Material, PointLight, PointPower, Scene, Sensor, Shape,
+    Camera, Emission, Environment, Material, Microfacet, PointLight, PointPower, Scene, Sensor,
+    Shape,
 };
 use std::path::Path;
 
@@ -165,12 +166,87 @@ fn check_material(c: &Check, place: &str, m: &Material) -> Result<()> {
             1.0,
             "reflectance",
         ),
-        Material::Dielectric { ior } => {
-            c.positive(&format!("{place}.ior"), *ior, "index of refraction")?;
-            if *ior > 10.0 {
-                return Err(c.fail(&format!("{place}.ior"), format!("{ior} is outside (0, 10]")));
+        Material::Dielectric { ior } | Material::ThinDielectric { ior } => {
+            check_ior(c, place, *ior, false)
+        }
+        Material::Conductor {
+            eta,
+            k,
+            specular_reflectance,
+            roughness,
+        } => {
+            c.rgb_in(
+                &format!("{place}.eta"),
+                *eta,
+                0.0,
+                MAX_CONDUCTOR_IOR,
+                "index of refraction",
+            )?;
+            c.rgb_in(
+                &format!("{place}.k"),
+                *k,
+                0.0,
+                MAX_CONDUCTOR_IOR,
+                "extinction coefficient",
+            )?;
+            if let Some(i) = (0..3).find(|&i| eta.0[i] == 0.0 && k.0[i] == 0.0) {
+                return Err(c.fail(
+                    place,
+                    format!("eta and k are both 0 in channel {i} (no interface)"),
+                ));
             }
-            Ok(())
+            c.rgb_in(
+                &format!("{place}.specular_reflectance"),
+                *specular_reflectance,
+                0.0,
+                1.0,
+                "reflectance",
+            )?;
+            check_roughness(c, place, roughness.as_ref())
+        }
+        Material::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            ior,
+            nonlinear: _,
+            roughness,
+        } => {
+            c.rgb_in(
+                &format!("{place}.diffuse_reflectance"),
+                *diffuse_reflectance,
+                0.0,
+                1.0,
+                "reflectance",
+            )?;
+            c.rgb_in(
+                &format!("{place}.specular_reflectance"),
+                *specular_reflectance,
+                0.0,
+                1.0,
+                "reflectance",
+            )?;
+            // Mitsuba's roughplastic refuses an index-matched coating (its tables divide by it).
+            check_ior(c, place, *ior, roughness.is_some())?;
+            check_roughness(c, place, roughness.as_ref())
+        }
+        Material::RoughDielectric { ior, roughness } => {
+            check_ior(c, place, *ior, true)?;
+            check_roughness(c, place, Some(roughness))
+        }
+        Material::Blend {
+            weight,
+            first,
+            second,
+        } => {
+            c.finite(&format!("{place}.weight"), *weight)?;
+            if !(0.0..=1.0).contains(weight) {
+                return Err(c.fail(
+                    &format!("{place}.weight"),
+                    format!("{} is outside [0, 1]", show(*weight)),
+                ));
+            }
+            check_material(c, &format!("{place}.first"), first)?;
+            check_material(c, &format!("{place}.second"), second)
         }
         Material::Glossy {
             diffuse,
@@ -212,6 +288,45 @@ fn check_material(c: &Check, place: &str, m: &Material) -> Result<()> {
     }
 }
 
+/// Largest index of refraction (real part or extinction coefficient) a conductor may have:
+/// metals in the visible stay below 10 (silver's k ≈ 4, aluminium's ≈ 8).
+const MAX_CONDUCTOR_IOR: f64 = 100.0;
+
+/// A dielectric's relative index of refraction: in (0, 10], and not 1 where the model
+/// (a rough interface) needs an interface.
+fn check_ior(c: &Check, place: &str, ior: f64, interface: bool) -> Result<()> {
+    c.positive(&format!("{place}.ior"), ior, "index of refraction")?;
+    if ior > 10.0 {
+        return Err(c.fail(&format!("{place}.ior"), format!("{ior} is outside (0, 10]")));
+    }
+    if interface && ior == 1.0 {
+        return Err(c.fail(
+            &format!("{place}.ior"),
+            "1 matches the outside: a rough interface needs an index other than 1",
+        ));
+    }
+    Ok(())
+}
+
+/// Largest microfacet α accepted: beyond it a "rough" surface is no longer a microfacet
+/// surface (Mitsuba accepts any α; the scenes it ships stay below 1).
+const MAX_ALPHA: f64 = 4.0;
+
+fn check_roughness(c: &Check, place: &str, r: Option<&Microfacet>) -> Result<()> {
+    let Some(r) = r else {
+        return Ok(());
+    };
+    let at = format!("{place}.roughness.alpha");
+    c.finite(&at, r.alpha)?;
+    if !(r.alpha > 0.0 && r.alpha <= MAX_ALPHA) {
+        return Err(c.fail(
+            &at,
+            format!("{} is outside (0, {}]", show(r.alpha), show(MAX_ALPHA)),
+        ));
+    }
+    Ok(())
+}
+
 fn check_point_light(c: &Check, place: &str, l: &PointLight) -> Result<()> {
     c.position(&format!("{place}.position"), l.position)?;
     let v = match l.power {
@@ -234,7 +349,55 @@ fn check_point_light(c: &Check, place: &str, l: &PointLight) -> Result<()> {
             ),
         ));
     }
-    c.emission_rgb(&format!("{place}.color"), l.color)
+    c.emission_rgb(&format!("{place}.color"), l.color)?;
+    if let Some(spot) = &l.spot {
+        let place = format!("{place}.spot");
+        c.nonzero_vec(&format!("{place}.direction"), spot.direction)?;
+        let (cut, beam) = (spot.cutoff_deg, spot.beam_width_deg);
+        c.finite(&format!("{place}.cutoff_deg"), cut)?;
+        c.finite(&format!("{place}.beam_width_deg"), beam)?;
+        if !(cut > 0.0 && cut <= 180.0) {
+            return Err(c.fail(
+                &format!("{place}.cutoff_deg"),
+                format!("the cutoff must be in (0, 180] degrees, got {}", show(cut)),
+            ));
+        }
+        if !(0.0..=cut).contains(&beam) {
+            return Err(c.fail(
+                &format!("{place}.beam_width_deg"),
+                format!(
+                    "the beam width must be in [0, cutoff_deg = {}] degrees, got {}",
+                    show(cut),
+                    show(beam)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// An environment: a constant radiance like an emitter's; a map's scale positive and its
+/// `to_world` a rotation (the file is read when compiling).
+fn check_environment(c: &Check, env: &Environment) -> Result<()> {
+    match env {
+        Environment::Constant(l) => c.emission_rgb("environment.Constant", *l),
+        Environment::Map {
+            scale, to_world, ..
+        } => {
+            c.positive("environment.scale", *scale, "the map's scale")?;
+            if *scale > MAX_EMISSION {
+                return Err(c.fail(
+                    "environment.scale",
+                    format!("{} exceeds {}", show(*scale), show(MAX_EMISSION)),
+                ));
+            }
+            for (i, row) in to_world.iter().enumerate() {
+                c.vec(&format!("environment.to_world[{i}]"), Vec3::from(*row))?;
+            }
+            luxest_render::compiled::check_rotation(to_world)
+                .map_err(|m| c.fail("environment.to_world", m))
+        }
+    }
 }
 
 fn check_sensor(c: &Check, place: &str, s: &Sensor) -> Result<()> {
@@ -398,13 +561,18 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
     for (i, l) in scene.luminaires.iter().enumerate() {
         crate::luminaires::check(&c, &format!("luminaires[{i}]"), l)?;
     }
+    if let Some(env) = &scene.environment {
+        check_environment(&c, env)?;
+    }
     if scene.point_lights.is_empty()
         && scene.luminaires.is_empty()
+        && scene.environment.is_none()
         && scene.objects.iter().all(|o| o.emission.is_none())
     {
         return Err(Error::input(
             path,
-            "scene has no emitter (no point light, luminaire or object with emission)",
+            "scene has no emitter (no point light, luminaire, environment or object with \
+             emission)",
         ));
     }
     let mut names = std::collections::BTreeSet::new();

@@ -13,8 +13,16 @@
 //! only: they break energy conservation, which the furnace test
 //! would catch).
 //!
+//! Environment light ([`luxest_render::environment`]): a path that leaves the scene gathers the
+//! environment's radiance along its last direction, weighted by the power heuristic against
+//! next-event estimation (which draws a direction from the map, with the environment's share
+//! of the emitter choice, and tests it with a shadow ray to infinity); a camera ray or a
+//! specular bounce that escapes takes it with weight 1. Spot lights are point sources whose
+//! light point carries the falloff towards the shading point.
+//!
 //! The features manifest selects a monomorphised variant: the code for point sources, area
-//! emitters and specular materials is compiled out of the variants of scenes without them.
+//! emitters, specular materials and the environment is compiled out of the variants of scenes
+//! without them.
 
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
@@ -22,7 +30,7 @@ use luxest_render::bsdf::{self, Transport};
 use luxest_render::rt::Ray;
 use luxest_render::sampling::Sampler;
 use luxest_render::sobol::PixelSampler;
-use luxest_render::world::World;
+use luxest_render::world::{LightSample, World};
 
 /// Rays traced, for rates; optionally every ray, to time raw Embree on the same rays.
 #[derive(Default)]
@@ -54,7 +62,7 @@ fn power_heuristic(a: f64, b: f64) -> f64 {
 pub type Kernel = fn(&World, Vec3, Vec3, &mut PixelSampler, u32, &mut RayLog) -> Rgb;
 
 /// Radiance arriving at `origin` from direction `dir`.
-pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
+pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const ENV: bool>(
     world: &World,
     origin: Vec3,
     dir: Vec3,
@@ -81,6 +89,15 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
             });
         }
         let Some(sp) = world.intersect(origin, dir) else {
+            if ENV {
+                let le = world.environment_radiance(dir);
+                let w = if delta {
+                    1.0
+                } else {
+                    power_heuristic(bsdf_pdf, world.environment_pdf(dir))
+                };
+                l = l + beta * le * w;
+            }
             break;
         };
         let wo = -dir;
@@ -102,46 +119,68 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
         let m = world.material_seen(&sp, wo);
         let m = &*m;
         let is_delta = SPECULAR && bsdf::is_delta(m);
-        if !is_delta && (POINT || AREA) {
-            // Next-event estimation.
-            let lp = world.sample_light_point(rng, sp.position);
-            let v = lp.position - sp.position;
-            let d2 = v.length_squared();
-            if d2 > 0.0 {
-                let d = d2.sqrt();
-                let w = v / d;
-                let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
-                let f = f * w.dot(sp.ng).abs();
-                if f.max_component() > 0.0 {
-                    let contribution = match lp.normal {
-                        Some(nl) if AREA => {
-                            let cos_l = -nl.dot(w);
-                            if cos_l > 0.0 {
-                                let light_pdf = lp.pdf * d2 / cos_l;
-                                f * lp.emitted * (power_heuristic(light_pdf, bp) / light_pdf)
-                            } else {
-                                Rgb::BLACK
+        if !is_delta && (POINT || AREA || ENV) {
+            // Next-event estimation: (unit direction, distance to the light or infinity, the
+            // light's point (none for the environment), contribution before visibility).
+            let (w, d, target, contribution) = match world.sample_light_point(rng, sp.position) {
+                LightSample::Point(lp) => {
+                    let v = lp.position - sp.position;
+                    let d2 = v.length_squared();
+                    if d2 <= 0.0 {
+                        (v, 0.0, None, Rgb::BLACK)
+                    } else {
+                        let d = d2.sqrt();
+                        let w = v / d;
+                        let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
+                        let f = f * w.dot(sp.ng).abs();
+                        let c = if f.max_component() <= 0.0 {
+                            Rgb::BLACK
+                        } else {
+                            match lp.normal {
+                                Some(nl) if AREA => {
+                                    let cos_l = -nl.dot(w);
+                                    if cos_l > 0.0 {
+                                        let light_pdf = lp.pdf * d2 / cos_l;
+                                        f * lp.emitted
+                                            * (power_heuristic(light_pdf, bp) / light_pdf)
+                                    } else {
+                                        Rgb::BLACK
+                                    }
+                                }
+                                None if POINT => f * lp.emitted * (1.0 / (d2 * lp.pdf)),
+                                _ => Rgb::BLACK,
                             }
-                        }
-                        None if POINT => f * lp.emitted * (1.0 / (d2 * lp.pdf)),
-                        _ => Rgb::BLACK,
-                    };
-                    if contribution.max_component() > 0.0 {
-                        log.shadow += 1;
-                        let from = world.offset(sp.position, sp.ng, w);
-                        if log.record {
-                            log.shadow_depths.push(depth);
-                            log.shadow_rays.push(Ray {
-                                origin: from,
-                                direction: w,
-                                tnear: 0.0,
-                                tfar: d,
-                            });
-                        }
-                        if !world.occluded(from, lp.position) {
-                            l = l + beta * contribution;
-                        }
+                        };
+                        (w, d, Some(lp.position), c)
                     }
+                }
+                LightSample::Environment(es) if ENV && es.pdf > 0.0 => {
+                    let w = es.direction;
+                    let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
+                    let f = f * w.dot(sp.ng).abs();
+                    let c = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
+                    (w, f64::INFINITY, None, c)
+                }
+                LightSample::Environment(es) => (es.direction, f64::INFINITY, None, Rgb::BLACK),
+            };
+            if contribution.max_component() > 0.0 {
+                log.shadow += 1;
+                let from = world.offset(sp.position, sp.ng, w);
+                if log.record {
+                    log.shadow_depths.push(depth);
+                    log.shadow_rays.push(Ray {
+                        origin: from,
+                        direction: w,
+                        tnear: 0.0,
+                        tfar: d,
+                    });
+                }
+                let visible = match target {
+                    Some(p) => !world.occluded(from, p),
+                    None => world.escapes(from, w),
+                };
+                if visible {
+                    l = l + beta * contribution;
                 }
             }
         }
@@ -173,14 +212,26 @@ pub fn kernel_for(world: &World) -> Kernel {
     // A luminaire is a delta light like an isotropic point: the same next-event code serves
     // it (`sample_light_point` returns its intensity towards the receiver).
     let delta_lights = f.point_emitters || f.goniometric_luminaires;
+    let env = f.environment;
     match (delta_lights, f.area_emitters, f.specular_paths) {
-        (true, true, true) => radiance::<true, true, true>,
-        (true, true, false) => radiance::<true, true, false>,
-        (true, false, true) => radiance::<true, false, true>,
-        (true, false, false) => radiance::<true, false, false>,
-        (false, true, true) => radiance::<false, true, true>,
-        (false, true, false) => radiance::<false, true, false>,
-        (false, false, true) => radiance::<false, false, true>,
-        (false, false, false) => radiance::<false, false, false>,
+        (true, true, true) => with_environment::<true, true, true>(env),
+        (true, true, false) => with_environment::<true, true, false>(env),
+        (true, false, true) => with_environment::<true, false, true>(env),
+        (true, false, false) => with_environment::<true, false, false>(env),
+        (false, true, true) => with_environment::<false, true, true>(env),
+        (false, true, false) => with_environment::<false, true, false>(env),
+        (false, false, true) => with_environment::<false, false, true>(env),
+        (false, false, false) => with_environment::<false, false, false>(env),
+    }
+}
+
+/// The variant with or without the environment's code.
+fn with_environment<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
+    env: bool,
+) -> Kernel {
+    if env {
+        radiance::<POINT, AREA, SPECULAR, true>
+    } else {
+        radiance::<POINT, AREA, SPECULAR, false>
     }
 }
