@@ -3,20 +3,22 @@
 
 Each scene is a room (floor, ceiling and four walls with their own reflectances) furnished with
 primitives (boxes as tables, cabinets and blocks; spheres) and meshes (the torus and trefoil of
-scenes/meshes), in Lambertian, glossy and, in some scenes, mirror and glass materials, lit by one
-to several emitters of varied size, flux and position: ceiling panels, small very bright spheres
-(the firefly makers) and point sources, white or strongly coloured; about a third of the
-reflectances are saturated colours. The camera stands somewhere in the room looking at
-something, or, in a quarter of the rooms, outside a room open at the front (as the Cornell box
-is seen), so that views include empty background. Everything follows from (seed, index), so a scene regenerates byte for byte.
+scenes/meshes), in Lambertian, glossy, plastic and metal and, in some scenes, mirror and glass
+materials, lit by one to several emitters of varied size, flux and position: ceiling panels,
+small very bright spheres (the firefly makers) and point sources, white or strongly coloured;
+about a third of the reflectances are saturated colours. The camera stands somewhere in the room
+looking at something, or, in a quarter of the rooms, outside a room open at the front (as the
+Cornell box is seen), so that views include empty background. Everything follows from (seed,
+index), so a scene regenerates byte for byte.
 
 Three rooms in four are textured from the procedural library of data-gen/textures.py (written
 once per dataset, DIR/textures/<name>.png, named from the scenes as ../textures/<name>.png):
 wood, tile, marble and carpet floors, plastered, tiled, panelled or papered walls, textured
-furniture boxes and meshes (colour textures multiplying Lambertian and glossy colours, repeated
-at varied scales and offsets by `uv_transform`), pictures and pages hung on the walls, cut-out
-plants and grilles (opacity), and textured emitters (windows, patterned ceiling panels). The
-other rooms, and the spheres (which have no texture coordinates), stay untextured.
+furniture boxes and meshes (colour textures multiplying the Lambertian, glossy and plastic
+diffuse colours and the metals' specular colour, repeated at varied scales and offsets by
+`uv_transform`), pictures and pages hung on the walls, cut-out plants and grilles (opacity), and
+textured emitters (windows, patterned ceiling panels). The other rooms, and the spheres (which
+have no texture coordinates), stay untextured.
 
   generate.py --preset quick|full --side N --out DIR   write DIR/<split>/<name>.ron, N x N
                                                        images, and the library DIR/textures/
@@ -57,6 +59,19 @@ TEXTURE_SIDE = 256
 FLOORS = {"wood-planks": 0.9, "tiles": 1.2, "marble": 1.6, "fabric": 0.35}
 WALLS = {"plaster": 2.0, "tiles": 0.9, "fabric": 0.5, "wood-planks": 1.0, "marble": 1.8, "paper-text": 0.8}
 FURNITURE = {"wood-planks": 0.8, "marble": 0.9, "fabric": 0.3, "tiles": 0.6, "plaster": 1.2}
+# Materials of the furniture and meshes, with their weights: Lambertian, glossy (Glossy), plastic
+# (Plastic: a diffuse base under a smooth or rough coating), metal (Conductor, smooth or rough),
+# mirror and glass.
+KINDS = {"lambert": 0.5, "glossy": 0.2, "plastic": 0.12, "metal": 0.08, "mirror": 0.05, "glass": 0.05}
+# Conductors' complex index of refraction (eta, k) at the R, G and B wavelengths of Mitsuba 3's
+# RGB mode for its spectral tables (the gold is the one of crates/render/tests/data/mitsuba_bsdf.ron).
+METALS = {
+    "gold": ((0.143, 0.374, 1.442), (3.983, 2.385, 1.603)),
+    "copper": ((0.200, 0.924, 1.102), (3.912, 2.452, 2.142)),
+    "aluminium": ((1.657, 0.880, 0.521), (9.224, 6.270, 4.837)),
+    "silver": ((0.155, 0.117, 0.138), (4.828, 3.122, 2.147)),
+    "chromium": ((4.368, 2.910, 1.654), (5.205, 4.231, 3.755)),
+}
 # Length along the meshes' u (the ring, the knot) over the length around their tube (v).
 MESH_ASPECT = {"torus.obj": 3, "trefoil.glb": 12}
 PICTURES = ("photo-landscape", "photo-still-life", "paper-text")
@@ -134,11 +149,11 @@ def scene(preset, index, seed, side, scene_dir=None):
 
     def material(kind=None, tex=None, cut_out=False):
         """A new material of `kind` (drawn when None); `tex`: (library image, su, sv, fixed)
-        makes a Lambertian or glossy one textured, its colour a tint of the image, and with
-        `cut_out` its alpha the opacity (opaque where it reaches 0.5)."""
+        makes a Lambertian, glossy, plastic or metal one textured, its main colour a tint of the
+        image, and with `cut_out` its alpha the opacity (opaque where it reaches 0.5)."""
         name = f"m{len(materials)}"
-        kind = kind or rng.choices(["lambert", "glossy", "mirror", "glass"], [0.62, 0.26, 0.06, 0.06])[0]
-        tex = tex if kind in ("lambert", "glossy") else None
+        kind = kind or rng.choices(list(KINDS), list(KINDS.values()))[0]
+        tex = tex if kind in ("lambert", "glossy", "plastic", "metal") else None
         if tex is not None:
             lib = tex[0]
             tint = v3(*[rng.uniform(0.8, 1.0) for _ in range(3)]) if lib in COLOURED else color(rng, 0.35, 0.95)
@@ -156,12 +171,29 @@ def scene(preset, index, seed, side, scene_dir=None):
             materials[name] = (
                 f"Glossy(diffuse: {diffuse}, specular: {v3(spec, spec, spec)}, roughness: {f(rng.uniform(0.08, 0.7))})"
             )
+        elif kind == "plastic":
+            nonlinear = ", nonlinear: true" if rng.random() < 0.2 else ""
+            rough = f", roughness: Some({microfacet()})" if rng.random() < 0.6 else ""
+            materials[name] = (
+                f"Plastic(diffuse_reflectance: {tint if tex else color(rng)}, ior: {f(rng.uniform(1.4, 1.6))}"
+                f"{nonlinear}{rough})"
+            )
+        elif kind == "metal":
+            eta, k = METALS[rng.choice(sorted(METALS))]
+            r = rng.uniform(0.85, 1.0)
+            rough = f", roughness: Some({microfacet()})" if rng.random() < 0.8 else ""
+            materials[name] = (
+                f"Conductor(eta: {v3(*eta)}, k: {v3(*k)}, specular_reflectance: {tint if tex else v3(r, r, r)}{rough})"
+            )
         elif kind == "mirror":
             r = rng.uniform(0.7, 0.95)
             materials[name] = f"Mirror(reflectance: {v3(r, r, r)})"
         else:
             materials[name] = f"Dielectric(ior: {f(rng.uniform(1.33, 1.7))})"
         return name
+
+    def microfacet():
+        return f"(distribution: {rng.choice(['Ggx', 'Beckmann'])}, alpha: {f(rng.uniform(0.05, 0.5))})"
 
     def maybe(choices, width, height, p):
         """With probability p (in a textured room), a texture of `choices` (library image ->

@@ -4,7 +4,8 @@ The library's images are PNGs that an independent decoder (Pillow) reads back, c
 verified, as exactly the pixels the library computes; the repeating patterns have no seam larger
 than their largest step inside; the library and the scenes regenerate byte for byte whatever
 the interpreter's hash seed. The generated scenes name only library images, texture about three
-rooms in four and never a sphere (it has no texture coordinates), and vary the texture scales.
+rooms in four and never a sphere (it has no texture coordinates), texture Lambertian, glossy,
+plastic and metal materials, and vary the texture scales.
 That every generated scene compiles needs the scene-compile stage: pipelines/tests/test_generated_scenes.py.
 """
 
@@ -106,7 +107,7 @@ def test_generated_rooms_use_the_library(tmp_path):
     assert listed.stdout.split() == [f"textures/{n}.png" for n in textures.NAMES]
     scenes = sorted(tmp_path.glob("*/*.ron"))
     assert len(scenes) == 240
-    textured, used, scales, opacities, emitters = 0, set(), set(), 0, 0
+    textured, used, scales, opacities, emitters, kinds = 0, set(), set(), 0, 0, set()
     for path in scenes:
         text = path.read_text()
         if "textures: {" not in text:
@@ -120,8 +121,12 @@ def test_generated_rooms_use_the_library(tmp_path):
         surfaced = set(re.findall(r'^\s+"(m\d+)": \(color:', text, re.M))
         spheres = set(re.findall(r'shape: Sphere\(.*material: "(m\d+)"', text))
         assert surfaced and not surfaced & spheres, path
+        for m in surfaced:
+            kinds.add(re.search(rf'^\s+"{m}": (\w+)\(', text, re.M).group(1))
         opacities += "opacity:" in text
         emitters += "emission: Texture(" in text
     assert 0.65 * len(scenes) < textured < 0.85 * len(scenes)
     assert used == set(textures.NAMES)
     assert len(scales) > 200 and opacities > 20 and emitters > 20
+    # Textures tint every kind of material that has a main colour.
+    assert kinds == {"Lambertian", "Glossy", "Plastic", "Conductor"}
