@@ -432,13 +432,13 @@ def main():
         return
     if args.out is None:
         ap.error("--out is required unless --list")
+    if args.only != "textures" and (args.side is None or not 16 <= args.side <= 8192):
+        ap.error("--side: the image side in pixels, 16 to 8192, is required with --out")
     if args.only != "scenes":
         library.write_library(args.out / TEXTURE_DIR, TEXTURE_SIDE, args.seed)
         print(f"{len(library.NAMES)} textures in {args.out / TEXTURE_DIR}", file=sys.stderr)
     if args.only == "textures":
         return
-    if args.side is None or not 16 <= args.side <= 8192:
-        ap.error("--side: the image side in pixels, 16 to 8192, is required with --out")
     for i, (split, name) in enumerate(scenes):
         path = args.out / split / f"{name}.ron"
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -43,15 +43,14 @@ $(GEN_DIR)/%.ron: data-gen/generate.py data-gen/textures.py $(MESHES) $(SIDE_STA
 # The procedural texture library the scenes name (../textures/<name>.png, data-gen/textures.py),
 # one per dataset: a few seconds to write, so written once per change of the generator, by the
 # rule of a stamp (the generator rewrites only the images whose bytes changed, and make re-reads
-# their times, so an unchanged image leaves its scenes compiled). A missing image is written
-# again.
+# their times, so an unchanged image leaves its scenes compiled). A missing image removes the
+# stamp when make reads this file, so the library is written again.
 DATASET_TEXTURES := $(addprefix $(GEN_DIR)/,$(shell python3 data-gen/generate.py --list-textures))
 TEXTURE_STAMP := build/dataset/$(DATASET)/textures.stamp
+$(if $(filter-out $(wildcard $(DATASET_TEXTURES)),$(DATASET_TEXTURES)),$(shell rm -f $(TEXTURE_STAMP)))
 $(TEXTURE_STAMP): data-gen/generate.py data-gen/textures.py
-	@$(GENERATE) --out $(GEN_DIR) --only textures
-	@touch $@
-$(DATASET_TEXTURES): $(TEXTURE_STAMP)
-	@[ -e $@ ] || $(GENERATE) --out $(GEN_DIR) --only textures
+	@$(GENERATE) --out $(GEN_DIR) --only textures && touch $@
+$(DATASET_TEXTURES): $(TEXTURE_STAMP) ;
 
 # A compiled scene holds its textures' pixels: it depends on the library too.
 build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(DATASET_TEXTURES) $(SCENE_COMPILE)

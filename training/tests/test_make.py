@@ -171,7 +171,18 @@ def test_textured_example_runs_every_stage_through_its_variable():
 
 def test_generator_writes_the_side_it_is_given(tmp_path):
     subprocess.run(
-        ["python3", "data-gen/generate.py", "--preset", "quick", "--side", "72", "--out", str(tmp_path)],
+        [
+            "python3",
+            "data-gen/generate.py",
+            "--preset",
+            "quick",
+            "--side",
+            "72",
+            "--out",
+            str(tmp_path),
+            "--only",
+            "scenes",
+        ],
         cwd=ROOT,
         check=True,
         capture_output=True,
@@ -195,7 +206,8 @@ def test_dataset_count_adds_scenes_and_keeps_the_smaller_datasets(tmp_path):
     assert len({flag(c, "-o") for c in dry_run("reference") if c[0] == STAGES["TRACE"]}) == 24
     for n in (24, 30):
         subprocess.run(
-            ["python3", "data-gen/generate.py", "--scenes", str(n), "--side", "32", "--out", str(tmp_path / str(n))],
+            ["python3", "data-gen/generate.py", "--scenes", str(n), "--side", "32", "--only", "scenes"]
+            + ["--out", str(tmp_path / str(n))],
             cwd=ROOT,
             check=True,
             capture_output=True,
