@@ -2,7 +2,7 @@
 # The long fuzz run (docs/fuzzing.md): every cargo-fuzz target of fuzz/, one after the other, for
 # SECONDS_PER_TARGET seconds each (default 600), then a table of the results.
 #
-#   scripts/fuzz.sh                 # all ten targets, 10 minutes each
+#   scripts/fuzz.sh                 # all twelve targets, 10 minutes each
 #   SECONDS_PER_TARGET=60 scripts/fuzz.sh exr ies
 #
 # Needs cargo-fuzz (`cargo install cargo-fuzz --locked`); on a stable toolchain the targets build
@@ -14,7 +14,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SECS=${SECONDS_PER_TARGET:-600}
 TARGETS=("$@")
-[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(scene obj gltf compiled exr ies ldt sensors scene_info peer)
+[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(scene obj gltf mitsuba_xml ply compiled exr ies ldt sensors scene_info peer)
 export RUSTC_BOOTSTRAP=1
 
 command -v cargo-fuzz >/dev/null || {

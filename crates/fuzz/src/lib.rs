@@ -17,10 +17,12 @@ const NOWHERE: &str = "/nonexistent-luxest-fuzz";
 pub type Target = fn(&[u8]);
 
 /// The targets by name, as `fuzz/fuzz_targets/<name>.rs` and the smoke run know them.
-pub const TARGETS: [(&str, Target); 10] = [
+pub const TARGETS: [(&str, Target); 12] = [
     ("scene", scene),
     ("obj", obj),
     ("gltf", gltf),
+    ("mitsuba_xml", mitsuba_xml),
+    ("ply", ply),
     ("compiled", compiled),
     ("exr", exr),
     ("ies", ies),
@@ -66,6 +68,34 @@ pub fn obj(data: &[u8]) {
 /// A glTF 2.0 file (JSON `.gltf` or binary `.glb`).
 pub fn gltf(data: &[u8]) {
     let _ = scene_compile::meshes::load_gltf_bytes(&Path::new(NOWHERE).join("m.glb"), data);
+}
+
+/// A Mitsuba 3 XML scene: parsing, `$` substitution, includes (which read nothing: they are
+/// looked up where no file is), references, transforms and the translation of every element;
+/// a translation that validates is compiled when its tessellation is small.
+pub fn mitsuba_xml(data: &[u8]) {
+    use luxest_render::scene::Shape;
+    let path = Path::new(NOWHERE).join("scene.xml");
+    let Ok(imported) = scene_compile::import::mitsuba_xml::import_bytes(&path, data) else {
+        return;
+    };
+    let scene = imported.scene;
+    if scene_compile::validate::check_scene(&path, &scene).is_err() {
+        return;
+    }
+    let small = scene.objects.len() <= 64
+        && scene
+            .objects
+            .iter()
+            .all(|o| !matches!(o.shape, Shape::Sphere { .. }));
+    if small {
+        let _ = scene_compile::compile(&scene, &path);
+    }
+}
+
+/// A Stanford PLY mesh (ASCII or binary).
+pub fn ply(data: &[u8]) {
+    let _ = scene_compile::ply::load_ply_bytes(&Path::new(NOWHERE).join("m.ply"), data);
 }
 
 /// A compiled scene file (magic, schema, hash, header, arrays): as given, then with its content

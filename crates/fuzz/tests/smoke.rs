@@ -34,6 +34,12 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
         "scene" => files("scenes", &[".ron"]),
         "obj" => files("scenes/meshes", &[".obj"]),
         "gltf" => files("scenes/meshes", &[".glb", ".gltf"]),
+        "mitsuba_xml" => mitsuba_seeds(),
+        "ply" => [
+            files("crates/scene-compile/tests/data/mitsuba/meshes", &[".ply"]),
+            vec![ASCII_PLY.as_bytes().to_vec()],
+        ]
+        .concat(),
         "compiled" => vec![compiled_seed()],
         "exr" => files(
             "tests/fixtures/denoise",
@@ -60,6 +66,37 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
 }
 
 /// A small compiled scene (the Cornell box), as scene-compile writes it.
+/// An ASCII PLY with normals, texture coordinates (as s, t), a quad face and an extra element.
+const ASCII_PLY: &str = "ply\nformat ascii 1.0\ncomment seed\nelement vertex 4\n\
+property float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n\
+property float nz\nproperty float s\nproperty float t\nelement face 1\n\
+property list uchar int vertex_indices\nelement edge 1\nproperty int vertex1\n\
+property int vertex2\nend_header\n0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 0\n1 1 0 0 0 1 1 1\n\
+0 1 0 0 0 1 0 1\n4 0 1 2 3\n0 1\n";
+
+/// The importer's test scene as it is (its include and meshes are not found where the fuzz
+/// target looks) and self-contained: the included file's elements inlined and the mesh shapes
+/// cut, so that mutations reach the translation of every element.
+fn mitsuba_seeds() -> Vec<Vec<u8>> {
+    let dir = root().join("crates/scene-compile/tests/data/mitsuba");
+    let scene = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
+    let part = std::fs::read_to_string(dir.join("parts/materials.xml")).unwrap();
+    let inner = part
+        .split_once('>')
+        .and_then(|(_, rest)| rest.rsplit_once("</scene>"))
+        .map(|(body, _)| body)
+        .unwrap();
+    let mut inlined = scene.replace("<include filename=\"parts/materials.xml\"/>", inner);
+    for kind in ["obj", "ply"] {
+        let open = format!("<shape type=\"{kind}\"");
+        if let Some(start) = inlined.find(&open) {
+            let end = start + inlined[start..].find("</shape>").unwrap() + "</shape>".len();
+            inlined.replace_range(start..end, "");
+        }
+    }
+    vec![scene.into_bytes(), inlined.into_bytes(), part.into_bytes()]
+}
+
 fn compiled_seed() -> Vec<u8> {
     let (mut scene, _) =
         scene_compile::compile_file(&root().join("scenes/cornell-box.ron")).expect("compiles");

@@ -374,6 +374,14 @@ pub struct Object {
     /// Reverses the front side (e.g. a box seen from the inside, a room).
     #[serde(default)]
     pub flip_normals: bool,
+    /// Ignores the mesh's vertex normals: flat shading with the geometric normal (Mitsuba 3's
+    /// `face_normals`).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub face_normals: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 /// Geometry of an object, in its local frame (before `transform`).
@@ -391,21 +399,40 @@ pub enum Shape {
     /// `20 * 4^subdivisions` triangles whose vertices lie on the sphere; normals point out.
     Sphere { radius: f64, subdivisions: u32 },
     /// A Wavefront OBJ mesh (path relative to the scene file). Polygons are triangulated;
-    /// OBJ materials are ignored (the object's `material` applies).
-    Obj { path: String },
+    /// OBJ materials are ignored (the object's `material` applies). With `usemtl`, only the
+    /// faces the file assigns (`usemtl NAME`) to that MTL material.
+    Obj {
+        path: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        usemtl: Option<String>,
+    },
     /// A glTF 2.0 mesh, `.gltf` (with external or embedded buffers) or `.glb`; every mesh of
-    /// the default scene with its node transforms. glTF materials are ignored.
-    Gltf { path: String },
+    /// the default scene with its node transforms. glTF materials are ignored. With
+    /// `primitive: (m, p)`, only primitive `p` of mesh `m`, in the mesh's own frame (no node
+    /// transform).
+    Gltf {
+        path: String,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        primitive: Option<(u32, u32)>,
+    },
+    /// A Stanford PLY triangle mesh (ASCII or binary little-endian; vertex positions, optional
+    /// normals and texture coordinates, faces as index lists, fan-triangulated).
+    Ply { path: String },
 }
 
 /// Local-to-world transform: scale, then rotate about x, then y, then z (degrees,
-/// right-handed), then translate.
+/// right-handed), then translate, then `matrix` when given.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Transform {
     pub scale: Vec3,
     pub rotate_deg: Vec3,
     pub translate: Vec3,
+    /// A general affine transform applied last: the first three rows of its 4 × 4 matrix,
+    /// row-major (`p' = M p + t` with `M` the 3 × 3 block and `t` the last column). Importers
+    /// write it (Mitsuba 3's `to_world`, glTF node matrices).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub matrix: Option<[[f64; 4]; 3]>,
 }
 
 impl Default for Transform {
@@ -414,6 +441,7 @@ impl Default for Transform {
             scale: Vec3::splat(1.0),
             rotate_deg: Vec3::ZERO,
             translate: Vec3::ZERO,
+            matrix: None,
         }
     }
 }
@@ -421,7 +449,12 @@ impl Default for Transform {
 impl Transform {
     pub fn to_affine(&self) -> luxest_io::math::Affine {
         use luxest_io::math::Affine;
-        Affine::translate(self.translate)
+        let after = match &self.matrix {
+            Some([r0, r1, r2]) => Affine::from_rows4([*r0, *r1, *r2, [0.0, 0.0, 0.0, 1.0]]),
+            None => Affine::IDENTITY,
+        };
+        after
+            .compose(&Affine::translate(self.translate))
             .compose(&Affine::rotate_axis(2, self.rotate_deg.z))
             .compose(&Affine::rotate_axis(1, self.rotate_deg.y))
             .compose(&Affine::rotate_axis(0, self.rotate_deg.x))

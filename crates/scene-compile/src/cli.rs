@@ -4,18 +4,18 @@
 use crate::{compile, referenced_files, scene_name};
 use clap::Parser;
 use luxest_io::cli::Console;
-use luxest_io::fsio::{read_ron, to_ron_string};
+use luxest_io::fsio::to_ron_string;
 use luxest_io::outputs::{path_component, Format, OutputPlan};
 use luxest_io::Result;
 use luxest_render::compiled::CompiledScene;
-use luxest_render::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// Compile an authored luxest scene into one self-contained scene file.
 #[derive(Parser, Debug)]
 #[command(name = "scene-compile", version, about)]
 pub struct Args {
-    /// The authored scene (.ron), or with --info a compiled scene.
+    /// The scene: authored (.ron), or Mitsuba 3 (.xml), glTF 2.0 (.gltf, .glb) or OBJ+MTL
+    /// (.obj) translated on the way; with --info a compiled scene.
     pub input: PathBuf,
     /// Output file, *.lxs [default: build/<scene name>/scene.lxs].
     #[arg(short, long, conflicts_with = "check")]
@@ -24,8 +24,12 @@ pub struct Args {
     #[arg(long)]
     pub check: bool,
     /// Print the header (features manifest, emitters, sensors, stats) of a compiled scene.
-    #[arg(long, conflicts_with_all = ["out", "check", "export_mitsuba"])]
+    #[arg(long, conflicts_with_all = ["out", "check", "export_mitsuba", "export_ron"])]
     pub info: bool,
+    /// Also write the scene as luxest RON to this file (for an imported scene: its
+    /// translation, to read and edit; file paths relative to the file written).
+    #[arg(long, value_name = "FILE")]
+    pub export_ron: Option<PathBuf>,
     #[command(flatten)]
     pub console: Console,
     /// Also write the scene for Mitsuba 3 into this directory (scene.xml and one OBJ per
@@ -51,7 +55,11 @@ pub fn run(args: Args) -> Result<()> {
         let scene = CompiledScene::load(&args.input)?;
         return luxest_io::cli::print(&info_text(&scene));
     }
-    let authored: Scene = read_ron(&args.input)?;
+    let imported = crate::import::read_scene(&args.input)?;
+    for w in &imported.warnings {
+        args.console.note(format_args!("warning: {w}"));
+    }
+    let authored = imported.scene;
     // The output, planned before the work: not the scene file, a mesh or a photometric file it
     // refers to, nor a directory or device; the default stays inside build/.
     let out = match &args.out {
@@ -65,8 +73,12 @@ pub fn run(args: Args) -> Result<()> {
     let inputs: Vec<PathBuf> = std::iter::once(args.input.clone())
         .chain(referenced_files(&authored, &args.input))
         .collect();
-    let outputs = if args.check { None } else { Some(&out) };
-    let mut plan = OutputPlan::new(&inputs, outputs)?;
+    let outputs: Vec<&PathBuf> = (!args.check)
+        .then_some(&out)
+        .into_iter()
+        .chain(&args.export_ron)
+        .collect();
+    let mut plan = OutputPlan::new(&inputs, outputs.iter().copied())?;
     if let Some(o) = &args.out {
         Format::Lxs.check(o, "-o/--out")?;
     }
@@ -92,7 +104,15 @@ pub fn run(args: Args) -> Result<()> {
             scene.content_hash
         )
     };
+    let ron_text = args
+        .export_ron
+        .as_ref()
+        .map(|p| crate::import::export_ron(&authored, &args.input, p));
     if args.check {
+        if let (Some(p), Some(text)) = (&args.export_ron, &ron_text) {
+            plan.write_bytes(p, text.as_bytes())?;
+            plan.commit()?;
+        }
         args.console.note(format_args!("ok {summary}"));
         return Ok(());
     }
@@ -101,12 +121,18 @@ pub fn run(args: Args) -> Result<()> {
             let files = crate::mitsuba::export(&scene, &args.input)?;
             let paths: Vec<PathBuf> = files.iter().map(|(name, _)| dir.join(name)).collect();
             // Every output, the compiled scene's included, checked together before writing.
-            plan = OutputPlan::new(&inputs, std::iter::once(&out).chain(&paths))?;
+            plan = OutputPlan::new(
+                &inputs,
+                std::iter::once(&out).chain(&paths).chain(&args.export_ron),
+            )?;
             Some((dir, files, paths))
         }
         None => None,
     };
     plan.write_bytes(&out, &bytes)?;
+    if let (Some(p), Some(text)) = (&args.export_ron, &ron_text) {
+        plan.write_bytes(p, text.as_bytes())?;
+    }
     if let Some((_, files, paths)) = &export {
         for ((_, data), path) in files.iter().zip(paths) {
             plan.write_bytes(path, data)?;

@@ -7,16 +7,20 @@
 //! emitter table (with luminaires from photometric files, [`luminaires`]) and the sensor
 //! expansion (with calculation surfaces, [`surfaces`]).
 //!
-//! Modules: [`cli`] (arguments and run), [`validate`], [`shapes`] (tessellation), [`meshes`]
-//! (OBJ and glTF), [`luminaires`], [`environment`] (the environment emitter and its map),
-//! [`surfaces`], [`textures`] (bitmap textures and the per-material surfaces), [`mitsuba`]
-//! (export to Mitsuba 3); this file assembles the world-space scene.
+//! Modules: [`cli`] (arguments and run), [`import`] (whole scenes from Mitsuba 3 XML, glTF and
+//! OBJ+MTL, translated into an authored scene), [`validate`], [`shapes`] (tessellation),
+//! [`meshes`] (OBJ and glTF), [`ply`] (PLY meshes), [`luminaires`], [`environment`] (the
+//! environment emitter and its map), [`surfaces`], [`textures`] (bitmap textures and the
+//! per-material surfaces), [`mitsuba`] (export to Mitsuba 3); this file assembles the
+//! world-space scene.
 
 pub mod cli;
 pub mod environment;
+pub mod import;
 pub mod luminaires;
 pub mod meshes;
 pub mod mitsuba;
+pub mod ply;
 pub mod shapes;
 pub mod surfaces;
 pub mod textures;
@@ -59,7 +63,9 @@ pub fn scene_name(scene: &Scene, path: &Path) -> String {
 pub fn referenced_files(scene: &Scene, path: &Path) -> Vec<PathBuf> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let meshes = scene.objects.iter().filter_map(|o| match &o.shape {
-        Shape::Obj { path } | Shape::Gltf { path } => Some(dir.join(path)),
+        Shape::Obj { path, .. } | Shape::Gltf { path, .. } | Shape::Ply { path } => {
+            Some(dir.join(path))
+        }
         _ => None,
     });
     let photometry = scene.luminaires.iter().map(|l| dir.join(&l.file));
@@ -70,10 +76,12 @@ pub fn referenced_files(scene: &Scene, path: &Path) -> Vec<PathBuf> {
     meshes.chain(photometry).chain(environment).collect()
 }
 
-/// Reads, validates and compiles an authored scene file.
+/// Reads (a RON scene, or one [`import`] translates), validates and compiles a scene file.
 pub fn compile_file(path: &Path) -> Result<(CompiledScene, Report)> {
-    let scene: Scene = luxest_io::fsio::read_ron(path)?;
-    compile(&scene, path)
+    let imported = import::read_scene(path)?;
+    let (compiled, mut report) = compile(&imported.scene, path)?;
+    report.warnings.splice(0..0, imported.warnings);
+    Ok((compiled, report))
 }
 
 /// World-space geometry being assembled.
@@ -223,8 +231,15 @@ fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMes
             radius,
             subdivisions,
         } => shapes::icosphere(*radius, *subdivisions),
-        Shape::Obj { path } => meshes::load_obj(&resolve(path)?)?,
-        Shape::Gltf { path } => meshes::load_gltf(&resolve(path)?)?,
+        Shape::Obj { path, usemtl } => match usemtl {
+            Some(m) => meshes::load_obj_usemtl(&resolve(path)?, m)?,
+            None => meshes::load_obj(&resolve(path)?)?,
+        },
+        Shape::Gltf { path, primitive } => match primitive {
+            Some((m, p)) => meshes::load_gltf_primitive(&resolve(path)?, *m, *p)?,
+            None => meshes::load_gltf(&resolve(path)?)?,
+        },
+        Shape::Ply { path } => ply::load_ply(&resolve(path)?)?,
     })
 }
 
@@ -348,7 +363,10 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     for (i, o) in scene.objects.iter().enumerate() {
         let place = format!("objects[{i}]");
         let name = o.name.clone().unwrap_or_else(|| place.clone());
-        let mesh = object_mesh(path, &place, &o.shape)?;
+        let mut mesh = object_mesh(path, &place, &o.shape)?;
+        if o.face_normals {
+            mesh.normals = None;
+        }
         let surface = scene.surfaces.get(&o.material);
         let textured_surface = surface.is_some_and(|s| {
             s.color.is_some()

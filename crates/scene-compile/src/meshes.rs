@@ -45,6 +45,38 @@ pub fn load_obj(path: &Path) -> Result<LocalMesh> {
     load_obj_bytes(path, &bytes)
 }
 
+/// The faces of an OBJ file that it assigns to the MTL material `usemtl` (`usemtl NAME` before
+/// them), as one mesh; an error when there are none.
+pub fn load_obj_usemtl(path: &Path, usemtl: &str) -> Result<LocalMesh> {
+    let bytes = luxest_io::fsio::read_bytes(path)?;
+    let text = String::from_utf8_lossy(&bytes);
+    // Faces under another material become empty lines, so that line numbers stay the file's.
+    let mut current: Option<&str> = None;
+    let mut kept = String::with_capacity(text.len());
+    let mut faces = 0usize;
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("usemtl") => current = Some(line.trim()["usemtl".len()..].trim()),
+            Some("f") if current != Some(usemtl) => {
+                kept.push('\n');
+                continue;
+            }
+            Some("f") => faces += 1,
+            _ => {}
+        }
+        kept.push_str(line);
+        kept.push('\n');
+    }
+    if faces == 0 {
+        return Err(Error::input(
+            path,
+            format!("no face of the OBJ file uses the material \"{usemtl}\""),
+        ));
+    }
+    load_obj_bytes(path, kept.as_bytes())
+}
+
 /// [`load_obj`] of the file's content `bytes`; `path` names it in errors.
 pub fn load_obj_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
     let mut reader = LineCounter {
@@ -441,9 +473,40 @@ pub fn load_gltf(path: &Path) -> Result<LocalMesh> {
     load_gltf_bytes(path, &bytes)
 }
 
-/// [`load_gltf`] of the file's content `bytes`; `path` names it in errors and locates external
-/// buffers.
-pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
+/// One primitive (`mesh`, `primitive`) of a glTF file, in its mesh's frame (no node transform).
+pub fn load_gltf_primitive(path: &Path, mesh: u32, primitive: u32) -> Result<LocalMesh> {
+    let bytes = luxest_io::fsio::read_bytes(path)?;
+    let file = open_gltf(path, &bytes)?;
+    let place = format!("mesh {mesh} primitive {primitive}");
+    let prim = file
+        .document
+        .meshes()
+        .nth(mesh as usize)
+        .and_then(|m| m.primitives().nth(primitive as usize))
+        .ok_or_else(|| Error::at(path, &place, "the file has no such primitive"))?;
+    let m = primitive_mesh(
+        path,
+        &file.buffers,
+        mesh as usize,
+        &prim,
+        &Affine::IDENTITY,
+        "the mesh",
+    )?;
+    if m.triangles.is_empty() {
+        return Err(Error::at(path, place, "primitive has no triangles"));
+    }
+    Ok(m)
+}
+
+/// A parsed and checked glTF file with its buffers loaded.
+pub struct GltfFile {
+    pub document: gltf::Document,
+    pub buffers: Vec<Vec<u8>>,
+}
+
+/// Parses a glTF file (`bytes`, named `path`; external buffers relative to it) and loads its
+/// buffers, refusing what the gltf crate would panic on.
+pub fn open_gltf(path: &Path, bytes: &[u8]) -> Result<GltfFile> {
     check_glb_header(path, bytes)?;
     let malformed = |e: gltf::Error| Error::input(path, format!("malformed glTF: {e}"));
     let raw = gltf::Gltf::from_slice_without_validation(bytes).map_err(malformed)?;
@@ -504,21 +567,27 @@ pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
         }
         buffers.push(data);
     }
-    let scene = gltf
+    Ok(GltfFile {
+        document: gltf.document,
+        buffers,
+    })
+}
+
+/// Every node of the file's default scene (or its first) with its world transform, parents
+/// before children; refuses cycles, nodes with two parents and non-finite transforms.
+pub fn gltf_nodes<'a>(path: &Path, file: &'a GltfFile) -> Result<Vec<(gltf::Node<'a>, Affine)>> {
+    let scene = file
         .document
         .default_scene()
-        .or_else(|| gltf.document.scenes().next())
+        .or_else(|| file.document.scenes().next())
         .ok_or_else(|| Error::input(path, "glTF file has no scene"))?;
-    let mut mesh = LocalMesh {
-        normals: Some(Vec::new()),
-        ..Default::default()
-    };
     let mut stack: Vec<(gltf::Node, Affine)> =
         scene.nodes().map(|n| (n, Affine::IDENTITY)).collect();
     // The node hierarchy must be a forest (glTF 2.0, 3.5.3): a node reached twice is a cycle
     // (0 -> 1 -> 0, or its own child) or a node with two parents, either of which would make
     // this walk endless or duplicate geometry.
-    let mut visited = vec![false; gltf.document.nodes().count()];
+    let mut visited = vec![false; file.document.nodes().count()];
+    let mut out = Vec::new();
     while let Some((node, parent)) = stack.pop() {
         if std::mem::replace(&mut visited[node.index()], true) {
             return Err(Error::at(
@@ -539,103 +608,135 @@ pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
         for child in node.children() {
             stack.push((child, world));
         }
+        out.push((node, world));
+    }
+    Ok(out)
+}
+
+/// One triangle primitive with the transform `world` applied (`frame` names it in messages).
+pub fn primitive_mesh(
+    path: &Path,
+    buffers: &[Vec<u8>],
+    mesh_index: usize,
+    prim: &gltf::Primitive,
+    world: &Affine,
+    frame: &str,
+) -> Result<LocalMesh> {
+    let place = format!("mesh {mesh_index} primitive {}", prim.index());
+    if prim.mode() != gltf::mesh::Mode::Triangles {
+        return Err(Error::at(
+            path,
+            place,
+            format!(
+                "primitive mode {:?} is not supported (only triangles)",
+                prim.mode()
+            ),
+        ));
+    }
+    for (semantic, accessor) in prim.attributes() {
+        check_accessor(path, &place, &format!("{semantic:?}"), &accessor, buffers)?;
+    }
+    if let Some(indices) = prim.indices() {
+        check_accessor(path, &place, "indices", &indices, buffers)?;
+    }
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
+    let positions: Vec<Vec3> = reader
+        .read_positions()
+        .ok_or_else(|| Error::at(path, &place, "primitive has no POSITION attribute"))?
+        .map(Vec3::from)
+        .collect();
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(Error::at(
+            path,
+            format!("{place} vertex {i}"),
+            "non-finite coordinate",
+        ));
+    }
+    let nv = positions.len() as u32;
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(ix) => ix.into_u32().collect(),
+        None => (0..nv).collect(),
+    };
+    if !indices.len().is_multiple_of(3) || indices.iter().any(|&i| i >= nv) {
+        return Err(Error::at(
+            path,
+            place,
+            "index list is not a whole number of in-range triangles",
+        ));
+    }
+    let normals = reader
+        .read_normals()
+        .map(|n| n.map(Vec3::from).collect::<Vec<_>>());
+    let normals = normals.filter(|n| n.len() == positions.len());
+    let uvs = reader
+        .read_tex_coords(0)
+        .map(|t| {
+            t.into_f32()
+                .map(|[u, v]| [u as f64, v as f64])
+                .collect::<Vec<_>>()
+        })
+        .filter(|t| t.len() == positions.len());
+    if let Some(i) = uvs.as_ref().and_then(|t| {
+        t.iter()
+            .position(|t| !(t[0].is_finite() && t[1].is_finite()))
+    }) {
+        return Err(Error::at(
+            path,
+            format!("{place} vertex {i}"),
+            "non-finite TEXCOORD_0",
+        ));
+    }
+    let det = world.determinant();
+    let positions: Vec<Vec3> = positions
+        .into_iter()
+        .map(|p| world.apply_point(p))
+        .collect();
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(Error::at(
+            path,
+            format!("{place} vertex {i}"),
+            format!("exceeds f64 after the transform of {frame}"),
+        ));
+    }
+    let normals = normals.map(|n| {
+        n.into_iter()
+            .map(|v| world.apply_normal(v) * det.signum())
+            .collect::<Vec<_>>()
+    });
+    let mut triangles: Vec<[u32; 3]> = indices
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    if det < 0.0 {
+        triangles.iter_mut().for_each(|t| t.swap(1, 2));
+    }
+    Ok(LocalMesh {
+        positions,
+        normals,
+        uvs,
+        triangles,
+    })
+}
+
+/// [`load_gltf`] of the file's content `bytes`; `path` names it in errors and locates external
+/// buffers.
+pub fn load_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
+    let file = open_gltf(path, bytes)?;
+    let mut mesh = LocalMesh {
+        normals: Some(Vec::new()),
+        ..Default::default()
+    };
+    for (node, world) in gltf_nodes(path, &file)? {
         let Some(gmesh) = node.mesh() else { continue };
         for prim in gmesh.primitives() {
-            let place = format!("mesh {} primitive {}", gmesh.index(), prim.index());
-            if prim.mode() != gltf::mesh::Mode::Triangles {
-                return Err(Error::at(
-                    path,
-                    place,
-                    format!(
-                        "primitive mode {:?} is not supported (only triangles)",
-                        prim.mode()
-                    ),
-                ));
-            }
-            for (semantic, accessor) in prim.attributes() {
-                check_accessor(path, &place, &format!("{semantic:?}"), &accessor, &buffers)?;
-            }
-            if let Some(indices) = prim.indices() {
-                check_accessor(path, &place, "indices", &indices, &buffers)?;
-            }
-            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
-            let positions: Vec<Vec3> = reader
-                .read_positions()
-                .ok_or_else(|| Error::at(path, &place, "primitive has no POSITION attribute"))?
-                .map(Vec3::from)
-                .collect();
-            if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-                return Err(Error::at(
-                    path,
-                    format!("{place} vertex {i}"),
-                    "non-finite coordinate",
-                ));
-            }
-            let nv = positions.len() as u32;
-            let indices: Vec<u32> = match reader.read_indices() {
-                Some(ix) => ix.into_u32().collect(),
-                None => (0..nv).collect(),
-            };
-            if !indices.len().is_multiple_of(3) || indices.iter().any(|&i| i >= nv) {
-                return Err(Error::at(
-                    path,
-                    place,
-                    "index list is not a whole number of in-range triangles",
-                ));
-            }
-            let normals = reader
-                .read_normals()
-                .map(|n| n.map(Vec3::from).collect::<Vec<_>>());
-            let normals = normals.filter(|n| n.len() == positions.len());
-            let uvs = reader
-                .read_tex_coords(0)
-                .map(|t| {
-                    t.into_f32()
-                        .map(|[u, v]| [u as f64, v as f64])
-                        .collect::<Vec<_>>()
-                })
-                .filter(|t| t.len() == positions.len());
-            if let Some(i) = uvs.as_ref().and_then(|t| {
-                t.iter()
-                    .position(|t| !(t[0].is_finite() && t[1].is_finite()))
-            }) {
-                return Err(Error::at(
-                    path,
-                    format!("{place} vertex {i}"),
-                    "non-finite TEXCOORD_0",
-                ));
-            }
-            // Node transform to the file's root frame; the object transform follows later.
-            let det = world.determinant();
-            let positions: Vec<Vec3> = positions
-                .into_iter()
-                .map(|p| world.apply_point(p))
-                .collect();
-            if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-                return Err(Error::at(
-                    path,
-                    format!("{place} vertex {i}"),
-                    format!("exceeds f64 after the transform of {}", node_place(&node)),
-                ));
-            }
-            let normals = normals.map(|n| {
-                n.into_iter()
-                    .map(|v| world.apply_normal(v) * det.signum())
-                    .collect::<Vec<_>>()
-            });
-            let mut triangles: Vec<[u32; 3]> = indices
-                .chunks_exact(3)
-                .map(|c| [c[0], c[1], c[2]])
-                .collect();
-            if det < 0.0 {
-                triangles.iter_mut().for_each(|t| t.swap(1, 2));
-            }
-            mesh.append(LocalMesh {
-                positions,
-                normals,
-                uvs,
-                triangles,
-            });
+            mesh.append(primitive_mesh(
+                path,
+                &file.buffers,
+                gmesh.index(),
+                &prim,
+                &world,
+                &node_place(&node),
+            )?);
         }
     }
     if mesh.triangles.is_empty() {

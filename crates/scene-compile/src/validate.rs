@@ -466,6 +466,20 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
         c.vec(&format!("{place}.transform.scale"), t.scale)?;
         c.vec(&format!("{place}.transform.rotate_deg"), t.rotate_deg)?;
         c.vec(&format!("{place}.transform.translate"), t.translate)?;
+        if let Some(m) = &t.matrix {
+            for (r, row) in m.iter().enumerate() {
+                for (k, v) in row.iter().enumerate() {
+                    c.finite(&format!("{place}.transform.matrix[{r}][{k}]"), *v)?;
+                }
+            }
+            let det = t.to_affine().determinant();
+            if !(det.is_finite() && det != 0.0) {
+                return Err(c.fail(
+                    &format!("{place}.transform.matrix"),
+                    "is singular (flattens the object)",
+                ));
+            }
+        }
         for (i, v) in [t.translate.x, t.translate.y, t.translate.z]
             .into_iter()
             .enumerate()
@@ -522,7 +536,7 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
                     ));
                 }
             }
-            Shape::Obj { .. } | Shape::Gltf { .. } => {}
+            Shape::Obj { .. } | Shape::Gltf { .. } | Shape::Ply { .. } => {}
         }
         match &o.emission {
             None => {}
