@@ -144,7 +144,7 @@ def scene(preset, index, seed, side, scene_dir=None):
             m = f"((0.0, {f(su)}, {f(ou)}), ({f(sv)}, 0.0, {f(ov)}))"
         else:
             m = f"(({f(su)}, 0.0, {f(ou)}), (0.0, {f(sv)}, {f(ov)}))"
-        textures[name] = f'(path: "{path}", uv_transform: Some(UvTransform({m})))'
+        textures[name] = f'(path: "{path}", uv_transform: {m})'
         return name
 
     def material(kind=None, tex=None, cut_out=False):

@@ -478,7 +478,15 @@ mod tests {
     use super::*;
 
     fn element(ron: &str) -> String {
-        bsdf(&luxest_io::fsio::parse_ron::<Material>(Path::new("test.ron"), ron).unwrap())
+        let mut files = Vec::new();
+        let mut maps = Maps {
+            color: None,
+            roughness: None,
+            stem: "m".into(),
+            files: &mut files,
+        };
+        let m = luxest_io::fsio::parse_ron::<Material>(Path::new("test.ron"), ron).unwrap();
+        bsdf(&m, &mut maps, true)
     }
 
     /// Each Mitsuba material is written as its plugin with its parameters. (These elements,
