@@ -108,3 +108,23 @@ bench-denoise: reports/bench/denoise.md
 .PHONY: bench-slurm
 bench-slurm: $(SCENE_COMPILE) $(TRACE) $(AOV_WRITE) $(ESTIMATE) $(VENV)/$(VENV_STAMP)
 	$(PYTHON) pipelines/bench_slurm.py --bin-dir $(RELEASE) -o reports/bench/slurm.md
+
+# `make bench-scenes` (needs .venv-peers): luxest's trace against Mitsuba 3 on Mitsuba 3 XML
+# scenes, both renderers loading the same files in the same run (pipelines/bench_scenes.py): the
+# material and emitter scenes it writes (every imported BSDF, textures, a cut-out, point, spot,
+# textured area and environment emitters through a window) and the public scenes under
+# scenes/public/ (their README credits the authors); whole-image and block z-tests,
+# reports/bench/scenes.md. Fails where they disagree beyond noise.
+BENCH_SCENES_SPP ?= 4096
+BENCH_SCENES_RESOLUTION ?= 256x192
+PUBLIC_SCENES := $(wildcard scenes/public/*/scene.xml)
+
+.PHONY: bench-scenes
+
+reports/bench/scenes.md: pipelines/bench_scenes.py $(SCENE_COMPILE) $(TRACE) $(PUBLIC_SCENES)
+	@test -x $(PEERS_PYTHON) || { echo "error: $(PEERS_PYTHON) missing: run scripts/setup.sh --no-python --no-ort --peers" >&2; exit 1; }
+	$(PEERS_PYTHON) pipelines/bench_scenes.py --bins $(RELEASE) --work-dir build/bench/scenes \
+		--spp $(BENCH_SCENES_SPP) --resolution $(BENCH_SCENES_RESOLUTION) \
+		$(foreach s,$(PUBLIC_SCENES),--scene $(notdir $(patsubst %/,%,$(dir $(s))))=$(s)) -o $@
+
+bench-scenes: reports/bench/scenes.md

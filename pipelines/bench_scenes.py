@@ -167,8 +167,10 @@ def sphere(at, radius, bsdf):
 def materials_scene(d, w, h):
     """Every BSDF luxest imports, in a lit room: spheres of conductor (smooth Au, GGX Cu,
     Beckmann Al), plastic, rough plastic (textured, nonlinear), dielectric, rough dielectric, a
-    blend; a thin-dielectric pane, a one-sided textured panel and a cut-out leaf; a textured
-    area lamp and a point light."""
+    blend; a thin-dielectric pane and a one-sided textured panel; a textured area lamp and a
+    point light. (The cut-out is a scene of its own: Mitsuba's `path` mishandles masks and its
+    `volpath` passes point light through thin panes, which luxest's and `path`'s shadow rays
+    do not.)"""
     b = [
         '<bsdf type="conductor"><string name="material" value="Au"/></bsdf>',
         '<bsdf type="roughconductor"><string name="material" value="Cu"/><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/></bsdf>',
@@ -188,11 +190,23 @@ def materials_scene(d, w, h):
         body += sphere((-1.4 + 0.8 * (i % 4), 0.35 + 0.9 * (i // 4), -0.9 + 0.5 * (i // 4)), 0.3, bsdf)
     body += """  <shape type="rectangle"><transform name="to_world"><scale x="0.4" y="0.5"/><rotate y="1" angle="25"/><translate x="-1.2" y="1.0" z="0.6"/></transform><bsdf type="thindielectric"><float name="int_ior" value="1.5"/></bsdf></shape>
   <shape type="rectangle"><transform name="to_world"><scale x="0.4" y="0.3"/><rotate y="1" angle="-30"/><translate x="1.3" y="1.6" z="0.2"/></transform><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="checker.png"/><string name="filter_type" value="nearest"/></texture></bsdf></shape>
-  <shape type="rectangle"><transform name="to_world"><scale x="0.35" y="0.35"/><rotate y="1" angle="15"/><translate x="0.2" y="1.9" z="0.3"/></transform><bsdf type="mask"><texture type="bitmap" name="opacity"><string name="filename" value="leaf.png"/><boolean name="raw" value="true"/></texture><bsdf type="twosided"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="leaf.png"/></texture></bsdf></bsdf></bsdf></shape>
   <shape type="rectangle"><transform name="to_world"><scale x="0.5" y="0.3"/><rotate x="1" angle="90"/><translate y="2.99" z="-0.3"/></transform><bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf><emitter type="area"><texture type="bitmap" name="radiance"><string name="filename" value="lamp.exr"/></texture></emitter></shape>
   <emitter type="point"><point name="position" value="1.2, 2.4, 1.0"/><rgb name="intensity" value="3, 2.8, 2.5"/></emitter>
 """
     write_scene(d / "materials.xml", body, dict(fov=55, origin="0, 1.5, 3.6", target="0, 1.0, 0", w=w, h=h))
+
+
+def cutout_scene(d, w, h):
+    """A cut-out leaf (Mitsuba `mask` of an RGBA bitmap, which Mitsuba reads by its colour's
+    luminance) before the textured lamp, a one-sided panel and a sphere, lit also by a point
+    light. Mitsuba renders it with `volpath` (see `integrator_of`)."""
+    body = ROOM + sphere((0.6, 0.5, -0.4), 0.4, '<bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.6"/></bsdf>')
+    body += """  <shape type="rectangle"><transform name="to_world"><scale x="0.35" y="0.35"/><rotate y="1" angle="15"/><translate x="0.2" y="1.9" z="0.3"/></transform><bsdf type="mask"><texture type="bitmap" name="opacity"><string name="filename" value="leaf.png"/><boolean name="raw" value="true"/></texture><bsdf type="twosided"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="leaf.png"/></texture></bsdf></bsdf></bsdf></shape>
+  <shape type="rectangle"><transform name="to_world"><scale x="0.4" y="0.3"/><rotate y="1" angle="-30"/><translate x="1.3" y="1.6" z="0.2"/></transform><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="checker.png"/><string name="filter_type" value="nearest"/></texture></bsdf></shape>
+  <shape type="rectangle"><transform name="to_world"><scale x="0.5" y="0.3"/><rotate x="1" angle="90"/><translate y="2.99" z="-0.3"/></transform><bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf><emitter type="area"><texture type="bitmap" name="radiance"><string name="filename" value="lamp.exr"/></texture></emitter></shape>
+  <emitter type="point"><point name="position" value="1.2, 2.4, 1.0"/><rgb name="intensity" value="3, 2.8, 2.5"/></emitter>
+"""
+    write_scene(d / "cutout.xml", body, dict(fov=55, origin="0, 1.5, 3.6", target="0, 1.0, 0", w=w, h=h))
 
 
 def emitters_scene(d, w, h):
@@ -224,8 +238,9 @@ def write_scenes(d, w, h):
     textures(d)
     icosphere_obj(d / "sphere.obj")
     materials_scene(d, w, h)
+    cutout_scene(d, w, h)
     emitters_scene(d, w, h)
-    return {name: d / f"{name}.xml" for name in ("materials", "daylight", "overcast")}
+    return {name: d / f"{name}.xml" for name in ("materials", "cutout", "daylight", "overcast")}
 
 
 # ---- rendering and comparison --------------------------------------------------------------
