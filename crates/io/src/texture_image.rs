@@ -5,8 +5,9 @@
 //! texture decides the encoding, `luxest_render::texture`), EXR values are linear.
 //!
 //! Bad input is a one-line error naming the file, never a panic: the size a header claims is
-//! checked against [`MAX_TEXTURE_SIDE`] and against the memory available ([`crate::limits`])
-//! before the pixels are allocated; a truncated or corrupt file, an image with no pixels, a CMYK
+//! checked against [`MAX_TEXTURE_SIDE`], against the memory available ([`crate::limits`]) and
+//! against what the file's bytes can code (PNG: deflate's largest expansion; JPEG: a bit per
+//! 8x8 block; EXR: [`crate::exr`]'s bound) before the pixels are allocated; a truncated or corrupt file, an image with no pixels, a CMYK
 //! JPEG (its inks have no colorimetric meaning without a profile) and a NaN or infinity in an
 //! EXR are refused.
 
@@ -27,6 +28,13 @@ pub fn texture_bytes_per_texel(eight_bit: bool) -> u64 {
         22
     }
 }
+
+/// Claims of decoded data up to this size are decoded without the expansion bound below.
+const MIN_CLAIM: u64 = 16 << 20;
+
+/// The most a deflate stream expands (about 1032 times: a 258-byte match in under two bits),
+/// rounded up: a PNG's pixel data is at most this many times its file's size.
+const MAX_DEFLATE_EXPANSION: u64 = 1100;
 
 /// The file format an image was decoded from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -153,6 +161,22 @@ pub fn decode_png(path: &Path, bytes: &[u8]) -> Result<TextureImage> {
     let eight_bit = header.bit_depth != ::png::BitDepth::Sixteen;
     let sample_bytes = if eight_bit { 1 } else { 2 };
     check_size(path, (width, height), 4 * sample_bytes, eight_bit)?;
+    // The filtered rows (a filter byte and the packed samples each) are deflate's output: a
+    // file claiming more than its bytes can expand to is corrupt, and decoding it would
+    // allocate the claim first (found by fuzzing: 125 bytes claiming 4.4 GB).
+    let bits = header.color_type.samples() as u64 * header.bit_depth as u64;
+    let raw = height * (1 + (width * bits).div_ceil(8));
+    if raw > MIN_CLAIM && raw > bytes.len() as u64 * MAX_DEFLATE_EXPANSION {
+        return Err(Error::input(
+            path,
+            format!(
+                "truncated or corrupt PNG file: its header claims {width}x{height} pixels, {} \
+                 of pixel data, more than its {} bytes can hold",
+                crate::limits::show_bytes(raw as u128),
+                bytes.len()
+            ),
+        ));
+    }
     let mut reader = decoder.read_info().map_err(bad)?;
     let (color, depth) = reader.output_color_type();
     let channels = color.samples();
@@ -209,6 +233,19 @@ pub fn decode_jpeg(path: &Path, bytes: &[u8]) -> Result<TextureImage> {
     // image (2 bytes a sample, up to 4 components).
     let eight_bit = info.pixel_format != jpeg_decoder::PixelFormat::L16;
     check_size(path, (width, height), 4 + 8, eight_bit)?;
+    // Huffman coding spends at least one bit on every 8x8 block's DC coefficient: a file
+    // claiming more blocks than it has bits is corrupt, and decoding it would allocate the
+    // claim first.
+    if width * height * 4 > MIN_CLAIM && width * height > bytes.len() as u64 * 8 * 64 {
+        return Err(Error::input(
+            path,
+            format!(
+                "truncated or corrupt JPEG file: its header claims {width}x{height} pixels, \
+                 more 8x8 blocks than its {} bytes have bits",
+                bytes.len()
+            ),
+        ));
+    }
     decoder.set_max_decoding_buffer_size((width * height * 4) as usize);
     let pixels = decoder.decode().map_err(bad)?;
     let (width, height) = (width as usize, height as usize);
@@ -499,6 +536,12 @@ mod tests {
         assert!(e.contains("a 65536x65536 texture needs 47.2 GB"), "{e}");
         let e = error(with_png_size(&png, 0, 8));
         assert!(e.contains("not a readable PNG file"), "{e}");
+        // A small file claiming gigabytes of pixel data (crates/fuzz/regressions/texture_png/).
+        let e = error(with_png_size(&png, 30_000, 30_000));
+        assert!(
+            e.contains("claims 30000x30000 pixels, 3.6 GB of pixel data, more than its"),
+            "{e}"
+        );
         let e = error(b"GIF89a".to_vec());
         assert!(e.contains("not a PNG, JPEG or OpenEXR image"), "{e}");
         // A corrupt pixel stream (the zlib data of IDAT overwritten).

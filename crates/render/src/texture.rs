@@ -1162,6 +1162,13 @@ mod tests {
         huge[sof + 5..sof + 9].copy_from_slice(&[0xff, 0xff, 0xff, 0xff]);
         let e = error(huge);
         assert!(e.contains("a 65535x65535 texture needs 81.6 GB"), "{e}");
+        let mut large = jpeg.clone();
+        large[sof + 5..sof + 9].copy_from_slice(&[0x27, 0x10, 0x27, 0x10]);
+        let e = error(large);
+        assert!(
+            e.contains("claims 10000x10000 pixels, more 8x8 blocks than its 737 bytes have bits"),
+            "{e}"
+        );
         let mut zero = jpeg.clone();
         zero[sof + 7..sof + 9].copy_from_slice(&[0, 0]);
         let e = error(zero);
