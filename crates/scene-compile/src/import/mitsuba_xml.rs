@@ -690,20 +690,26 @@ impl<'a> Importer<'a> {
     }
 }
 
-/// Whether `a` is a rotation: orthonormal, determinant +1, no translation.
-fn is_rotation(a: &Affine) -> bool {
+/// The rotation part of `a` made exactly orthonormal (Gram-Schmidt on its columns), when its
+/// columns are orthonormal within 1e-3 (Mitsuba's `has_scale` tolerance) and it does not mirror.
+fn nearly_rotation(a: &Affine) -> Option<[[f64; 3]; 3]> {
     let m = &a.m;
     let col = |j: usize| Vec3::new(m[0][j], m[1][j], m[2][j]);
     let (x, y, z) = (col(0), col(1), col(2));
-    let close = |v: f64, want: f64| (v - want).abs() <= 1e-6;
-    close(x.dot(x), 1.0)
+    let close = |v: f64, want: f64| (v - want).abs() <= 1e-3;
+    let orthonormal = close(x.dot(x), 1.0)
         && close(y.dot(y), 1.0)
         && close(z.dot(z), 1.0)
         && close(x.dot(y), 0.0)
         && close(x.dot(z), 0.0)
-        && close(y.dot(z), 0.0)
-        && a.determinant() > 0.0
-        && a.t == Vec3::ZERO
+        && close(y.dot(z), 0.0);
+    if !orthonormal || a.determinant() <= 0.0 {
+        return None;
+    }
+    let x = x.try_normalize()?;
+    let y = (y - x * x.dot(y)).try_normalize()?;
+    let z = x.cross(y);
+    Some([[x.x, y.x, z.x], [x.y, y.y, z.y], [x.z, y.z, z.z]])
 }
 
 /// Rotation about the unit axis `a` by `deg` degrees (right-handed; Rodrigues' formula).
@@ -1563,17 +1569,19 @@ impl<'a> Importer<'a> {
                     let scale = r.float("scale", 1.0)?;
                     let to_world = r.transform("to_world")?;
                     r.done()?;
-                    if !is_rotation(&to_world) {
+                    // Directions ignore the translation; a rotation written with few digits is
+                    // made exactly orthonormal (Mitsuba's own tolerance for scale is 1e-3).
+                    let Some(rotation) = nearly_rotation(&to_world) else {
                         return Err(self.fail(
                             e,
                             "the environment map's to_world must be a rotation (no scale, \
-                             shear, mirror or translation)",
+                             shear or mirror)",
                         ));
-                    }
+                    };
                     Environment::Map {
                         path,
                         scale,
-                        to_world: to_world.m,
+                        to_world: rotation,
                     }
                 };
                 self.scene.environment = Some(env);
