@@ -631,14 +631,41 @@ fn obj_mtl_scene_translates_its_materials() {
         .find(|o| o.name == "lamp")
         .unwrap();
     assert_eq!(lamp_range.triangle_count, 1);
-    // A texture is refused with the MTL line until textured surfaces exist.
+    // map_Kd and d: a colour texture (relative to the OBJ) and a stochastic cut-out.
+    std::fs::create_dir_all(d.join("tex")).unwrap();
+    std::fs::copy(data().join("textures/wood.png"), d.join("tex/wood.png")).unwrap();
     std::fs::write(
         d.join("room.mtl"),
-        "newmtl floor\nKd 1 1 1\nmap_Kd wood.png\nnewmtl lamp\nKe 1 1 1\nnewmtl shiny\nnewmtl glass\n",
+        "newmtl floor\nKd 1 1 1\nmap_Kd tex/wood.png\nd 0.5\nnewmtl lamp\nKe 1 1 1\n\
+         newmtl shiny\nnewmtl glass\nillum 7\nd 0.2\n",
+    )
+    .unwrap();
+    let s = read_scene(&d.join("room.obj")).unwrap().scene;
+    assert_eq!(s.textures["tex/wood.png"].path, "tex/wood.png");
+    assert_eq!(
+        s.surfaces["floor"],
+        Surface {
+            color: Some("tex/wood.png".into()),
+            roughness: None,
+            opacity: Some(Opacity {
+                texture: None,
+                value: 0.5,
+                cutoff: None
+            }),
+            normal: None,
+            two_sided: true
+        }
+    );
+    // Glass is transparent by its model: d does not cut it out.
+    assert!(!s.surfaces.contains_key("glass"));
+    // A texture file that is not there is refused with the MTL line.
+    std::fs::write(
+        d.join("room.mtl"),
+        "newmtl floor\nKd 1 1 1\nmap_Kd gone.png\nnewmtl lamp\nKe 1 1 1\nnewmtl shiny\nnewmtl glass\n",
     )
     .unwrap();
     let err = refused(&d.join("room.obj"));
-    assert!(err.contains("room.mtl: line 3: map_Kd"), "{err}");
+    assert!(err.contains("room.mtl: line 3: texture") && err.contains("gone.png not found"), "{err}");
     std::fs::remove_dir_all(&d).unwrap();
 }
 
