@@ -665,7 +665,10 @@ fn obj_mtl_scene_translates_its_materials() {
     )
     .unwrap();
     let err = refused(&d.join("room.obj"));
-    assert!(err.contains("room.mtl: line 3: texture") && err.contains("gone.png not found"), "{err}");
+    assert!(
+        err.contains("room.mtl: line 3: texture") && err.contains("gone.png not found"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -692,34 +695,44 @@ fn base64(bytes: &[u8]) -> String {
 fn gltf_scene_translates_nodes_materials_camera_and_lights() {
     let d = tmp("gltf");
     let mut buf = Vec::new();
-    for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+    // Positions of one triangle, then its texture coordinates.
+    for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 1.] {
         buf.extend_from_slice(&v.to_le_bytes());
     }
+    std::fs::copy(data().join("textures/wood.png"), d.join("leaf.png")).unwrap();
     let json = format!(
         r#"{{"asset": {{"version": "2.0"}},
   "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_clearcoat"],
   "extensions": {{"KHR_lights_punctual": {{"lights": [{{"type": "point", "color": [1, 0.5, 0.25], "intensity": 40}}]}}}},
   "scene": 0,
-  "scenes": [{{"nodes": [0, 1, 2, 3]}}],
+  "scenes": [{{"nodes": [0, 1, 2, 3, 4]}}],
   "nodes": [
     {{"name": "floor", "mesh": 0, "translation": [0, -1, 0]}},
     {{"name": "lamp", "mesh": 1, "scale": [2, 2, 2]}},
     {{"camera": 0, "translation": [0, 0, 5]}},
-    {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "translation": [0, 3, 0]}}
+    {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "translation": [0, 3, 0]}},
+    {{"name": "plant", "mesh": 2, "translation": [3, 0, 0]}}
   ],
   "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.5, "aspectRatio": 2.0, "znear": 0.1}}}}],
   "materials": [
     {{"name": "paint", "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.25, 0.125, 1], "metallicFactor": 0}}}},
     {{"name": "steel", "pbrMetallicRoughness": {{"baseColorFactor": [0.75, 0.75, 0.75, 1], "metallicFactor": 1, "roughnessFactor": 0.25}},
-      "emissiveFactor": [1, 1, 1]}}
+      "emissiveFactor": [1, 1, 1]}},
+    {{"name": "leaf", "pbrMetallicRoughness": {{"baseColorFactor": [1, 1, 1, 0.8], "baseColorTexture": {{"index": 0}}, "metallicFactor": 0, "roughnessFactor": 0.5}},
+      "alphaMode": "MASK", "alphaCutoff": 0.3, "normalTexture": {{"index": 1}}}}
   ],
+  "images": [{{"uri": "leaf.png"}}],
+  "samplers": [{{"magFilter": 9728, "wrapS": 33648, "wrapT": 33648}}],
+  "textures": [{{"source": 0}}, {{"source": 0, "sampler": 0}}],
   "meshes": [
     {{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 0}}]}},
-    {{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 1}}]}}
+    {{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 1}}]}},
+    {{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "material": 2}}]}}
   ],
-  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}}],
-  "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
-  "buffers": [{{"byteLength": 36, "uri": "data:application/octet-stream;base64,{}"}}]
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 24}}],
+  "buffers": [{{"byteLength": 60, "uri": "data:application/octet-stream;base64,{}"}}]
 }}"#,
         base64(&buf)
     );
@@ -756,7 +769,32 @@ fn gltf_scene_translates_nodes_materials_camera_and_lights() {
             roughness: 0.25
         }
     );
-    assert_eq!(s.objects.len(), 2);
+    assert_eq!(s.objects.len(), 3);
+    // baseColorTexture (default sampler: repeat, bilinear), alpha MASK at the cutoff with the
+    // base colour's alpha, a normal map read linearly with its own sampler.
+    assert_eq!(
+        s.surfaces["leaf"],
+        Surface {
+            color: Some("leaf.png".into()),
+            roughness: None,
+            opacity: Some(Opacity {
+                texture: Some("leaf.png".into()),
+                value: 0.800000011920929,
+                cutoff: Some(0.30000001192092896)
+            }),
+            normal: Some("leaf.png'".into()),
+            two_sided: true
+        }
+    );
+    assert_eq!(
+        (s.textures["leaf.png"].wrap, s.textures["leaf.png"].filter),
+        (Wrap::Repeat, Filter::Bilinear)
+    );
+    let normal = &s.textures["leaf.png'"];
+    assert_eq!(
+        (normal.wrap, normal.filter, normal.encoding),
+        (Wrap::Mirror, Filter::Nearest, Some(Encoding::Linear))
+    );
     let floor = s.objects.iter().find(|o| o.material == "paint").unwrap();
     assert_eq!(
         floor.shape,

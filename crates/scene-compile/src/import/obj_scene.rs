@@ -188,13 +188,7 @@ fn material(
     scene_file: &Path,
     textures: &mut BTreeMap<String, TextureDesc>,
 ) -> Result<(Material, Option<Surface>)> {
-    let at = |msg: String| {
-        Error::at(
-            &m.file,
-            format!("line {} (newmtl {name})", m.line),
-            msg,
-        )
-    };
+    let at = |msg: String| Error::at(&m.file, format!("line {} (newmtl {name})", m.line), msg);
     let mut texture = |map: &Option<(String, usize)>| -> Result<Option<String>> {
         let Some((file, line)) = map else {
             return Ok(None);
@@ -257,7 +251,9 @@ fn material(
         }
         _ if glass => {
             if color.is_some() {
-                return Err(at("map_Kd on glass (illum 4, 6, 7, 9) is not supported".into()));
+                return Err(at(
+                    "map_Kd on glass (illum 4, 6, 7, 9) is not supported".into()
+                ));
             }
             Material::Dielectric { ior: m.ni }
         }
