@@ -244,7 +244,8 @@ fn material(
         _ if emissive.max_component() > 0.0 => Some(Emission::Radiance(emissive)),
         _ => None,
     };
-    let surface = (color.is_some() || normal.is_some() || opacity.is_some()).then(|| Surface {
+    let textured = color.is_some() || normal.is_some() || opacity.is_some();
+    let surface = textured.then_some(Surface {
         color,
         roughness: None,
         opacity,
@@ -378,7 +379,7 @@ pub fn import(path: &Path) -> Result<Imported> {
         for prim in mesh.primitives() {
             let m = prim.material();
             let key = m.index();
-            if !materials.contains_key(&key) {
+            if let std::collections::btree_map::Entry::Vacant(slot) = materials.entry(key) {
                 let (model, surface, emission) =
                     material(path, &m, &mut warnings, &mut scene.textures)?;
                 let mut name = match (key, m.name()) {
@@ -393,7 +394,7 @@ pub fn import(path: &Path) -> Result<Imported> {
                 if let Some(surface) = surface {
                     scene.surfaces.insert(name.clone(), surface);
                 }
-                materials.insert(key, (name, emission));
+                slot.insert((name, emission));
             }
             let (name, emission) = materials[&key].clone();
             scene.objects.push(Object {

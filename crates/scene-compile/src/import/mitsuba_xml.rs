@@ -21,12 +21,15 @@
 //! `flip_normals`, `face_normals`); BSDFs `diffuse`, `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor` and `roughconductor` (`eta`/`k`, or a `material` preset of
 //! [`super::mitsuba_tables`]; `none`, smooth, is luxest's `Mirror`), `plastic`,
-//! `roughplastic`, `blendbsdf` (constant weight), `twosided`; emitters `area`
-//! (inside a shape), `point`, `spot`, `constant`, `envmap` (OpenEXR); sensor `perspective` (`fov`, `fov_axis`, `focal_length`,
-//! `to_world`) with film `hdrfilm` (`width`, `height`). `<integrator>` and the sensor's
-//! `<sampler>` are left out with a warning (luxest's estimator and sample count are chosen on
-//! its command line), a non-box `<rfilter>` likewise (luxest's pixel filter is a box).
-//! Anything else is an error naming the file, the line and the element.
+//! `roughplastic`, `blendbsdf` (constant weight), `twosided`, `mask`; a BSDF not inside
+//! `twosided` is one-sided (a surface with `two_sided: false`), and a shape without one gets
+//! Mitsuba's default (a one-sided diffuse 0.5); `bitmap` textures as the main colour, a rough
+//! BSDF's α, a mask's opacity and an area emitter's radiance; emitters `area` (inside a shape),
+//! `point`, `spot`, `constant`, `envmap` (OpenEXR); sensor `perspective` (`fov`, `fov_axis`,
+//! `focal_length`, `to_world`) with film `hdrfilm` (`width`, `height`). `<integrator>` and the
+//! sensor's `<sampler>` are left out with a warning (luxest's estimator and sample count are
+//! chosen on its command line), a non-box `<rfilter>` likewise (luxest's pixel filter is a
+//! box). Anything else is an error naming the file, the line and the element.
 //!
 //! **Units.** Mitsuba's RGB radiance (area, constant and environment emitters) becomes luxest's
 //! luminance in cd/m² with the same numbers, and its point intensity luxest's candela; luxest
@@ -1501,7 +1504,9 @@ impl<'a> Importer<'a> {
                 let intensity = r.color("intensity", 1.0)?;
                 r.done()?;
                 let y = intensity.luminance();
-                if !(y > 0.0) || intensity.min_component() < 0.0 {
+                if y.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+                    || intensity.min_component() < 0.0
+                {
                     return Err(self.fail(
                         e,
                         "the intensity must be non-negative with positive luminance",
@@ -1528,7 +1533,9 @@ impl<'a> Importer<'a> {
                 let beam_width_deg = r.float("beam_width", cutoff_deg * 3.0 / 4.0)?;
                 r.done()?;
                 let y = intensity.luminance();
-                if !(y > 0.0) || intensity.min_component() < 0.0 {
+                if y.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+                    || intensity.min_component() < 0.0
+                {
                     return Err(self.fail(
                         e,
                         "the intensity must be non-negative with positive luminance",

@@ -218,7 +218,8 @@ fn material(
         return Err(at(format!("d = {} is outside [0, 1]", m.d)));
     }
     // Transparency (d < 1 or map_d) of an opaque model: a stochastic cut-out of opacity d.
-    let opacity = (!glass && (m.d < 1.0 || opacity_texture.is_some())).then(|| Opacity {
+    let transparent = !glass && (m.d < 1.0 || opacity_texture.is_some());
+    let opacity = transparent.then_some(Opacity {
         texture: opacity_texture,
         value: m.d,
         cutoff: None,
@@ -259,7 +260,8 @@ fn material(
         }
         other => return Err(at(format!("illum {other} is not supported"))),
     };
-    let surface = (color.is_some() || opacity.is_some()).then(|| Surface {
+    let textured = color.is_some() || opacity.is_some();
+    let surface = textured.then_some(Surface {
         color,
         roughness: None,
         opacity,
