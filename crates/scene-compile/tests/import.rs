@@ -836,3 +836,37 @@ fn gltf_scene_translates_nodes_materials_camera_and_lights() {
     assert!((area - 2.0).abs() < 1e-6, "{area}");
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+#[test]
+fn define_gives_a_mitsuba_parameter_over_its_default() {
+    let d = tmp("define");
+    let scene = d.join("p.xml");
+    std::fs::write(
+        &scene,
+        xml(r#"<default name="albedo" value="0.5"/>
+    <bsdf type="twosided" id="grey"><bsdf type="diffuse"><rgb name="reflectance" value="$albedo"/></bsdf></bsdf>"#),
+    )
+    .unwrap();
+    let out = d.join("p.ron");
+    let o = bin()
+        .args(["--check", "-D", "albedo=0.25", "--export-ron"])
+        .arg(&out)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ron = std::fs::read_to_string(&out).unwrap();
+    let grey = ron.find("\"grey\": Lambertian(").expect("the material");
+    assert!(
+        ron[grey..].contains("reflectance: (0.25, 0.25, 0.25)"),
+        "{ron}"
+    );
+    // Malformed, or given to a format without parameters: usage errors (exit 2).
+    let o = bin()
+        .args(["--check", "-D", "albedo"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -1891,19 +1891,29 @@ fn collect_ids<'a>(
 
 /// Translates the Mitsuba 3 scene file `path`.
 pub fn import(path: &Path) -> Result<Imported> {
-    import_impl(path, None)
+    import_impl(path, None, &[])
+}
+
+/// [`import`] with parameters given as Mitsuba's `-D name=value` gives them: they take
+/// precedence over the scene's `<default>`s.
+pub fn import_with(path: &Path, defines: &[(String, String)]) -> Result<Imported> {
+    import_impl(path, None, defines)
 }
 
 /// [`import`] of the file's content `bytes`; `path` names it in errors and locates the files
 /// it refers to (includes, meshes, maps).
 pub fn import_bytes(path: &Path, bytes: &[u8]) -> Result<Imported> {
-    import_impl(path, Some(bytes))
+    import_impl(path, Some(bytes), &[])
 }
 
-fn import_impl(path: &Path, bytes: Option<&[u8]>) -> Result<Imported> {
+fn import_impl(
+    path: &Path,
+    bytes: Option<&[u8]>,
+    defines: &[(String, String)],
+) -> Result<Imported> {
     let mut parser = Parser {
         files: Vec::new(),
-        params: Vec::new(),
+        params: defines.to_vec(),
         stack: Vec::new(),
     };
     let root = parser.parse_file_bytes(path, bytes, None)?;
