@@ -2,8 +2,8 @@
 //! against the source file's numbers, compiled end to end, and every class of bad input
 //! refused by the real binary with exit code 1 and one line naming the file and the place.
 //!
-//! `tests/data/mitsuba/scene.xml` is loaded by Mitsuba 3 itself in
-//! `tests/data/mitsuba/check_with_mitsuba.py`, so its translation is checked against a scene
+//! `crates/scene-compile/tests/data/mitsuba/scene.xml` is loaded by Mitsuba 3 itself in
+//! `crates/scene-compile/tests/data/mitsuba/check_with_mitsuba.py`, so its translation is checked against a scene
 //! Mitsuba accepts.
 
 use luxest_io::color::Rgb;
