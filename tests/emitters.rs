@@ -328,7 +328,7 @@ fn background_pixels_show_the_sky_in_every_image_estimator() {
     assert!((film.mean()[corner].luminance() - SKY).abs() < 1e-9);
     // aov-write's emission feature is the part of trace's image a denoiser leaves alone: the
     // sky seen directly is in it.
-    let hit = aov_write::features::first_hit(&world, cam.position, cam.direction(0.5, 0.5));
+    let hit = aov_write::features::first_hit(&world, cam.position, cam.direction(0.5, 0.5), 0.0);
     assert!((hit.emission.luminance() - SKY).abs() < 1e-12, "{hit:?}");
 }
 

@@ -259,6 +259,7 @@ fn a_textured_emitter_lights_a_sensor_as_its_mean_luminance_does() {
             singularity: Singularity::Ball { eps: 1e-3 },
             max_depth: 10,
             near_field: None,
+            environment_samples: 0,
         },
         &Progress::off(),
     );
@@ -302,6 +303,7 @@ fn under_occluder(dir: &TempDir, surfaces: &str, counts: u32) -> (Vec<f64>, Vec<
             singularity: Singularity::Ball { eps: 1e-3 },
             max_depth: 10,
             near_field: None,
+            environment_samples: 0,
         },
         &Progress::off(),
     );
@@ -485,4 +487,63 @@ fn feature_albedo_filters_a_minified_texture_over_the_pixel() {
     let mean = points.iter().sum::<f64>() / points.len() as f64;
     let sd = (points.iter().map(|p| (p - mean).powi(2)).sum::<f64>() / points.len() as f64).sqrt();
     assert!(sd > 0.15, "finest-level albedo spread {sd}");
+}
+
+#[test]
+fn the_mitsuba_export_writes_textures_cut_outs_and_sidedness() {
+    // What Mitsuba 3 needs to render the textured scene as luxest does: texture coordinates in
+    // the OBJ, the colour texture baked with its constant into a bitmap, a mask for the
+    // cut-out, no `twosided` around a one-sided material.
+    let dir = TempDir::new("tex-export");
+    grey_row(&dir, "halves.exr", &[LEFT, RIGHT]);
+    let text = floor_scene(
+        "Lambertian(reflectance: (0.5, 0.5, 0.5))",
+        r#"textures: { "halves": (path: "halves.exr", filter: Nearest, wrap: Clamp) },
+           surfaces: { "floor": (color: Some("halves"), two_sided: false,
+                                 opacity: Some((texture: Some("halves"), cutoff: Some(0.5)))) },"#,
+    );
+    let ron = dir.write("export.ron", text);
+    let out = dir.path().join("export.lxs");
+    let mitsuba = dir.path().join("mitsuba");
+    scene_compile(&[
+        ron.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--export-mitsuba",
+        mitsuba.to_str().unwrap(),
+        "-q",
+    ])
+    .unwrap();
+    let xml = std::fs::read_to_string(mitsuba.join("scene.xml")).unwrap();
+    assert!(xml.contains(r#"<bsdf type="mask">"#), "{xml}");
+    assert!(!xml.contains("twosided"), "{xml}");
+    assert!(
+        xml.contains(r#"<string name="filter_type" value="nearest"/>"#),
+        "{xml}"
+    );
+    assert!(
+        xml.contains(r#"<string name="wrap_mode" value="clamp"/>"#),
+        "{xml}"
+    );
+    let obj = std::fs::read_to_string(mitsuba.join("mesh_000.obj")).unwrap();
+    assert_eq!(
+        obj.lines().filter(|l| l.starts_with("vt ")).count(),
+        4,
+        "{obj}"
+    );
+    assert!(obj.lines().any(|l| l.starts_with("f 1/1 ")), "{obj}");
+    // The baked reflectance: texel × 0.5; the baked opacity: texel ≥ ½.
+    let read = |name: &str| {
+        let file = xml
+            .split('"')
+            .find(|f| f.starts_with(name) && f.ends_with(".exr"))
+            .unwrap_or_else(|| panic!("no {name}*.exr in {xml}"))
+            .to_string();
+        luxest_io::exr::read_rgb(&mitsuba.join(file)).unwrap()
+    };
+    let reflectance = read("material_000_reflectance");
+    assert_eq!(reflectance.pixels[0][0], LEFT * 0.5);
+    assert_eq!(reflectance.pixels[1][0], RIGHT * 0.5);
+    let opacity = read("opacity_000");
+    assert_eq!((opacity.pixels[0][0], opacity.pixels[1][0]), (0.0, 1.0));
 }

@@ -23,6 +23,11 @@
 //! | spot light (on-axis intensity I₀, cutoff, beam width) | `spot` emitter, `intensity` = I₀, `cutoff_angle`, `beam_width`, `to_world` a `lookat` along the axis |
 //! | constant environment (radiance L) | `constant` emitter, `radiance` = L |
 //! | environment map (texels, scale, rotation) | `envmap` emitter reading `environment.exr` (the compiled texels, written as f32 RGB), `scale`, `to_world` the rotation as a 4 × 4 `matrix` |
+//! | colour texture of a material or emitter (multiplying a colour) | `bitmap` (`raw`, the filter, wrap mode and `to_uv` of the texture) reading an EXR of the texels times that colour, one per parameter |
+//! | roughness texture (multiplying α) | `bitmap` `alpha` of the baked α per texel |
+//! | one-sided surface | the model without `twosided` |
+//! | cut-out (opacity) | `mask` with the opacity (a constant, or a `bitmap` of value × alpha, thresholded per texel where there is a cut-off) |
+//! | texture coordinates | `vt` in the OBJ files (v flipped, as Mitsuba's loader flips it back) |
 //! | camera (pinhole, vertical field of view) | `perspective`, `fov_axis="y"`, `look_at` with the same up vector; `hdrfilm` with a `box` filter |
 //!
 //! Goniometric luminaires have no Mitsuba equivalent and are refused. The integrator is `path`
@@ -32,6 +37,7 @@ use luxest_io::math::Vec3;
 use luxest_io::{Error, Result};
 use luxest_render::compiled::{CompiledScene, Emitter, NO_EMITTER};
 use luxest_render::scene::{Material, Microfacet, MicrofacetDistribution};
+use luxest_render::texture::{Filter, Texture, Wrap};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -50,17 +56,101 @@ fn vec3(v: Vec3) -> String {
     format!("{:e}, {:e}, {:e}", v.x, v.y, v.z)
 }
 
-/// The BSDF element of a material.
-fn bsdf(m: &Material) -> String {
+/// How a material's textured parameters are written: its colour texture baked with each
+/// colour it multiplies (Mitsuba's `bitmap` has no scale), its roughness texture baked into α.
+struct Maps<'a> {
+    color: Option<&'a Texture>,
+    roughness: Option<&'a Texture>,
+    /// File-name stem of the baked textures of this material.
+    stem: String,
+    files: &'a mut ExportFiles,
+}
+
+impl Maps<'_> {
+    /// A colour parameter: `c`, times the colour texture when there is one.
+    fn color(&mut self, name: &str, c: [f64; 3]) -> String {
+        match self.color {
+            None => rgb(name, c),
+            Some(t) => {
+                let file = format!("{}_{}_{}.exr", self.stem, name, self.files.len());
+                let element = bitmap(name, &file, t);
+                self.files
+                    .push((file, bake(t, |v| [0, 1, 2].map(|i| v[i] as f64 * c[i]))));
+                element
+            }
+        }
+    }
+
+    /// The `alpha` of a microfacet model: α times the roughness texture's first channel (`f`
+    /// maps the product to Mitsuba's α).
+    fn alpha(&mut self, alpha: f64, f: fn(f64) -> f64) -> String {
+        match self.roughness {
+            None => format!(r#"<float name="alpha" value="{:e}"/>"#, f(alpha)),
+            Some(t) => {
+                let file = format!("{}_alpha_{}.exr", self.stem, self.files.len());
+                let element = bitmap("alpha", &file, t);
+                self.files
+                    .push((file, bake(t, |v| [f(alpha * v[0] as f64); 3])));
+                element
+            }
+        }
+    }
+}
+
+/// A `bitmap` texture element reading `file` (linear values), with `t`'s lookup options.
+fn bitmap(name: &str, file: &str, t: &Texture) -> String {
+    let m = t.uv_transform().0;
+    format!(
+        r#"<texture type="bitmap" name="{name}"><string name="filename" value="{file}"/><boolean name="raw" value="true"/><string name="filter_type" value="{}"/><string name="wrap_mode" value="{}"/><transform name="to_uv"><matrix value="{:e} {:e} 0 {:e} {:e} {:e} 0 {:e} 0 0 1 0 0 0 0 1"/></transform></texture>"#,
+        match t.filter() {
+            Filter::Bilinear => "bilinear",
+            Filter::Nearest => "nearest",
+        },
+        match t.wrap() {
+            Wrap::Repeat => "repeat",
+            Wrap::Mirror => "mirror",
+            Wrap::Clamp => "clamp",
+        },
+        m[0][0],
+        m[0][1],
+        m[0][2],
+        m[1][0],
+        m[1][1],
+        m[1][2]
+    )
+}
+
+/// The finest level of `t` with each texel (linear RGBA) mapped by `f`, as an f32 RGB EXR.
+fn bake(t: &Texture, f: impl Fn([f32; 4]) -> [f64; 3]) -> Vec<u8> {
+    let (w, h) = (t.width(), t.height());
+    let mut image = luxest_io::image::RgbImage::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            image.pixels[y * w + x] = f(t.texel(0, x, y)).map(|v| v as f32);
+        }
+    }
+    luxest_io::exr::encode_rgb(Path::new("texture.exr"), &image)
+        .expect("an in-memory EXR of a decoded texture encodes")
+}
+
+/// The BSDF element of a material (two-sided models wrapped in `twosided` when `two_sided`).
+fn bsdf(m: &Material, maps: &mut Maps, two_sided: bool) -> String {
+    let wrap = |inner: String| {
+        if two_sided {
+            format!(r#"<bsdf type="twosided">{inner}</bsdf>"#)
+        } else {
+            inner
+        }
+    };
     match m {
-        Material::Lambertian { reflectance } => format!(
-            r#"<bsdf type="twosided"><bsdf type="diffuse">{}</bsdf></bsdf>"#,
-            rgb("reflectance", reflectance.0)
-        ),
-        Material::Mirror { reflectance } => format!(
-            r#"<bsdf type="twosided"><bsdf type="conductor"><string name="material" value="none"/>{}</bsdf></bsdf>"#,
-            rgb("specular_reflectance", reflectance.0)
-        ),
+        Material::Lambertian { reflectance } => wrap(format!(
+            r#"<bsdf type="diffuse">{}</bsdf>"#,
+            maps.color("reflectance", reflectance.0)
+        )),
+        Material::Mirror { reflectance } => wrap(format!(
+            r#"<bsdf type="conductor"><string name="material" value="none"/>{}</bsdf>"#,
+            maps.color("specular_reflectance", reflectance.0)
+        )),
         Material::Dielectric { ior } => format!(
             r#"<bsdf type="dielectric"><float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/></bsdf>"#
         ),
@@ -68,49 +158,49 @@ fn bsdf(m: &Material) -> String {
             diffuse,
             specular,
             roughness,
-        } => format!(
-            r#"<bsdf type="twosided"><bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse">{}</bsdf><bsdf type="roughconductor"><string name="distribution" value="ggx"/><float name="alpha" value="{:e}"/><string name="material" value="none"/>{}</bsdf></bsdf></bsdf>"#,
-            rgb("reflectance", diffuse.0.map(|v| 2.0 * v)),
-            roughness * roughness,
+        } => wrap(format!(
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse">{}</bsdf><bsdf type="roughconductor"><string name="distribution" value="ggx"/>{}<string name="material" value="none"/>{}</bsdf></bsdf>"#,
+            maps.color("reflectance", diffuse.0.map(|v| 2.0 * v)),
+            maps.alpha(*roughness, |r| r * r),
             rgb("specular_reflectance", specular.0.map(|v| 2.0 * v))
-        ),
+        )),
         Material::Conductor {
             eta,
             k,
             specular_reflectance,
             roughness,
-        } => format!(
-            r#"<bsdf type="twosided"><bsdf type="{}">{}{}{}{}</bsdf></bsdf>"#,
+        } => wrap(format!(
+            r#"<bsdf type="{}">{}{}{}{}</bsdf>"#,
             if roughness.is_some() {
                 "roughconductor"
             } else {
                 "conductor"
             },
-            microfacet(roughness.as_ref()),
+            microfacet(roughness.as_ref(), maps),
             rgb("eta", eta.0),
             rgb("k", k.0),
-            rgb("specular_reflectance", specular_reflectance.0)
-        ),
+            maps.color("specular_reflectance", specular_reflectance.0)
+        )),
         Material::Plastic {
             diffuse_reflectance,
             specular_reflectance,
             ior,
             nonlinear,
             roughness,
-        } => format!(
-            r#"<bsdf type="twosided"><bsdf type="{}">{}{}{}<float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/><boolean name="nonlinear" value="{nonlinear}"/></bsdf></bsdf>"#,
+        } => wrap(format!(
+            r#"<bsdf type="{}">{}{}{}<float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/><boolean name="nonlinear" value="{nonlinear}"/></bsdf>"#,
             if roughness.is_some() {
                 "roughplastic"
             } else {
                 "plastic"
             },
-            microfacet(roughness.as_ref()),
-            rgb("diffuse_reflectance", diffuse_reflectance.0),
+            microfacet(roughness.as_ref(), maps),
+            maps.color("diffuse_reflectance", diffuse_reflectance.0),
             rgb("specular_reflectance", specular_reflectance.0)
-        ),
+        )),
         Material::RoughDielectric { ior, roughness } => format!(
             r#"<bsdf type="roughdielectric">{}<float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/></bsdf>"#,
-            microfacet(Some(roughness))
+            microfacet(Some(roughness), maps)
         ),
         Material::ThinDielectric { ior } => format!(
             r#"<bsdf type="thindielectric"><float name="int_ior" value="{ior:e}"/><float name="ext_ior" value="1"/></bsdf>"#
@@ -123,22 +213,22 @@ fn bsdf(m: &Material) -> String {
             second,
         } => format!(
             r#"<bsdf type="blendbsdf"><float name="weight" value="{weight:e}"/>{}{}</bsdf>"#,
-            bsdf(first),
-            bsdf(second)
+            bsdf(first, maps, two_sided),
+            bsdf(second, maps, two_sided)
         ),
     }
 }
 
 /// The `distribution` and `alpha` of a microfacet model (nothing for a smooth one).
-fn microfacet(r: Option<&Microfacet>) -> String {
+fn microfacet(r: Option<&Microfacet>, maps: &mut Maps) -> String {
     match r {
         Some(r) => format!(
-            r#"<string name="distribution" value="{}"/><float name="alpha" value="{:e}"/>"#,
+            r#"<string name="distribution" value="{}"/>{}"#,
             match r.distribution {
                 MicrofacetDistribution::Ggx => "ggx",
                 MicrofacetDistribution::Beckmann => "beckmann",
             },
-            r.alpha
+            maps.alpha(r.alpha, |a| a)
         ),
         None => String::new(),
     }
@@ -298,22 +388,82 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
         }
         let mut by_new: Vec<(usize, u32)> = index.iter().map(|(&v, &n)| (n, v)).collect();
         by_new.sort_unstable();
-        for (_, v) in by_new {
+        for &(_, v) in &by_new {
             let p = scene.positions[v as usize];
             let _ = writeln!(obj, "v {} {} {}", p[0], p[1], p[2]);
         }
+        if h.features.uvs {
+            // Mitsuba's OBJ loader flips v, as luxest's does.
+            for &(_, v) in &by_new {
+                let t = scene.uvs[v as usize];
+                let _ = writeln!(obj, "vt {} {}", t[0], 1.0 - t[1]);
+            }
+            faces = faces
+                .lines()
+                .map(|l| {
+                    let f: Vec<&str> = l.split(' ').collect();
+                    format!("f {0}/{0} {1}/{1} {2}/{2}\n", f[1], f[2], f[3])
+                })
+                .collect();
+        }
         obj.push_str(&faces);
+        let surface = h.surfaces.get(*m as usize);
+        let texture = |t: Option<u32>| t.map(|t| &scene.textures[t as usize]);
         let emitter = match h.emitters.get(*e as usize) {
-            Some(Emitter::Area { radiance_rgb, .. }) => format!(
-                r#"<emitter type="area">{}</emitter>"#,
-                rgb("radiance", radiance_rgb.0)
-            ),
+            Some(Emitter::Area {
+                radiance_rgb,
+                texture: t,
+                ..
+            }) => {
+                let mut maps = Maps {
+                    color: texture(*t),
+                    roughness: None,
+                    stem: format!("emitter_{g:03}"),
+                    files: &mut files,
+                };
+                format!(
+                    r#"<emitter type="area">{}</emitter>"#,
+                    maps.color("radiance", radiance_rgb.0)
+                )
+            }
             _ => String::new(),
         };
+        let mut maps = Maps {
+            color: texture(surface.and_then(|s| s.color)),
+            roughness: texture(surface.and_then(|s| s.roughness)),
+            stem: format!("material_{g:03}"),
+            files: &mut files,
+        };
+        let mut element = bsdf(
+            &material.model,
+            &mut maps,
+            surface.is_none_or(|s| s.two_sided),
+        );
+        if let Some(o) = surface.and_then(|s| s.opacity.as_ref()) {
+            // Mitsuba's `mask` is stochastic: a cut-off is baked into the texels (exact for
+            // nearest lookups; at texel edges a bilinear lookup of the thresholded texels
+            // differs from thresholding the bilinear lookup).
+            let opacity = match texture(o.texture) {
+                None => format!(r#"<float name="opacity" value="{:e}"/>"#, o.value),
+                Some(t) => {
+                    let file = format!("opacity_{g:03}.exr");
+                    let (value, cutoff, alpha) = (o.value, o.cutoff, t.has_alpha());
+                    let baked = bake(t, |v| {
+                        let a = value * if alpha { v[3] } else { v[0] } as f64;
+                        [match cutoff {
+                            Some(c) => f64::from(u8::from(a >= c)),
+                            None => a,
+                        }; 3]
+                    });
+                    files.push((file.clone(), baked));
+                    bitmap("opacity", &file, t)
+                }
+            };
+            element = format!(r#"<bsdf type="mask">{opacity}{element}</bsdf>"#);
+        }
         let _ = writeln!(
             xml,
-            r#"  <shape type="obj"><string name="filename" value="{file}"/><boolean name="face_normals" value="true"/>{}{emitter}</shape>"#,
-            bsdf(&material.model)
+            r#"  <shape type="obj"><string name="filename" value="{file}"/><boolean name="face_normals" value="true"/>{element}{emitter}</shape>"#
         );
         files.push((file, obj.into_bytes()));
     }
