@@ -3,8 +3,8 @@
 //! refused by the real binary with exit code 1 and one line naming the file and the place.
 //!
 //! `crates/scene-compile/tests/data/mitsuba/scene.xml` is loaded by Mitsuba 3 itself in
-//! `crates/scene-compile/tests/data/mitsuba/check_with_mitsuba.py`, so its translation is checked against a scene
-//! Mitsuba accepts.
+//! `crates/scene-compile/tests/data/mitsuba/check_with_mitsuba.py`, so its translation is
+//! checked against a scene Mitsuba accepts.
 
 use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
