@@ -537,6 +537,16 @@ fn bad_mitsuba_input_is_one_line_naming_file_line_and_element() {
             "mirrored.xml: line 4: <sensor type=\"perspective\">: the camera's to_world mirrors the image",
         ),
         (
+            "cycle",
+            xml(r#"<bsdf type="twosided" id="loop"><ref id="loop"/></bsdf>"#),
+            "cycle.xml: line 4: <bsdf type=\"twosided\" id=\"loop\">: BSDFs nest deeper than 64",
+        ),
+        (
+            "deep",
+            xml(&format!("{}{}", "<bsdf type=\"twosided\">".repeat(100), "</bsdf>".repeat(100))),
+            "deep.xml: line 4: <bsdf>: elements nest deeper than 64",
+        ),
+        (
             "version",
             "<scene><shape type=\"cube\"/></scene>".to_string(),
             "version.xml: line 1: <scene>: the root element has no version attribute",

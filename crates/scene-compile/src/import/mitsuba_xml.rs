@@ -56,6 +56,9 @@ pub const SPHERE_SUBDIVISIONS: u32 = 6;
 pub const DISK_SEGMENTS: usize = 256;
 /// Deepest `<include>` nesting, as Mitsuba's default `max_include_depth`.
 const MAX_INCLUDE_DEPTH: usize = 15;
+/// Deepest nesting of elements in one file, and of BSDFs through references (a `<ref>` to an
+/// enclosing BSDF is a cycle): real scenes nest a few levels.
+const MAX_NESTING: usize = 64;
 
 /// One XML element after `$` substitution and `<include>` expansion.
 #[derive(Clone, Debug)]
@@ -267,6 +270,13 @@ impl Parser {
     ) -> Result<Option<Elem>> {
         let line = doc.text_pos_at(node.range().start).row;
         let tag = node.tag_name().name().to_string();
+        if node.ancestors().count() > MAX_NESTING {
+            return Err(self.fail(
+                file,
+                line,
+                format!("<{tag}>: elements nest deeper than {MAX_NESTING}"),
+            ));
+        }
         let mut attrs = Vec::new();
         for a in node.attributes() {
             let mut v = self.substitute(a.value(), file, line)?;
@@ -395,6 +405,8 @@ struct Importer<'a> {
     /// Textures made so far, and their names by the address of their element.
     textures: RefCell<BTreeMap<String, TextureDesc>>,
     texture_names: RefCell<BTreeMap<usize, String>>,
+    /// How deep [`Importer::bsdf`] is in nested BSDFs.
+    bsdf_depth: Cell<usize>,
     /// Directories `<path>` adds to the file search.
     search: Vec<PathBuf>,
 }
@@ -1001,6 +1013,20 @@ impl<'a> Importer<'a> {
     }
 
     fn bsdf(&self, e: &'a Elem) -> Result<Bsdf> {
+        let depth = self.bsdf_depth.get();
+        if depth >= MAX_NESTING {
+            return Err(self.fail(
+                e,
+                format!("BSDFs nest deeper than {MAX_NESTING} (a <ref> to an enclosing BSDF?)"),
+            ));
+        }
+        self.bsdf_depth.set(depth + 1);
+        let b = self.bsdf_at(e);
+        self.bsdf_depth.set(depth);
+        b
+    }
+
+    fn bsdf_at(&self, e: &'a Elem) -> Result<Bsdf> {
         let plugin = e.attr("type").unwrap_or("");
         let r = self.reader(e)?;
         let color;
@@ -1940,6 +1966,7 @@ fn import_impl(
         default_bsdf: None,
         textures: RefCell::new(BTreeMap::new()),
         texture_names: RefCell::new(BTreeMap::new()),
+        bsdf_depth: Cell::new(0),
         search,
     };
     imp.top_level(&root)?;
