@@ -211,7 +211,15 @@ fn mitsuba_scene_translates_field_by_field() {
             .find(|o| o.name.as_deref() == Some(name))
             .unwrap_or_else(|| panic!("no object {name}"))
     };
-    assert_eq!(s.objects.len(), 9);
+    assert_eq!(s.objects.len(), 10);
+    // serialized: mesh 1 of the file (version 4), relative to the scene.
+    assert_eq!(
+        o("tile").shape,
+        Shape::Serialized {
+            path: "meshes/two.serialized".into(),
+            shape_index: 1
+        }
+    );
 
     // Textures: the bitmap's file, wrap, filter and to_uv (scale, then translate: u' = 2u + ½,
     // v' = 3v); raw bitmaps are linear, the others keep the file's encoding.
@@ -225,19 +233,19 @@ fn mitsuba_scene_translates_field_by_field() {
         wood.uv_transform,
         Some(UvTransform([[2.0, 0.0, 0.5], [0.0, 3.0, 0.0]]))
     );
-    let opacity_tex = "textures/alpha.png@scene:130";
-    let alpha_tex = "textures/alpha.png@scene:138";
+    let opacity_tex = "textures/alpha.png@scene:136";
+    let alpha_tex = "textures/alpha.png@scene:144";
     assert_eq!(s.textures.len(), 3, "{:?}", s.textures.keys());
     assert_eq!(s.textures[opacity_tex].encoding, Some(Encoding::Linear));
     // A bare BSDF is one-sided; its bitmap colour multiplies a reflectance of 1.
     assert_eq!(
-        m["diffuse@scene:124"],
+        m["diffuse@scene:130"],
         Material::Lambertian {
             reflectance: Rgb::WHITE
         }
     );
     assert_eq!(
-        s.surfaces["diffuse@scene:124"],
+        s.surfaces["diffuse@scene:130"],
         Surface {
             color: Some("wood".into()),
             roughness: None,
@@ -252,7 +260,7 @@ fn mitsuba_scene_translates_field_by_field() {
         .find(|c| c.0 == "Cu")
         .unwrap();
     assert_eq!(
-        m["mask@scene:129"],
+        m["mask@scene:135"],
         Material::Conductor {
             eta: Rgb(cu.1),
             k: Rgb(cu.2),
@@ -264,7 +272,7 @@ fn mitsuba_scene_translates_field_by_field() {
         }
     );
     assert_eq!(
-        s.surfaces["mask@scene:129"],
+        s.surfaces["mask@scene:135"],
         Surface {
             color: None,
             roughness: Some(alpha_tex.into()),
@@ -404,10 +412,11 @@ fn mitsuba_scene_compiles_and_its_exported_ron_compiles_to_the_same_scene() {
     let path = data().join("scene.xml");
     let (compiled, _) = scene_compile::compile_file(&path).unwrap();
     let stats = &compiled.header.stats;
-    // 4 rectangles of 2 + 12 (cube) + 20·4^6 (sphere) + 254 (disk fan) + 1 (OBJ) + 2 (PLY).
+    // 4 rectangles of 2 + 12 (cube) + 20·4^6 (sphere) + 254 (disk fan) + 1 (OBJ) + 2 (PLY)
+    // + 2 (serialized mesh 1).
     assert_eq!(
         stats.triangles,
-        8 + 12 + 20 * 4u64.pow(mitsuba_xml::SPHERE_SUBDIVISIONS) + 254 + 1 + 2
+        8 + 12 + 20 * 4u64.pow(mitsuba_xml::SPHERE_SUBDIVISIONS) + 254 + 1 + 2 + 2
     );
     // Two area emitters, point, spot and environment.
     assert_eq!(compiled.header.emitters.len(), 5);

@@ -17,7 +17,7 @@
 //! composed in order: each applies after the previous ones). A property the translation does
 //! not read is an error, so nothing is dropped without a word.
 //!
-//! **Objects.** Shapes `obj`, `ply`, `rectangle`, `cube`, `sphere`, `disk` (with `to_world`,
+//! **Objects.** Shapes `obj`, `ply`, `serialized` (versions 3 and 4), `rectangle`, `cube`, `sphere`, `disk` (with `to_world`,
 //! `flip_normals`, `face_normals`); BSDFs `diffuse`, `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor` and `roughconductor` (`eta`/`k`, or a `material` preset of
 //! [`super::mitsuba_tables`]; `none`, smooth, is luxest's `Mirror`), `plastic`,
@@ -1422,6 +1422,16 @@ impl<'a> Importer<'a> {
                 } else {
                     Shape::Ply { path }
                 }
+            }
+            "serialized" => {
+                let file = r
+                    .string("filename")?
+                    .ok_or_else(|| self.fail(e, "needs a filename"))?;
+                let path = self.resolve_file(e, &file)?;
+                let shape_index = r.integer("shape_index", 0)?;
+                let shape_index = u32::try_from(shape_index)
+                    .map_err(|_| self.fail(e, format!("shape_index {shape_index} is negative")))?;
+                Shape::Serialized { path, shape_index }
             }
             "rectangle" => Shape::Quad {
                 corner: Vec3::new(-1.0, -1.0, 0.0),

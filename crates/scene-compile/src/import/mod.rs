@@ -158,9 +158,10 @@ pub fn export_ron(scene: &Scene, source: &Path, out: &Path) -> String {
     let mut s = scene.clone();
     for o in &mut s.objects {
         match &mut o.shape {
-            Shape::Obj { path, .. } | Shape::Gltf { path, .. } | Shape::Ply { path } => {
-                *path = rebase(path)
-            }
+            Shape::Obj { path, .. }
+            | Shape::Gltf { path, .. }
+            | Shape::Ply { path }
+            | Shape::Serialized { path, .. } => *path = rebase(path),
             _ => {}
         }
     }
