@@ -889,3 +889,44 @@ fn define_gives_a_mitsuba_parameter_over_its_default() {
     assert_eq!(o.status.code(), Some(2));
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+#[test]
+fn version_0_6_scenes_get_mitsubas_upgrade() {
+    let d = tmp("legacy");
+    std::fs::copy(data().join("textures/wood.png"), d.join("wood.png")).unwrap();
+    std::fs::write(
+        d.join("old.xml"),
+        r#"<scene version="0.6.0">
+    <shape type="rectangle" id="wall">
+        <transform name="toWorld"><translate x="1"/></transform>
+        <bsdf type="diffuse">
+            <texture type="bitmap" name="diffuseReflectance">
+                <string name="filename" value="wood.png"/>
+                <float name="uoffset" value="0.25"/>
+                <float name="uscale" value="2"/>
+                <float name="vscale" value="3"/>
+            </texture>
+        </bsdf>
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+    </shape>
+</scene>
+"#,
+    )
+    .unwrap();
+    let s = read_scene(&d.join("old.xml")).unwrap().scene;
+    let wall = &s.objects[0];
+    assert!(same_affine(
+        &affine(&wall.transform.matrix),
+        &Affine::translate(Vec3::new(1.0, 0.0, 0.0))
+    ));
+    // diffuseReflectance → reflectance (the texture's colour); uv' = scale · (uv + offset).
+    assert_eq!(
+        s.surfaces[&wall.material].color.as_deref(),
+        Some("wood.png@old:5")
+    );
+    assert_eq!(
+        s.textures["wood.png@old:5"].uv_transform,
+        Some(UvTransform([[2.0, 0.0, 0.5], [0.0, 3.0, 0.0]]))
+    );
+    std::fs::remove_dir_all(&d).unwrap();
+}

@@ -9,7 +9,8 @@
 //! directly or not, is an error. `<ref id>` refers to an object with that `id` (`name` gives
 //! the property name); `<alias id as>` gives an object a second id. Scenes of version < 2.0
 //! get Mitsuba's upgrade: camelCase property names become snake_case (`toWorld` →
-//! `to_world`) and a `diffuse`'s `diffuse_reflectance` becomes `reflectance`.
+//! `to_world`), a `diffuse`'s `diffuse_reflectance` becomes `reflectance`, and a bitmap's
+//! `uoffset`, `voffset`, `uscale`, `vscale` become its `to_uv`.
 //!
 //! **Properties.** `float`, `integer`, `boolean`, `string`, `rgb` (one or three values),
 //! `spectrum` (a single constant value only), `point`, `vector` and `transform` (`matrix` of 9
@@ -83,6 +84,8 @@ impl Elem {
 /// The first pass: files read, parameters substituted, includes expanded.
 struct Parser {
     files: Vec<PathBuf>,
+    /// Per file: whether its version is below 2.0 (Mitsuba 0.x syntax, upgraded).
+    legacy: Vec<bool>,
     /// `$name` → value, in definition order.
     params: Vec<(String, String)>,
     /// The files being read, outermost first (for recursion).
@@ -214,6 +217,7 @@ impl Parser {
             return Err(self.fail(file, line, format!("invalid version \"{version}\"")));
         };
         let upgrade = version < (2, 0, 0);
+        self.legacy.push(upgrade);
         let elem = self.convert(&doc, root, file, upgrade)?;
         self.stack.pop();
         Ok(elem.expect("the root is an element that stays"))
@@ -1296,7 +1300,23 @@ impl<'a> Importer<'a> {
             "nearest" => Filter::Nearest,
             other => return Err(self.fail(e, format!("unknown filter_type \"{other}\""))),
         };
-        let to_uv = r.transform("to_uv")?;
+        let mut to_uv = r.transform("to_uv")?;
+        // Mitsuba's upgrade of version < 2 files: uoffset, voffset, uscale, vscale become
+        // to_uv = scale · translate.
+        if self.parser.legacy.get(e.file).copied().unwrap_or(false) {
+            let old = ["uoffset", "voffset", "uscale", "vscale"];
+            if old
+                .iter()
+                .any(|k| r.props.items.iter().any(|i| i.name == *k))
+            {
+                if to_uv != Affine::IDENTITY {
+                    return Err(self.fail(e, "give either to_uv or uoffset/uscale, not both"));
+                }
+                let offset = Vec3::new(r.float("uoffset", 0.0)?, r.float("voffset", 0.0)?, 0.0);
+                let scale = Vec3::new(r.float("uscale", 1.0)?, r.float("vscale", 1.0)?, 1.0);
+                to_uv = Affine::scale(scale).compose(&Affine::translate(offset));
+            }
+        }
         r.boolean("accel", true)?;
         if let Some(f) = r.string("format")? {
             if f != "auto" {
@@ -1949,6 +1969,7 @@ fn import_impl(
 ) -> Result<Imported> {
     let mut parser = Parser {
         files: Vec::new(),
+        legacy: Vec::new(),
         params: defines.to_vec(),
         stack: Vec::new(),
     };
