@@ -5,6 +5,8 @@
 #
 #   make run       the main job on the default scene (cornell-box): compile, path-traced
 #                  snapshots + AOVs, local estimate at its sensors, double-local-estimate image
+#   make textured-example  the textured interior (scenes/textured-room.ron): path-traced and
+#                  denoised, and its double-local-estimate image, with PNG previews
 #   make scenes    compile every scene in scenes/ into build/<name>/scene.lxs
 #   make test      formatting, lints and all tests (cargo and pytest)
 #   make reference noisy   render the generated denoiser dataset (PRESET=quick|full)
@@ -45,12 +47,14 @@ SCENES := $(basename $(notdir $(wildcard scenes/*.ron)))
 COMPILED := $(patsubst %,build/%/scene.lxs,$(SCENES))
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml Cargo.lock
 MESHES := $(wildcard scenes/meshes/*)
+# The images the example scenes name (data-gen/example_textures.py writes them).
+SCENE_TEXTURES := $(wildcard scenes/textures/*)
 
 VENV := .venv
 VENV_STAMP := .luxest-setup-4
 PYTHON := $(VENV)/bin/python
 
-.PHONY: run scenes test lint bench validate singularity clean train pytest eval test-slurm rust-test
+.PHONY: run textured-example scenes test lint bench validate singularity clean train pytest eval test-slurm rust-test
 # Every file make builds is kept: none is a throwaway intermediate (compiled scenes, renders).
 .SECONDARY:
 
@@ -88,6 +92,15 @@ run: build/$(DEFAULT_SCENE)/scene.lxs $(ESTIMATE) $(TRACE) $(AOV_WRITE) $(DENOIS
 	$(LAUNCH) $(ESTIMATE) sensors $< --paths 200000 --csv $(RUN_PREFIX).sensors.csv
 	$(LAUNCH) $(ESTIMATE) image $< --paths 300 --resolution 256x256 --preview $(RUN_PREFIX)_$(call lx_count,300)le.png
 
+# The textured interior: path-traced at 64 spp with its features and denoised by the committed
+# model, and its double-local-estimate image (300 light paths per sensor), PNG previews beside.
+TEXTURED_PREFIX := build/textured-room/textured-room
+textured-example: build/textured-room/scene.lxs $(TRACE) $(AOV_WRITE) $(ESTIMATE) $(DENOISE)
+	$(LAUNCH) $(TRACE) $< --spp 64 --snapshots 16 --preview $(TEXTURED_PREFIX)_$(call lx_count,64)spp.png
+	$(LAUNCH) $(AOV_WRITE) $< --spp 64 --snapshots 16 --min-samples $(FEATURE_SPP)
+	$(LAUNCH) $(DENOISE) --model $(DEFAULT_MODEL) --preview $(foreach s,16 64,$(call lx_image,$(TEXTURED_PREFIX),$(s),hdr))
+	$(LAUNCH) $(ESTIMATE) image $< --paths 300 --preview $(TEXTURED_PREFIX)_$(call lx_count,300)le.png
+
 scenes: $(COMPILED)
 
 # The stage binaries: one rule for all of them. Each depends on the sources cargo's dep-info lists
@@ -103,8 +116,8 @@ $(addprefix $(RELEASE)/,$(STAGE_BINS)): $(RELEASE)/%:
 	$(CARGO) build --release -p $*
 	@touch $@
 
-# The compiled scene depends on its source, the meshes it may load and the compiler.
-build/%/scene.lxs: scenes/%.ron $(MESHES) $(SCENE_COMPILE)
+# The compiled scene depends on its source, the meshes and images it may load and the compiler.
+build/%/scene.lxs: scenes/%.ron $(MESHES) $(SCENE_TEXTURES) $(SCENE_COMPILE)
 	$(LAUNCH) $(SCENE_COMPILE) $< -o $@
 
 # The Python sources' formatting (ruff.toml); make test checks it too (training/tests/test_tidy.py).
@@ -141,7 +154,9 @@ rust-test:
 
 # The Make DAG through a real single-node Slurm cluster (pipelines/tests/test_slurm.py; set up by
 # scripts/slurm-cluster.sh, Slurm and munge from scripts/setup.sh), with the debug stage programs
-# make test builds: about a minute, so a target of its own, which CI runs after make test.
+# make test builds: about a minute, so a target of its own, which CI runs after make test. With
+# the same programs, every generated room compiled with its textures
+# (pipelines/tests/test_generated_scenes.py, seconds).
 test-slurm: $(VENV)/$(VENV_STAMP)
 	$(CLIPPY_BUILD) $(CARGO) build $(addprefix -p ,$(STAGE_BINS)) --bins
 	MAKEFLAGS= MAKELEVEL= LUXEST_BIN_DIR=target/debug $(PYTHON) -m pytest pipelines/tests -q

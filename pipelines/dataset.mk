@@ -37,10 +37,23 @@ NOISY_SNAPSHOTS := $(subst $(space),$(comma),$(strip $(NOISY_LEVELS)))
 # regenerates the scenes when it changes (the generator rewrites the files whose text changed).
 SIDE_STAMP := $(call lx_stamp,build/dataset/$(DATASET),side,$(DATASET_SIDE))
 
-$(GEN_DIR)/%.ron: data-gen/generate.py $(MESHES) $(SIDE_STAMP)
-	@$(GENERATE) --side $(DATASET_SIDE) --out $(GEN_DIR)
+$(GEN_DIR)/%.ron: data-gen/generate.py data-gen/textures.py $(MESHES) $(SIDE_STAMP)
+	@$(GENERATE) --side $(DATASET_SIDE) --out $(GEN_DIR) --only scenes
 
-build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(SCENE_COMPILE)
+# The procedural texture library the scenes name (../textures/<name>.png, data-gen/textures.py),
+# one per dataset: a few seconds to write, so written once per change of the generator, by the
+# rule of a stamp (the generator rewrites only the images whose bytes changed, and make re-reads
+# their times, so an unchanged image leaves its scenes compiled). A missing image removes the
+# stamp when make reads this file, so the library is written again.
+DATASET_TEXTURES := $(addprefix $(GEN_DIR)/,$(shell python3 data-gen/generate.py --list-textures))
+TEXTURE_STAMP := build/dataset/$(DATASET)/textures.stamp
+$(if $(filter-out $(wildcard $(DATASET_TEXTURES)),$(DATASET_TEXTURES)),$(shell rm -f $(TEXTURE_STAMP)))
+$(TEXTURE_STAMP): data-gen/generate.py data-gen/textures.py
+	@$(GENERATE) --out $(GEN_DIR) --only textures && touch $@
+$(DATASET_TEXTURES): $(TEXTURE_STAMP) ;
+
+# A compiled scene holds its textures' pixels: it depends on the library too.
+build/dataset/$(DATASET)/%.lxs: $(GEN_DIR)/%.ron $(DATASET_TEXTURES) $(SCENE_COMPILE)
 	$(LAUNCH) $(SCENE_COMPILE) -q $< -o $@
 
 # REF_SPP is part of what a reference is: a stamp named after it (the only one of its kind) is a

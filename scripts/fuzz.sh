@@ -2,7 +2,7 @@
 # The long fuzz run (docs/fuzzing.md): every cargo-fuzz target of fuzz/, one after the other, for
 # SECONDS_PER_TARGET seconds each (default 600), then a table of the results.
 #
-#   scripts/fuzz.sh                 # all twelve targets, 10 minutes each
+#   scripts/fuzz.sh                 # all sixteen targets, 10 minutes each
 #   SECONDS_PER_TARGET=60 scripts/fuzz.sh exr ies
 #
 # Needs cargo-fuzz (`cargo install cargo-fuzz --locked`); on a stable toolchain the targets build
@@ -14,8 +14,12 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SECS=${SECONDS_PER_TARGET:-600}
 TARGETS=("$@")
-[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(scene obj gltf mitsuba_xml ply compiled exr ies ldt sensors scene_info peer)
+[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(scene obj gltf mitsuba_xml ply compiled exr ies ldt sensors scene_info peer texture_png texture_jpeg texture_exr texture_encoded)
 export RUSTC_BOOTSTRAP=1
+# jpeg-decoder's package carries a rust-toolchain file (1.61.0): under cargo-fuzz, rustup would
+# pick it up when compiling that crate unless the toolchain is named in the environment.
+RUSTUP_TOOLCHAIN=${RUSTUP_TOOLCHAIN:-$(rustup show active-toolchain | cut -d' ' -f1)}
+export RUSTUP_TOOLCHAIN
 
 command -v cargo-fuzz >/dev/null || {
     echo "error: cargo-fuzz is not installed: cargo install cargo-fuzz --locked" >&2

@@ -2,8 +2,8 @@
 //! estimator's own standard error as the tolerance: a sensor under an open sky (E = π L), a
 //! diffuse plane under a constant sky seen by the camera (L = ρ L_sky: trace, light tracing,
 //! double local estimate), a sensor in a black box lit through a square hole (E = L times the
-//! hole's projected solid angle), a sensor under an environment map (E by quadrature of the
-//! map), and a spot light over a plane (E = I₀ falloff(θ) cos θ / d², and the plane's
+//! hole's projected solid angle), a sensor and a plane under an environment map (E by
+//! quadrature of the map, the plane's luminance ρ E / π), and a spot light over a plane (E = I₀ falloff(θ) cos θ / d², and the plane's
 //! luminance ρ E / π in the camera's pixels).
 
 use crate::util::{compile_text, TempDir};
@@ -144,11 +144,25 @@ fn sensor_in_a_black_box_sees_the_sky_through_its_hole() {
     );
     let world = world_at(&compile_text(&dir, "box", &text));
     let expected = SKY * 4.0 * corner_rectangle(0.5, 0.5, 2.0);
-    let [le, g] = sensor_estimates(&world, 2_000, 200_000);
+    let [le, g] = sensor_estimates(&world, 2_000, 100_000);
     assert_close("local estimate", le[0], expected, 0.0);
     assert_close("gather", g[0], expected, 0.0);
     // The test can fail: the standard error is a few per cent of the value.
     assert!(le[0].1 < 0.05 * expected, "{:?}", le[0]);
+
+    // Grey walls: the sky's light reflected inside the box reaches the sensor by light paths
+    // entering through the hole (local estimate) and by backward paths with next-event
+    // estimation of the sky (gather), two independent estimates of the same illuminance.
+    let grey = text.replace("reflectance: (0, 0, 0)", "reflectance: (0.6, 0.6, 0.6)");
+    let world = world_at(&compile_text(&dir, "grey-box", &grey));
+    let [le, g] = sensor_estimates(&world, 60_000, 30_000);
+    let se = (le[0].1.powi(2) + g[0].1.powi(2)).sqrt();
+    assert!(
+        (le[0].0 - g[0].0).abs() <= 4.0 * se && le[0].0 > 1.2 * expected,
+        "grey box: local {:?} vs gather {:?} (direct alone {expected})",
+        le[0],
+        g[0]
+    );
 }
 
 #[test]
@@ -174,6 +188,7 @@ fn sensor_under_an_environment_map_matches_its_quadrature() {
     let (s, c) = 25f64.to_radians().sin_cos();
     let text = format!(
         r#"Scene(
+        camera: Some(Camera(position: (0.01, 3, 0.02), look_at: (0, 0, 0), up: (0, 0, -1), vfov_deg: 25.0, resolution: (8, 6))),
         materials: {{ "ground": Lambertian(reflectance: (0.5, 0.5, 0.5)) }},
         objects: [(shape: Quad(corner: (-2, 0, 2), u: (4, 0, 0), v: (0, 0, -4)), material: "ground")],
         environment: Some(Map(path: "sky.exr", scale: 1.5,
@@ -181,7 +196,8 @@ fn sensor_under_an_environment_map_matches_its_quadrature() {
         sensors: [Points(name: "up", points: [(position: (0, 0, 0), normal: (0, 1, 0))])])"#,
         ms = -s
     );
-    let world = world_at(&compile_text(&dir, "map", &text));
+    let scene = compile_text(&dir, "map", &text);
+    let world = world_at(&scene);
     let env = world.environment().unwrap();
     let (nt, np) = (400, 800);
     let mut exact = 0.0;
@@ -199,6 +215,52 @@ fn sensor_under_an_environment_map_matches_its_quadrature() {
     // The quadrature's own error is below 1e-3 of the value.
     assert_close("local estimate", le[0], exact, 1e-3);
     assert_close("gather", g[0], exact, 1e-3);
+
+    // The plane's luminance seen from above is ρ E / π everywhere: trace (the map's next-event
+    // directions and escaping paths by MIS), light tracing (light paths drawn from the map) and
+    // the double local estimate (the map's light reflected at the points the camera sees).
+    let expected = 0.5 * exact / PI;
+    let (world, cam) = trace::load(&scene, None).unwrap();
+    let mut film = Film::new(cam.width as usize, cam.height as usize);
+    Renderer::new(&world, cam, 2, 2, 1000).advance(&mut film, 128, false, &Progress::off());
+    let mean: Vec<f64> = film.mean().iter().map(|c| c.luminance()).collect();
+    check_image("trace", &mean, &film.standard_error(), expected, 4.0);
+    let (world, cam) = load_with_camera(&scene, None, Traversal::Robust).unwrap();
+    let lt = estimate::light_tracing::render(
+        &world,
+        &cam,
+        &estimate::light_tracing::LightTraceConfig {
+            paths: 300_000,
+            seed: 3,
+            threads: 2,
+            max_depth: 1000,
+        },
+        &Progress::off(),
+    );
+    let mean: Vec<f64> = lt.rgb.iter().map(|c| c.luminance()).collect();
+    check_image("light tracing", &mean, &lt.standard_error, expected, 8.0);
+    let dle = estimate::double_local_estimate::render(
+        &world,
+        &cam,
+        &estimate::double_local_estimate::ImageConfig {
+            paths: 4_000,
+            pixel_samples: 1,
+            seed: 4,
+            threads: 2,
+            singularity: Singularity::Ball { eps: 1e-3 },
+            max_depth: 1000,
+            mis_paths: 1,
+        },
+        &Console::QUIET,
+    );
+    let mean: Vec<f64> = dle.rgb.iter().map(|c| c.luminance()).collect();
+    check_image(
+        "double local estimate",
+        &mean,
+        &dle.standard_error,
+        expected,
+        8.0,
+    );
 }
 
 const PLANE_UNDER_SKY: &str = r#"Scene(
@@ -490,4 +552,132 @@ fn sensor_points_in_the_open_see_the_sky_from_every_side_they_face() {
         PI * SKY,
         1e-4,
     );
+}
+
+#[test]
+fn mitsuba_export_writes_spots_and_environments() {
+    // The spot as Mitsuba's `spot` looking along its axis, the map as `envmap` with its texels
+    // in environment.exr and its rotation as a 4 × 4 matrix, a constant sky as `constant`.
+    let dir = TempDir::new("env-export");
+    let pixels: Vec<[f32; 3]> = (0..12).map(|k| [k as f32 + 0.5, 1.0, 2.0]).collect();
+    let image = luxest_io::image::RgbImage {
+        width: 4,
+        height: 3,
+        pixels: pixels.clone(),
+        attributes: Vec::new(),
+    };
+    luxest_io::exr::write_rgb(&dir.path().join("sky.exr"), &image).unwrap();
+    let scene = |env: &str| {
+        format!(
+            r#"Scene(
+            materials: {{ "grey": Lambertian(reflectance: (0.5, 0.5, 0.5)) }},
+            objects: [(shape: Quad(corner: (-2, 0, 2), u: (4, 0, 0), v: (0, 0, -4)), material: "grey")],
+            {SPOT},
+            environment: Some({env}))"#
+        )
+    };
+    let export = |name: &str, text: &str| {
+        let path = compile_text(&dir, name, text);
+        let compiled = luxest_render::compiled::CompiledScene::load(&path).unwrap();
+        scene_compile::mitsuba::export(&compiled, &path).unwrap()
+    };
+    let files = export(
+        "map",
+        &scene(r#"Map(path: "sky.exr", scale: 3.0, to_world: ((0, 0, 1), (0, 1, 0), (-1, 0, 0)))"#),
+    );
+    let xml = String::from_utf8(files[0].1.clone()).unwrap();
+    assert!(
+        xml.contains(r#"<emitter type="spot"><transform name="to_world"><lookat origin="0e0, 2e0, 0e0" target="0e0, 1e0, 0e0""#),
+        "{xml}"
+    );
+    assert!(xml.contains(r#"<float name="cutoff_angle" value="3e1"/><float name="beam_width" value="2e1"/><rgb name="intensity" value="1e2, 1e2, 1e2"/>"#));
+    assert!(xml.contains(r#"<emitter type="envmap"><string name="filename" value="environment.exr"/><float name="scale" value="3e0"/><transform name="to_world"><matrix value="0e0 0e0 1e0 0 0e0 1e0 0e0 0 -1e0 0e0 0e0 0 0 0 0 1"/>"#), "{xml}");
+    let (_, exr) = files
+        .iter()
+        .find(|(name, _)| name == "environment.exr")
+        .unwrap();
+    let back = luxest_io::exr::read_rgb_bytes(std::path::Path::new("environment.exr"), exr.clone())
+        .unwrap();
+    assert_eq!((back.width, back.height, back.pixels), (4, 3, pixels));
+    let files = export("constant", &scene("Constant((1.5, 2, 2.5))"));
+    let xml = String::from_utf8(files[0].1.clone()).unwrap();
+    assert!(
+        xml.contains(
+            r#"<emitter type="constant"><rgb name="radiance" value="1.5e0, 2e0, 2.5e0"/></emitter>"#
+        ),
+        "{xml}"
+    );
+}
+
+#[test]
+fn bad_environments_and_spots_are_one_line_errors() {
+    // Each: exit code 1, one line naming the file and the problem, no output.
+    let dir = TempDir::new("env-errors");
+    dir.write("garbage.exr", b"not an exr at all");
+    let image = luxest_io::image::RgbImage {
+        width: 3,
+        height: 2,
+        pixels: vec![[0.0; 3]; 6],
+        attributes: Vec::new(),
+    };
+    luxest_io::exr::write_rgb(&dir.path().join("black.exr"), &image).unwrap();
+    let base = |extra: &str| {
+        format!(
+            r#"Scene(
+            materials: {{ "grey": Lambertian(reflectance: (0.5, 0.5, 0.5)) }},
+            objects: [(shape: Quad(corner: (-2, 0, 2), u: (4, 0, 0), v: (0, 0, -4)), material: "grey")],
+            {extra})"#
+        )
+    };
+    let cases = [
+        (
+            r#"environment: Some(Map(path: "missing.exr"))"#,
+            "missing.exr not found",
+        ),
+        (
+            r#"environment: Some(Map(path: "garbage.exr"))"#,
+            "garbage.exr: not a readable OpenEXR file",
+        ),
+        (
+            r#"environment: Some(Map(path: "black.exr"))"#,
+            "black.exr: environment map is black",
+        ),
+        (
+            r#"environment: Some(Map(path: "black.exr", to_world: ((1, 0, 0), (0, 2, 0), (0, 0, 1))))"#,
+            "environment.to_world: environment to_world",
+        ),
+        (
+            r#"environment: Some(Map(path: "black.exr", scale: -1))"#,
+            "environment.scale: the map's scale must be positive",
+        ),
+        (
+            r#"environment: Some(Constant((0, 0, 0)))"#,
+            "environment.Constant: emitter has zero power",
+        ),
+        (
+            r#"point_lights: [(position: (0, 1, 0), power: Intensity(1.0),
+                spot: Some((direction: (0, -1, 0), cutoff_deg: 20.0, beam_width_deg: 25.0)))]"#,
+            "point_lights[0].spot.beam_width_deg: the beam width must be in [0, cutoff_deg = 20]",
+        ),
+        (
+            r#"point_lights: [(position: (0, 1, 0), power: Intensity(1.0),
+                spot: Some((direction: (0, 0, 0), cutoff_deg: 20.0, beam_width_deg: 10.0)))]"#,
+            "point_lights[0].spot.direction: must not be the zero vector",
+        ),
+        (
+            r#"point_lights: [(position: (0, 1, 0), power: Intensity(1.0),
+                spot: Some((direction: (0, -1, 0), cutoff_deg: 200.0, beam_width_deg: 10.0)))]"#,
+            "point_lights[0].spot.cutoff_deg: the cutoff must be in (0, 180]",
+        ),
+    ];
+    for (k, (extra, want)) in cases.iter().enumerate() {
+        let path = dir.write(&format!("bad{k}.ron"), base(extra));
+        let out = dir.path().join(format!("bad{k}.lxs"));
+        let (code, msg) =
+            crate::util::scene_compile(&[path.to_str().unwrap(), "-o", out.to_str().unwrap()])
+                .expect_err("bad input must fail");
+        assert_eq!(code, 1, "{msg}");
+        assert!(!msg.contains('\n') && msg.contains(want), "case {k}: {msg}");
+        assert!(!out.exists());
+    }
 }

@@ -225,3 +225,52 @@ fn missing_scene_file_is_named() {
     assert_eq!(code, 1);
     assert_eq!(msg, "/nonexistent/dir/scene.ron: file not found");
 }
+
+#[test]
+fn mitsuba_material_parameters_out_of_range_are_named() {
+    for (material, parts) in [
+        (
+            r#"Conductor(eta: (0.2, 0.4, -1.0), k: (3.0, 2.0, 1.0))"#,
+            &["materials[\"w\"].eta", "outside [0, 100]"][..],
+        ),
+        (
+            r#"Conductor(eta: (0.0, 0.4, 1.0), k: (0.0, 2.0, 1.0))"#,
+            &["materials[\"w\"]", "eta and k are both 0 in channel 0"][..],
+        ),
+        (
+            r#"Conductor(eta: (0.2, 0.4, 1.0), k: (3.0, 2.0, 1.0), roughness: Some((distribution: Ggx, alpha: 0.0)))"#,
+            &["materials[\"w\"].roughness.alpha", "0 is outside (0, 4]"][..],
+        ),
+        (
+            r#"Plastic(diffuse_reflectance: (0.5, 1.5, 0.5))"#,
+            &["materials[\"w\"].diffuse_reflectance", "outside [0, 1]"][..],
+        ),
+        (
+            r#"Plastic(diffuse_reflectance: (0.5, 0.5, 0.5), ior: 1.0, roughness: Some((distribution: Beckmann, alpha: 0.1)))"#,
+            &[
+                "materials[\"w\"].ior",
+                "a rough interface needs an index other than 1",
+            ][..],
+        ),
+        (
+            r#"RoughDielectric(ior: 11.0, roughness: (distribution: Ggx, alpha: 0.1))"#,
+            &["materials[\"w\"].ior", "outside (0, 10]"][..],
+        ),
+        (
+            r#"ThinDielectric(ior: -1.5)"#,
+            &["materials[\"w\"].ior", "must be positive"][..],
+        ),
+        (
+            r#"Blend(weight: 1.5, first: ThinDielectric(ior: 1.5), second: Lambertian(reflectance: (0.5, 0.5, 0.5)))"#,
+            &["materials[\"w\"].weight", "outside [0, 1]"][..],
+        ),
+        (
+            r#"Blend(weight: 0.5, first: ThinDielectric(ior: 1.5), second: Lambertian(reflectance: (0.5, 2.0, 0.5)))"#,
+            &["materials[\"w\"].second.reflectance", "outside [0, 1]"][..],
+        ),
+    ] {
+        let m = format!(r#"materials: {{ "w": {material} }},"#);
+        let msg = expect_error(&scene(&m, FLOOR, LIGHT), &[]);
+        assert_has(&msg, parts);
+    }
+}

@@ -547,3 +547,53 @@ fn the_mitsuba_export_writes_textures_cut_outs_and_sidedness() {
     let opacity = read("opacity_000");
     assert_eq!((opacity.pixels[0][0], opacity.pixels[1][0]), (0.0, 1.0));
 }
+
+#[test]
+fn a_blend_of_mirror_and_matte_in_a_white_furnace_is_exact() {
+    // A convex object under a constant sky L = 1 reflects, where it is seen, exactly the
+    // albedo of its material: (1 − w) ρ + w for a blend of weight w of a matte ρ and a perfect
+    // mirror, through both the delta and the diffuse member (a renderer that weighs a delta
+    // sample with the other member's density — Mitsuba 3's blendbsdf does — misses it).
+    let dir = TempDir::new("blend-furnace");
+    let (w, rho) = (0.3, 0.5);
+    let text = format!(
+        r#"Scene(
+        camera: Camera(position: (0.0, 0.0, -4.0), look_at: (0.0, 0.0, 0.0), vfov_deg: 30.0,
+                       resolution: (16, 16)),
+        materials: {{ "b": Blend(weight: {w}, first: Lambertian(reflectance: ({rho}, {rho}, {rho})),
+                                 second: Mirror(reflectance: (1.0, 1.0, 1.0))) }},
+        objects: [(shape: Sphere(radius: 1.0, subdivisions: 3), material: "b")],
+        environment: Some(Constant((1.0, 1.0, 1.0))))"#
+    );
+    let scene = compile_text(&dir, "blend", &text);
+    let (cam, film) = trace_film(&scene, 256);
+    let (mean, se) = (film.mean(), film.standard_error());
+    let expected = (1.0 - w) * rho + w;
+    let mut checked = 0;
+    for py in 0..cam.height as usize {
+        for px in 0..cam.width as usize {
+            // Pixels whose corners all see a sphere of radius 0.9 (inside the icosphere).
+            let inside =
+                [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                    .iter()
+                    .all(|&(dx, dy)| {
+                        let d = cam.direction(px as f64 + dx, py as f64 + dy);
+                        let o = cam.position;
+                        let b = o.dot(d);
+                        b * b - (o.length_squared() - 0.81) > 0.0
+                    });
+            if !inside {
+                continue;
+            }
+            let i = py * cam.width as usize + px;
+            let v = mean[i].luminance();
+            assert!(
+                (v - expected).abs() <= 4.0 * se[i] + 1e-9,
+                "pixel ({px},{py}): {v} ± {} vs {expected}",
+                se[i]
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 40, "{checked}");
+}

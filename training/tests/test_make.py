@@ -133,12 +133,56 @@ def test_scenes_follow_dataset_side():
     rule = re.search(r"^build/dataset/pytest-dry-run/scenes/%\.ron:(.*)$", out.stdout, re.M)
     assert rule and "build/dataset/pytest-dry-run/side-96" in rule.group(1).split()
     gen = [shlex.split(line) for line in out.stdout.splitlines() if line.startswith("python3 data-gen/generate.py")]
-    assert gen and all(flag(c, "--side") == "96" and flag(c, "--preset") == "quick" for c in gen)
+    scenes = [c for c in gen if flag(c, "--only") == "scenes"]
+    assert scenes and all(flag(c, "--side") == "96" and flag(c, "--preset") == "quick" for c in scenes)
+
+
+def test_compiled_scenes_depend_on_the_texture_library():
+    # Every compiled scene depends on every image of the library (a compiled scene holds its
+    # textures' pixels); the images are written by one generator run, the rule of a stamp that
+    # depends on the generator and the library's code, not on the image side.
+    out = make("-n", "-p", "dataset-scenes", DATASET_SIDE="96")
+    assert out.returncode == 0, out.stderr
+    images = subprocess.run(
+        ["python3", "data-gen/generate.py", "--list-textures"], cwd=ROOT, check=True, capture_output=True, text=True
+    ).stdout.split()
+    assert len(images) >= 8
+    rule = re.search(r"^build/dataset/pytest-dry-run/%\.lxs:(.*)$", out.stdout, re.M)
+    assert rule and {f"build/dataset/pytest-dry-run/scenes/{i}" for i in images} <= set(rule.group(1).split())
+    stamp = re.search(r"^build/dataset/pytest-dry-run/textures\.stamp:(.*)$", out.stdout, re.M)
+    assert stamp and set(stamp.group(1).split()) == {"data-gen/generate.py", "data-gen/textures.py"}
+    writes = [
+        line
+        for line in out.stdout.splitlines()
+        if line.startswith("python3 data-gen/generate.py") and "--only textures" in line
+    ]
+    assert writes and all("--side" not in line for line in writes)
+
+
+def test_textured_example_runs_every_stage_through_its_variable():
+    # make textured-example: trace, aov-write, denoise (the committed model) and estimate image
+    # on the compiled scenes/textured-room.ron.
+    cmds = dry_run("textured-example")
+    scene = "build/textured-room/scene.lxs"
+    assert [c[0] for c in cmds] == [STAGES[v] for v in ("SCENE_COMPILE", "TRACE", "AOV_WRITE", "DENOISE", "ESTIMATE")]
+    assert cmds[0][1] == "scenes/textured-room.ron" and all(scene in c for c in (cmds[1], cmds[2], cmds[4]))
+    assert flag(cmds[3], "--model") == "models/default.onnx" and cmds[4][1] == "image"
 
 
 def test_generator_writes_the_side_it_is_given(tmp_path):
     subprocess.run(
-        ["python3", "data-gen/generate.py", "--preset", "quick", "--side", "72", "--out", str(tmp_path)],
+        [
+            "python3",
+            "data-gen/generate.py",
+            "--preset",
+            "quick",
+            "--side",
+            "72",
+            "--out",
+            str(tmp_path),
+            "--only",
+            "scenes",
+        ],
         cwd=ROOT,
         check=True,
         capture_output=True,
@@ -162,7 +206,8 @@ def test_dataset_count_adds_scenes_and_keeps_the_smaller_datasets(tmp_path):
     assert len({flag(c, "-o") for c in dry_run("reference") if c[0] == STAGES["TRACE"]}) == 24
     for n in (24, 30):
         subprocess.run(
-            ["python3", "data-gen/generate.py", "--scenes", str(n), "--side", "32", "--out", str(tmp_path / str(n))],
+            ["python3", "data-gen/generate.py", "--scenes", str(n), "--side", "32", "--only", "scenes"]
+            + ["--out", str(tmp_path / str(n))],
             cwd=ROOT,
             check=True,
             capture_output=True,

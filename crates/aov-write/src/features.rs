@@ -340,3 +340,56 @@ impl FeatureFilm {
         self.depth.iter().map(|&d| [(d / n) as f32; 3]).collect()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use luxest_render::scene::{Microfacet, MicrofacetDistribution};
+
+    fn close(a: Rgb, b: Rgb) -> bool {
+        (0..3).all(|c| (a.0[c] - b.0[c]).abs() < 1e-12)
+    }
+
+    /// OIDN's albedo of the Mitsuba materials: a metal's reflectivity at normal incidence
+    /// ((η − 1)² + k²) / ((η + 1)² + k²) times its specular reflectance; a plastic's coating and
+    /// base weighted by the coating's normal-incidence reflectance ((η − 1) / (η + 1))²; a
+    /// dielectric's 1; a blend's weighted sum.
+    #[test]
+    fn albedo_of_the_mitsuba_materials() {
+        let rough = Microfacet {
+            distribution: MicrofacetDistribution::Ggx,
+            alpha: 0.2,
+        };
+        let metal = Material::Conductor {
+            eta: Rgb([0.2, 1.0, 1.5]),
+            k: Rgb([3.0, 2.0, 0.0]),
+            specular_reflectance: Rgb([1.0, 0.5, 1.0]),
+            roughness: Some(rough),
+        };
+        let f0 = |n: f64, k: f64| ((n - 1.0) * (n - 1.0) + k * k) / ((n + 1.0) * (n + 1.0) + k * k);
+        let expected = Rgb([f0(0.2, 3.0), 0.5 * f0(1.0, 2.0), f0(1.5, 0.0)]);
+        assert!(close(albedo(&metal), expected), "{:?}", albedo(&metal));
+        let plastic = Material::Plastic {
+            diffuse_reflectance: Rgb([0.8, 0.4, 0.0]),
+            specular_reflectance: Rgb::WHITE,
+            ior: 1.5,
+            nonlinear: false,
+            roughness: None,
+        };
+        let expected = Rgb([0.04 + 0.96 * 0.8, 0.04 + 0.96 * 0.4, 0.04]);
+        assert!(close(albedo(&plastic), expected), "{:?}", albedo(&plastic));
+        let glass = Material::RoughDielectric {
+            ior: 1.5,
+            roughness: rough,
+        };
+        assert_eq!(albedo(&glass), Rgb::WHITE);
+        assert_eq!(albedo(&Material::ThinDielectric { ior: 1.5 }), Rgb::WHITE);
+        let blend = Material::Blend {
+            weight: 0.25,
+            first: Box::new(plastic.clone()),
+            second: Box::new(glass),
+        };
+        let expected = albedo(&plastic) * 0.75 + Rgb::splat(0.25);
+        assert!(close(albedo(&blend), expected));
+    }
+}

@@ -607,8 +607,9 @@ fn sensors(
         singularity: sing,
         max_depth: run.max_depth,
         near_field,
-        // The environment's direct term: as many samples per sensor as the near field's.
-        environment_samples: paths.min(DEFAULT_NEAR_SAMPLES),
+        // The sky's direct term: one sample (two shadow rays at most) per sensor and light path,
+        // about what the light paths' connections to each sensor cost.
+        environment_samples: paths,
     };
     // Each batch takes at least one near-field sample per sensor.
     let near_total = match cfg.near_field {

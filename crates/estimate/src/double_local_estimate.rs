@@ -2,7 +2,9 @@
 //!
 //! The point each camera sample sees (after following mirror and glass bounces) becomes a
 //! sensor with a BRDF: every collision j of every light path contributes to every such point
-//! p the luminance `Q_j f_j cos_j cos_p / d² V(j, p) f_p(→ camera)`. Point-source light is
+//! p the luminance `Q_j f_j cos_j cos_p / d² V(j, p) f_p(→ camera)`. (A material with both,
+//! such as a smooth plastic, is such a point for its density and is followed through its delta
+//! lobe.) Point-source light is
 //! added exactly, emitters seen directly with their luminance.
 //!
 //! Naively that is (collisions × pixels) shadow rays. The work is organised so that it runs at
@@ -221,12 +223,20 @@ fn view_points(
                             _ => None,
                         },
                     });
-                    break;
+                    // A material with a delta lobe besides (a smooth plastic's coating, a
+                    // blend's mirror): the view point takes what has a density, the path goes
+                    // on through the delta lobe alone.
+                    if !bsdf::has_delta_lobe(m) {
+                        break;
+                    }
                 }
                 let Some(s) = bsdf::sample_flat(m, -dir, sp.ng, &mut rng, Transport::Radiance)
                 else {
                     break;
                 };
+                if !s.delta {
+                    break;
+                }
                 weight = weight * s.weight;
                 origin = world.offset(sp.position, sp.ng, s.wi);
                 dir = s.wi;

@@ -5,8 +5,8 @@
 //! area emitters, and for the environment [`crate::transport::environment_illuminance`] (a
 //! direction from the map and one about the normal, by multiple importance sampling).
 //! Indirect light: a cosine-distributed direction from p (weight π) and a path traced from
-//! there with next-event estimation at every vertex (the environment by a direction drawn from
-//! its map) and analog Russian roulette; emission found by BSDF sampling, and the environment
+//! there with next-event estimation at every vertex (a light point, and a direction drawn from
+//! the environment's map) and analog Russian roulette; emission found by BSDF sampling, and the environment
 //! met by a path that leaves the scene, are ignored (they are all counted by next-event
 //! estimation), so the estimator needs a scene without specular paths, and is unbiased with
 //! bounded variance wherever the sensor is.
@@ -19,7 +19,7 @@ use luxest_render::bsdf::{self, Transport};
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
 use luxest_render::sampling::{cosine_hemisphere, Rng};
 use luxest_render::scene::SensorPoint;
-use luxest_render::world::{LightSample, SurfacePoint, World};
+use luxest_render::world::{SurfacePoint, World};
 use std::f64::consts::PI;
 
 #[derive(Clone, Debug)]
@@ -33,32 +33,20 @@ pub struct GatherConfig {
 }
 
 /// Light arriving at `x` (surface normal `n`, towards directions on `n`'s side) from one
-/// sampled light point or environment direction, times `f cos` evaluated by
-/// `response(w_to_light)`: the next-event estimate for area and point emitters and the
-/// environment. Point sources and the environment are skipped when `skip_exact` (the sensor's
-/// own direct light, which is computed exactly or by [`environment_illuminance`]).
+/// sampled light point, times `f cos` evaluated by `response(w_to_light)`: the next-event
+/// estimate for area and point emitters. Point sources are skipped when `skip_points`.
 fn next_event(
     world: &World,
     x: Vec3,
     n: Vec3,
     rng: &mut Rng,
     response: impl Fn(Vec3) -> Rgb,
-    skip_exact: bool,
+    skip_points: bool,
 ) -> Rgb {
-    let l = match world.sample_light_point(rng, x) {
-        LightSample::Point(l) => l,
-        LightSample::Environment(_) if skip_exact => return Rgb::BLACK,
-        LightSample::Environment(es) => {
-            let r = response(es.direction);
-            if es.pdf <= 0.0
-                || r.max_component() <= 0.0
-                || !world.escapes(world.offset(x, n, es.direction), es.direction)
-            {
-                return Rgb::BLACK;
-            }
-            return es.radiance * r * (1.0 / es.pdf);
-        }
-    };
+    if !world.has_light_points() {
+        return Rgb::BLACK; // the environment alone: see `environment_next_event`
+    }
+    let l = world.sample_light_point(rng, x);
     let v = l.position - x;
     let d2 = v.length_squared();
     if d2 <= 0.0 {
@@ -74,7 +62,7 @@ fn next_event(
             }
             c / d2
         }
-        None if skip_exact => return Rgb::BLACK,
+        None if skip_points => return Rgb::BLACK,
         None => 1.0 / d2,
     };
     let r = response(w);
@@ -85,6 +73,30 @@ fn next_event(
         return Rgb::BLACK;
     }
     l.emitted * r * (geometric / l.pdf)
+}
+
+/// Light arriving at `x` (surface normal `n`) from the environment along one direction drawn
+/// from its map, times `f cos` evaluated by `response(w)`: the next-event estimate of the
+/// environment (black without one).
+fn environment_next_event(
+    world: &World,
+    x: Vec3,
+    n: Vec3,
+    rng: &mut Rng,
+    response: impl Fn(Vec3) -> Rgb,
+) -> Rgb {
+    let Some(env) = world.environment() else {
+        return Rgb::BLACK;
+    };
+    let es = env.sample(rng.next_f64(), rng.next_f64());
+    let r = response(es.direction);
+    if es.pdf <= 0.0
+        || r.max_component() <= 0.0
+        || !world.escapes(world.offset(x, n, es.direction), es.direction)
+    {
+        return Rgb::BLACK;
+    }
+    es.radiance * r * (1.0 / es.pdf)
 }
 
 /// The backward walk from the surface point `first`, reached along `dir`: at most `max_depth`
@@ -131,14 +143,9 @@ fn reflected_radiance(
         let m = world.material_seen(sp, wo);
         let m = &*m;
         let ng = bsdf::facing_normal(wo, sp.ng);
-        let radiance = next_event(
-            world,
-            sp.position,
-            ng,
-            rng,
-            |w| bsdf::eval(m, wo, w, sp.ng, sp.ng) * w.dot(sp.ng).abs(),
-            false,
-        );
+        let f_cos = |w: Vec3| bsdf::eval(m, wo, w, sp.ng, sp.ng) * w.dot(sp.ng).abs();
+        let radiance = next_event(world, sp.position, ng, rng, f_cos, false)
+            + environment_next_event(world, sp.position, ng, rng, f_cos);
         l = l + beta * radiance;
     });
     l

@@ -58,7 +58,8 @@ pub enum Arrival {
 }
 
 /// A step of a random walk: the new throughput, ray origin and direction, and the density of
-/// the direction (solid angle, times the roulette's survival probability; 0 for a delta BSDF).
+/// the direction (solid angle, times the roulette's survival probability; 0 for a direction
+/// sampled from a delta lobe).
 pub struct Scattered {
     pub beta: Rgb,
     pub origin: Vec3,
@@ -172,7 +173,9 @@ fn walk(world: &World, rng: &mut Rng, max_depth: u32, mut visit: impl FnMut(Step
         let Some(s) = scatter(world, &sp, dir, q, Transport::Flux, rng) else {
             return end;
         };
-        arrival = if delta {
+        // The sample's lobe, not the material, tells: a smooth plastic's coating or a blend's
+        // mirror is a delta lobe of a material that also has a density.
+        arrival = if s.pdf == 0.0 {
             Arrival::Specular
         } else {
             Arrival::Sampled {

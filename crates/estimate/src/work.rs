@@ -191,8 +191,15 @@ pub fn sensors_plan(
     // intersection and a next-event ray.
     let walks = near.len() as f64 * near_samples as f64;
     let backward = walks * (2.0 + 2.0 * near_path);
-    let units = vertices * (1.0 + c) + backward;
-    let cost = vertices * (1.0 + c * CONNECTION_COST) + backward;
+    // The sky's direct light: one sample of two shadow rays per sensor and light path (the
+    // `environment_samples` estimate sensors gives the local estimate).
+    let sky = if world.environment().is_some() {
+        2.0 * sensors.len() as f64 * paths as f64
+    } else {
+        0.0
+    };
+    let units = vertices * (1.0 + c) + backward + sky;
+    let cost = vertices * (1.0 + c * CONNECTION_COST) + backward + sky;
     let parallel = threads.min(batches).max(1);
     let mut work = format!(
         "{paths} light paths of ~{} collisions, each vertex connected to ~{} of {} sensors",
@@ -206,6 +213,9 @@ pub fn sensors_plan(
             near.len(),
             luxest_io::limits::show_count(near_path)
         );
+    }
+    if sky > 0.0 {
+        work += &format!(", {paths} samples of the sky's direct light at each sensor");
     }
     WorkPlan {
         stage: "estimate sensors".into(),

@@ -17,7 +17,7 @@ const NOWHERE: &str = "/nonexistent-luxest-fuzz";
 pub type Target = fn(&[u8]);
 
 /// The targets by name, as `fuzz/fuzz_targets/<name>.rs` and the smoke run know them.
-pub const TARGETS: [(&str, Target); 12] = [
+pub const TARGETS: [(&str, Target); 16] = [
     ("scene", scene),
     ("obj", obj),
     ("gltf", gltf),
@@ -30,6 +30,10 @@ pub const TARGETS: [(&str, Target); 12] = [
     ("sensors", sensors),
     ("scene_info", scene_info),
     ("peer", peer),
+    ("texture_png", texture_png),
+    ("texture_jpeg", texture_jpeg),
+    ("texture_exr", texture_exr),
+    ("texture_encoded", texture_encoded),
 ];
 
 /// A scene file: RON parsing, validation and, for scenes whose tessellation is small, the whole
@@ -196,6 +200,85 @@ pub fn peer(data: &[u8]) {
     if let Ok(p) = report::peer::parse(&path, data) {
         let _ = report::peer::check_sets(&path, &p, &["work-plane"], &path);
     }
+}
+
+/// A PNG texture: decoding, then what a texture does with the image ([`use_texture_image`]).
+pub fn texture_png(data: &[u8]) {
+    let path = Path::new(NOWHERE).join("t.png");
+    use_texture_image(&path, luxest_io::texture_image::decode_png(&path, data));
+}
+
+/// A JPEG texture: decoding, then what a texture does with the image.
+pub fn texture_jpeg(data: &[u8]) {
+    let path = Path::new(NOWHERE).join("t.jpg");
+    use_texture_image(&path, luxest_io::texture_image::decode_jpeg(&path, data));
+}
+
+/// An OpenEXR texture: decoding (channels R, G, B, A or Y, A; finite values), then what a
+/// texture does with the image.
+pub fn texture_exr(data: &[u8]) {
+    let path = Path::new(NOWHERE).join("t.exr");
+    use_texture_image(
+        &path,
+        luxest_io::texture_image::decode_exr(&path, data.to_vec()),
+    );
+}
+
+/// A texture as the compiled scene stores it (`Texture::decode`), then lookups.
+pub fn texture_encoded(data: &[u8]) {
+    let path = Path::new(NOWHERE).join("s.lxs");
+    if let Ok((texture, _)) = luxest_render::texture::Texture::decode(&path, data) {
+        use_texture(&texture);
+    }
+}
+
+/// Builds textures of a decoded image with two sets of options, looks them up, and checks that
+/// each one's encoding decodes to the same texture.
+fn use_texture_image(
+    path: &Path,
+    image: luxest_io::Result<luxest_io::texture_image::TextureImage>,
+) {
+    use luxest_render::texture::{Encoding, Filter, Texture, TextureOptions, UvTransform, Wrap};
+    let Ok(image) = image else {
+        return;
+    };
+    let linear = TextureOptions {
+        encoding: Some(Encoding::Linear),
+        wrap: Wrap::Mirror,
+        filter: Filter::Nearest,
+        uv_transform: UvTransform([[2.0, 0.5, 0.1], [-0.3, 1.5, 0.25]]),
+    };
+    for options in [TextureOptions::default(), linear] {
+        let Ok(texture) = Texture::from_image(&image, &options) else {
+            continue;
+        };
+        use_texture(&texture);
+        let mut bytes = Vec::new();
+        texture.encode(&mut bytes);
+        let (back, len) = Texture::decode(path, &bytes).expect("a texture's encoding decodes");
+        assert_eq!(len, bytes.len());
+        assert!(back == texture, "the decoded texture differs");
+    }
+}
+
+/// The lookups a renderer makes of a texture; all must be finite (the texels are).
+fn use_texture(texture: &luxest_render::texture::Texture) {
+    for (uv, footprint) in [
+        ([0.3, 0.7], 0.0),
+        ([-1.2, 5.5], 0.01),
+        ([0.5, 0.5], 0.3),
+        ([1e12, -1e300], 2.0),
+        ([f64::NAN, 0.1], f64::INFINITY),
+    ] {
+        let v = texture.eval(uv, footprint);
+        assert!(v.iter().all(|c| c.is_finite()), "lookup {v:?}");
+    }
+    let a = texture.average();
+    let m = texture.mean_over_triangle([[0.0, 0.0], [1.0, 0.2], [0.3, 0.9]]);
+    assert!(
+        a.iter().chain(&m).all(|c| c.is_finite()),
+        "means {a:?} {m:?}"
+    );
 }
 
 /// The queries the compiler and the estimators make of a parsed photometric file.

@@ -61,11 +61,83 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
         "sensors" => sensors_seeds(),
         "scene_info" => scene_info_seeds(),
         "peer" => files("reports/lighting/office", &["radiance.csv"]),
+        "texture_png" => [
+            files("crates/render/tests/data/texture", &[".png"]),
+            png_seeds(),
+        ]
+        .concat(),
+        "texture_jpeg" => files("crates/render/tests/data/texture", &[".jpg"]),
+        "texture_exr" => [
+            files("crates/render/tests/data/texture", &[".exr"]),
+            files(
+                "tests/fixtures/denoise",
+                &["spp.alb.exr", "odd_000004spp.hdr.exr"],
+            ),
+            files("crates/fuzz/regressions/exr", &[""]),
+        ]
+        .concat(),
+        "texture_encoded" => encoded_texture_seeds(),
         _ => unreachable!("unknown target {target}"),
     };
     s.extend(files(&format!("crates/fuzz/regressions/{target}"), &[""]));
     assert!(!s.is_empty(), "no seeds for {target}");
     s
+}
+
+/// PNGs of the colour types and depths the texture decoder expands: grey 16-bit, grey and
+/// alpha, RGBA, a palette with transparency, grey 2-bit.
+fn png_seeds() -> Vec<Vec<u8>> {
+    use png::{BitDepth::*, ColorType::*};
+    let encode = |color, depth, w: u32, data: &[u8], palette: Option<(&[u8], &[u8])>| {
+        let mut bytes = Vec::new();
+        let mut encoder = png::Encoder::new(&mut bytes, w, 3);
+        encoder.set_color(color);
+        encoder.set_depth(depth);
+        if let Some((entries, alphas)) = palette {
+            encoder.set_palette(entries.to_vec());
+            encoder.set_trns(alphas.to_vec());
+        }
+        let mut writer = encoder.write_header().expect("valid header");
+        writer.write_image_data(data).expect("valid data");
+        writer.finish().expect("finishes");
+        bytes
+    };
+    let ramp = |n: usize| -> Vec<u8> { (0..n).map(|i| (i * 37 % 256) as u8).collect() };
+    vec![
+        encode(Grayscale, Sixteen, 3, &ramp(18), None),
+        encode(GrayscaleAlpha, Eight, 3, &ramp(18), None),
+        encode(Rgba, Eight, 3, &ramp(36), None),
+        encode(
+            Indexed,
+            Eight,
+            3,
+            &[0, 1, 2, 2, 1, 0, 1, 1, 1],
+            Some((&ramp(9), &[0, 128])),
+        ),
+        encode(
+            Grayscale,
+            Two,
+            4,
+            &[0b0001_1011, 0b1110_0100, 0b0101_1010],
+            None,
+        ),
+    ]
+}
+
+/// Textures as the compiled scene stores them: the PNG, JPEG and EXR fixtures.
+fn encoded_texture_seeds() -> Vec<Vec<u8>> {
+    let dir = root().join("crates/render/tests/data/texture");
+    ["bitmap.png", "pattern_grey.jpg", "rgba_half.exr"]
+        .iter()
+        .map(|name| {
+            let options = luxest_render::texture::TextureOptions::default();
+            let t = luxest_render::texture::Texture::load(&dir.join(name), &options)
+                .expect("fixture loads");
+            let mut bytes = Vec::new();
+            t.encode(&mut bytes);
+            bytes
+        })
+        .collect()
 }
 
 /// A small compiled scene (the Cornell box), as scene-compile writes it.

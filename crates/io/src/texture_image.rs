@@ -16,9 +16,17 @@ use std::path::Path;
 /// The largest width or height of a texture, in pixels.
 pub const MAX_TEXTURE_SIDE: u64 = 1 << 16;
 
-/// Bytes a texel of the texture built from an image can take, mip-maps included (RGBA f32
-/// and a pyramid of a third more): what the size check reserves beyond the decoded samples.
-pub const TEXTURE_BYTES_PER_TEXEL: u64 = 22;
+/// Bytes a texel of the texture built from an image takes, mip-maps included (rounded up):
+/// 8-bit images keep 4 bytes of RGBA and a pyramid of a third as many 8-byte texels; others
+/// 16 bytes (RGBA f32) and a third more. What the size check reserves beyond the decoded
+/// samples.
+pub fn texture_bytes_per_texel(eight_bit: bool) -> u64 {
+    if eight_bit {
+        7
+    } else {
+        22
+    }
+}
 
 /// The file format an image was decoded from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,8 +110,13 @@ pub fn decode_texture_image(path: &Path, bytes: Vec<u8>) -> Result<TextureImage>
 }
 
 /// Checks a `width` x `height` image of `decoded_bytes` per pixel (and the texture built from
-/// it) before anything of that size is allocated.
-fn check_size(path: &Path, width: u64, height: u64, decoded_bytes: u64) -> Result<()> {
+/// it, of 8-bit samples or not) before anything of that size is allocated.
+fn check_size(
+    path: &Path,
+    (width, height): (u64, u64),
+    decoded_bytes: u64,
+    eight_bit: bool,
+) -> Result<()> {
     if width == 0 || height == 0 {
         return Err(Error::input(
             path,
@@ -123,7 +136,7 @@ fn check_size(path: &Path, width: u64, height: u64, decoded_bytes: u64) -> Resul
         "texture",
         width,
         height,
-        decoded_bytes + TEXTURE_BYTES_PER_TEXEL,
+        decoded_bytes + texture_bytes_per_texel(eight_bit),
     )
     .map_err(|m| Error::input(path, m))
 }
@@ -136,8 +149,10 @@ pub fn decode_png(path: &Path, bytes: &[u8]) -> Result<TextureImage> {
     decoder.set_transformations(::png::Transformations::EXPAND);
     let header = decoder.read_header_info().map_err(bad)?;
     let (width, height) = (header.width as u64, header.height as u64);
-    // The largest output a PNG can have: 16-bit RGBA.
-    check_size(path, width, height, 8)?;
+    // At most 4 samples a pixel after expansion.
+    let eight_bit = header.bit_depth != ::png::BitDepth::Sixteen;
+    let sample_bytes = if eight_bit { 1 } else { 2 };
+    check_size(path, (width, height), 4 * sample_bytes, eight_bit)?;
     let mut reader = decoder.read_info().map_err(bad)?;
     let (color, depth) = reader.output_color_type();
     let channels = color.samples();
@@ -192,7 +207,8 @@ pub fn decode_jpeg(path: &Path, bytes: &[u8]) -> Result<TextureImage> {
     let (width, height) = (info.width as u64, info.height as u64);
     // Decoded samples (at most 4 bytes a pixel) and the decoder's coefficients of a progressive
     // image (2 bytes a sample, up to 4 components).
-    check_size(path, width, height, 4 + 8)?;
+    let eight_bit = info.pixel_format != jpeg_decoder::PixelFormat::L16;
+    check_size(path, (width, height), 4 + 8, eight_bit)?;
     decoder.set_max_decoding_buffer_size((width * height * 4) as usize);
     let pixels = decoder.decode().map_err(bad)?;
     let (width, height) = (width as usize, height as usize);
@@ -248,7 +264,7 @@ pub fn decode_exr(path: &Path, bytes: Vec<u8>) -> Result<TextureImage> {
         .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.width(), layer.size.height());
-    check_size(path, width as u64, height as u64, 16)?;
+    check_size(path, (width as u64, height as u64), 16, false)?;
     let list = &layer.channel_data.list;
     let names: Vec<String> = list.iter().map(|c| c.name.to_string()).collect();
     let find = |want: &str| names.iter().position(|n| n == want);
@@ -319,4 +335,209 @@ pub fn decode_exr(path: &Path, bytes: Vec<u8>) -> Result<TextureImage> {
         samples: Samples::F32(samples),
         format: ImageFormat::Exr,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn here() -> PathBuf {
+        PathBuf::from("textures/t.png")
+    }
+
+    /// A PNG of `data` as the `png` crate's encoder writes it (`palette`: entries and their
+    /// `tRNS` alphas for an indexed image).
+    fn png_bytes(
+        (w, h): (u32, u32),
+        color: ::png::ColorType,
+        depth: ::png::BitDepth,
+        data: &[u8],
+        palette: Option<(&[u8], &[u8])>,
+    ) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        let mut encoder = ::png::Encoder::new(&mut bytes, w, h);
+        encoder.set_color(color);
+        encoder.set_depth(depth);
+        if let Some((entries, alphas)) = palette {
+            encoder.set_palette(entries.to_vec());
+            if !alphas.is_empty() {
+                encoder.set_trns(alphas.to_vec());
+            }
+        }
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_image_data(data).unwrap();
+        writer.finish().unwrap();
+        bytes
+    }
+
+    #[test]
+    fn png_of_every_colour_type_and_depth_decodes_to_its_samples() {
+        use ::png::{BitDepth::*, ColorType::*};
+        let u8s = |v: &[u8]| Samples::U8(v.to_vec());
+        // 2x2 images; 16-bit data big-endian as PNG stores it.
+        let grey8 = [0u8, 128, 200, 255];
+        let case = |color, depth, data: &[u8]| {
+            decode_png(&here(), &png_bytes((2, 2), color, depth, data, None)).unwrap()
+        };
+        let g = case(Grayscale, Eight, &grey8);
+        assert_eq!((g.width, g.height, g.channels), (2, 2, 1));
+        assert_eq!(g.samples, u8s(&grey8));
+        assert!(!g.has_alpha());
+        let ga: Vec<u8> = (0..8).map(|i| i * 30).collect();
+        let t = case(GrayscaleAlpha, Eight, &ga);
+        assert_eq!((t.channels, t.samples.clone()), (2, u8s(&ga)));
+        assert!(t.has_alpha());
+        let rgb: Vec<u8> = (0..12).map(|i| i * 20).collect();
+        assert_eq!(case(Rgb, Eight, &rgb).samples, u8s(&rgb));
+        let rgba: Vec<u8> = (0..16).map(|i| 255 - i * 15).collect();
+        let t = case(Rgba, Eight, &rgba);
+        assert_eq!((t.channels, t.samples.clone()), (4, u8s(&rgba)));
+        let words: Vec<u16> = (0..16).map(|i| i * 4099 + 7).collect();
+        let be: Vec<u8> = words.iter().flat_map(|w| w.to_be_bytes()).collect();
+        assert_eq!(
+            case(Grayscale, Sixteen, &be[..8]).samples,
+            Samples::U16(words[..4].to_vec())
+        );
+        assert_eq!(
+            case(GrayscaleAlpha, Sixteen, &be[..16]).samples,
+            Samples::U16(words[..8].to_vec())
+        );
+        assert_eq!(
+            case(Rgb, Sixteen, &be[..24]).samples,
+            Samples::U16(words[..12].to_vec())
+        );
+        let t = case(Rgba, Sixteen, &be);
+        assert_eq!(
+            (t.channels, t.samples.clone()),
+            (4, Samples::U16(words.clone()))
+        );
+        // 1-bit grey scaled to 8 bits: rows of 2 pixels packed in the high bits of a byte.
+        let t = case(Grayscale, One, &[0b1000_0000, 0b0100_0000]);
+        assert_eq!(t.samples, u8s(&[255, 0, 0, 255]));
+        // Palette: indices expanded to RGB, to RGBA where tRNS gives alphas.
+        let entries = [10u8, 20, 30, 200, 210, 220];
+        let indices = [0u8, 1, 1, 0];
+        let bytes = png_bytes((2, 2), Indexed, Eight, &indices, Some((&entries, &[])));
+        let t = decode_png(&here(), &bytes).unwrap();
+        assert_eq!(t.channels, 3);
+        assert_eq!(
+            t.samples,
+            u8s(&[10, 20, 30, 200, 210, 220, 200, 210, 220, 10, 20, 30])
+        );
+        let bytes = png_bytes((2, 2), Indexed, Eight, &indices, Some((&entries, &[77])));
+        let t = decode_png(&here(), &bytes).unwrap();
+        assert_eq!(t.channels, 4);
+        assert_eq!(
+            t.samples,
+            u8s(&[10, 20, 30, 77, 200, 210, 220, 255, 200, 210, 220, 255, 10, 20, 30, 77])
+        );
+        // The signature decides the decoder.
+        let t = decode_texture_image(&here(), png_bytes((2, 2), Rgb, Eight, &rgb, None)).unwrap();
+        assert_eq!(t.format, ImageFormat::Png);
+    }
+
+    /// CRC-32 (ISO 3309, as PNG chunks use it).
+    fn crc32(bytes: &[u8]) -> u32 {
+        let mut crc = !0u32;
+        for &b in bytes {
+            crc ^= b as u32;
+            for _ in 0..8 {
+                crc = if crc & 1 == 1 {
+                    (crc >> 1) ^ 0xedb8_8320
+                } else {
+                    crc >> 1
+                };
+            }
+        }
+        !crc
+    }
+
+    /// `png` with its IHDR claiming `w` x `h` pixels (CRC made right).
+    fn with_png_size(png: &[u8], w: u32, h: u32) -> Vec<u8> {
+        let mut b = png.to_vec();
+        // Signature 8, IHDR length 4 and type 4, then width and height.
+        b[16..20].copy_from_slice(&w.to_be_bytes());
+        b[20..24].copy_from_slice(&h.to_be_bytes());
+        let crc = crc32(&b[12..29]);
+        b[29..33].copy_from_slice(&crc.to_be_bytes());
+        b
+    }
+
+    #[test]
+    fn bad_pngs_are_one_line_errors_naming_the_file() {
+        use ::png::{BitDepth::*, ColorType::*};
+        let data: Vec<u8> = (0..8 * 8 * 4).map(|i| (i * 7 % 251) as u8).collect();
+        let png = png_bytes((8, 8), Rgba, Eight, &data, None);
+        assert_eq!(
+            crc32(&png[12..29]).to_be_bytes(),
+            png[29..33],
+            "the test's CRC"
+        );
+        let error = |bytes: Vec<u8>| {
+            let e = decode_texture_image(&here(), bytes)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with("textures/t.png: ") && !e.contains('\n'),
+                "{e}"
+            );
+            e
+        };
+        // Every prefix that cuts into the pixel data. (One cut later, in the last IDAT's CRC or
+        // in IEND, still holds the whole image and decodes.)
+        let iend = png.len() - 12;
+        for len in 0..iend - 4 {
+            error(png[..len].to_vec());
+        }
+        let e = error(with_png_size(&png, 100_000, 100_000));
+        assert!(
+            e.contains("claims 100000x100000 pixels, more than the 65536"),
+            "{e}"
+        );
+        let e = error(with_png_size(&png, 65_536, 65_536));
+        assert!(e.contains("a 65536x65536 texture needs 47.2 GB"), "{e}");
+        let e = error(with_png_size(&png, 0, 8));
+        assert!(e.contains("not a readable PNG file"), "{e}");
+        let e = error(b"GIF89a".to_vec());
+        assert!(e.contains("not a PNG, JPEG or OpenEXR image"), "{e}");
+        // A corrupt pixel stream (the zlib data of IDAT overwritten).
+        let mut corrupt = png.clone();
+        let idat = corrupt.windows(4).position(|w| w == b"IDAT").unwrap();
+        for b in &mut corrupt[idat + 4..idat + 12] {
+            *b = 0xff;
+        }
+        error(corrupt);
+    }
+
+    #[test]
+    fn exr_channels_decode_as_stored_and_non_finite_values_are_refused() {
+        let dir = std::env::temp_dir().join(format!("luxest-teximg-{}", std::process::id()));
+        let path = dir.join("lin.exr");
+        let mut img = crate::image::RgbImage::new(3, 2);
+        for (i, p) in img.pixels.iter_mut().enumerate() {
+            *p = [i as f32, -0.5 * i as f32, 1e5];
+        }
+        crate::exr::write_rgb(&path, &img).unwrap();
+        let t = read_texture_image(&path).unwrap();
+        assert_eq!(
+            (t.width, t.height, t.channels, t.format),
+            (3, 2, 3, ImageFormat::Exr)
+        );
+        let expected: Vec<f32> = img.pixels.iter().flatten().copied().collect();
+        assert_eq!(t.samples, Samples::F32(expected));
+        img.pixels[4][1] = f32::NAN;
+        crate::exr::write_rgb(&path, &img).unwrap();
+        let e = read_texture_image(&path).unwrap_err().to_string();
+        assert!(
+            e.ends_with("lin.exr: non-finite value (NaN or infinity) in channel G at pixel (1, 1)"),
+            "{e}"
+        );
+        let bytes = std::fs::read(&path).unwrap();
+        for len in (0..bytes.len()).step_by(7) {
+            let e = decode_texture_image(&path, bytes[..len].to_vec()).unwrap_err();
+            assert!(e.to_string().contains("lin.exr: "), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -122,11 +122,12 @@ pub struct CompiledSurface {
     pub two_sided: bool,
 }
 
-/// Opacity of a cut-out surface: `value` × the texture's alpha (1 without a texture).
+/// Opacity of a cut-out surface: `value` × the texture's `channel` (1 without a texture).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CompiledOpacity {
     pub texture: Option<u32>,
+    pub channel: crate::scene::OpacityChannel,
     pub value: f64,
     /// Opaque where the opacity reaches `cutoff`, transparent below; `None`: opaque with
     /// probability equal to the opacity.

@@ -4,13 +4,13 @@
 //! environment's radiance along rays that leave the scene, and scale-aware ray offsets.
 
 use crate::compiled::{CompiledScene, Emitter, NO_EMITTER};
-use crate::environment::{EnvironmentLight, EnvironmentSample};
+use crate::environment::EnvironmentLight;
 use crate::luminaire::GoniometricLight;
 use crate::rt::{Hit, RayTracer};
 use crate::sampling::{
     cosine_hemisphere, uniform_sphere, uniform_triangle, Distribution1D, Rng, Sampler,
 };
-use crate::scene::Material;
+use crate::scene::{Material, OpacityChannel};
 use crate::texture::Texture;
 use luxest_io::color::Rgb;
 use luxest_io::error::Result;
@@ -48,16 +48,6 @@ pub struct EmissionSample {
     pub emitter: u32,
 }
 
-/// What next-event estimation draws: a point on a light, or a direction towards the
-/// environment.
-#[derive(Clone, Copy, Debug)]
-pub enum LightSample {
-    Point(LightPoint),
-    /// A direction towards the environment; its `pdf` (solid angle) includes the emitter
-    /// choice.
-    Environment(EnvironmentSample),
-}
-
 /// A point on an area emitter or a point source, for next-event estimation.
 #[derive(Clone, Copy, Debug)]
 pub struct LightPoint {
@@ -74,7 +64,14 @@ pub struct LightPoint {
 pub struct World {
     pub scene: CompiledScene,
     pub tracer: RayTracer,
+    /// Every emitter by flux: where light paths start.
     emitter_choice: Distribution1D,
+    /// The emitters next-event estimation draws points on — all but the environment, which it
+    /// samples on its own (see [`World::environment`]) — by flux; `None` when the environment
+    /// is the only emitter. Without an environment the same distribution as `emitter_choice`.
+    light_choice: Option<Distribution1D>,
+    /// The one emitter of `light_choice`, if it has one alone (then no number is drawn).
+    single_light: Option<usize>,
     /// Per area emitter, the distribution of its triangles by area (None for point emitters).
     triangle_choice: Vec<Option<Distribution1D>>,
     /// Per area emitter, its triangles as (corner, edge 1, edge 2, unit normal), for fast
@@ -107,14 +104,15 @@ pub struct World {
 /// cut-off, with probability α — decided by a hash of the hit and the ray, so that every ray
 /// draws independently and the result is the same at any thread count.
 fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
-    let per_material: Vec<Option<(Option<Texture>, f64, Option<f64>)>> = scene
+    type Cut = (Option<Texture>, OpacityChannel, f64, Option<f64>);
+    let per_material: Vec<Option<Cut>> = scene
         .header
         .surfaces
         .iter()
         .map(|s| {
             s.opacity.as_ref().map(|o| {
                 let texture = o.texture.map(|t| scene.textures[t as usize].clone());
-                (texture, o.value, o.cutoff)
+                (texture, o.channel, o.value, o.cutoff)
             })
         })
         .collect();
@@ -123,7 +121,7 @@ fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
     let uvs = scene.uvs.clone();
     Box::new(move |prim, u, v, ray| {
         let m = triangle_material[prim as usize] as usize;
-        let Some(Some((texture, value, cutoff))) = per_material.get(m) else {
+        let Some(Some((texture, channel, value, cutoff))) = per_material.get(m) else {
             return true;
         };
         let mut alpha = *value;
@@ -135,7 +133,7 @@ fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
                 a[0] as f64 * w + b[0] as f64 * u + c[0] as f64 * v,
                 a[1] as f64 * w + b[1] as f64 * u + c[1] as f64 * v,
             ];
-            alpha *= opacity(t, uv) as f64;
+            alpha *= opacity(t, uv, *channel);
         }
         match cutoff {
             Some(c) => alpha >= *c,
@@ -152,14 +150,19 @@ fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
     })
 }
 
-/// A texture's opacity at `uv`: its alpha channel, or its first channel without one.
+/// A texture's opacity at `uv` read from `channel`.
 #[inline]
-fn opacity(t: &Texture, uv: [f64; 2]) -> f32 {
-    let c = t.eval(uv, 0.0);
-    if t.has_alpha() {
-        c[3]
-    } else {
-        c[0]
+pub fn opacity(t: &Texture, uv: [f64; 2], channel: OpacityChannel) -> f64 {
+    opacity_of(t.eval(uv, 0.0), t.has_alpha(), channel)
+}
+
+/// The opacity in a texel (linear RGBA) of a texture that has alpha or not.
+pub fn opacity_of(c: [f32; 4], has_alpha: bool, channel: OpacityChannel) -> f64 {
+    let luminance = || Rgb([c[0] as f64, c[1] as f64, c[2] as f64]).luminance();
+    match channel {
+        OpacityChannel::Auto if has_alpha => c[3] as f64,
+        OpacityChannel::Alpha => c[3] as f64,
+        OpacityChannel::Auto | OpacityChannel::Luminance => luminance(),
     }
 }
 
@@ -255,6 +258,9 @@ impl World {
     /// The world with the given kind of ray queries (the stage that loads it chooses:
     /// docs/architecture.md, *Crate graph*).
     pub fn with_traversal(scene: CompiledScene, traversal: Traversal) -> Result<World> {
+        for m in &scene.header.materials {
+            crate::bsdf::prepare(&m.model);
+        }
         let mask = scene.header.features.opacity.then(|| opacity_mask(&scene));
         let tracer = RayTracer::with_mask(
             &scene.positions,
@@ -269,6 +275,20 @@ impl World {
                 "scene has no emitter with positive flux",
             )
         })?;
+        let light_weights: Vec<f64> = scene
+            .header
+            .emitters
+            .iter()
+            .map(|e| match e {
+                Emitter::Environment { .. } => 0.0,
+                _ => e.flux_lm(),
+            })
+            .collect();
+        let light_choice = Distribution1D::new(&light_weights);
+        let lights: Vec<usize> = (0..light_weights.len())
+            .filter(|&i| !matches!(scene.header.emitters[i], Emitter::Environment { .. }))
+            .collect();
+        let single_light = (lights.len() == 1).then(|| lights[0]);
         let emitter_triangles: Vec<Vec<[Vec3; 4]>> = scene
             .header
             .emitters
@@ -382,6 +402,8 @@ impl World {
             scene,
             tracer,
             emitter_choice,
+            light_choice,
+            single_light,
             triangle_choice,
             emitter_triangles,
             luminaires,
@@ -636,14 +658,17 @@ impl World {
         self.environment().map_or(Rgb::BLACK, |e| e.radiance(w))
     }
 
-    /// Solid-angle density with which [`World::sample_light_point`] draws the direction `w`
-    /// towards the environment (the emitter choice included), for multiple importance
-    /// sampling; 0 without an environment.
+    /// Solid-angle density with which next-event estimation draws the direction `w` towards
+    /// the environment (one [`EnvironmentLight::sample`] per vertex, besides the light point of
+    /// [`World::sample_light_point`]), for multiple importance sampling; 0 without one.
     pub fn environment_pdf(&self, w: Vec3) -> f64 {
-        match &self.environment {
-            Some((ei, e)) => self.emitter_choice.pmf(*ei as usize) * e.pdf(w),
-            None => 0.0,
-        }
+        self.environment().map_or(0.0, |e| e.pdf(w))
+    }
+
+    /// Whether the scene has an emitter besides the environment (what
+    /// [`World::sample_light_point`] draws from).
+    pub fn has_light_points(&self) -> bool {
+        self.light_choice.is_some()
     }
 
     /// Whether a ray from `from` (already offset from its surface) along the unit direction
@@ -781,15 +806,15 @@ impl World {
         (a + e1 * b1 + e2 * b2, n, radiance)
     }
 
-    /// A point on a light chosen by flux, or a direction towards the environment, for
+    /// A point on a light chosen by flux among all emitters but the environment, for
     /// next-event estimation at `receiver` (a luminaire's or spot's intensity depends on the
-    /// direction towards it).
-    pub fn sample_light_point(&self, rng: &mut impl Sampler, receiver: Vec3) -> LightSample {
+    /// direction towards it). Only for scenes with such a light ([`World::has_light_points`]).
+    pub fn sample_light_point(&self, rng: &mut impl Sampler, receiver: Vec3) -> LightPoint {
         // One emitter needs no choice (no random number drawn).
-        let (ei, p_e) = if self.scene.header.emitters.len() == 1 {
-            (0, 1.0)
-        } else {
-            self.emitter_choice.sample(rng.next_f64())
+        let (ei, p_e) = match (self.single_light, &self.light_choice) {
+            (Some(i), _) => (i, 1.0),
+            (None, Some(choice)) => choice.sample(rng.next_f64()),
+            (None, None) => unreachable!("next-event estimation of a scene without light points"),
         };
         match &self.scene.header.emitters[ei] {
             Emitter::Luminaire { .. } => {
@@ -799,31 +824,27 @@ impl World {
                     .luminaire(ei)
                     .expect("luminaires are built for luminaire scenes");
                 let position = l.choose_source(rng);
-                LightSample::Point(LightPoint {
+                LightPoint {
                     position,
                     normal: None,
                     emitted: l.intensity_toward(receiver - position),
                     pdf: p_e,
-                })
+                }
             }
             Emitter::Point {
                 position,
                 intensity_rgb,
                 spot,
                 ..
-            } => LightSample::Point(LightPoint {
+            } => LightPoint {
                 position: *position,
                 normal: None,
                 emitted: point_intensity(*intensity_rgb, spot, receiver - *position),
                 pdf: p_e,
-            }),
-            Emitter::Area { .. } => LightSample::Point(self.area_light_point(ei, p_e, rng)),
+            },
+            Emitter::Area { .. } => self.area_light_point(ei, p_e, rng),
             Emitter::Environment { .. } => {
-                let env = self.environment().expect("the environment is built");
-                let (u1, u2) = rng.next_2d();
-                let mut s = env.sample(u1, u2);
-                s.pdf *= p_e;
-                LightSample::Environment(s)
+                unreachable!("the light choice gives the environment weight 0")
             }
         }
     }
@@ -866,7 +887,10 @@ impl World {
     /// Area density with which [`World::sample_light_point`] picks a point on the area emitter
     /// `emitter` (for multiple importance sampling).
     pub fn light_point_pdf(&self, emitter: u32) -> f64 {
-        let p_e = self.emitter_choice.pmf(emitter as usize);
+        let p_e = self
+            .light_choice
+            .as_ref()
+            .map_or(0.0, |c| c.pmf(emitter as usize));
         match &self.scene.header.emitters[emitter as usize] {
             Emitter::Area { area_m2, .. } => p_e / area_m2,
             Emitter::Point { .. } | Emitter::Luminaire { .. } | Emitter::Environment { .. } => 0.0,

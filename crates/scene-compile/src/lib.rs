@@ -700,3 +700,83 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         .map_err(|m| Error::input(path, m))?;
     Ok((compiled, report))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use luxest_render::scene::MaterialKind;
+
+    /// A floor quad per material of `materials` (RON), lit by a point light.
+    fn compiled(materials: &[(&str, &str)]) -> (CompiledScene, Report) {
+        let mut text = String::from("Scene(materials: {");
+        for (name, m) in materials {
+            text += &format!("\"{name}\": {m},");
+        }
+        text += "}, objects: [";
+        for (i, (name, _)) in materials.iter().enumerate() {
+            text += &format!(
+                "(shape: Quad(corner: ({i}.0, 0.0, 0.0), u: (1.0, 0.0, 0.0), v: (0.0, 0.0, -1.0)), material: \"{name}\"),"
+            );
+        }
+        text += "], point_lights: [(position: (0.5, 1.0, -0.5), power: Intensity(10.0))])";
+        let path = Path::new("features.ron");
+        let scene: Scene = luxest_io::fsio::parse_ron(path, &text).unwrap();
+        compile(&scene, path).unwrap()
+    }
+
+    #[test]
+    fn features_follow_the_lobes_of_the_mitsuba_materials() {
+        let (s, _) = compiled(&[(
+            "rough plastic",
+            "Plastic(diffuse_reflectance: (0.5, 0.5, 0.5), roughness: Some((distribution: Ggx, alpha: 0.2)))",
+        )]);
+        let f = &s.header.features;
+        assert!(f.glossy && !f.specular_paths && !f.transmission);
+        // A smooth coating is a delta lobe; a rough dielectric transmits glossily; a blend
+        // lists what it blends.
+        let (s, _) = compiled(&[
+            ("plastic", "Plastic(diffuse_reflectance: (0.5, 0.5, 0.5))"),
+            (
+                "frosted",
+                "RoughDielectric(ior: 1.5, roughness: (distribution: Beckmann, alpha: 0.2))",
+            ),
+            (
+                "worn",
+                "Blend(weight: 0.5, first: Conductor(eta: (0.2, 0.4, 1.4), k: (4.0, 2.4, 1.6)), second: Lambertian(reflectance: (0.5, 0.5, 0.5)))",
+            ),
+        ]);
+        let f = &s.header.features;
+        assert!(f.glossy && f.specular_paths && f.transmission);
+        assert_eq!(
+            f.material_kinds,
+            [
+                MaterialKind::Lambertian,
+                MaterialKind::Conductor,
+                MaterialKind::Plastic,
+                MaterialKind::RoughDielectric,
+                MaterialKind::Blend,
+            ]
+        );
+        let (s, _) = compiled(&[("window", "ThinDielectric(ior: 1.5)")]);
+        let f = &s.header.features;
+        assert!(!f.glossy && f.specular_paths && f.transmission);
+    }
+
+    #[test]
+    fn a_lossless_conductor_is_warned_about() {
+        // Mitsuba's `none`: Fresnel reflectance 1 at every angle.
+        let (_, report) = compiled(&[(
+            "chrome",
+            "Conductor(eta: (0.0, 0.0, 0.0), k: (1.0, 1.0, 1.0))",
+        )]);
+        assert!(report
+            .warnings
+            .iter()
+            .any(|w| w.contains("no material absorbs light in channel 0")));
+        let (_, report) = compiled(&[(
+            "gold",
+            "Conductor(eta: (0.14, 0.37, 1.44), k: (3.98, 2.39, 1.60))",
+        )]);
+        assert!(!report.warnings.iter().any(|w| w.contains("absorbs")));
+    }
+}

@@ -38,6 +38,7 @@ use luxest_io::{Error, Result};
 use luxest_render::compiled::{CompiledScene, Emitter, NO_EMITTER};
 use luxest_render::scene::{Material, Microfacet, MicrofacetDistribution};
 use luxest_render::texture::{Filter, Texture, Wrap};
+use luxest_render::world::opacity_of;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -449,7 +450,7 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
                     let file = format!("opacity_{g:03}.exr");
                     let (value, cutoff, alpha) = (o.value, o.cutoff, t.has_alpha());
                     let baked = bake(t, |v| {
-                        let a = value * if alpha { v[3] } else { v[0] } as f64;
+                        let a = value * opacity_of(v, alpha, o.channel);
                         [match cutoff {
                             Some(c) => f64::from(u8::from(a >= c)),
                             None => a,
@@ -470,4 +471,67 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
     let _ = writeln!(xml, "</scene>");
     files.insert(0, ("scene.xml".to_string(), xml.into_bytes()));
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn element(ron: &str) -> String {
+        let mut files = Vec::new();
+        let mut maps = Maps {
+            color: None,
+            roughness: None,
+            stem: "m".into(),
+            files: &mut files,
+        };
+        let m = luxest_io::fsio::parse_ron::<Material>(Path::new("test.ron"), ron).unwrap();
+        bsdf(&m, &mut maps, true)
+    }
+
+    /// Each Mitsuba material is written as its plugin with its parameters. (These elements,
+    /// loaded by Mitsuba 3.9's `mi.load_string`, evaluate as the plugin dictionaries of
+    /// `crates/render/tests/data/mitsuba_bsdf.py` do.)
+    #[test]
+    fn the_mitsuba_materials_export_as_their_plugins() {
+        let gold = element(
+            "Conductor(eta: (0.2, 0.4, 1.4), k: (4.0, 2.4, 1.6), roughness: Some((distribution: Beckmann, alpha: 0.2)))",
+        );
+        assert_eq!(
+            gold,
+            r#"<bsdf type="twosided"><bsdf type="roughconductor"><string name="distribution" value="beckmann"/><float name="alpha" value="2e-1"/><rgb name="eta" value="2e-1, 4e-1, 1.4e0"/><rgb name="k" value="4e0, 2.4e0, 1.6e0"/><rgb name="specular_reflectance" value="1e0, 1e0, 1e0"/></bsdf></bsdf>"#
+        );
+        let smooth = element("Conductor(eta: (0.0, 0.0, 0.0), k: (1.0, 1.0, 1.0))");
+        assert!(
+            smooth.starts_with(r#"<bsdf type="twosided"><bsdf type="conductor"><rgb name="eta""#)
+        );
+        let plastic = element(
+            "Plastic(diffuse_reflectance: (0.5, 0.1, 0.1), nonlinear: true, roughness: Some((distribution: Ggx, alpha: 0.3)))",
+        );
+        assert!(plastic.contains(r#"<bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="3e-1"/>"#));
+        assert!(plastic.contains(r#"<boolean name="nonlinear" value="true"/>"#));
+        assert!(plastic.contains(&format!(
+            r#"<float name="int_ior" value="{:e}"/><float name="ext_ior" value="1"/>"#,
+            1.49 / 1.000277
+        )));
+        assert_eq!(
+            element("RoughDielectric(ior: 1.5, roughness: (distribution: Ggx, alpha: 0.1))"),
+            r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="1e-1"/><float name="int_ior" value="1.5e0"/><float name="ext_ior" value="1"/></bsdf>"#
+        );
+        assert_eq!(
+            element("ThinDielectric(ior: 1.5)"),
+            r#"<bsdf type="thindielectric"><float name="int_ior" value="1.5e0"/><float name="ext_ior" value="1"/></bsdf>"#
+        );
+        let blend = element(
+            "Blend(weight: 0.25, first: ThinDielectric(ior: 1.5), second: Lambertian(reflectance: (0.5, 0.5, 0.5)))",
+        );
+        assert_eq!(
+            blend,
+            format!(
+                r#"<bsdf type="blendbsdf"><float name="weight" value="2.5e-1"/>{}{}</bsdf>"#,
+                element("ThinDielectric(ior: 1.5)"),
+                element("Lambertian(reflectance: (0.5, 0.5, 0.5))")
+            )
+        );
+    }
 }

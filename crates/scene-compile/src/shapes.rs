@@ -43,13 +43,13 @@ impl LocalMesh {
 }
 
 /// The parallelogram `corner + s u + t v` as two triangles facing `u x v`, with texture
-/// coordinates (s, 1 − t): the image upright on the parallelogram seen from its front, as on
-/// Mitsuba 3's `rectangle`.
+/// coordinates (s, t), as on Mitsuba 3's `rectangle`: the image's first row along the `u` edge
+/// from `corner`, its rows following `v`.
 pub fn quad(corner: Vec3, u: Vec3, v: Vec3) -> LocalMesh {
     LocalMesh {
         positions: vec![corner, corner + u, corner + u + v, corner + v],
         normals: None,
-        uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
+        uvs: Some(vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]),
         triangles: vec![[0, 1, 2], [0, 2, 3]],
     }
 }

@@ -7,7 +7,7 @@ use luxest_io::num::show;
 use luxest_io::Result;
 use luxest_render::compiled::{CompiledOpacity, CompiledSurface, TextureInfo};
 use luxest_render::sampling::uniform_triangle;
-use luxest_render::scene::{Emission, Scene, Surface, TextureDesc};
+use luxest_render::scene::{Emission, Material, Scene, Surface, TextureDesc};
 use luxest_render::texture::{Texture, TextureOptions};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -42,6 +42,20 @@ pub(crate) fn check(c: &Check, scene: &Scene) -> Result<()> {
                 c.texture_name(scene, &format!("{place}.{field}"), t)?;
             }
         }
+        if s.roughness.is_some() {
+            let m = &scene.materials[material];
+            if !roughness_texturable(m) {
+                return Err(c.fail(
+                    &format!("{place}.roughness"),
+                    format!(
+                        "material \"{material}\" ({:?}) has no microfacet roughness a texture \
+                         can scale (Glossy, rough Conductor and RoughDielectric have; a Plastic's \
+                         coating is precomputed for its one α)",
+                        m.kind()
+                    ),
+                ));
+            }
+        }
         if let Some(o) = &s.opacity {
             if let Some(t) = &o.texture {
                 c.texture_name(scene, &format!("{place}.opacity.texture"), t)?;
@@ -59,6 +73,22 @@ pub(crate) fn check(c: &Check, scene: &Scene) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Whether a roughness texture can scale the material's α (recursively for blends: either
+/// member).
+fn roughness_texturable(m: &Material) -> bool {
+    match m {
+        Material::Glossy { .. }
+        | Material::RoughDielectric { .. }
+        | Material::Conductor {
+            roughness: Some(_), ..
+        } => true,
+        Material::Blend { first, second, .. } => {
+            roughness_texturable(first) || roughness_texturable(second)
+        }
+        _ => false,
+    }
 }
 
 /// The textures a scene uses, loaded: their table entries, their pixels, and their indices by
@@ -157,6 +187,7 @@ fn compile_surface(s: &Surface, tex: &dyn Fn(&Option<String>) -> Option<u32>) ->
         roughness: tex(&s.roughness),
         opacity: s.opacity.as_ref().map(|o| CompiledOpacity {
             texture: tex(&o.texture),
+            channel: o.channel,
             value: o.value,
             cutoff: o.cutoff,
         }),

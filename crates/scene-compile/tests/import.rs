@@ -9,8 +9,8 @@
 use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
 use luxest_render::scene::{
-    Emission, Environment, Material, Microfacet, MicrofacetDistribution, Opacity, PointPower,
-    Shape, Surface,
+    Emission, Environment, Material, Microfacet, MicrofacetDistribution, Opacity, OpacityChannel,
+    PointPower, Shape, Surface,
 };
 use luxest_render::texture::{Encoding, Filter, UvTransform, Wrap};
 use scene_compile::import::{export_ron, mitsuba_xml, read_scene};
@@ -278,6 +278,7 @@ fn mitsuba_scene_translates_field_by_field() {
             roughness: Some(alpha_tex.into()),
             opacity: Some(Opacity {
                 texture: Some(opacity_tex.into()),
+                channel: OpacityChannel::Luminance,
                 value: 1.0,
                 cutoff: None
             }),

@@ -15,9 +15,9 @@
 //!
 //! Environment light ([`luxest_render::environment`]): a path that leaves the scene gathers the
 //! environment's radiance along its last direction, weighted by the power heuristic against
-//! next-event estimation (which draws a direction from the map, with the environment's share
-//! of the emitter choice, and tests it with a shadow ray to infinity); a camera ray or a
-//! specular bounce that escapes takes it with weight 1. Spot lights are point sources whose
+//! next-event estimation of the environment (at every non-delta vertex one direction drawn
+//! from its map, besides the light point, tested with a shadow ray to infinity); a camera ray
+//! or a specular bounce that escapes takes it with weight 1. Spot lights are point sources whose
 //! light point carries the falloff towards the shading point.
 //!
 //! The features manifest selects a monomorphised variant: the code for point sources, area
@@ -30,7 +30,7 @@ use luxest_render::bsdf::{self, Transport};
 use luxest_render::rt::Ray;
 use luxest_render::sampling::Sampler;
 use luxest_render::sobol::PixelSampler;
-use luxest_render::world::{LightSample, World};
+use luxest_render::world::World;
 
 /// Rays traced, for rates; optionally every ray, to time raw Embree on the same rays.
 #[derive(Default)]
@@ -119,51 +119,62 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
         let m = world.material_seen(&sp, wo);
         let m = &*m;
         let is_delta = SPECULAR && bsdf::is_delta(m);
-        if !is_delta && (POINT || AREA || ENV) {
-            // Next-event estimation: (unit direction, distance to the light or infinity, the
-            // light's point (none for the environment), contribution before visibility).
-            let (w, d, target, contribution) = match world.sample_light_point(rng, sp.position) {
-                LightSample::Point(lp) => {
-                    let v = lp.position - sp.position;
-                    let d2 = v.length_squared();
-                    if d2 <= 0.0 {
-                        (v, 0.0, None, Rgb::BLACK)
-                    } else {
-                        let d = d2.sqrt();
-                        let w = v / d;
-                        let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
-                        let f = f * w.dot(sp.ng).abs();
-                        let c = if f.max_component() <= 0.0 {
-                            Rgb::BLACK
-                        } else {
-                            match lp.normal {
-                                Some(nl) if AREA => {
-                                    let cos_l = -nl.dot(w);
-                                    if cos_l > 0.0 {
-                                        let light_pdf = lp.pdf * d2 / cos_l;
-                                        f * lp.emitted
-                                            * (power_heuristic(light_pdf, bp) / light_pdf)
-                                    } else {
-                                        Rgb::BLACK
-                                    }
-                                }
-                                None if POINT => f * lp.emitted * (1.0 / (d2 * lp.pdf)),
-                                _ => Rgb::BLACK,
+        if !is_delta && (POINT || AREA) {
+            // Next-event estimation.
+            let lp = world.sample_light_point(rng, sp.position);
+            let v = lp.position - sp.position;
+            let d2 = v.length_squared();
+            if d2 > 0.0 {
+                let d = d2.sqrt();
+                let w = v / d;
+                let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
+                let f = f * w.dot(sp.ng).abs();
+                if f.max_component() > 0.0 {
+                    let contribution = match lp.normal {
+                        Some(nl) if AREA => {
+                            let cos_l = -nl.dot(w);
+                            if cos_l > 0.0 {
+                                let light_pdf = lp.pdf * d2 / cos_l;
+                                f * lp.emitted * (power_heuristic(light_pdf, bp) / light_pdf)
+                            } else {
+                                Rgb::BLACK
                             }
-                        };
-                        (w, d, Some(lp.position), c)
+                        }
+                        None if POINT => f * lp.emitted * (1.0 / (d2 * lp.pdf)),
+                        _ => Rgb::BLACK,
+                    };
+                    if contribution.max_component() > 0.0 {
+                        log.shadow += 1;
+                        let from = world.offset(sp.position, sp.ng, w);
+                        if log.record {
+                            log.shadow_depths.push(depth);
+                            log.shadow_rays.push(Ray {
+                                origin: from,
+                                direction: w,
+                                tnear: 0.0,
+                                tfar: d,
+                            });
+                        }
+                        if !world.occluded(from, lp.position) {
+                            l = l + beta * contribution;
+                        }
                     }
                 }
-                LightSample::Environment(es) if ENV && es.pdf > 0.0 => {
-                    let w = es.direction;
-                    let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
-                    let f = f * w.dot(sp.ng).abs();
-                    let c = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
-                    (w, f64::INFINITY, None, c)
-                }
-                LightSample::Environment(es) => (es.direction, f64::INFINITY, None, Rgb::BLACK),
-            };
-            if contribution.max_component() > 0.0 {
+            }
+        }
+        if ENV && !is_delta {
+            // Next-event estimation of the environment: one direction from its map, besides
+            // the light point above.
+            let env = world
+                .environment()
+                .expect("ENV variants are for scenes with one");
+            let (u1, u2) = rng.next_2d();
+            let es = env.sample(u1, u2);
+            let w = es.direction;
+            let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
+            let f = f * w.dot(sp.ng).abs();
+            if es.pdf > 0.0 && f.max_component() > 0.0 {
+                let contribution = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
                 log.shadow += 1;
                 let from = world.offset(sp.position, sp.ng, w);
                 if log.record {
@@ -172,14 +183,10 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                         origin: from,
                         direction: w,
                         tnear: 0.0,
-                        tfar: d,
+                        tfar: f64::INFINITY,
                     });
                 }
-                let visible = match target {
-                    Some(p) => !world.occluded(from, p),
-                    None => world.escapes(from, w),
-                };
-                if visible {
+                if world.escapes(from, w) {
                     l = l + beta * contribution;
                 }
             }

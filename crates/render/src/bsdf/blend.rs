@@ -67,7 +67,7 @@ pub fn sample_blend(
         });
     }
     let p = density((w, first, second), wo, s.wi, (ng, ns));
-    if !(p > 0.0) {
+    if p.is_nan() || p <= 0.0 {
         return None;
     }
     let f = eval((w, first, second), wo, s.wi, (ng, ns), mode);

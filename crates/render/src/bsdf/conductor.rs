@@ -94,7 +94,7 @@ impl Conductor<'_> {
         let d = Distribution::new(r);
         let (m, pdf_m) = d.sample(wo, u);
         let wi = reflect(wo, m);
-        if !(pdf_m > 0.0) || wi.z <= 0.0 {
+        if pdf_m.is_nan() || pdf_m <= 0.0 || wi.z <= 0.0 {
             return None;
         }
         // f cos θi / pdf = F G1(wi, m): D and G1(wo, m) cancel against the visible normals

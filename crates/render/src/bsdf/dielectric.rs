@@ -143,7 +143,7 @@ impl Rough {
             return None;
         }
         let (m, pdf_m) = self.d.sample(wo, u);
-        if !(pdf_m > 0.0) {
+        if pdf_m.is_nan() || pdf_m <= 0.0 {
             return None;
         }
         let (f, cos_t, eta_it, eta_ti) = fresnel(wo.dot(m), self.eta);
@@ -171,7 +171,7 @@ impl Rough {
         // cancel against the visible normals' density and the lobe choice (up to the masking
         // ratio, see `microfacet`).
         let g1 = self.d.smith_g1(wi, m) * self.d.masking_ratio(wo, m);
-        if !(g1 > 0.0 && pdf > 0.0) {
+        if g1 <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         Some(LocalSample {

@@ -259,7 +259,7 @@ impl Plastic<'_> {
                     crate::sampling::cosine_hemisphere(u.0, u.1)
                 };
                 let pdf = self.pdf(wo, wi);
-                if wi.z <= 0.0 || !(pdf > 0.0) {
+                if wi.z <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
                     return None;
                 }
                 Some(LocalSample {

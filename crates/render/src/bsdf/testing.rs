@@ -122,8 +122,8 @@ pub fn albedo_quadrature(m: &Material, wo: Vec3, k: usize, mode: Transport) -> R
             let phi = (j as f64 + 0.5) * 2.0 * PI / nphi as f64;
             let wi = Vec3::new(s * phi.cos(), s * phi.sin(), c);
             let f = eval_transport(m, wo, wi, UP, UP, mode);
-            for ch in 0..3 {
-                sum[ch] += f.0[ch] * c.abs() * cell;
+            for (s, f) in sum.iter_mut().zip(f.0) {
+                *s += f * c.abs() * cell;
             }
         }
     }

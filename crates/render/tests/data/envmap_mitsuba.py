@@ -53,9 +53,7 @@ def main() -> None:
     exr = HERE / "envmap_test.exr"
     mi.Bitmap(texels(), pixel_format=mi.Bitmap.PixelFormat.RGB).write(str(exr))
     to_world = mi.ScalarTransform4f().rotate(AXIS, ANGLE_DEG)
-    emitter = mi.load_dict(
-        {"type": "envmap", "filename": str(exr), "scale": SCALE, "to_world": to_world}
-    )
+    emitter = mi.load_dict({"type": "envmap", "filename": str(exr), "scale": SCALE, "to_world": to_world})
     m = np.array(to_world.matrix)[:3, :3]
     lines = [
         "# Mitsuba 3 envmap radiance (scalar_rgb) along escaping rays; written by envmap_mitsuba.py",

@@ -42,7 +42,7 @@ use luxest_io::math::{Affine, Vec3};
 use luxest_io::{Error, Result};
 use luxest_render::scene::{
     Camera, Emission, Environment, Material, Microfacet, MicrofacetDistribution, Object, Opacity,
-    PointLight, PointPower, Scene, Shape, Spot, Surface, TextureDesc, Transform,
+    OpacityChannel, PointLight, PointPower, Scene, Shape, Spot, Surface, TextureDesc, Transform,
 };
 use luxest_render::texture::{Encoding, Filter, UvTransform, Wrap};
 use std::cell::{Cell, RefCell};
@@ -1071,6 +1071,8 @@ impl<'a> Importer<'a> {
                 return Ok(Bsdf {
                     opacity: Some(Opacity {
                         texture,
+                        // Mitsuba's bitmap drops an image's alpha: a mask reads its colour.
+                        channel: OpacityChannel::Luminance,
                         value,
                         cutoff: None,
                     }),

@@ -1,0 +1,3 @@
+//! Fuzz target: see `luxest_fuzz::texture_encoded`.
+#![no_main]
+libfuzzer_sys::fuzz_target!(|data: &[u8]| luxest_fuzz::texture_encoded(data));
