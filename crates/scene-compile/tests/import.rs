@@ -669,6 +669,7 @@ fn obj_mtl_scene_translates_its_materials() {
             roughness: None,
             opacity: Some(Opacity {
                 texture: None,
+                channel: OpacityChannel::Auto,
                 value: 0.5,
                 cutoff: None
             }),
@@ -799,6 +800,7 @@ fn gltf_scene_translates_nodes_materials_camera_and_lights() {
             roughness: None,
             opacity: Some(Opacity {
                 texture: Some("leaf.png".into()),
+                channel: OpacityChannel::Alpha,
                 value: 0.800000011920929,
                 cutoff: Some(0.30000001192092896)
             }),

@@ -30,6 +30,7 @@ use crate::meshes::{gltf_nodes, open_gltf};
 use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
 use luxest_io::{Error, Result};
+use luxest_render::scene::OpacityChannel;
 use luxest_render::scene::{
     Camera, Emission, Material, Microfacet, MicrofacetDistribution, Object, Opacity, PointLight,
     PointPower, Shape, Surface, TextureDesc, Transform,
@@ -179,6 +180,7 @@ fn material(
         gltf::material::AlphaMode::Opaque => None,
         mode => Some(Opacity {
             texture: color.clone(),
+            channel: OpacityChannel::Alpha,
             value: alpha as f64,
             cutoff: (mode == gltf::material::AlphaMode::Mask)
                 .then(|| m.alpha_cutoff().unwrap_or(0.5) as f64),

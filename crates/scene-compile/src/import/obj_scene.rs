@@ -23,6 +23,7 @@
 use crate::import::{scene_relative, Imported};
 use luxest_io::color::Rgb;
 use luxest_io::{Error, Result};
+use luxest_render::scene::OpacityChannel;
 use luxest_render::scene::{
     Emission, Material, Object, Opacity, Shape, Surface, TextureDesc, Transform,
 };
@@ -221,6 +222,8 @@ fn material(
     let transparent = !glass && (m.d < 1.0 || opacity_texture.is_some());
     let opacity = transparent.then_some(Opacity {
         texture: opacity_texture,
+        // MTL's map_d is a scalar map: its alpha where it has one, else its grey level.
+        channel: OpacityChannel::Auto,
         value: m.d,
         cutoff: None,
     });
