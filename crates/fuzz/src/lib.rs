@@ -97,9 +97,17 @@ pub fn mitsuba_xml(data: &[u8]) {
     }
 }
 
-/// A Stanford PLY mesh (ASCII or binary).
+/// A Stanford PLY mesh (ASCII or binary); the same bytes as a Mitsuba `.serialized` mesh (its
+/// first and second mesh).
 pub fn ply(data: &[u8]) {
     let _ = scene_compile::ply::load_ply_bytes(&Path::new(NOWHERE).join("m.ply"), data);
+    for index in [0, 1] {
+        let _ = scene_compile::serialized::load_serialized_bytes(
+            &Path::new(NOWHERE).join("m.serialized"),
+            data,
+            index,
+        );
+    }
 }
 
 /// A compiled scene file (magic, schema, hash, header, arrays): as given, then with its content

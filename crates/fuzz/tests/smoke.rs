@@ -36,7 +36,10 @@ fn seeds(target: &str) -> Vec<Vec<u8>> {
         "gltf" => files("scenes/meshes", &[".glb", ".gltf"]),
         "mitsuba_xml" => mitsuba_seeds(),
         "ply" => [
-            files("crates/scene-compile/tests/data/mitsuba/meshes", &[".ply"]),
+            files(
+                "crates/scene-compile/tests/data/mitsuba/meshes",
+                &[".ply", ".serialized"],
+            ),
             vec![ASCII_PLY.as_bytes().to_vec()],
         ]
         .concat(),

@@ -432,6 +432,12 @@ pub enum Shape {
     /// A Stanford PLY triangle mesh (ASCII or binary little-endian; vertex positions, optional
     /// normals and texture coordinates, faces as index lists, fan-triangulated).
     Ply { path: String },
+    /// Mesh `shape_index` of a Mitsuba `.serialized` file (versions 3 and 4).
+    Serialized {
+        path: String,
+        #[serde(default)]
+        shape_index: u32,
+    },
 }
 
 /// Local-to-world transform: scale, then rotate about x, then y, then z (degrees,

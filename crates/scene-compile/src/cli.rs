@@ -26,6 +26,10 @@ pub struct Args {
     /// Print the header (features manifest, emitters, sensors, stats) of a compiled scene.
     #[arg(long, conflicts_with_all = ["out", "check", "export_mitsuba", "export_ron"])]
     pub info: bool,
+    /// A parameter of a Mitsuba 3 scene, as Mitsuba's own `-D name=value` (repeatable; takes
+    /// precedence over the scene's `<default>`).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE")]
+    pub define: Vec<String>,
     /// Also write the scene as luxest RON to this file (for an imported scene: its
     /// translation, to read and edit; file paths relative to the file written).
     #[arg(long, value_name = "FILE")]
@@ -55,7 +59,17 @@ pub fn run(args: Args) -> Result<()> {
         let scene = CompiledScene::load(&args.input)?;
         return luxest_io::cli::print(&info_text(&scene));
     }
-    let imported = crate::import::read_scene(&args.input)?;
+    let defines = args
+        .define
+        .iter()
+        .map(|d| match d.split_once('=') {
+            Some((k, v)) if !k.is_empty() => Ok((k.to_string(), v.to_string())),
+            _ => Err(luxest_io::Error::Usage(format!(
+                "-D {d}: expected NAME=VALUE"
+            ))),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let imported = crate::import::read_scene_with(&args.input, &defines)?;
     for w in &imported.warnings {
         args.console.note(format_args!("warning: {w}"));
     }

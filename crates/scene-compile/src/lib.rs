@@ -9,7 +9,8 @@
 //!
 //! Modules: [`cli`] (arguments and run), [`import`] (whole scenes from Mitsuba 3 XML, glTF and
 //! OBJ+MTL, translated into an authored scene), [`validate`], [`shapes`] (tessellation),
-//! [`meshes`] (OBJ and glTF), [`ply`] (PLY meshes), [`luminaires`], [`environment`] (the
+//! [`meshes`] (OBJ and glTF), [`ply`] (PLY meshes), [`serialized`] (Mitsuba's serialized
+//! meshes), [`luminaires`], [`environment`] (the
 //! environment emitter and its map), [`surfaces`], [`textures`] (bitmap textures and the
 //! per-material surfaces), [`mitsuba`] (export to Mitsuba 3); this file assembles the
 //! world-space scene.
@@ -21,6 +22,7 @@ pub mod luminaires;
 pub mod meshes;
 pub mod mitsuba;
 pub mod ply;
+pub mod serialized;
 pub mod shapes;
 pub mod surfaces;
 pub mod textures;
@@ -63,9 +65,10 @@ pub fn scene_name(scene: &Scene, path: &Path) -> String {
 pub fn referenced_files(scene: &Scene, path: &Path) -> Vec<PathBuf> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let meshes = scene.objects.iter().filter_map(|o| match &o.shape {
-        Shape::Obj { path, .. } | Shape::Gltf { path, .. } | Shape::Ply { path } => {
-            Some(dir.join(path))
-        }
+        Shape::Obj { path, .. }
+        | Shape::Gltf { path, .. }
+        | Shape::Ply { path }
+        | Shape::Serialized { path, .. } => Some(dir.join(path)),
         _ => None,
     });
     let photometry = scene.luminaires.iter().map(|l| dir.join(&l.file));
@@ -240,6 +243,9 @@ fn object_mesh(scene_path: &Path, place: &str, shape: &Shape) -> Result<LocalMes
             None => meshes::load_gltf(&resolve(path)?)?,
         },
         Shape::Ply { path } => ply::load_ply(&resolve(path)?)?,
+        Shape::Serialized { path, shape_index } => {
+            serialized::load_serialized(&resolve(path)?, *shape_index)?
+        }
     })
 }
 

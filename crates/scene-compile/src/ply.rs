@@ -348,7 +348,7 @@ pub fn load_ply_bytes(path: &Path, bytes: &[u8]) -> Result<LocalMesh> {
                                 let mut idx = Vec::with_capacity(count as usize);
                                 for _ in 0..count as usize {
                                     let v = body.value(*i).map_err(|m| fail(place(), m))?;
-                                    if !(v >= 0.0 && (v as u64) < nv) || !i.is_integer() {
+                                    if !(v >= 0.0 && (v as u64) < nv && i.is_integer()) {
                                         return Err(fail(
                                             place(),
                                             format!(

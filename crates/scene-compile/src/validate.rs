@@ -536,7 +536,10 @@ pub fn check_scene(path: &Path, scene: &Scene) -> Result<()> {
                     ));
                 }
             }
-            Shape::Obj { .. } | Shape::Gltf { .. } | Shape::Ply { .. } => {}
+            Shape::Obj { .. }
+            | Shape::Gltf { .. }
+            | Shape::Ply { .. }
+            | Shape::Serialized { .. } => {}
         }
         match &o.emission {
             None => {}

@@ -2,9 +2,9 @@
 //! against the source file's numbers, compiled end to end, and every class of bad input
 //! refused by the real binary with exit code 1 and one line naming the file and the place.
 //!
-//! `tests/data/mitsuba/scene.xml` is loaded by Mitsuba 3 itself in
-//! `tests/data/mitsuba/check_with_mitsuba.py`, so its translation is checked against a scene
-//! Mitsuba accepts.
+//! `crates/scene-compile/tests/data/mitsuba/scene.xml` is loaded by Mitsuba 3 itself in
+//! `crates/scene-compile/tests/data/mitsuba/check_with_mitsuba.py`, so its translation is
+//! checked against a scene Mitsuba accepts.
 
 use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
@@ -211,7 +211,15 @@ fn mitsuba_scene_translates_field_by_field() {
             .find(|o| o.name.as_deref() == Some(name))
             .unwrap_or_else(|| panic!("no object {name}"))
     };
-    assert_eq!(s.objects.len(), 9);
+    assert_eq!(s.objects.len(), 10);
+    // serialized: mesh 1 of the file (version 4), relative to the scene.
+    assert_eq!(
+        o("tile").shape,
+        Shape::Serialized {
+            path: "meshes/two.serialized".into(),
+            shape_index: 1
+        }
+    );
 
     // Textures: the bitmap's file, wrap, filter and to_uv (scale, then translate: u' = 2u + ½,
     // v' = 3v); raw bitmaps are linear, the others keep the file's encoding.
@@ -225,19 +233,19 @@ fn mitsuba_scene_translates_field_by_field() {
         wood.uv_transform,
         Some(UvTransform([[2.0, 0.0, 0.5], [0.0, 3.0, 0.0]]))
     );
-    let opacity_tex = "textures/alpha.png@scene:130";
-    let alpha_tex = "textures/alpha.png@scene:138";
+    let opacity_tex = "textures/alpha.png@scene:136";
+    let alpha_tex = "textures/alpha.png@scene:144";
     assert_eq!(s.textures.len(), 3, "{:?}", s.textures.keys());
     assert_eq!(s.textures[opacity_tex].encoding, Some(Encoding::Linear));
     // A bare BSDF is one-sided; its bitmap colour multiplies a reflectance of 1.
     assert_eq!(
-        m["diffuse@scene:124"],
+        m["diffuse@scene:130"],
         Material::Lambertian {
             reflectance: Rgb::WHITE
         }
     );
     assert_eq!(
-        s.surfaces["diffuse@scene:124"],
+        s.surfaces["diffuse@scene:130"],
         Surface {
             color: Some("wood".into()),
             roughness: None,
@@ -252,7 +260,7 @@ fn mitsuba_scene_translates_field_by_field() {
         .find(|c| c.0 == "Cu")
         .unwrap();
     assert_eq!(
-        m["mask@scene:129"],
+        m["mask@scene:135"],
         Material::Conductor {
             eta: Rgb(cu.1),
             k: Rgb(cu.2),
@@ -264,7 +272,7 @@ fn mitsuba_scene_translates_field_by_field() {
         }
     );
     assert_eq!(
-        s.surfaces["mask@scene:129"],
+        s.surfaces["mask@scene:135"],
         Surface {
             color: None,
             roughness: Some(alpha_tex.into()),
@@ -405,10 +413,11 @@ fn mitsuba_scene_compiles_and_its_exported_ron_compiles_to_the_same_scene() {
     let path = data().join("scene.xml");
     let (compiled, _) = scene_compile::compile_file(&path).unwrap();
     let stats = &compiled.header.stats;
-    // 4 rectangles of 2 + 12 (cube) + 20·4^6 (sphere) + 254 (disk fan) + 1 (OBJ) + 2 (PLY).
+    // 4 rectangles of 2 + 12 (cube) + 20·4^6 (sphere) + 254 (disk fan) + 1 (OBJ) + 2 (PLY)
+    // + 2 (serialized mesh 1).
     assert_eq!(
         stats.triangles,
-        8 + 12 + 20 * 4u64.pow(mitsuba_xml::SPHERE_SUBDIVISIONS) + 254 + 1 + 2
+        8 + 12 + 20 * 4u64.pow(mitsuba_xml::SPHERE_SUBDIVISIONS) + 254 + 1 + 2 + 2
     );
     // Two area emitters, point, spot and environment.
     assert_eq!(compiled.header.emitters.len(), 5);
@@ -538,6 +547,16 @@ fn bad_mitsuba_input_is_one_line_naming_file_line_and_element() {
             "mirrored.xml: line 4: <sensor type=\"perspective\">: the camera's to_world mirrors the image",
         ),
         (
+            "cycle",
+            xml(r#"<bsdf type="twosided" id="loop"><ref id="loop"/></bsdf>"#),
+            "cycle.xml: line 4: <bsdf type=\"twosided\" id=\"loop\">: BSDFs nest deeper than 64",
+        ),
+        (
+            "deep",
+            xml(&format!("{}{}", "<bsdf type=\"twosided\">".repeat(100), "</bsdf>".repeat(100))),
+            "deep.xml: line 4: <bsdf>: elements nest deeper than 64",
+        ),
+        (
             "version",
             "<scene><shape type=\"cube\"/></scene>".to_string(),
             "version.xml: line 1: <scene>: the root element has no version attribute",
@@ -632,14 +651,45 @@ fn obj_mtl_scene_translates_its_materials() {
         .find(|o| o.name == "lamp")
         .unwrap();
     assert_eq!(lamp_range.triangle_count, 1);
-    // A texture is refused with the MTL line until textured surfaces exist.
+    // map_Kd and d: a colour texture (relative to the OBJ) and a stochastic cut-out.
+    std::fs::create_dir_all(d.join("tex")).unwrap();
+    std::fs::copy(data().join("textures/wood.png"), d.join("tex/wood.png")).unwrap();
     std::fs::write(
         d.join("room.mtl"),
-        "newmtl floor\nKd 1 1 1\nmap_Kd wood.png\nnewmtl lamp\nKe 1 1 1\nnewmtl shiny\nnewmtl glass\n",
+        "newmtl floor\nKd 1 1 1\nmap_Kd tex/wood.png\nd 0.5\nnewmtl lamp\nKe 1 1 1\n\
+         newmtl shiny\nnewmtl glass\nillum 7\nd 0.2\n",
+    )
+    .unwrap();
+    let s = read_scene(&d.join("room.obj")).unwrap().scene;
+    assert_eq!(s.textures["tex/wood.png"].path, "tex/wood.png");
+    assert_eq!(
+        s.surfaces["floor"],
+        Surface {
+            color: Some("tex/wood.png".into()),
+            roughness: None,
+            opacity: Some(Opacity {
+                texture: None,
+                channel: OpacityChannel::Auto,
+                value: 0.5,
+                cutoff: None
+            }),
+            normal: None,
+            two_sided: true
+        }
+    );
+    // Glass is transparent by its model: d does not cut it out.
+    assert!(!s.surfaces.contains_key("glass"));
+    // A texture file that is not there is refused with the MTL line.
+    std::fs::write(
+        d.join("room.mtl"),
+        "newmtl floor\nKd 1 1 1\nmap_Kd gone.png\nnewmtl lamp\nKe 1 1 1\nnewmtl shiny\nnewmtl glass\n",
     )
     .unwrap();
     let err = refused(&d.join("room.obj"));
-    assert!(err.contains("room.mtl: line 3: map_Kd"), "{err}");
+    assert!(
+        err.contains("room.mtl: line 3: texture") && err.contains("gone.png not found"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }
 
@@ -666,34 +716,44 @@ fn base64(bytes: &[u8]) -> String {
 fn gltf_scene_translates_nodes_materials_camera_and_lights() {
     let d = tmp("gltf");
     let mut buf = Vec::new();
-    for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+    // Positions of one triangle, then its texture coordinates.
+    for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 1.] {
         buf.extend_from_slice(&v.to_le_bytes());
     }
+    std::fs::copy(data().join("textures/wood.png"), d.join("leaf.png")).unwrap();
     let json = format!(
         r#"{{"asset": {{"version": "2.0"}},
   "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_clearcoat"],
   "extensions": {{"KHR_lights_punctual": {{"lights": [{{"type": "point", "color": [1, 0.5, 0.25], "intensity": 40}}]}}}},
   "scene": 0,
-  "scenes": [{{"nodes": [0, 1, 2, 3]}}],
+  "scenes": [{{"nodes": [0, 1, 2, 3, 4]}}],
   "nodes": [
     {{"name": "floor", "mesh": 0, "translation": [0, -1, 0]}},
     {{"name": "lamp", "mesh": 1, "scale": [2, 2, 2]}},
     {{"camera": 0, "translation": [0, 0, 5]}},
-    {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "translation": [0, 3, 0]}}
+    {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "translation": [0, 3, 0]}},
+    {{"name": "plant", "mesh": 2, "translation": [3, 0, 0]}}
   ],
   "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.5, "aspectRatio": 2.0, "znear": 0.1}}}}],
   "materials": [
     {{"name": "paint", "pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.25, 0.125, 1], "metallicFactor": 0}}}},
     {{"name": "steel", "pbrMetallicRoughness": {{"baseColorFactor": [0.75, 0.75, 0.75, 1], "metallicFactor": 1, "roughnessFactor": 0.25}},
-      "emissiveFactor": [1, 1, 1]}}
+      "emissiveFactor": [1, 1, 1]}},
+    {{"name": "leaf", "pbrMetallicRoughness": {{"baseColorFactor": [1, 1, 1, 0.8], "baseColorTexture": {{"index": 0}}, "metallicFactor": 0, "roughnessFactor": 0.5}},
+      "alphaMode": "MASK", "alphaCutoff": 0.3, "normalTexture": {{"index": 1}}}}
   ],
+  "images": [{{"uri": "leaf.png"}}],
+  "samplers": [{{"magFilter": 9728, "wrapS": 33648, "wrapT": 33648}}],
+  "textures": [{{"source": 0}}, {{"source": 0, "sampler": 0}}],
   "meshes": [
     {{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 0}}]}},
-    {{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 1}}]}}
+    {{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 1}}]}},
+    {{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "material": 2}}]}}
   ],
-  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}}],
-  "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
-  "buffers": [{{"byteLength": 36, "uri": "data:application/octet-stream;base64,{}"}}]
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 24}}],
+  "buffers": [{{"byteLength": 60, "uri": "data:application/octet-stream;base64,{}"}}]
 }}"#,
         base64(&buf)
     );
@@ -730,7 +790,33 @@ fn gltf_scene_translates_nodes_materials_camera_and_lights() {
             roughness: 0.25
         }
     );
-    assert_eq!(s.objects.len(), 2);
+    assert_eq!(s.objects.len(), 3);
+    // baseColorTexture (default sampler: repeat, bilinear), alpha MASK at the cutoff with the
+    // base colour's alpha, a normal map read linearly with its own sampler.
+    assert_eq!(
+        s.surfaces["leaf"],
+        Surface {
+            color: Some("leaf.png".into()),
+            roughness: None,
+            opacity: Some(Opacity {
+                texture: Some("leaf.png".into()),
+                channel: OpacityChannel::Alpha,
+                value: 0.800000011920929,
+                cutoff: Some(0.30000001192092896)
+            }),
+            normal: Some("leaf.png'".into()),
+            two_sided: true
+        }
+    );
+    assert_eq!(
+        (s.textures["leaf.png"].wrap, s.textures["leaf.png"].filter),
+        (Wrap::Repeat, Filter::Bilinear)
+    );
+    let normal = &s.textures["leaf.png'"];
+    assert_eq!(
+        (normal.wrap, normal.filter, normal.encoding),
+        (Wrap::Mirror, Filter::Nearest, Some(Encoding::Linear))
+    );
     let floor = s.objects.iter().find(|o| o.material == "paint").unwrap();
     assert_eq!(
         floor.shape,
@@ -770,5 +856,80 @@ fn gltf_scene_translates_nodes_materials_camera_and_lights() {
         })
         .sum();
     assert!((area - 2.0).abs() < 1e-6, "{area}");
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn define_gives_a_mitsuba_parameter_over_its_default() {
+    let d = tmp("define");
+    let scene = d.join("p.xml");
+    std::fs::write(
+        &scene,
+        xml(r#"<default name="albedo" value="0.5"/>
+    <bsdf type="twosided" id="grey"><bsdf type="diffuse"><rgb name="reflectance" value="$albedo"/></bsdf></bsdf>"#),
+    )
+    .unwrap();
+    let out = d.join("p.ron");
+    let o = bin()
+        .args(["--check", "-D", "albedo=0.25", "--export-ron"])
+        .arg(&out)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ron = std::fs::read_to_string(&out).unwrap();
+    let grey = ron.find("\"grey\": Lambertian(").expect("the material");
+    assert!(
+        ron[grey..].contains("reflectance: (0.25, 0.25, 0.25)"),
+        "{ron}"
+    );
+    // Malformed, or given to a format without parameters: usage errors (exit 2).
+    let o = bin()
+        .args(["--check", "-D", "albedo"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn version_0_6_scenes_get_mitsubas_upgrade() {
+    let d = tmp("legacy");
+    std::fs::copy(data().join("textures/wood.png"), d.join("wood.png")).unwrap();
+    std::fs::write(
+        d.join("old.xml"),
+        r#"<scene version="0.6.0">
+    <shape type="rectangle" id="wall">
+        <transform name="toWorld"><translate x="1"/></transform>
+        <bsdf type="diffuse">
+            <texture type="bitmap" name="diffuseReflectance">
+                <string name="filename" value="wood.png"/>
+                <float name="uoffset" value="0.25"/>
+                <float name="uscale" value="2"/>
+                <float name="vscale" value="3"/>
+            </texture>
+        </bsdf>
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+    </shape>
+</scene>
+"#,
+    )
+    .unwrap();
+    let s = read_scene(&d.join("old.xml")).unwrap().scene;
+    let wall = &s.objects[0];
+    assert!(same_affine(
+        &affine(&wall.transform.matrix),
+        &Affine::translate(Vec3::new(1.0, 0.0, 0.0))
+    ));
+    // diffuseReflectance → reflectance (the texture's colour); uv' = scale · (uv + offset).
+    assert_eq!(
+        s.surfaces[&wall.material].color.as_deref(),
+        Some("wood.png@old:5")
+    );
+    assert_eq!(
+        s.textures["wood.png@old:5"].uv_transform,
+        Some(UvTransform([[2.0, 0.0, 0.5], [0.0, 3.0, 0.0]]))
+    );
     std::fs::remove_dir_all(&d).unwrap();
 }

@@ -12,9 +12,14 @@
 //! | `metallicFactor` 1, roughness 0 | `Mirror(baseColorFactor)` |
 //! | `metallicFactor` m in (0, 1) | `Blend(weight: m, first: the dielectric, second: the metal)` |
 //! | `emissiveFactor` × `KHR_materials_emissive_strength` | `Radiance`, cd/m² |
+//! | `baseColorTexture` | the surface's colour texture (multiplying baseColor) |
+//! | `normalTexture` (scale 1) | the surface's normal map (linear) |
+//! | `emissiveTexture` | `Emission::Texture` scaled by the emissive factor |
+//! | `alphaMode` `MASK` / `BLEND` | a cut-out of opacity baseColor alpha × the texture's alpha, at `alphaCutoff` / stochastic |
 //!
-//! Textures, `alphaMode` `MASK`/`BLEND` and a
-//! camera other than perspective are errors until luxest has the matching models; extensions
+//! Textures are external image files (embedded images are errors), `TEXCOORD_0` only, with the
+//! sampler's wrap mode (the same along s and t) and magnification filter.
+//! `metallicRoughnessTexture` and a camera other than perspective are errors; extensions
 //! the importer does not read are named in a warning (an error when the file requires them).
 //! `doubleSided` is not used: a single-sided glTF material means back faces are culled, which
 //! a closed mesh never shows, and luxest shades both sides. A camera's image is 720 pixels high
@@ -25,10 +30,12 @@ use crate::meshes::{gltf_nodes, open_gltf};
 use luxest_io::color::Rgb;
 use luxest_io::math::{Affine, Vec3};
 use luxest_io::{Error, Result};
+use luxest_render::scene::OpacityChannel;
 use luxest_render::scene::{
-    Camera, Emission, Material, Microfacet, MicrofacetDistribution, Object, PointLight, PointPower,
-    Shape, Transform,
+    Camera, Emission, Material, Microfacet, MicrofacetDistribution, Object, Opacity, PointLight,
+    PointPower, Shape, Surface, TextureDesc, Transform,
 };
+use luxest_render::texture::{Encoding, Filter, Wrap};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -46,28 +53,87 @@ fn material_place(m: &gltf::Material) -> String {
     }
 }
 
-/// The luxest material and emission of a glTF material.
+/// The texture a glTF texture reference names, registered in `textures` on first use; its
+/// name. Only external image files (a URI, not a data URI or a buffer view) can be referred to.
+fn texture(
+    path: &Path,
+    place: &str,
+    which: &str,
+    tex: gltf::Texture,
+    tex_coord: u32,
+    encoding: Option<Encoding>,
+    textures: &mut BTreeMap<String, TextureDesc>,
+) -> Result<String> {
+    let fail = |msg: String| Error::at(path, place, format!("{which}: {msg}"));
+    if tex_coord != 0 {
+        return Err(fail(format!(
+            "TEXCOORD_{tex_coord} is not supported (only TEXCOORD_0)"
+        )));
+    }
+    let uri = match tex.source().source() {
+        gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => uri,
+        _ => {
+            return Err(fail(
+                "images embedded in the file are not supported (only external image files)".into(),
+            ))
+        }
+    };
+    let full = path.parent().unwrap_or(Path::new(".")).join(uri);
+    if !full.is_file() {
+        return Err(fail(format!("image {} not found", full.display())));
+    }
+    let sampler = tex.sampler();
+    use gltf::texture::WrappingMode;
+    let wrap = |m: WrappingMode| match m {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::MirroredRepeat => Wrap::Mirror,
+        WrappingMode::ClampToEdge => Wrap::Clamp,
+    };
+    let (ws, wt) = (wrap(sampler.wrap_s()), wrap(sampler.wrap_t()));
+    if ws != wt {
+        return Err(fail(format!(
+            "different wrap modes along s and t ({ws:?}, {wt:?}) are not supported"
+        )));
+    }
+    let filter = match sampler.mag_filter() {
+        Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+        _ => Filter::Bilinear,
+    };
+    let desc = TextureDesc {
+        path: scene_relative(&full, path),
+        encoding,
+        wrap: ws,
+        filter,
+        uv_transform: None,
+    };
+    let mut name = desc.path.clone();
+    loop {
+        match textures.get(&name) {
+            Some(d) if *d == desc => return Ok(name),
+            Some(_) => name.push('\''),
+            None => break,
+        }
+    }
+    textures.insert(name.clone(), desc);
+    Ok(name)
+}
+
+/// The luxest material, surface and emission of a glTF material.
 fn material(
     path: &Path,
     m: &gltf::Material,
     warnings: &mut Vec<String>,
-) -> Result<(Material, Option<Emission>)> {
+    textures: &mut BTreeMap<String, TextureDesc>,
+) -> Result<(Material, Option<Surface>, Option<Emission>)> {
     let place = material_place(m);
     let fail = |msg: String| Error::at(path, &place, msg);
     let pbr = m.pbr_metallic_roughness();
-    let textures = [
-        ("baseColorTexture", pbr.base_color_texture().is_some()),
-        (
-            "metallicRoughnessTexture",
-            pbr.metallic_roughness_texture().is_some(),
-        ),
-        ("normalTexture", m.normal_texture().is_some()),
-        ("emissiveTexture", m.emissive_texture().is_some()),
-    ];
-    if let Some((t, _)) = textures.iter().find(|(_, has)| *has) {
-        return Err(fail(format!(
-            "{t}: textures are not supported yet in this build of luxest"
-        )));
+    if pbr.metallic_roughness_texture().is_some() {
+        return Err(fail(
+            "metallicRoughnessTexture is not supported (luxest's roughness texture reads the \
+             first channel; glTF's roughness is the second)"
+                .into(),
+        ));
     }
     if m.occlusion_texture().is_some() {
         warnings.push(format!(
@@ -75,15 +141,51 @@ fn material(
             path.display()
         ));
     }
-    match m.alpha_mode() {
-        gltf::material::AlphaMode::Opaque => {}
-        mode => {
-            return Err(fail(format!(
-                "alphaMode {mode:?} is not supported yet in this build of luxest"
-            )))
+    let color = match pbr.base_color_texture() {
+        Some(info) => Some(texture(
+            path,
+            &place,
+            "baseColorTexture",
+            info.texture(),
+            info.tex_coord(),
+            None,
+            textures,
+        )?),
+        None => None,
+    };
+    let normal = match m.normal_texture() {
+        Some(n) => {
+            if n.scale() != 1.0 {
+                return Err(fail(format!(
+                    "normalTexture scale {} is not supported (only 1)",
+                    n.scale()
+                )));
+            }
+            Some(texture(
+                path,
+                &place,
+                "normalTexture",
+                n.texture(),
+                n.tex_coord(),
+                Some(Encoding::Linear),
+                textures,
+            )?)
         }
-    }
-    let [r, g, b, _] = pbr.base_color_factor();
+        None => None,
+    };
+    let [r, g, b, alpha] = pbr.base_color_factor();
+    // MASK: opaque where base colour alpha × the texture's alpha reaches the cutoff; BLEND:
+    // a stochastic cut-out of that opacity.
+    let opacity = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => None,
+        mode => Some(Opacity {
+            texture: color.clone(),
+            channel: OpacityChannel::Alpha,
+            value: alpha as f64,
+            cutoff: (mode == gltf::material::AlphaMode::Mask)
+                .then(|| m.alpha_cutoff().unwrap_or(0.5) as f64),
+        }),
+    };
     let base = Rgb([r as f64, g as f64, b as f64]);
     let metallic = pbr.metallic_factor() as f64;
     let roughness = pbr.roughness_factor() as f64;
@@ -128,8 +230,31 @@ fn material(
     let [er, eg, eb] = m.emissive_factor();
     let strength = m.emissive_strength().unwrap_or(1.0) as f64;
     let emissive = Rgb([er as f64, eg as f64, eb as f64]) * strength;
-    let emission = (emissive.max_component() > 0.0).then_some(Emission::Radiance(emissive));
-    Ok((model, emission))
+    let emission = match m.emissive_texture() {
+        Some(info) if emissive.max_component() > 0.0 => Some(Emission::Texture {
+            texture: texture(
+                path,
+                &place,
+                "emissiveTexture",
+                info.texture(),
+                info.tex_coord(),
+                None,
+                textures,
+            )?,
+            scale: emissive,
+        }),
+        _ if emissive.max_component() > 0.0 => Some(Emission::Radiance(emissive)),
+        _ => None,
+    };
+    let textured = color.is_some() || normal.is_some() || opacity.is_some();
+    let surface = textured.then_some(Surface {
+        color,
+        roughness: None,
+        opacity,
+        normal,
+        two_sided: true,
+    });
+    Ok((model, surface, emission))
 }
 
 fn matrix_of(a: &Affine) -> [[f64; 4]; 3] {
@@ -256,8 +381,9 @@ pub fn import(path: &Path) -> Result<Imported> {
         for prim in mesh.primitives() {
             let m = prim.material();
             let key = m.index();
-            if !materials.contains_key(&key) {
-                let (model, emission) = material(path, &m, &mut warnings)?;
+            if let std::collections::btree_map::Entry::Vacant(slot) = materials.entry(key) {
+                let (model, surface, emission) =
+                    material(path, &m, &mut warnings, &mut scene.textures)?;
                 let mut name = match (key, m.name()) {
                     (Some(_), Some(n)) => n.to_string(),
                     (Some(i), None) => format!("material {i}"),
@@ -267,7 +393,10 @@ pub fn import(path: &Path) -> Result<Imported> {
                     name.push('\'');
                 }
                 scene.materials.insert(name.clone(), model);
-                materials.insert(key, (name, emission));
+                if let Some(surface) = surface {
+                    scene.surfaces.insert(name.clone(), surface);
+                }
+                slot.insert((name, emission));
             }
             let (name, emission) = materials[&key].clone();
             scene.objects.push(Object {

@@ -9,7 +9,8 @@
 //! directly or not, is an error. `<ref id>` refers to an object with that `id` (`name` gives
 //! the property name); `<alias id as>` gives an object a second id. Scenes of version < 2.0
 //! get Mitsuba's upgrade: camelCase property names become snake_case (`toWorld` →
-//! `to_world`) and a `diffuse`'s `diffuse_reflectance` becomes `reflectance`.
+//! `to_world`), a `diffuse`'s `diffuse_reflectance` becomes `reflectance`, and a bitmap's
+//! `uoffset`, `voffset`, `uscale`, `vscale` become its `to_uv`.
 //!
 //! **Properties.** `float`, `integer`, `boolean`, `string`, `rgb` (one or three values),
 //! `spectrum` (a single constant value only), `point`, `vector` and `transform` (`matrix` of 9
@@ -17,16 +18,19 @@
 //! composed in order: each applies after the previous ones). A property the translation does
 //! not read is an error, so nothing is dropped without a word.
 //!
-//! **Objects.** Shapes `obj`, `ply`, `rectangle`, `cube`, `sphere`, `disk` (with `to_world`,
+//! **Objects.** Shapes `obj`, `ply`, `serialized` (versions 3 and 4), `rectangle`, `cube`, `sphere`, `disk` (with `to_world`,
 //! `flip_normals`, `face_normals`); BSDFs `diffuse`, `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor` and `roughconductor` (`eta`/`k`, or a `material` preset of
 //! [`super::mitsuba_tables`]; `none`, smooth, is luxest's `Mirror`), `plastic`,
-//! `roughplastic`, `blendbsdf` (constant weight), `twosided`; emitters `area`
-//! (inside a shape), `point`, `spot`, `constant`, `envmap` (OpenEXR); sensor `perspective` (`fov`, `fov_axis`, `focal_length`,
-//! `to_world`) with film `hdrfilm` (`width`, `height`). `<integrator>` and the sensor's
-//! `<sampler>` are left out with a warning (luxest's estimator and sample count are chosen on
-//! its command line), a non-box `<rfilter>` likewise (luxest's pixel filter is a box).
-//! Anything else is an error naming the file, the line and the element.
+//! `roughplastic`, `blendbsdf` (constant weight), `twosided`, `mask`; a BSDF not inside
+//! `twosided` is one-sided (a surface with `two_sided: false`), and a shape without one gets
+//! Mitsuba's default (a one-sided diffuse 0.5); `bitmap` textures as the main colour, a rough
+//! BSDF's α, a mask's opacity and an area emitter's radiance; emitters `area` (inside a shape),
+//! `point`, `spot`, `constant`, `envmap` (OpenEXR); sensor `perspective` (`fov`, `fov_axis`,
+//! `focal_length`, `to_world`) with film `hdrfilm` (`width`, `height`). `<integrator>` and the
+//! sensor's `<sampler>` are left out with a warning (luxest's estimator and sample count are
+//! chosen on its command line), a non-box `<rfilter>` likewise (luxest's pixel filter is a
+//! box). Anything else is an error naming the file, the line and the element.
 //!
 //! **Units.** Mitsuba's RGB radiance (area, constant and environment emitters) becomes luxest's
 //! luminance in cd/m² with the same numbers, and its point intensity luxest's candela; luxest
@@ -53,6 +57,9 @@ pub const SPHERE_SUBDIVISIONS: u32 = 6;
 pub const DISK_SEGMENTS: usize = 256;
 /// Deepest `<include>` nesting, as Mitsuba's default `max_include_depth`.
 const MAX_INCLUDE_DEPTH: usize = 15;
+/// Deepest nesting of elements in one file, and of BSDFs through references (a `<ref>` to an
+/// enclosing BSDF is a cycle): real scenes nest a few levels.
+const MAX_NESTING: usize = 64;
 
 /// One XML element after `$` substitution and `<include>` expansion.
 #[derive(Clone, Debug)]
@@ -77,6 +84,8 @@ impl Elem {
 /// The first pass: files read, parameters substituted, includes expanded.
 struct Parser {
     files: Vec<PathBuf>,
+    /// Per file: whether its version is below 2.0 (Mitsuba 0.x syntax, upgraded).
+    legacy: Vec<bool>,
     /// `$name` → value, in definition order.
     params: Vec<(String, String)>,
     /// The files being read, outermost first (for recursion).
@@ -208,6 +217,7 @@ impl Parser {
             return Err(self.fail(file, line, format!("invalid version \"{version}\"")));
         };
         let upgrade = version < (2, 0, 0);
+        self.legacy.push(upgrade);
         let elem = self.convert(&doc, root, file, upgrade)?;
         self.stack.pop();
         Ok(elem.expect("the root is an element that stays"))
@@ -264,6 +274,13 @@ impl Parser {
     ) -> Result<Option<Elem>> {
         let line = doc.text_pos_at(node.range().start).row;
         let tag = node.tag_name().name().to_string();
+        if node.ancestors().count() > MAX_NESTING {
+            return Err(self.fail(
+                file,
+                line,
+                format!("<{tag}>: elements nest deeper than {MAX_NESTING}"),
+            ));
+        }
         let mut attrs = Vec::new();
         for a in node.attributes() {
             let mut v = self.substitute(a.value(), file, line)?;
@@ -392,6 +409,8 @@ struct Importer<'a> {
     /// Textures made so far, and their names by the address of their element.
     textures: RefCell<BTreeMap<String, TextureDesc>>,
     texture_names: RefCell<BTreeMap<usize, String>>,
+    /// How deep [`Importer::bsdf`] is in nested BSDFs.
+    bsdf_depth: Cell<usize>,
     /// Directories `<path>` adds to the file search.
     search: Vec<PathBuf>,
 }
@@ -690,20 +709,26 @@ impl<'a> Importer<'a> {
     }
 }
 
-/// Whether `a` is a rotation: orthonormal, determinant +1, no translation.
-fn is_rotation(a: &Affine) -> bool {
+/// The rotation part of `a` made exactly orthonormal (Gram-Schmidt on its columns), when its
+/// columns are orthonormal within 1e-3 (Mitsuba's `has_scale` tolerance) and it does not mirror.
+fn nearly_rotation(a: &Affine) -> Option<[[f64; 3]; 3]> {
     let m = &a.m;
     let col = |j: usize| Vec3::new(m[0][j], m[1][j], m[2][j]);
     let (x, y, z) = (col(0), col(1), col(2));
-    let close = |v: f64, want: f64| (v - want).abs() <= 1e-6;
-    close(x.dot(x), 1.0)
+    let close = |v: f64, want: f64| (v - want).abs() <= 1e-3;
+    let orthonormal = close(x.dot(x), 1.0)
         && close(y.dot(y), 1.0)
         && close(z.dot(z), 1.0)
         && close(x.dot(y), 0.0)
         && close(x.dot(z), 0.0)
-        && close(y.dot(z), 0.0)
-        && a.determinant() > 0.0
-        && a.t == Vec3::ZERO
+        && close(y.dot(z), 0.0);
+    if !orthonormal || a.determinant() <= 0.0 {
+        return None;
+    }
+    let x = x.try_normalize()?;
+    let y = (y - x * x.dot(y)).try_normalize()?;
+    let z = x.cross(y);
+    Some([[x.x, y.x, z.x], [x.y, y.y, z.y], [x.z, y.z, z.z]])
 }
 
 /// Rotation about the unit axis `a` by `deg` degrees (right-handed; Rodrigues' formula).
@@ -992,6 +1017,20 @@ impl<'a> Importer<'a> {
     }
 
     fn bsdf(&self, e: &'a Elem) -> Result<Bsdf> {
+        let depth = self.bsdf_depth.get();
+        if depth >= MAX_NESTING {
+            return Err(self.fail(
+                e,
+                format!("BSDFs nest deeper than {MAX_NESTING} (a <ref> to an enclosing BSDF?)"),
+            ));
+        }
+        self.bsdf_depth.set(depth + 1);
+        let b = self.bsdf_at(e);
+        self.bsdf_depth.set(depth);
+        b
+    }
+
+    fn bsdf_at(&self, e: &'a Elem) -> Result<Bsdf> {
         let plugin = e.attr("type").unwrap_or("");
         let r = self.reader(e)?;
         let color;
@@ -1263,7 +1302,23 @@ impl<'a> Importer<'a> {
             "nearest" => Filter::Nearest,
             other => return Err(self.fail(e, format!("unknown filter_type \"{other}\""))),
         };
-        let to_uv = r.transform("to_uv")?;
+        let mut to_uv = r.transform("to_uv")?;
+        // Mitsuba's upgrade of version < 2 files: uoffset, voffset, uscale, vscale become
+        // to_uv = scale · translate.
+        if self.parser.legacy.get(e.file).copied().unwrap_or(false) {
+            let old = ["uoffset", "voffset", "uscale", "vscale"];
+            if old
+                .iter()
+                .any(|k| r.props.items.iter().any(|i| i.name == *k))
+            {
+                if to_uv != Affine::IDENTITY {
+                    return Err(self.fail(e, "give either to_uv or uoffset/uscale, not both"));
+                }
+                let offset = Vec3::new(r.float("uoffset", 0.0)?, r.float("voffset", 0.0)?, 0.0);
+                let scale = Vec3::new(r.float("uscale", 1.0)?, r.float("vscale", 1.0)?, 1.0);
+                to_uv = Affine::scale(scale).compose(&Affine::translate(offset));
+            }
+        }
         r.boolean("accel", true)?;
         if let Some(f) = r.string("format")? {
             if f != "auto" {
@@ -1390,6 +1445,16 @@ impl<'a> Importer<'a> {
                     Shape::Ply { path }
                 }
             }
+            "serialized" => {
+                let file = r
+                    .string("filename")?
+                    .ok_or_else(|| self.fail(e, "needs a filename"))?;
+                let path = self.resolve_file(e, &file)?;
+                let shape_index = r.integer("shape_index", 0)?;
+                let shape_index = u32::try_from(shape_index)
+                    .map_err(|_| self.fail(e, format!("shape_index {shape_index} is negative")))?;
+                Shape::Serialized { path, shape_index }
+            }
             "rectangle" => Shape::Quad {
                 corner: Vec3::new(-1.0, -1.0, 0.0),
                 u: Vec3::new(2.0, 0.0, 0.0),
@@ -1497,7 +1562,9 @@ impl<'a> Importer<'a> {
                 let intensity = r.color("intensity", 1.0)?;
                 r.done()?;
                 let y = intensity.luminance();
-                if !(y > 0.0) || intensity.min_component() < 0.0 {
+                if y.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+                    || intensity.min_component() < 0.0
+                {
                     return Err(self.fail(
                         e,
                         "the intensity must be non-negative with positive luminance",
@@ -1524,7 +1591,9 @@ impl<'a> Importer<'a> {
                 let beam_width_deg = r.float("beam_width", cutoff_deg * 3.0 / 4.0)?;
                 r.done()?;
                 let y = intensity.luminance();
-                if !(y > 0.0) || intensity.min_component() < 0.0 {
+                if y.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+                    || intensity.min_component() < 0.0
+                {
                     return Err(self.fail(
                         e,
                         "the intensity must be non-negative with positive luminance",
@@ -1565,17 +1634,19 @@ impl<'a> Importer<'a> {
                     let scale = r.float("scale", 1.0)?;
                     let to_world = r.transform("to_world")?;
                     r.done()?;
-                    if !is_rotation(&to_world) {
+                    // Directions ignore the translation; a rotation written with few digits is
+                    // made exactly orthonormal (Mitsuba's own tolerance for scale is 1e-3).
+                    let Some(rotation) = nearly_rotation(&to_world) else {
                         return Err(self.fail(
                             e,
                             "the environment map's to_world must be a rotation (no scale, \
-                             shear, mirror or translation)",
+                             shear or mirror)",
                         ));
-                    }
+                    };
                     Environment::Map {
                         path,
                         scale,
-                        to_world: to_world.m,
+                        to_world: rotation,
                     }
                 };
                 self.scene.environment = Some(env);
@@ -1878,19 +1949,30 @@ fn collect_ids<'a>(
 
 /// Translates the Mitsuba 3 scene file `path`.
 pub fn import(path: &Path) -> Result<Imported> {
-    import_impl(path, None)
+    import_impl(path, None, &[])
+}
+
+/// [`import`] with parameters given as Mitsuba's `-D name=value` gives them: they take
+/// precedence over the scene's `<default>`s.
+pub fn import_with(path: &Path, defines: &[(String, String)]) -> Result<Imported> {
+    import_impl(path, None, defines)
 }
 
 /// [`import`] of the file's content `bytes`; `path` names it in errors and locates the files
 /// it refers to (includes, meshes, maps).
 pub fn import_bytes(path: &Path, bytes: &[u8]) -> Result<Imported> {
-    import_impl(path, Some(bytes))
+    import_impl(path, Some(bytes), &[])
 }
 
-fn import_impl(path: &Path, bytes: Option<&[u8]>) -> Result<Imported> {
+fn import_impl(
+    path: &Path,
+    bytes: Option<&[u8]>,
+    defines: &[(String, String)],
+) -> Result<Imported> {
     let mut parser = Parser {
         files: Vec::new(),
-        params: Vec::new(),
+        legacy: Vec::new(),
+        params: defines.to_vec(),
         stack: Vec::new(),
     };
     let root = parser.parse_file_bytes(path, bytes, None)?;
@@ -1917,6 +1999,7 @@ fn import_impl(path: &Path, bytes: Option<&[u8]>) -> Result<Imported> {
         default_bsdf: None,
         textures: RefCell::new(BTreeMap::new()),
         texture_names: RefCell::new(BTreeMap::new()),
+        bsdf_depth: Cell::new(0),
         search,
     };
     imp.top_level(&root)?;

@@ -58,6 +58,11 @@ impl SourceFormat {
 /// Reads a scene file: RON as authored, or a Mitsuba 3 (`.xml`), glTF (`.gltf`, `.glb`) or
 /// OBJ (`.obj`) scene translated.
 pub fn read_scene(path: &Path) -> Result<Imported> {
+    read_scene_with(path, &[])
+}
+
+/// [`read_scene`] with Mitsuba parameters (`-D name=value`); other formats refuse them.
+pub fn read_scene_with(path: &Path, defines: &[(String, String)]) -> Result<Imported> {
     let format = SourceFormat::of(path).ok_or_else(|| {
         Error::input(
             path,
@@ -65,12 +70,17 @@ pub fn read_scene(path: &Path) -> Result<Imported> {
              .gltf or .glb (glTF 2.0) or .obj (Wavefront OBJ with MTL)",
         )
     })?;
+    if !defines.is_empty() && format != SourceFormat::MitsubaXml {
+        return Err(Error::Usage(
+            "-D/--define gives parameters of a Mitsuba 3 scene (.xml) only".into(),
+        ));
+    }
     match format {
         SourceFormat::Ron => Ok(Imported {
             scene: luxest_io::fsio::read_ron(path)?,
             warnings: Vec::new(),
         }),
-        SourceFormat::MitsubaXml => mitsuba_xml::import(path),
+        SourceFormat::MitsubaXml => mitsuba_xml::import_with(path, defines),
         SourceFormat::Gltf => gltf_scene::import(path),
         SourceFormat::Obj => obj_scene::import(path),
     }
@@ -148,9 +158,10 @@ pub fn export_ron(scene: &Scene, source: &Path, out: &Path) -> String {
     let mut s = scene.clone();
     for o in &mut s.objects {
         match &mut o.shape {
-            Shape::Obj { path, .. } | Shape::Gltf { path, .. } | Shape::Ply { path } => {
-                *path = rebase(path)
-            }
+            Shape::Obj { path, .. }
+            | Shape::Gltf { path, .. }
+            | Shape::Ply { path }
+            | Shape::Serialized { path, .. } => *path = rebase(path),
             _ => {}
         }
     }

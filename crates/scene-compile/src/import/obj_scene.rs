@@ -12,15 +12,22 @@
 //! | `illum` 4, 6, 7 or 9 | `Dielectric(Ni)` |
 //! | `Ke` > 0 | the material's objects emit `Radiance(Ke)`, cd/m² |
 //!
-//! `Ka`, `Tf`, `sharpness` and `Ni` outside glass have no meaning for a physically based
-//! renderer and are left out with a warning; textures (`map_Kd`, `map_d`) and transparency
-//! (`d` < 1) are errors until luxest has textured surfaces; anything else is an error naming the
-//! MTL file and line.
+//! | `map_Kd` | the surface's colour texture (multiplying `Kd`) |
+//! | `d` < 1, `Tr` > 0, `map_d` | a stochastic cut-out of opacity `d` (× the `map_d` texture) |
+//!
+//! Textures are looked up with texture coordinates `vt` (v flipped, as Mitsuba 3's OBJ loader
+//! does), wrapping, bilinear. `Ka`, `Tf` and `sharpness` have no meaning for a physically based
+//! renderer and are left out with a warning; texture options and every other statement are
+//! errors naming the MTL file and line.
 
 use crate::import::{scene_relative, Imported};
 use luxest_io::color::Rgb;
 use luxest_io::{Error, Result};
-use luxest_render::scene::{Emission, Material, Object, Shape, Transform};
+use luxest_render::scene::OpacityChannel;
+use luxest_render::scene::{
+    Emission, Material, Object, Opacity, Shape, Surface, TextureDesc, Transform,
+};
+use luxest_render::texture::{Filter, Wrap};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
@@ -36,8 +43,9 @@ struct Mtl {
     ni: f64,
     d: f64,
     illum: i64,
-    /// Texture statements, with their lines.
-    maps: Vec<(String, usize)>,
+    /// `map_Kd` and `map_d`: the file name and the statement's line.
+    map_kd: Option<(String, usize)>,
+    map_d: Option<(String, usize)>,
 }
 
 fn rgb_of(words: &[&str]) -> Option<Rgb> {
@@ -94,7 +102,8 @@ fn read_mtl(
                     ni: 1.0,
                     d: 1.0,
                     illum: 2,
-                    maps: Vec::new(),
+                    map_kd: None,
+                    map_d: None,
                 },
             );
             current = Some(name);
@@ -136,7 +145,22 @@ fn read_mtl(
             "illum" => {
                 m.illum = number()? as i64;
             }
-            "map_Kd" | "map_d" => m.maps.push((key.to_string(), n)),
+            "map_Kd" | "map_d" => {
+                // Options (-s, -o, -clamp, -bm, …) would change the lookup: refused.
+                let file = match args {
+                    [f] if !f.starts_with('-') => f.to_string(),
+                    _ => {
+                        return Err(bad(
+                            "expects a file name alone (texture options are not supported)",
+                        ))
+                    }
+                };
+                if key == "map_Kd" {
+                    m.map_kd = Some((file, n));
+                } else {
+                    m.map_d = Some((file, n));
+                }
+            }
             "Ka" | "Tf" | "sharpness" => {
                 if ignored.insert(key) {
                     warnings.push(format!(
@@ -157,25 +181,54 @@ fn read_mtl(
     Ok(())
 }
 
-/// The luxest material of an MTL material.
-fn material(name: &str, m: &Mtl) -> Result<Material> {
+/// The luxest material of an MTL material, with its surface (textures, transparency) when it
+/// has one; `textures` collects the textures it uses.
+fn material(
+    name: &str,
+    m: &Mtl,
+    scene_file: &Path,
+    textures: &mut BTreeMap<String, TextureDesc>,
+) -> Result<(Material, Option<Surface>)> {
     let at = |msg: String| Error::at(&m.file, format!("line {} (newmtl {name})", m.line), msg);
-    if let Some((key, line)) = m.maps.first() {
-        return Err(Error::at(
-            &m.file,
-            format!("line {line}"),
-            format!("{key}: textures are not supported yet in this build of luxest"),
-        ));
-    }
+    let mut texture = |map: &Option<(String, usize)>| -> Result<Option<String>> {
+        let Some((file, line)) = map else {
+            return Ok(None);
+        };
+        let full = m.file.parent().unwrap_or(Path::new(".")).join(file);
+        if !full.is_file() {
+            return Err(Error::at(
+                &m.file,
+                format!("line {line}"),
+                format!("texture {} not found", full.display()),
+            ));
+        }
+        let path = scene_relative(&full, scene_file);
+        textures.entry(path.clone()).or_insert(TextureDesc {
+            path: path.clone(),
+            encoding: None,
+            wrap: Wrap::Repeat,
+            filter: Filter::Bilinear,
+            uv_transform: None,
+        });
+        Ok(Some(path))
+    };
+    let color = texture(&m.map_kd)?;
+    let opacity_texture = texture(&m.map_d)?;
     let glass = matches!(m.illum, 4 | 6 | 7 | 9);
-    if m.d < 1.0 && !glass {
-        return Err(at(format!(
-            "transparency d = {} (< 1) is not supported yet in this build of luxest",
-            m.d
-        )));
+    if !(0.0..=1.0).contains(&m.d) {
+        return Err(at(format!("d = {} is outside [0, 1]", m.d)));
     }
+    // Transparency (d < 1 or map_d) of an opaque model: a stochastic cut-out of opacity d.
+    let transparent = !glass && (m.d < 1.0 || opacity_texture.is_some());
+    let opacity = transparent.then_some(Opacity {
+        texture: opacity_texture,
+        // MTL's map_d is a scalar map: its alpha where it has one, else its grey level.
+        channel: OpacityChannel::Auto,
+        value: m.d,
+        cutoff: None,
+    });
     let zero = |c: Rgb| c.max_component() == 0.0;
-    Ok(match m.illum {
+    let model = match m.illum {
         0 | 1 => Material::Lambertian { reflectance: m.kd },
         2 if zero(m.ks) => Material::Lambertian { reflectance: m.kd },
         2 => {
@@ -200,9 +253,25 @@ fn material(name: &str, m: &Mtl) -> Result<Material> {
                 m.illum
             )))
         }
-        _ if glass => Material::Dielectric { ior: m.ni },
+        _ if glass => {
+            if color.is_some() {
+                return Err(at(
+                    "map_Kd on glass (illum 4, 6, 7, 9) is not supported".into()
+                ));
+            }
+            Material::Dielectric { ior: m.ni }
+        }
         other => return Err(at(format!("illum {other} is not supported"))),
-    })
+    };
+    let textured = color.is_some() || opacity.is_some();
+    let surface = textured.then_some(Surface {
+        color,
+        roughness: None,
+        opacity,
+        normal: None,
+        two_sided: true,
+    });
+    Ok((model, surface))
 }
 
 /// Translates the OBJ file `path` and its MTL libraries.
@@ -262,7 +331,11 @@ pub fn import(path: &Path) -> Result<Imported> {
     let mut scene = super::empty_scene();
     for name in &used {
         let m = &mtls[name];
-        scene.materials.insert(name.clone(), material(name, m)?);
+        let (model, surface) = material(name, m, path, &mut scene.textures)?;
+        scene.materials.insert(name.clone(), model);
+        if let Some(surface) = surface {
+            scene.surfaces.insert(name.clone(), surface);
+        }
         scene.objects.push(Object {
             name: Some(name.clone()),
             shape: Shape::Obj {
