@@ -101,7 +101,10 @@ def icosphere_obj(path, radius=1.0, level=2):
     lines = [f"v {v[0] * radius:.6f} {v[1] * radius:.6f} {v[2] * radius:.6f}" for v in verts]
     # Latitude-longitude texture coordinates (both renderers interpolate the same ones, seam
     # included).
-    lines += [f"vt {0.5 + math.atan2(v[0], v[2]) / (2 * math.pi):.6f} {math.acos(max(-1, min(1, v[1]))) / math.pi:.6f}" for v in verts]
+    lines += [
+        f"vt {0.5 + math.atan2(v[0], v[2]) / (2 * math.pi):.6f} {math.acos(max(-1, min(1, v[1]))) / math.pi:.6f}"
+        for v in verts
+    ]
     lines += [f"f {a + 1}/{a + 1} {b + 1}/{b + 1} {c + 1}/{c + 1}" for a, b, c in faces]
     Path(path).write_text("\n".join(lines) + "\n")
 
@@ -115,14 +118,34 @@ def textures(d):
         d / "planks.png",
         n,
         n,
-        [[tuple(int(255 * c) for c in ((0.55 + 0.15 * math.sin(y * 0.9 + (x // 16) * 1.7)) * s for s in (1, 0.7, 0.45))) for x in range(n)] for y in range(n)],
+        [
+            [
+                tuple(
+                    int(255 * c)
+                    for c in ((0.55 + 0.15 * math.sin(y * 0.9 + (x // 16) * 1.7)) * s for s in (1, 0.7, 0.45))
+                )
+                for x in range(n)
+            ]
+            for y in range(n)
+        ],
     )
-    png(d / "checker.png", n, n, [[(220, 220, 220) if (x // 8 + y // 8) % 2 else (40, 60, 120) for x in range(n)] for y in range(n)])
+    png(
+        d / "checker.png",
+        n,
+        n,
+        [[(220, 220, 220) if (x // 8 + y // 8) % 2 else (40, 60, 120) for x in range(n)] for y in range(n)],
+    )
     png(
         d / "leaf.png",
         n,
         n,
-        [[(60, 140, 50, 255 if (x - 32) ** 2 / 900 + (y - 32) ** 2 / 300 < 1 and (x + y) % 11 else 0) for x in range(n)] for y in range(n)],
+        [
+            [
+                (60, 140, 50, 255 if (x - 32) ** 2 / 900 + (y - 32) ** 2 / 300 < 1 and (x + y) % 11 else 0)
+                for x in range(n)
+            ]
+            for y in range(n)
+        ],
         channels=4,
     )
     exr_rgb(d / "lamp.exr", 16, 16, lambda x, y: (1.0 + (x % 4 == 0), 1.0, 0.6 + 0.4 * (y / 15)))
@@ -200,7 +223,9 @@ def cutout_scene(d, w, h):
     """A cut-out leaf (Mitsuba `mask` of an RGBA bitmap, which Mitsuba reads by its colour's
     luminance) before the textured lamp, a one-sided panel and a sphere, lit also by a point
     light. Mitsuba renders it with `volpath` (see `integrator_of`)."""
-    body = ROOM + sphere((0.6, 0.5, -0.4), 0.4, '<bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.6"/></bsdf>')
+    body = ROOM + sphere(
+        (0.6, 0.5, -0.4), 0.4, '<bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.6"/></bsdf>'
+    )
     body += """  <shape type="rectangle"><transform name="to_world"><scale x="0.35" y="0.35"/><rotate y="1" angle="15"/><translate x="0.2" y="1.9" z="0.3"/></transform><bsdf type="mask"><texture type="bitmap" name="opacity"><string name="filename" value="leaf.png"/><boolean name="raw" value="true"/></texture><bsdf type="twosided"><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="leaf.png"/></texture></bsdf></bsdf></bsdf></shape>
   <shape type="rectangle"><transform name="to_world"><scale x="0.4" y="0.3"/><rotate y="1" angle="-30"/><translate x="1.3" y="1.6" z="0.2"/></transform><bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="checker.png"/><string name="filter_type" value="nearest"/></texture></bsdf></shape>
   <shape type="rectangle"><transform name="to_world"><scale x="0.5" y="0.3"/><rotate x="1" angle="90"/><translate y="2.99" z="-0.3"/></transform><bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf><emitter type="area"><texture type="bitmap" name="radiance"><string name="filename" value="lamp.exr"/></texture></emitter></shape>
@@ -218,7 +243,15 @@ def emitters_scene(d, w, h):
   <shape type="rectangle"><transform name="to_world"><scale x="0.5" y="0.5"/><translate x="-1.5" y="1.5" z="2"/></transform><ref id="wall"/></shape>
   <shape type="rectangle"><transform name="to_world"><scale x="0.5" y="0.5"/><translate x="1.5" y="1.5" z="2"/></transform><ref id="wall"/></shape>
 """
-    base = ROOM + window + sphere((0.3, 0.5, -0.6), 0.45, '<bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.7, 0.6, 0.3"/></bsdf>')
+    base = (
+        ROOM
+        + window
+        + sphere(
+            (0.3, 0.5, -0.6),
+            0.45,
+            '<bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.7, 0.6, 0.3"/></bsdf>',
+        )
+    )
     spot = """  <emitter type="spot"><transform name="to_world"><lookat origin="-1.5, 2.8, -1.5" target="0, 0, 0" up="0, 1, 0"/></transform><float name="cutoff_angle" value="25"/><float name="beam_width" value="15"/><rgb name="intensity" value="30, 28, 25"/></emitter>
   <emitter type="point"><point name="position" value="1.5, 2.5, -1.5"/><rgb name="intensity" value="2, 2, 2"/></emitter>
 """
@@ -311,7 +344,9 @@ def mitsuba(xml, spp, variant):
 
 def blocks(a, n=BLOCKS):
     h, w = a.shape[-2] // n, a.shape[-1] // n
-    return np.array([[a[..., i * h : (i + 1) * h, j * w : (j + 1) * w].mean(axis=(-1, -2)) for j in range(n)] for i in range(n)])
+    return np.array(
+        [[a[..., i * h : (i + 1) * h, j * w : (j + 1) * w].mean(axis=(-1, -2)) for j in range(n)] for i in range(n)]
+    )
 
 
 def compare(y_l, se_l, y_m, runs):
@@ -375,7 +410,10 @@ def main(argv=None):
         rows.append((name, tris, cpu_l, cpu_m, c, integrator))
         if abs(c["z"]) > 3 or c["max_z"] > 4.5:
             failures.append(name)
-        print(f"{name}: z {c['z']:+.2f}, max block |z| {c['max_z']:.2f}, luxest {cpu_l:.1f} CPU-s, Mitsuba {cpu_m:.1f} CPU-s", flush=True)
+        print(
+            f"{name}: z {c['z']:+.2f}, max block |z| {c['max_z']:.2f}, luxest {cpu_l:.1f} CPU-s, Mitsuba {cpu_m:.1f} CPU-s",
+            flush=True,
+        )
     out = [
         "# Mitsuba 3 XML scenes: luxest `trace` against Mitsuba 3",
         "",

@@ -42,8 +42,12 @@ def ron_rough(d, a):
 
 
 def conductor(eta, k, spec, dist=None, alpha=None):
-    m = {"type": "conductor" if dist is None else "roughconductor",
-         "eta": rgb(eta), "k": rgb(k), "specular_reflectance": rgb(spec)}
+    m = {
+        "type": "conductor" if dist is None else "roughconductor",
+        "eta": rgb(eta),
+        "k": rgb(k),
+        "specular_reflectance": rgb(spec),
+    }
     ron = "Conductor(eta: %s, k: %s, specular_reflectance: %s" % (ron_rgb(eta), ron_rgb(k), ron_rgb(spec))
     if dist is not None:
         m["distribution"] = dist.lower()
@@ -53,11 +57,20 @@ def conductor(eta, k, spec, dist=None, alpha=None):
 
 
 def plastic(diffuse, spec, ior, nonlinear, dist=None, alpha=None):
-    m = {"type": "plastic" if dist is None else "roughplastic",
-         "diffuse_reflectance": rgb(diffuse), "specular_reflectance": rgb(spec),
-         "int_ior": ior, "ext_ior": 1.0, "nonlinear": nonlinear}
+    m = {
+        "type": "plastic" if dist is None else "roughplastic",
+        "diffuse_reflectance": rgb(diffuse),
+        "specular_reflectance": rgb(spec),
+        "int_ior": ior,
+        "ext_ior": 1.0,
+        "nonlinear": nonlinear,
+    }
     ron = "Plastic(diffuse_reflectance: %s, specular_reflectance: %s, ior: %r, nonlinear: %s" % (
-        ron_rgb(diffuse), ron_rgb(spec), ior, "true" if nonlinear else "false")
+        ron_rgb(diffuse),
+        ron_rgb(spec),
+        ior,
+        "true" if nonlinear else "false",
+    )
     if dist is not None:
         m["distribution"] = dist.lower()
         m["alpha"] = alpha
@@ -66,14 +79,12 @@ def plastic(diffuse, spec, ior, nonlinear, dist=None, alpha=None):
 
 
 def rough_dielectric(ior, dist, alpha):
-    m = {"type": "roughdielectric", "int_ior": ior, "ext_ior": 1.0,
-         "distribution": dist.lower(), "alpha": alpha}
+    m = {"type": "roughdielectric", "int_ior": ior, "ext_ior": 1.0, "distribution": dist.lower(), "alpha": alpha}
     return m, "RoughDielectric(ior: %r, roughness: (distribution: %s, alpha: %r))" % (ior, dist, alpha)
 
 
 def thin_dielectric(ior):
-    return ({"type": "thindielectric", "int_ior": ior, "ext_ior": 1.0},
-            "ThinDielectric(ior: %r)" % ior)
+    return ({"type": "thindielectric", "int_ior": ior, "ext_ior": 1.0}, "ThinDielectric(ior: %r)" % ior)
 
 
 def diffuse(c):
@@ -81,8 +92,10 @@ def diffuse(c):
 
 
 def blend(w, a, b):
-    return ({"type": "blendbsdf", "weight": w, "first": a[0], "second": b[0]},
-            "Blend(weight: %r, first: %s, second: %s)" % (w, a[1], b[1]))
+    return (
+        {"type": "blendbsdf", "weight": w, "first": a[0], "second": b[0]},
+        "Blend(weight: %r, first: %s, second: %s)" % (w, a[1], b[1]),
+    )
 
 
 GOLD = ([0.143, 0.374, 1.442], [3.983, 2.385, 1.603])
@@ -123,8 +136,17 @@ def vec(v):
 
 
 def row(kind, mode, wo, wi, u, uc, value, pdf):
-    return ("(kind: %s, mode: %s, wo: %s, wi: %s, u: (%r, %r), uc: %r, value: %s, pdf: %r)"
-            % (kind, mode, vec(wo), vec(wi), u[0], u[1], uc, vec(value), float(pdf)))
+    return "(kind: %s, mode: %s, wo: %s, wi: %s, u: (%r, %r), uc: %r, value: %s, pdf: %r)" % (
+        kind,
+        mode,
+        vec(wo),
+        vec(wi),
+        u[0],
+        u[1],
+        uc,
+        vec(value),
+        float(pdf),
+    )
 
 
 def rows_of(bsdf, transmits):
@@ -141,19 +163,20 @@ def rows_of(bsdf, transmits):
             for wi in targets:
                 if wo[2] < 0:
                     wi = [-x for x in wi]
-                rows.append(row("Eval", name, wo, wi, (0.0, 0.0), 0.0,
-                                bsdf.eval(ctx, si, wi), bsdf.pdf(ctx, si, wi)))
+                rows.append(row("Eval", name, wo, wi, (0.0, 0.0), 0.0, bsdf.eval(ctx, si, wi), bsdf.pdf(ctx, si, wi)))
             if wo[2] > 0:
-                for (u1, u2, uc) in UNIFORM:
+                for u1, u2, uc in UNIFORM:
                     bs, w = bsdf.sample(ctx, si, uc, [u1, u2])
                     rows.append(row("Sample", name, wo, bs.wo, (u1, u2), uc, w, bs.pdf))
     return rows
 
 
 def main():
-    out = ["// Mitsuba %s (scalar_rgb) reference values of the luxest materials, written by" % mi.__version__,
-           "// crates/render/tests/data/mitsuba_bsdf.py; see its docstring.",
-           "["]
+    out = [
+        "// Mitsuba %s (scalar_rgb) reference values of the luxest materials, written by" % mi.__version__,
+        "// crates/render/tests/data/mitsuba_bsdf.py; see its docstring.",
+        "[",
+    ]
     for name, (m, ron) in CASES:
         bsdf = mi.load_dict(m)
         transmits = m["type"] in ("roughdielectric", "thindielectric")

@@ -41,8 +41,20 @@ def bitmap_png():
 
 def uvs():
     """Fixed points: corners, edges, texel centres, outside the unit square on every side."""
-    points = [(0.0, 0.0), (0.5, 0.5), (0.1, 0.9), (1.0, 1.0), (0.999, 0.001), (-0.05, 1.02),
-              (0.3, 1.0 / 6.0), (0.55, 0.49), (1.37, -0.21), (-1.3, 2.7), (2.05, 0.8), (-0.6, -0.45)]
+    points = [
+        (0.0, 0.0),
+        (0.5, 0.5),
+        (0.1, 0.9),
+        (1.0, 1.0),
+        (0.999, 0.001),
+        (-0.05, 1.02),
+        (0.3, 1.0 / 6.0),
+        (0.55, 0.49),
+        (1.37, -0.21),
+        (-1.3, 2.7),
+        (2.05, 0.8),
+        (-0.6, -0.45),
+    ]
     state = 12345
     for _ in range(24):
         pair = []
@@ -61,17 +73,35 @@ def lookups():
                 for t, m in enumerate([[[1, 0, 0], [0, 1, 0]], AFFINE]):
                     # A 4x4 `to_uv` maps (u, v, 0, 1): the translation is its fourth column.
                     to_uv = mi.ScalarTransform4f(
-                        [[m[0][0], m[0][1], 0, m[0][2]], [m[1][0], m[1][1], 0, m[1][2]],
-                         [0, 0, 1, 0], [0, 0, 0, 1]])
-                    tex = mi.load_dict({"type": "bitmap", "filename": os.path.join(HERE, "bitmap.png"),
-                                        "wrap_mode": wrap, "filter_type": filt, "raw": raw,
-                                        "to_uv": to_uv})
+                        [[m[0][0], m[0][1], 0, m[0][2]], [m[1][0], m[1][1], 0, m[1][2]], [0, 0, 1, 0], [0, 0, 0, 1]]
+                    )
+                    tex = mi.load_dict(
+                        {
+                            "type": "bitmap",
+                            "filename": os.path.join(HERE, "bitmap.png"),
+                            "wrap_mode": wrap,
+                            "filter_type": filt,
+                            "raw": raw,
+                            "to_uv": to_uv,
+                        }
+                    )
                     for u, v in uvs():
                         si = mi.SurfaceInteraction3f()
                         si.uv = mi.Point2f(u, v)
                         c = tex.eval(si)
-                        rows.append([wrap, filt, int(raw), t, repr(u), repr(v),
-                                     repr(float(c[0])), repr(float(c[1])), repr(float(c[2]))])
+                        rows.append(
+                            [
+                                wrap,
+                                filt,
+                                int(raw),
+                                t,
+                                repr(u),
+                                repr(v),
+                                repr(float(c[0])),
+                                repr(float(c[1])),
+                                repr(float(c[2])),
+                            ]
+                        )
     with open(os.path.join(HERE, "mitsuba_bitmap.csv"), "w", newline="") as f:
         out = csv.writer(f, lineterminator="\n")
         out.writerow(["wrap", "filter", "raw", "transform", "u", "v", "r", "g", "b"])
@@ -82,13 +112,15 @@ def jpegs():
     rgb = np.zeros((32, 48, 3), dtype=np.uint8)
     for by in range(2):
         for bx in range(3):
-            rgb[16 * by:16 * by + 16, 16 * bx:16 * bx + 16] = BLOCKS[by][bx]
+            rgb[16 * by : 16 * by + 16, 16 * bx : 16 * bx + 16] = BLOCKS[by][bx]
     grey = np.zeros((16, 32, 1), dtype=np.uint8)
     for bx in range(2):
-        grey[:, 16 * bx:16 * bx + 16] = GREY_BLOCKS[bx]
+        grey[:, 16 * bx : 16 * bx + 16] = GREY_BLOCKS[bx]
     rows = []
-    for name, data, fmt in [("pattern.jpg", rgb, mi.Bitmap.PixelFormat.RGB),
-                            ("pattern_grey.jpg", grey, mi.Bitmap.PixelFormat.Y)]:
+    for name, data, fmt in [
+        ("pattern.jpg", rgb, mi.Bitmap.PixelFormat.RGB),
+        ("pattern_grey.jpg", grey, mi.Bitmap.PixelFormat.Y),
+    ]:
         bitmap = mi.Bitmap(data, fmt)
         bitmap.set_srgb_gamma(True)
         path = os.path.join(HERE, name)

@@ -14,8 +14,10 @@ failed = 0
 for path in sorted(glob.glob(os.path.join(here, "*.xml"))):
     try:
         scene = mi.load_file(path)
-        print(f"ok {os.path.basename(path)}: {len(scene.shapes())} shapes, "
-              f"{len(scene.emitters())} emitters, {len(scene.sensors())} sensors")
+        print(
+            f"ok {os.path.basename(path)}: {len(scene.shapes())} shapes, "
+            f"{len(scene.emitters())} emitters, {len(scene.sensors())} sensors"
+        )
     except Exception as e:  # noqa: BLE001 (report every scene)
         failed += 1
         print(f"FAILED {os.path.basename(path)}: {e}")
