@@ -914,6 +914,17 @@ impl World {
         }
     }
 
+    /// [`World::emission`] for scenes without textured emitters: the emitter's constant
+    /// luminance.
+    #[inline]
+    pub fn emission_plain(&self, triangle: u32, ng: Vec3, w: Vec3) -> Option<(u32, Rgb)> {
+        let e = self.emitter_of(triangle)?;
+        match &self.scene.header.emitters[e as usize] {
+            Emitter::Area { radiance_rgb, .. } if ng.dot(w) > 0.0 => Some((e, *radiance_rgb)),
+            _ => None,
+        }
+    }
+
     /// Luminance per channel emitted by the surface at `sp` towards `w` (zero behind the
     /// emitter or off emitters).
     pub fn emitted_radiance(&self, sp: &SurfacePoint, w: Vec3) -> Rgb {

@@ -21,10 +21,11 @@
 //! light point carries the falloff towards the shading point.
 //!
 //! The features manifest selects a monomorphised variant: the code for point sources, area
-//! emitters, specular materials and the environment is compiled out of the variants of scenes
-//! without them.
+//! emitters, specular materials, and for the environment, textures and one-sided surfaces, is
+//! compiled out of the variants of scenes without them.
 
 use luxest_io::color::Rgb;
+use std::borrow::Cow;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
 use luxest_render::rt::Ray;
@@ -62,7 +63,7 @@ fn power_heuristic(a: f64, b: f64) -> f64 {
 pub type Kernel = fn(&World, Vec3, Vec3, &mut PixelSampler, u32, &mut RayLog) -> Rgb;
 
 /// Radiance arriving at `origin` from direction `dir`.
-pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const ENV: bool>(
+pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const EXTRA: bool>(
     world: &World,
     origin: Vec3,
     dir: Vec3,
@@ -89,7 +90,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             });
         }
         let Some(sp) = world.intersect(origin, dir) else {
-            if ENV {
+            if EXTRA && world.environment().is_some() {
                 let le = world.environment_radiance(dir);
                 let w = if delta {
                     1.0
@@ -102,7 +103,12 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
         };
         let wo = -dir;
         if AREA {
-            if let Some((e, le)) = world.emission(&sp, wo) {
+            let emission = if EXTRA {
+                world.emission(&sp, wo)
+            } else {
+                world.emission_plain(sp.triangle, sp.ng, wo)
+            };
+            if let Some((e, le)) = emission {
                 {
                     let w = if delta {
                         1.0
@@ -116,7 +122,11 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 }
             }
         }
-        let m = world.material_seen(&sp, wo);
+        let m = if EXTRA {
+            world.material_seen(&sp, wo)
+        } else {
+            Cow::Borrowed(world.material(sp.triangle))
+        };
         let m = &*m;
         let is_delta = SPECULAR && bsdf::is_delta(m);
         if !is_delta && (POINT || AREA) {
@@ -162,12 +172,9 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 }
             }
         }
-        if ENV && !is_delta {
+        if let (true, false, Some(env)) = (EXTRA, is_delta, world.environment()) {
             // Next-event estimation of the environment: one direction from its map, besides
             // the light point above.
-            let env = world
-                .environment()
-                .expect("ENV variants are for scenes with one");
             let (u1, u2) = rng.next_2d();
             let es = env.sample(u1, u2);
             let w = es.direction;
@@ -219,7 +226,8 @@ pub fn kernel_for(world: &World) -> Kernel {
     // A luminaire is a delta light like an isotropic point: the same next-event code serves
     // it (`sample_light_point` returns its intensity towards the receiver).
     let delta_lights = f.point_emitters || f.goniometric_luminaires;
-    let env = f.environment;
+    // Textures, one-sided surfaces and the environment: compiled out where the scene has none.
+    let env = f.environment || f.textures || f.one_sided;
     match (delta_lights, f.area_emitters, f.specular_paths) {
         (true, true, true) => with_environment::<true, true, true>(env),
         (true, true, false) => with_environment::<true, true, false>(env),
@@ -232,7 +240,7 @@ pub fn kernel_for(world: &World) -> Kernel {
     }
 }
 
-/// The variant with or without the environment's code.
+/// The variant with or without the code for the environment, textures and one-sided surfaces.
 fn with_environment<const POINT: bool, const AREA: bool, const SPECULAR: bool>(
     env: bool,
 ) -> Kernel {
