@@ -72,7 +72,7 @@ fn trace_film(scene: &Path, spp: u32) -> (luxest_render::camera::PinholeCamera, 
     let (world, cam) = trace::load(scene, None).unwrap();
     let mut film = Film::new(cam.width as usize, cam.height as usize);
     {
-        let r = Renderer::new(&world, cam.clone(), 1, 2, 1024);
+        let r = Renderer::new(&world, cam, 1, 2, 1024);
         r.advance(&mut film, spp, false, &Progress::off());
     }
     (cam, film)

@@ -117,7 +117,7 @@ def test_generated_rooms_use_the_library(tmp_path):
         for image in re.findall(r'path: "([^"]*\.png)"', text):
             assert image.startswith("../textures/") and image[12:-4] in textures.NAMES, (path, image)
             used.add(image[12:-4])
-        scales |= set(re.findall(r"UvTransform\(\(\(([-\d.]+), ([-\d.]+)", text))
+        scales |= set(re.findall(r"uv_transform: \(\(([-\d.]+), ([-\d.]+)", text))
         surfaced = set(re.findall(r'^\s+"(m\d+)": \(color:', text, re.M))
         spheres = set(re.findall(r'shape: Sphere\(.*material: "(m\d+)"', text))
         assert surfaced and not surfaced & spheres, path

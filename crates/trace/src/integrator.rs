@@ -25,13 +25,13 @@
 //! compiled out of the variants of scenes without them.
 
 use luxest_io::color::Rgb;
-use std::borrow::Cow;
 use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
 use luxest_render::rt::Ray;
 use luxest_render::sampling::Sampler;
 use luxest_render::sobol::PixelSampler;
 use luxest_render::world::World;
+use std::borrow::Cow;
 
 /// Rays traced, for rates; optionally every ray, to time raw Embree on the same rays.
 #[derive(Default)]
