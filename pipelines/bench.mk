@@ -117,7 +117,11 @@ bench-slurm: $(SCENE_COMPILE) $(TRACE) $(AOV_WRITE) $(ESTIMATE) $(VENV)/$(VENV_S
 # reports/bench/scenes.md. Fails where they disagree beyond noise.
 BENCH_SCENES_SPP ?= 4096
 BENCH_SCENES_RESOLUTION ?= 256x192
-PUBLIC_SCENES := $(wildcard scenes/public/*/scene.xml)
+# Public scenes: scenes/public/<name>/scene.xml, or any Mitsuba 3 XML files given on the command
+# line (`make bench-scenes PUBLIC_SCENES="…/docs/scenes/bsdf_conductor_gold.xml …"`, named after
+# their file).
+PUBLIC_SCENES ?= $(wildcard scenes/public/*/scene.xml)
+public_name = $(if $(filter scene.xml,$(notdir $(1))),$(notdir $(patsubst %/,%,$(dir $(1)))),$(basename $(notdir $(1))))
 
 .PHONY: bench-scenes
 
@@ -125,6 +129,6 @@ reports/bench/scenes.md: pipelines/bench_scenes.py $(SCENE_COMPILE) $(TRACE) $(P
 	@test -x $(PEERS_PYTHON) || { echo "error: $(PEERS_PYTHON) missing: run scripts/setup.sh --no-python --no-ort --peers" >&2; exit 1; }
 	$(PEERS_PYTHON) pipelines/bench_scenes.py --bins $(RELEASE) --work-dir build/bench/scenes \
 		--spp $(BENCH_SCENES_SPP) --resolution $(BENCH_SCENES_RESOLUTION) \
-		$(foreach s,$(PUBLIC_SCENES),--scene $(notdir $(patsubst %/,%,$(dir $(s))))=$(s)) -o $@
+		$(foreach s,$(PUBLIC_SCENES),--scene $(call public_name,$(s))=$(s)) -o $@
 
 bench-scenes: reports/bench/scenes.md

@@ -295,12 +295,14 @@ def read_exr(path):
     return np.array(mi.Bitmap(str(path)), dtype=np.float64)
 
 
-def luxest(bins, xml, work, spp):
-    """Imports and path-traces the scene: (Y image, its per-pixel standard error, CPU s, triangles)."""
+def luxest(bins, xml, work, spp, resolution=None):
+    """Imports and path-traces the scene (at `resolution`, "WxH", if given): (Y image, its
+    per-pixel standard error, CPU s, triangles)."""
     lxs = work / "scene.lxs"
     compile_cpu = child_cpu([bins / "scene-compile", xml, "-o", lxs, "-q"])
     prefix = work / "luxest"
-    cpu = child_cpu([bins / "trace", lxs, "--spp", spp, "--seed", LUXEST_SEED, "--stderr", "-o", prefix, "-q"])
+    size = ["--resolution", resolution] if resolution else []
+    cpu = child_cpu([bins / "trace", lxs, "--spp", spp, "--seed", LUXEST_SEED, "--stderr", "-o", prefix, "-q", *size])
     name = prefix.name
     y = luminance(read_exr(work / image_name(name, "hdr", spp))[..., :3])
     se = read_exr(work / image_name(name, "se", spp))[..., 0]
@@ -317,18 +319,57 @@ def integrator_of(xml_text):
     return "volpath" if '<bsdf type="mask"' in xml_text else "path"
 
 
-def mitsuba(xml, spp, variant):
-    """Mitsuba renders of the same file (box filter, `path` with unbounded depth), REPS runs
-    with distinct seeds: (their mean Y, the per-run Y images, CPU s)."""
+def flattened(path, depth=0):
+    """The text of a Mitsuba scene file with its `<include>`s inlined (their `<scene>` roots
+    dropped) and every `<path>` made absolute, so that the film can be edited wherever it is."""
+    path = Path(path).resolve()
+    text = path.read_text()
+    text = re.sub(
+        r'<path\s+value="([^"]*)"\s*/>',
+        lambda m: f'<path value="{(path.parent / m.group(1)).resolve()}"/>',
+        text,
+    )
+
+    def inline(m):
+        if depth > 15:
+            sys.exit(f"error: {path}: includes nested more than 15 deep")
+        inner = flattened(path.parent / m.group(1), depth + 1)
+        inner = re.sub(r"<\?xml[^>]*\?>", "", inner)
+        return re.sub(r"^\s*<scene[^>]*>|</scene>\s*$", "", inner.strip())
+
+    return re.sub(r'<include\s+filename="([^"]*)"\s*/>', inline, text)
+
+
+def film_size(text):
+    """The (width, height) of a flattened scene's film."""
+    film = re.search(r'<film type="hdrfilm"[^>]*>(.*?)</film>', text, re.S)
+    size = {k: int(v) for k, v in re.findall(r'<integer name="(width|height)" value="(\d+)"\s*/>', film.group(1))}
+    return size.get("width", 768), size.get("height", 576)
+
+
+def mitsuba(xml, spp, variant, resolution=None):
+    """Mitsuba renders of the same file (includes inlined; box filter; the film resized to
+    `resolution` if given; `path` with unbounded depth, or `volpath`), REPS runs with distinct
+    seeds: (their mean Y, the per-run Y images, CPU s, the integrator)."""
     import drjit as dr
     import mitsuba as mi
 
     mi.set_variant(variant)
-    text = Path(xml).read_text()
+    text = flattened(xml)
     # luxest integrates each pixel's area: Mitsuba's film gets a box filter.
     text = re.sub(r"<rfilter[^>]*/>", "", text)
-    text = re.sub(r'(<film type="hdrfilm">)', r'\1<rfilter type="box"/>', text)
-    mi.file_resolver().prepend(str(Path(xml).parent))
+    text = re.sub(r'(<film type="hdrfilm"[^>]*>)', r'\1<rfilter type="box"/>', text)
+    if resolution:
+        w, h = resolution.split("x")
+        for name, v in (("width", w), ("height", h)):
+            text = re.sub(
+                rf'(<film type="hdrfilm"[^>]*>.*?<integer name="{name}" value=")\d+(")',
+                rf"\g<1>{v}\g<2>",
+                text,
+                count=1,
+                flags=re.S,
+            )
+    mi.file_resolver().prepend(str(Path(xml).resolve().parent))
     t = time.process_time()
     scene = mi.load_string(text)
     integrator = mi.load_dict({"type": integrator_of(text), "max_depth": -1, "rr_depth": 5})
@@ -388,6 +429,12 @@ def main(argv=None):
     ap.add_argument("--scene", action="append", default=[], help="NAME=PATH of a public Mitsuba 3 scene")
     ap.add_argument("--spp", type=int, default=1024)
     ap.add_argument("--resolution", default="256x192", help="of the scenes this script writes")
+    ap.add_argument(
+        "--public-pixels",
+        type=int,
+        default=256 * 192,
+        help="public scenes are rendered at about this many pixels, their film's aspect kept",
+    )
     ap.add_argument("--variant", default="llvm_ad_rgb")
     ap.add_argument("-o", "--out", required=True)
     a = ap.parse_args(argv)
@@ -401,11 +448,17 @@ def main(argv=None):
         name, _, path = s.partition("=")
         scenes[name] = Path(path)
     rows, failures = [], []
+    public = {name for name, _ in (s.partition("=")[::2] for s in a.scene)}
     for name, xml in scenes.items():
         d = work / name
         d.mkdir(parents=True, exist_ok=True)
-        y_l, se_l, cpu_l, tris = luxest(bins, xml, d, a.spp)
-        y_m, runs, cpu_m, integrator = mitsuba(xml, a.spp, a.variant)
+        size = None
+        if name in public:
+            fw, fh = film_size(flattened(xml))
+            k = math.sqrt(a.public_pixels / (fw * fh))
+            size = f"{max(1, round(fw * k))}x{max(1, round(fh * k))}"
+        y_l, se_l, cpu_l, tris = luxest(bins, xml, d, a.spp, size)
+        y_m, runs, cpu_m, integrator = mitsuba(xml, a.spp, a.variant, size)
         c = compare(y_l, se_l, y_m, runs)
         rows.append((name, tris, cpu_l, cpu_m, c, integrator))
         if abs(c["z"]) > 3 or c["max_z"] > 4.5:

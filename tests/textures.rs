@@ -597,3 +597,63 @@ fn a_blend_of_mirror_and_matte_in_a_white_furnace_is_exact() {
     }
     assert!(checked >= 40, "{checked}");
 }
+
+#[test]
+fn an_imported_checkerboard_is_mitsubas() {
+    // Mitsuba 3's checkerboard (src/textures/checkerboard.cpp): color0 where uv − ⌊uv⌋ > ½ holds
+    // for both coordinates or for neither, color1 elsewhere, after to_uv. Imported from XML and
+    // looked up at the hit's texture coordinates, away from the lines where the halves meet.
+    let dir = TempDir::new("checkerboard");
+    let xml = dir.write(
+        "checker.xml",
+        r#"<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+  <shape type="rectangle">
+    <bsdf type="twosided"><bsdf type="diffuse">
+      <texture type="checkerboard" name="reflectance">
+        <rgb name="color0" value="0.8, 0.7, 0.6"/><rgb name="color1" value="0.1, 0.2, 0.3"/>
+        <transform name="to_uv"><scale x="3" y="2"/></transform>
+      </texture></bsdf></bsdf>
+  </shape>
+  <emitter type="point"><point name="position" value="0, 0, 2"/><rgb name="intensity" value="1, 1, 1"/></emitter>
+</scene>"#,
+    );
+    let out = dir.path().join("checker.lxs");
+    scene_compile(&[xml.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"]).unwrap();
+    let world = World::new(CompiledScene::load(&out).unwrap()).unwrap();
+    let frac = |x: f64| x - x.floor();
+    for &(u, v) in &[
+        (0.05, 0.05),
+        (0.2, 0.1),
+        (0.4, 0.6),
+        (0.7, 0.9),
+        (0.95, 0.3),
+        (0.55, 0.45),
+    ] {
+        let (su, sv) = (3.0 * u, 2.0 * v);
+        if [su, sv]
+            .iter()
+            .any(|&x| (frac(x) - 0.5).abs() < 1e-6 || frac(x) < 1e-6)
+        {
+            continue;
+        }
+        let same = (frac(su) > 0.5) == (frac(sv) > 0.5);
+        let expected = if same {
+            [0.8, 0.7, 0.6]
+        } else {
+            [0.1, 0.2, 0.3]
+        };
+        let m = world.material_at(0, [u, v], luxest_io::math::Vec3::new(0.0, 0.0, 1.0));
+        let luxest_render::scene::Material::Lambertian { reflectance } = &*m else {
+            panic!("a diffuse material: {m:?}")
+        };
+        for c in 0..3 {
+            assert!(
+                (reflectance.0[c] - expected[c]).abs() < 1e-6,
+                "uv ({u}, {v}): {reflectance:?} vs {expected:?}"
+            );
+        }
+    }
+}

@@ -48,12 +48,18 @@ pub struct Scene {
     pub environment: Option<Environment>,
 }
 
-/// A bitmap texture: a PNG, JPEG or EXR file and how it is looked up.
+/// A texture: a PNG, JPEG or EXR file (or a checkerboard) and how it is looked up.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TextureDesc {
-    /// Image file, relative to the scene file.
+    /// Image file, relative to the scene file (empty for a checkerboard).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub path: String,
+    /// Instead of a file: Mitsuba 3's `checkerboard`, the first colour where u and v (after
+    /// `uv_transform`) lie in the same half of their unit interval, the second elsewhere
+    /// (linear RGB).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checkerboard: Option<[Rgb; 2]>,
     /// How stored values become linear ones; default: sRGB for PNG and JPEG, linear for EXR.
     #[serde(default)]
     pub encoding: Option<crate::texture::Encoding>,

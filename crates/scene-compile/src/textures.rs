@@ -4,11 +4,13 @@
 use crate::validate::Check;
 use luxest_io::color::Rgb;
 use luxest_io::num::show;
+use luxest_io::texture_image::{ImageFormat, Samples, TextureImage};
+use luxest_io::Error;
 use luxest_io::Result;
 use luxest_render::compiled::{CompiledOpacity, CompiledSurface, TextureInfo};
 use luxest_render::sampling::uniform_triangle;
 use luxest_render::scene::{Emission, Material, Scene, Surface, TextureDesc};
-use luxest_render::texture::{Texture, TextureOptions};
+use luxest_render::texture::{Filter, Texture, TextureOptions, Wrap};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -16,8 +18,31 @@ use std::path::Path;
 /// texture named exists, opacities and cut-offs lie in [0, 1].
 pub(crate) fn check(c: &Check, scene: &Scene) -> Result<()> {
     for (name, t) in &scene.textures {
-        if t.path.is_empty() {
-            return Err(c.fail(&format!("textures[\"{name}\"].path"), "is empty"));
+        match (&t.checkerboard, t.path.is_empty()) {
+            (None, true) => {
+                return Err(c.fail(
+                    &format!("textures[\"{name}\"]"),
+                    "needs a path (or a checkerboard)",
+                ))
+            }
+            (Some(_), false) => {
+                return Err(c.fail(
+                    &format!("textures[\"{name}\"]"),
+                    "has both a path and a checkerboard",
+                ))
+            }
+            (Some(colors), true) => {
+                for (k, color) in colors.iter().enumerate() {
+                    c.rgb_in(
+                        &format!("textures[\"{name}\"].checkerboard[{k}]"),
+                        *color,
+                        0.0,
+                        f64::MAX,
+                        "checkerboard colour",
+                    )?;
+                }
+            }
+            (None, false) => {}
         }
         if let Some(m) = &t.uv_transform {
             if !m.0.iter().flatten().all(|v| v.is_finite()) {
@@ -129,15 +154,25 @@ pub fn load(path: &Path, scene: &Scene, warnings: &mut Vec<String>) -> Result<Lo
             warnings.push(format!("{}: textures[\"{name}\"]: unused", path.display()));
             continue;
         }
-        let place = format!("textures[\"{name}\"].path");
-        let file = crate::resolve_file(path, &place, &desc.path, "texture")?;
-        let texture = load_one(&file, desc)?;
+        let texture = match &desc.checkerboard {
+            Some(colors) => checkerboard(colors, desc)
+                .map_err(|m| Error::at(path, format!("textures[\"{name}\"]"), m))?,
+            None => {
+                let place = format!("textures[\"{name}\"].path");
+                let file = crate::resolve_file(path, &place, &desc.path, "texture")?;
+                load_one(&file, desc)?
+            }
+        };
         loaded
             .index
             .insert(name.clone(), loaded.textures.len() as u32);
         loaded.infos.push(TextureInfo {
             name: name.clone(),
-            source: desc.path.clone(),
+            source: if desc.checkerboard.is_some() {
+                "checkerboard".into()
+            } else {
+                desc.path.clone()
+            },
             width: texture.width() as u32,
             height: texture.height() as u32,
         });
@@ -156,6 +191,29 @@ fn load_one(file: &Path, desc: &TextureDesc) -> Result<Texture> {
         uv_transform: desc.uv_transform.unwrap_or_default(),
     };
     Texture::load(file, &options)
+}
+
+/// Mitsuba 3's `checkerboard` as a texture: 2 × 2 texels (first, second; second, first) looked
+/// up by the nearest texel and repeated, which is the checkerboard exactly (each half of the
+/// unit interval is one texel; Mitsuba's `uv − ⌊uv⌋ > ½` and the nearest texel differ only on
+/// the lines u, v = ½).
+fn checkerboard(colors: &[Rgb; 2], desc: &TextureDesc) -> std::result::Result<Texture, String> {
+    let [a, b] = colors.map(|c| c.0.map(|v| v as f32));
+    let samples = [a, b, b, a].concat();
+    let image = TextureImage {
+        width: 2,
+        height: 2,
+        channels: 3,
+        samples: Samples::F32(samples),
+        format: ImageFormat::Exr,
+    };
+    let options = TextureOptions {
+        encoding: None,
+        wrap: Wrap::Repeat,
+        filter: Filter::Nearest,
+        uv_transform: desc.uv_transform.unwrap_or_default(),
+    };
+    Texture::from_image(&image, &options)
 }
 
 /// The compiled surface of every material, in the materials' order; empty when no material

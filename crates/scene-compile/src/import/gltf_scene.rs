@@ -100,6 +100,7 @@ fn texture(
         _ => Filter::Bilinear,
     };
     let desc = TextureDesc {
+        checkerboard: None,
         path: scene_relative(&full, path),
         encoding,
         wrap: ws,

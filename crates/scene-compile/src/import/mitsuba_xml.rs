@@ -1282,25 +1282,42 @@ impl<'a> Importer<'a> {
             return Ok(n.clone());
         }
         let plugin = e.attr("type").unwrap_or("");
-        if plugin != "bitmap" {
-            return Err(self.fail(e, format!("unsupported texture \"{plugin}\" (only bitmap)")));
+        if plugin != "bitmap" && plugin != "checkerboard" {
+            return Err(self.fail(
+                e,
+                format!("unsupported texture \"{plugin}\" (bitmap and checkerboard are)"),
+            ));
         }
         let r = self.reader(e)?;
-        let file = r
-            .string("filename")?
-            .ok_or_else(|| self.fail(e, "needs a filename (bitmap data is not supported)"))?;
-        let path = self.resolve_file(e, &file)?;
-        let raw = r.boolean("raw", false)?;
-        let wrap = match r.string("wrap_mode")?.as_deref().unwrap_or("repeat") {
-            "repeat" => Wrap::Repeat,
-            "mirror" => Wrap::Mirror,
-            "clamp" => Wrap::Clamp,
-            other => return Err(self.fail(e, format!("unknown wrap_mode \"{other}\""))),
+        let checker = plugin == "checkerboard";
+        let (file, path, checkerboard) = if checker {
+            // Mitsuba's defaults: color0 0.4, color1 0.2.
+            let colors = [r.color("color0", 0.4)?, r.color("color1", 0.2)?];
+            ("checkerboard".to_string(), String::new(), Some(colors))
+        } else {
+            let file = r
+                .string("filename")?
+                .ok_or_else(|| self.fail(e, "needs a filename (bitmap data is not supported)"))?;
+            let path = self.resolve_file(e, &file)?;
+            (file, path, None)
         };
-        let filter = match r.string("filter_type")?.as_deref().unwrap_or("bilinear") {
-            "bilinear" => Filter::Bilinear,
-            "nearest" => Filter::Nearest,
-            other => return Err(self.fail(e, format!("unknown filter_type \"{other}\""))),
+        let raw = !checker && r.boolean("raw", false)?;
+        // A checkerboard has neither (its nearest 2 × 2 texels repeat).
+        let (wrap, filter) = if checker {
+            (Wrap::Repeat, Filter::Nearest)
+        } else {
+            let wrap = match r.string("wrap_mode")?.as_deref().unwrap_or("repeat") {
+                "repeat" => Wrap::Repeat,
+                "mirror" => Wrap::Mirror,
+                "clamp" => Wrap::Clamp,
+                other => return Err(self.fail(e, format!("unknown wrap_mode \"{other}\""))),
+            };
+            let filter = match r.string("filter_type")?.as_deref().unwrap_or("bilinear") {
+                "bilinear" => Filter::Bilinear,
+                "nearest" => Filter::Nearest,
+                other => return Err(self.fail(e, format!("unknown filter_type \"{other}\""))),
+            };
+            (wrap, filter)
         };
         let mut to_uv = r.transform("to_uv")?;
         // Mitsuba's upgrade of version < 2 files: uoffset, voffset, uscale, vscale become
@@ -1319,10 +1336,12 @@ impl<'a> Importer<'a> {
                 to_uv = Affine::scale(scale).compose(&Affine::translate(offset));
             }
         }
-        r.boolean("accel", true)?;
-        if let Some(f) = r.string("format")? {
-            if f != "auto" {
-                return Err(self.fail(e, format!("format \"{f}\" is not supported")));
+        if !checker {
+            r.boolean("accel", true)?;
+            if let Some(f) = r.string("format")? {
+                if f != "auto" {
+                    return Err(self.fail(e, format!("format \"{f}\" is not supported")));
+                }
             }
         }
         r.done()?;
@@ -1351,6 +1370,7 @@ impl<'a> Importer<'a> {
             name.clone(),
             TextureDesc {
                 path,
+                checkerboard,
                 // raw: the stored values as they are; otherwise the file's own encoding.
                 encoding: raw.then_some(Encoding::Linear),
                 wrap,

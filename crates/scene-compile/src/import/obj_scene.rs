@@ -204,6 +204,7 @@ fn material(
         }
         let path = scene_relative(&full, scene_file);
         textures.entry(path.clone()).or_insert(TextureDesc {
+            checkerboard: None,
             path: path.clone(),
             encoding: None,
             wrap: Wrap::Repeat,
