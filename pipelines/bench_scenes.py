@@ -18,10 +18,8 @@ Standard library and numpy for the scenes it writes; deterministic."""
 
 import argparse
 import math
-import os
 import re
 import struct
-import subprocess
 import sys
 import time
 import zlib
@@ -34,7 +32,9 @@ from luxest_contract import image_name, luminance  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from atomic import write_text  # noqa: E402
+from bench_pt import child_cpu  # noqa: E402
 from host import host_summary  # noqa: E402
+from mitsuba_render import read_exr  # noqa: E402
 
 REPS = 8
 BLOCKS = 16
@@ -279,32 +279,18 @@ def write_scenes(d, w, h):
 # ---- rendering and comparison --------------------------------------------------------------
 
 
-def child_cpu(cmd):
-    """Runs `cmd`; returns its user + system CPU seconds."""
-    r0 = os.times()
-    p = subprocess.run([str(c) for c in cmd], capture_output=True, text=True)
-    r1 = os.times()
-    if p.returncode != 0:
-        sys.exit(f"error: {' '.join(map(str, cmd))} failed:\n{p.stderr.strip()}")
-    return (r1.children_user - r0.children_user) + (r1.children_system - r0.children_system)
-
-
-def read_exr(path):
-    import mitsuba as mi
-
-    return np.array(mi.Bitmap(str(path)), dtype=np.float64)
-
-
 def luxest(bins, xml, work, spp, resolution=None):
     """Imports and path-traces the scene (at `resolution`, "WxH", if given): (Y image, its
     per-pixel standard error, CPU s, triangles)."""
     lxs = work / "scene.lxs"
-    compile_cpu = child_cpu([bins / "scene-compile", xml, "-o", lxs, "-q"])
+    compile_cpu, _ = child_cpu([bins / "scene-compile", xml, "-o", lxs, "-q"])
     prefix = work / "luxest"
     size = ["--resolution", resolution] if resolution else []
-    cpu = child_cpu([bins / "trace", lxs, "--spp", spp, "--seed", LUXEST_SEED, "--stderr", "-o", prefix, "-q", *size])
+    cpu, _ = child_cpu(
+        [bins / "trace", lxs, "--spp", spp, "--seed", LUXEST_SEED, "--stderr", "-o", prefix, "-q", *size]
+    )
     name = prefix.name
-    y = luminance(read_exr(work / image_name(name, "hdr", spp))[..., :3])
+    y = luminance(read_exr(work / image_name(name, "hdr", spp)))
     se = read_exr(work / image_name(name, "se", spp))[..., 0]
     # The compiled scene's RON header states the triangle count.
     tri = re.search(rb"triangles: (\d+)", lxs.read_bytes()[: 1 << 20])

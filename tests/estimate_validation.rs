@@ -727,7 +727,7 @@ fn images_are_bit_identical_at_any_thread_count() {
 /// Exact illuminance at a point a distance `d` below the centre of a uniform square emitter of
 /// side `a` and luminance `l`, facing it (the view factor of a parallel rectangle, four
 /// corner rectangles of side a/2).
-fn below_square_emitter(l: f64, a: f64, d: f64) -> f64 {
+pub(crate) fn below_square_emitter(l: f64, a: f64, d: f64) -> f64 {
     let (x, y) = (0.5 * a / d, 0.5 * a / d);
     let corner = (x / (1.0 + x * x).sqrt() * (y / (1.0 + x * x).sqrt()).atan()
         + y / (1.0 + y * y).sqrt() * (x / (1.0 + y * y).sqrt()).atan())

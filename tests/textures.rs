@@ -2,6 +2,7 @@
 //! each textured result is compared with what the same scene gives untextured with the
 //! texel's value (an identity the texture lookup must keep), or with the exact direct light.
 
+use crate::estimate_validation::below_square_emitter;
 use crate::util::{compile_text, scene_compile, TempDir};
 use estimate::local_estimate::{self as local, LocalConfig, Singularity};
 use estimate::sensor_batches::Batches;
@@ -206,16 +207,6 @@ fn light_tracing_and_the_double_local_estimate_see_the_texture() {
             );
         }
     }
-}
-
-/// Illuminance a distance `d` below the centre of a uniform square emitter of side `a` and
-/// luminance `l` (four corner rectangles of a parallel rectangle's view factor).
-fn below_square_emitter(l: f64, a: f64, d: f64) -> f64 {
-    let (x, y) = (0.5 * a / d, 0.5 * a / d);
-    let corner = (x / (1.0 + x * x).sqrt() * (y / (1.0 + x * x).sqrt()).atan()
-        + y / (1.0 + y * y).sqrt() * (x / (1.0 + y * y).sqrt()).atan())
-        / (2.0 * PI);
-    l * PI * 4.0 * corner
 }
 
 #[test]

@@ -211,7 +211,7 @@ fn max_expansion(compression: ::exr::compression::Compression) -> u128 {
 /// available (with the RGB copy this reader makes), and the file must be long enough to hold at
 /// least the table of chunk offsets the header implies (8 bytes per chunk). A few hundred bytes
 /// claiming 100000² pixels are refused here instead of aborting in the allocator.
-pub(crate) fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
+fn check_exr_size(path: &Path, bytes: &[u8]) -> Result<()> {
     let meta = ::exr::meta::MetaData::read_from_buffered(bytes, false)
         .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
     let mut chunks: u128 = 0;
@@ -276,17 +276,27 @@ pub fn read_rgb(path: &Path) -> Result<RgbImage> {
     read_rgb_bytes(path, bytes)
 }
 
-/// [`read_rgb`] of a file's content `bytes`; `path` names it in errors.
-pub fn read_rgb_bytes(path: &Path, bytes: Vec<u8>) -> Result<RgbImage> {
+/// An EXR's first valid layer at its largest resolution, every channel as stored (its size
+/// checked against the file's bytes first): what [`read_rgb_bytes`] and the texture decoder
+/// read.
+pub(crate) fn read_first_layer(
+    path: &Path,
+    bytes: Vec<u8>,
+) -> Result<::exr::image::Image<::exr::image::Layer<::exr::image::AnyChannels<FlatSamples>>>> {
     check_exr_size(path, &bytes)?;
-    let image = read()
+    read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .first_valid_layer()
         .all_attributes()
         .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
+        .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))
+}
+
+/// [`read_rgb`] of a file's content `bytes`; `path` names it in errors.
+pub fn read_rgb_bytes(path: &Path, bytes: Vec<u8>) -> Result<RgbImage> {
+    let image = read_first_layer(path, bytes)?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.width(), layer.size.height());
     let names: Vec<String> = layer

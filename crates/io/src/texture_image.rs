@@ -289,16 +289,8 @@ pub fn decode_jpeg(path: &Path, bytes: &[u8]) -> Result<TextureImage> {
 /// Decodes an OpenEXR image's first layer at its largest resolution: channels R, G, B (and A if
 /// present), or Y (and A). Every value must be finite.
 pub fn decode_exr(path: &Path, bytes: Vec<u8>) -> Result<TextureImage> {
-    use ::exr::prelude::{FlatSamples, ReadChannels, ReadLayers};
-    crate::exr::check_exr_size(path, &bytes)?;
-    let image = ::exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(|e| Error::input(path, format!("not a readable OpenEXR file: {e}")))?;
+    use ::exr::prelude::FlatSamples;
+    let image = crate::exr::read_first_layer(path, bytes)?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.width(), layer.size.height());
     check_size(path, (width as u64, height as u64), 16, false)?;

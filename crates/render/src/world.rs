@@ -126,14 +126,8 @@ fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
         };
         let mut alpha = *value;
         if let Some(t) = texture {
-            let [a, b, c] = indices[prim as usize].map(|i| uvs[i as usize]);
-            let (u, v) = (u as f64, v as f64);
-            let w = 1.0 - u - v;
-            let uv = [
-                a[0] as f64 * w + b[0] as f64 * u + c[0] as f64 * v,
-                a[1] as f64 * w + b[1] as f64 * u + c[1] as f64 * v,
-            ];
-            alpha *= opacity(t, uv, *channel);
+            let corners = indices[prim as usize].map(|i| uvs[i as usize]);
+            alpha *= opacity(t, interpolate_uv(corners, u as f64, v as f64), *channel);
         }
         match cutoff {
             Some(c) => alpha >= *c,
@@ -148,6 +142,13 @@ fn opacity_mask(scene: &CompiledScene) -> Box<crate::rt::Mask> {
             }
         }
     })
+}
+
+/// The texture coordinates at barycentric (u, v) of a triangle whose corners have `corners`.
+#[inline]
+fn interpolate_uv([a, b, c]: [[f32; 2]; 3], u: f64, v: f64) -> [f64; 2] {
+    let w = 1.0 - u - v;
+    [0, 1].map(|k| a[k] as f64 * w + b[k] as f64 * u + c[k] as f64 * v)
 }
 
 /// A texture's opacity at `uv` read from `channel`.
@@ -500,12 +501,7 @@ impl World {
             return [0.0, 0.0];
         }
         let idx = self.scene.indices[triangle as usize];
-        let [a, b, c] = idx.map(|i| self.scene.uvs[i as usize]);
-        let w = 1.0 - u - v;
-        [
-            a[0] as f64 * w + b[0] as f64 * u + c[0] as f64 * v,
-            a[1] as f64 * w + b[1] as f64 * u + c[1] as f64 * v,
-        ]
+        interpolate_uv(idx.map(|i| self.scene.uvs[i as usize]), u, v)
     }
 
     pub fn emitter_of(&self, triangle: u32) -> Option<u32> {
