@@ -209,6 +209,28 @@ fn degenerate_triangles_are_dropped_with_a_count() {
         report.warnings
     );
     assert!((compiled.header.stats.total_area_m2 - 1.0).abs() < 1e-6);
+
+    // An object with nothing but degenerate triangles is dropped with a warning; an emitting
+    // one is an error.
+    dir.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    let objs = format!(r#"{obj} (name: "flat", shape: Obj(path: "flat.obj"), material: "w"),"#);
+    let path = dir.write("scene2.ron", scene(MATERIALS, &objs, LIGHT));
+    let (compiled, report) = scene_compile::compile_file(&path).unwrap();
+    assert_eq!(compiled.header.stats.triangles, 2);
+    assert!(
+        report
+            .warnings
+            .iter()
+            .any(|w| w.contains("objects[1] (flat): dropped: no non-degenerate triangles")),
+        "{:?}",
+        report.warnings
+    );
+    let emitting = r#"(name: "flat", shape: Obj(path: "flat.obj"), material: "w", emission: Radiance((1.0, 1.0, 1.0))),"#;
+    let msg = expect_error(
+        &scene(MATERIALS, &format!("{FLOOR} {emitting}"), LIGHT),
+        &[("flat.obj", b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n")],
+    );
+    assert_has(&msg, &["objects[1]", "emitting object has no non-degenerate triangles"]);
 }
 
 #[test]

@@ -421,11 +421,20 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
             ));
         }
         if count == 0 {
-            return Err(Error::at(
-                path,
-                &place,
-                "object has no non-degenerate triangles",
+            // Nothing of it can be hit: an imported scene may carry such a mesh (Mitsuba renders
+            // nothing for it); an emitter without area is an error.
+            if o.emission.is_some() {
+                return Err(Error::at(
+                    path,
+                    &place,
+                    "emitting object has no non-degenerate triangles",
+                ));
+            }
+            report.warnings.push(format!(
+                "{}: {place} ({name}): dropped: no non-degenerate triangles",
+                path.display()
             ));
+            continue;
         }
         if let Some(e) = &o.emission {
             let mut texture = None;

@@ -900,8 +900,9 @@ fn version_0_6_scenes_get_mitsubas_upgrade() {
     std::fs::write(
         d.join("old.xml"),
         r#"<scene version="0.6.0">
+    <default name="shiftX" value="1"/>
     <shape type="rectangle" id="wall">
-        <transform name="toWorld"><translate x="1"/></transform>
+        <transform name="toWorld"><translate x="$shiftX"/></transform>
         <bsdf type="diffuse">
             <texture type="bitmap" name="diffuseReflectance">
                 <string name="filename" value="wood.png"/>
@@ -922,13 +923,15 @@ fn version_0_6_scenes_get_mitsubas_upgrade() {
         &affine(&wall.transform.matrix),
         &Affine::translate(Vec3::new(1.0, 0.0, 0.0))
     ));
-    // diffuseReflectance → reflectance (the texture's colour); uv' = scale · (uv + offset).
+    // A `<default>` keeps its name as written (Mitsuba upgrades property names only), so
+    // `$shiftX` resolves; diffuseReflectance → reflectance (the texture's colour);
+    // uv' = scale · (uv + offset).
     assert_eq!(
         s.surfaces[&wall.material].color.as_deref(),
-        Some("wood.png@old:5")
+        Some("wood.png@old:6")
     );
     assert_eq!(
-        s.textures["wood.png@old:5"].uv_transform,
+        s.textures["wood.png@old:6"].uv_transform,
         Some(UvTransform([[2.0, 0.0, 0.5], [0.0, 3.0, 0.0]]))
     );
     std::fs::remove_dir_all(&d).unwrap();

@@ -284,7 +284,9 @@ impl Parser {
         let mut attrs = Vec::new();
         for a in node.attributes() {
             let mut v = self.substitute(a.value(), file, line)?;
-            if upgrade && a.name() == "name" {
+            // Mitsuba upgrades the names of properties; a `<default>`'s name is a parameter's
+            // and stays as written (`$photonCount` finds `<default name="photonCount">`).
+            if upgrade && a.name() == "name" && node.tag_name().name() != "default" {
                 v = camel_to_snake(&v);
             }
             attrs.push((a.name().to_string(), v));
@@ -1819,9 +1821,13 @@ impl<'a> Importer<'a> {
         r.boolean("banner", true)?;
         r.boolean("sample_border", false)?;
         // Mitsuba 0.6 film options that Mitsuba 3 does not read either.
-        for k in ["attach_log", "high_quality_edges"] {
+        for k in ["attach_log", "high_quality_edges", "gamma"] {
             if r.props.items.iter().any(|i| i.name == k) {
-                r.boolean(k, false)?;
+                if k == "gamma" {
+                    r.float("gamma", 2.2)?;
+                } else {
+                    r.boolean(k, false)?;
+                }
                 self.warn(
                     e,
                     format!("{k} ignored (a Mitsuba 0.6 option Mitsuba 3 does not read)"),
