@@ -279,16 +279,13 @@ def write_scenes(d, w, h):
 # ---- rendering and comparison --------------------------------------------------------------
 
 
-def luxest(bins, xml, work, spp, resolution=None):
-    """Imports and path-traces the scene (at `resolution`, "WxH", if given): (Y image, its
-    per-pixel standard error, CPU s, triangles)."""
+def luxest(bins, xml, work, spp):
+    """Imports and path-traces the scene: (Y image, its per-pixel standard error, CPU s,
+    triangles)."""
     lxs = work / "scene.lxs"
     compile_cpu, _ = child_cpu([bins / "scene-compile", xml, "-o", lxs, "-q"])
     prefix = work / "luxest"
-    size = ["--resolution", resolution] if resolution else []
-    cpu, _ = child_cpu(
-        [bins / "trace", lxs, "--spp", spp, "--seed", LUXEST_SEED, "--stderr", "-o", prefix, "-q", *size]
-    )
+    cpu, _ = child_cpu([bins / "trace", lxs, "--spp", spp, "--seed", LUXEST_SEED, "--stderr", "-o", prefix, "-q"])
     name = prefix.name
     y = luminance(read_exr(work / image_name(name, "hdr", spp)))
     se = read_exr(work / image_name(name, "se", spp))[..., 0]
@@ -326,6 +323,31 @@ def flattened(path, depth=0):
     return re.sub(r'<include\s+filename="([^"]*)"\s*/>', inline, text)
 
 
+def resized(xml, size, work):
+    """A copy of the public scene `xml` for both renderers, in `work`: includes inlined, the
+    film set to `size` ("WxH"), and the scene's directory added to the file search (`<path>`),
+    so luxest and Mitsuba read the same film — a field of view given along one axis
+    (Mitsuba's `fov_axis`) then spans the same image for both."""
+    text = flattened(xml)
+    w, h = size.split("x")
+    for name, v in (("width", w), ("height", h)):
+        text, n = re.subn(
+            rf'(<film type="hdrfilm"[^>]*>.*?<integer name="{name}" value=")[^"]*(")',
+            rf"\g<1>{v}\g<2>",
+            text,
+            count=1,
+            flags=re.S,
+        )
+        if n == 0:
+            text = re.sub(r'(<film type="hdrfilm"[^>]*>)', rf'\1<integer name="{name}" value="{v}"/>', text, count=1)
+    text = re.sub(
+        r"(<scene\b[^>]*>)", lambda m: f'{m.group(1)}<path value="{Path(xml).resolve().parent}"/>', text, count=1
+    )
+    out = work / "scene.xml"
+    write_text(out, text)
+    return out
+
+
 def film_size(text):
     """The (width, height) of a flattened scene's film."""
     film = re.search(r'<film type="hdrfilm"[^>]*>(.*?)</film>', text, re.S)
@@ -333,10 +355,10 @@ def film_size(text):
     return size.get("width", 768), size.get("height", 576)
 
 
-def mitsuba(xml, spp, variant, resolution=None):
-    """Mitsuba renders of the same file (includes inlined; box filter; the film resized to
-    `resolution` if given; `path` with unbounded depth, or `volpath`), REPS runs with distinct
-    seeds: (their mean Y, the per-run Y images, CPU s, the integrator)."""
+def mitsuba(xml, spp, variant):
+    """Mitsuba renders of the same file (includes inlined; box filter; `path` with unbounded
+    depth, or `volpath`), REPS runs with distinct seeds: (their mean Y, the per-run Y images,
+    CPU s, the integrator)."""
     import drjit as dr
     import mitsuba as mi
 
@@ -345,16 +367,6 @@ def mitsuba(xml, spp, variant, resolution=None):
     # luxest integrates each pixel's area: Mitsuba's film gets a box filter.
     text = re.sub(r"<rfilter[^>]*/>", "", text)
     text = re.sub(r'(<film type="hdrfilm"[^>]*>)', r'\1<rfilter type="box"/>', text)
-    if resolution:
-        w, h = resolution.split("x")
-        for name, v in (("width", w), ("height", h)):
-            text = re.sub(
-                rf'(<film type="hdrfilm"[^>]*>.*?<integer name="{name}" value=")\d+(")',
-                rf"\g<1>{v}\g<2>",
-                text,
-                count=1,
-                flags=re.S,
-            )
     mi.file_resolver().prepend(str(Path(xml).resolve().parent))
     t = time.process_time()
     scene = mi.load_string(text)
@@ -438,13 +450,12 @@ def main(argv=None):
     for name, xml in scenes.items():
         d = work / name
         d.mkdir(parents=True, exist_ok=True)
-        size = None
         if name in public:
             fw, fh = film_size(flattened(xml))
             k = math.sqrt(a.public_pixels / (fw * fh))
-            size = f"{max(1, round(fw * k))}x{max(1, round(fh * k))}"
-        y_l, se_l, cpu_l, tris = luxest(bins, xml, d, a.spp, size)
-        y_m, runs, cpu_m, integrator = mitsuba(xml, a.spp, a.variant, size)
+            xml = resized(xml, f"{max(1, round(fw * k))}x{max(1, round(fh * k))}", d)
+        y_l, se_l, cpu_l, tris = luxest(bins, xml, d, a.spp)
+        y_m, runs, cpu_m, integrator = mitsuba(xml, a.spp, a.variant)
         c = compare(y_l, se_l, y_m, runs)
         rows.append((name, tris, cpu_l, cpu_m, c, integrator))
         if abs(c["z"]) > 3 or c["max_z"] > 4.5:

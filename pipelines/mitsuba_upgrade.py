@@ -63,10 +63,10 @@ def upgrade(root):
     parents = {c: p for p in root.iter() for c in p}
     for integ in [e for e in root.iter("integrator")]:
         parents[integ].remove(integ)
-        changes.append(f"removed <integrator type=\"{integ.get('type')}\"> (renderers get theirs on the command line)")
+        changes.append(f'removed <integrator type="{integ.get("type")}"> (renderers get theirs on the command line)')
     for bsdf in root.iter("bsdf"):
         kind = bsdf.get("type")
-        where = f"<bsdf type=\"{kind}\"{' id=' + repr(bsdf.get('id')) if bsdf.get('id') else ''}>"
+        where = f'<bsdf type="{kind}"{" id=" + repr(bsdf.get("id")) if bsdf.get("id") else ""}>'
         if kind in CONDUCTORS:
             ext = prop(bsdf, "extEta")
             if ext is not None:
@@ -89,14 +89,14 @@ def upgrade(root):
     for bump in [e for e in root.iter("bsdf") if e.get("type") == "bumpmap"]:
         inner = [c for c in bump if c.tag in ("bsdf", "ref")]
         if len(inner) != 1:
-            sys.exit("error: <bsdf type=\"bumpmap\"> without exactly one nested BSDF")
+            sys.exit('error: <bsdf type="bumpmap"> without exactly one nested BSDF')
         parent = parents[bump]
         i = list(parent).index(bump)
         parent.remove(bump)
         parent.insert(i, inner[0])
         if bump.get("id") and inner[0].tag == "bsdf" and not inner[0].get("id"):
             inner[0].set("id", bump.get("id"))
-        changes.append("<bsdf type=\"bumpmap\">: replaced by its nested BSDF (APPROXIMATION: bump mapping dropped)")
+        changes.append('<bsdf type="bumpmap">: replaced by its nested BSDF (APPROXIMATION: bump mapping dropped)')
     for tex in root.iter("texture"):
         if tex.get("type") != "bitmap":
             continue
@@ -108,7 +108,9 @@ def upgrade(root):
                 ET.SubElement(tex, "boolean", name="raw", value="true")
             elif value != -1.0:
                 sys.exit(f"error: bitmap gamma {value}: only 1 (linear) and -1 (sRGB) have a Mitsuba 3 equivalent")
-            changes.append(f"bitmap {prop(tex, 'filename').get('value')!r}: gamma {g.get('value')} -> {'raw' if value == 1.0 else 'sRGB (default)'}")
+            changes.append(
+                f"bitmap {prop(tex, 'filename').get('value')!r}: gamma {g.get('value')} -> {'raw' if value == 1.0 else 'sRGB (default)'}"
+            )
         f = prop(tex, "filterType")
         if f is not None and f.get("value") in MIP_FILTERS:
             changes.append(f"bitmap {prop(tex, 'filename').get('value')!r}: filterType {f.get('value')} -> bilinear")
@@ -140,7 +142,8 @@ def main(argv=None):
         sys.exit(f"error: {a.scene}: version {version!r} is not a Mitsuba 0.x scene")
     changes = upgrade(root)
     note = "\n".join(
-        [f" Upgraded for Mitsuba 3 from {a.scene.name} by pipelines/mitsuba_upgrade.py:"] + [f"  - {c}" for c in changes]
+        [f" Upgraded for Mitsuba 3 from {a.scene.name} by pipelines/mitsuba_upgrade.py:"]
+        + [f"  - {c}" for c in changes]
     )
     root.insert(0, ET.Comment(note.replace("--", "-") + "\n"))
     tmp = a.out.with_name(a.out.name + ".tmp")
