@@ -64,7 +64,10 @@ fn uniform_sky_through_a_roof_window_gives_the_view_factor() {
     // into the ground only acts near the horizon).
     let dir = TempDir::new("daylight-hole");
     let l = 1000.0;
-    let scene = box_with_roof_window(0.4, &format!("(kind: Uniform, zenith_luminance: Some({l}))"));
+    let scene = box_with_roof_window(
+        0.4,
+        &format!("(kind: Uniform, zenith_luminance: Some({l}))"),
+    );
     let (e, se, r) = run(&dir, "hole", &scene, "20000");
     let exact = l * 4.0 * corner_factor(0.2, 0.2, 0.8);
     assert!(
@@ -211,7 +214,10 @@ fn one_window_room_agrees_with_radiance_at_three_points() {
         .iter()
         .map(|&k| {
             let p = peer[k].0;
-            format!("(position: ({:?}, {:?}, {:?}), normal: (0, 1, 0))", p.x, p.y, p.z)
+            format!(
+                "(position: ({:?}, {:?}, {:?}), normal: (0, 1, 0))",
+                p.x, p.y, p.z
+            )
         })
         .collect();
     let start = scene.find("calculation_surfaces").unwrap();
@@ -223,8 +229,15 @@ fn one_window_room_agrees_with_radiance_at_three_points() {
     let dir = TempDir::new("daylight-radiance");
     let lxs = compile_text(&dir, "room", &text);
     let out = dir.path().join("room.sensors.ron");
-    estimate(&["sensors", lxs.to_str().unwrap(), "-o", out.to_str().unwrap(), "--paths", "60000"])
-        .unwrap();
+    estimate(&[
+        "sensors",
+        lxs.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--paths",
+        "60000",
+    ])
+    .unwrap();
     let r: SensorResults = luxest_io::fsio::read_ron(&out).unwrap();
     for (p, &k) in r.sets[0].points.iter().zip(&picked) {
         let (_, e_r, se_r) = peer[k];
@@ -235,6 +248,9 @@ fn one_window_room_agrees_with_radiance_at_three_points() {
             p.value,
             p.standard_error
         );
-        assert!(p.standard_error < 0.05 * e_r, "point {k}: too noisy to test");
+        assert!(
+            p.standard_error < 0.05 * e_r,
+            "point {k}: too noisy to test"
+        );
     }
 }

@@ -291,7 +291,7 @@ impl Sky {
         }
         finite_in("ground_reflectance", self.ground_reflectance, 0.0, 1.0)?;
         finite_in("turbidity", self.turbidity, 1.0, 20.0)?;
-        if !(16..=8192).contains(&self.resolution) || self.resolution % 2 != 0 {
+        if !(16..=8192).contains(&self.resolution) || !self.resolution.is_multiple_of(2) {
             return Err(format!(
                 "sky resolution {} must be even, 16 to 8192",
                 self.resolution

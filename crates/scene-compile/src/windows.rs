@@ -41,6 +41,9 @@ impl WorldQuad {
     }
 }
 
+/// An opening in a quad: s0, s1, t0, t1 and the window's index.
+type Hole = (f64, f64, f64, f64, usize);
+
 /// The scene with its windows cut (`None` when it has none).
 pub fn cut(scene: &Scene, path: &Path) -> Result<Option<Scene>> {
     if scene.windows.is_empty() {
@@ -62,7 +65,7 @@ pub fn cut(scene: &Scene, path: &Path) -> Result<Option<Scene>> {
         })
         .collect();
     // Per object: its holes as (s0, s1, t0, t1, window index).
-    let mut holes: Vec<Vec<(f64, f64, f64, f64, usize)>> = vec![Vec::new(); scene.objects.len()];
+    let mut holes: Vec<Vec<Hole>> = vec![Vec::new(); scene.objects.len()];
     let mut panes = Vec::new();
     for (k, w) in scene.windows.iter().enumerate() {
         let place = format!(
