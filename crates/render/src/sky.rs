@@ -594,9 +594,9 @@ mod tests {
     }
 
     #[test]
-    fn map_integration_error_is_below_a_tenth_of_a_percent() {
+    fn map_integration_error_is_below_1e_4() {
         // The bilinear map of 512 × 257 texels against the analytic function, on a horizontal
-        // and four vertical planes, for the overcast and the clear sky.
+        // and four vertical planes, for the overcast and the clear sky (measured: ≤ 1.1e-5).
         let mut clear = overcast(1.0);
         clear.kind = SkyKind::Clear;
         clear.zenith_luminance = None;
@@ -624,7 +624,7 @@ mod tests {
                 let exact = horizontal_illuminance_of(|d| m.luminance(d), n, 300);
                 let map = horizontal_illuminance_of(|d| env.radiance(d).luminance(), n, 300);
                 assert!(
-                    (map - exact).abs() < 1e-3 * exact,
+                    (map - exact).abs() < 1e-4 * exact,
                     "{:?} normal {n:?}: map {map} vs {exact}",
                     m.kind
                 );
