@@ -9,9 +9,9 @@
 # (3 % + 3σ).
 
 DAYLIGHT_DIR ?= reports/lighting/daylight
-# Light paths per case: 4M gives about 0.3 % standard error near the windows and 1–2 % at the
+# Light paths per case: 2M gives about 0.3 % standard error near the windows and 1–2 % at the
 # back of the room.
-DAYLIGHT_PATHS ?= 4000000
+DAYLIGHT_PATHS ?= 2000000
 DAYLIGHT_SEED ?= 1
 DAYLIGHT_CASES := daylit-room-one-window:0.02 daylit-room:0.02 daylit-room-sun:0.03
 daylight_scene = $(word 1,$(subst :, ,$(1)))

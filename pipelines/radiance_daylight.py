@@ -116,7 +116,12 @@ def cut_windows(scene, path):
                 out.append(
                     {
                         "name": f"{o.get('name') or i}.{n}",
-                        "shape": {"__name__": "Quad", "corner": corner, "u": scale(qu, sb - sa), "v": scale(qv, tb - ta)},
+                        "shape": {
+                            "__name__": "Quad",
+                            "corner": corner,
+                            "u": scale(qu, sb - sa),
+                            "v": scale(qv, tb - ta),
+                        },
                         "material": o["material"],
                     }
                 )
@@ -330,8 +335,13 @@ def compare(lux_path, peer_path, tol):
     eh_r = float(meta["horizontal_illuminance_lx"])
     df_l = [100 * p["value"] / eh_l for p in pts]
     df_r = [100 * r[3] / eh_r for r in rows]
+    sky = lux["sky"]["description"]
+    try:  # radiance_office's RON reader decodes non-ASCII text byte by byte
+        sky = sky.encode("latin-1").decode("utf-8")
+    except UnicodeError:
+        pass
     return {
-        "sky": lux["sky"]["description"],
+        "sky": sky,
         "gensky": meta.get("sky", ""),
         "settings": meta.get("settings", ""),
         "eh": (eh_l, eh_r, float(meta["horizontal_illuminance_se_lx"])),
