@@ -37,9 +37,9 @@ sky, 3 % with the sun), and writes `daylight.md` with the daylight-factor figure
 """
 
 import argparse
+import itertools
 import math
 import os
-import re
 import resource
 import subprocess
 import sys
@@ -47,10 +47,12 @@ import tempfile
 import time
 from pathlib import Path
 
-import pyradiance  # noqa: F401  (puts the bundled Radiance binaries on PATH, sets RAYPATH)
+# Importing pyradiance puts the bundled Radiance binaries on PATH and sets RAYPATH.
+import pyradiance
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from radiance_office import EFFICACY, WEIGHTS, add, polygon, quad_points, rad, read_ron  # noqa: E402
+
+from radiance_office import EFFICACY, WEIGHTS, add, polygon, quad_points, rad, read_ron
 
 FLAGS = {"Overcast": "-c", "Uniform": "-u", "Clear": ("+s", "-s"), "Intermediate": ("+i", "-i")}
 
@@ -106,8 +108,8 @@ def cut_windows(scene, path):
         ss = sorted({0.0, 1.0, *[h[0] for h in hs], *[h[1] for h in hs]})
         ts = sorted({0.0, 1.0, *[h[2] for h in hs], *[h[3] for h in hs]})
         n = 0
-        for ta, tb in zip(ts, ts[1:]):
-            for sa, sb in zip(ss, ss[1:]):
+        for ta, tb in itertools.pairwise(ts):
+            for sa, sb in itertools.pairwise(ss):
                 sm, tm = (sa + sb) / 2, (ta + tb) / 2
                 if any(h[0] < sm < h[1] and h[2] < tm < h[3] for h in hs):
                     continue
@@ -273,7 +275,7 @@ def peer(a):
         (eh, eh_se) = rtrace("sky.oct", ["0 0 0 0 0 1"], a, work)[0]
     wall = time.time() - t0
     cpu = resource.getrusage(resource.RUSAGE_CHILDREN)
-    version = subprocess.run(["rtrace", "-version"], capture_output=True, text=True).stdout.strip()
+    version = subprocess.run(["rtrace", "-version"], check=True, capture_output=True, text=True).stdout.strip()
     header = [
         "# name: Radiance",
         f"# program: Radiance rtrace ({version}; PyPI pyradiance {pyradiance.__version__})",
@@ -384,13 +386,19 @@ def report(a):
             "",
             f"- sky: {c['sky']}",
             f"- Radiance: {c['gensky']}; {c['settings']} ({c['cpu']} CPU s)",
-            f"- luxest: `estimate sensors` {c['run'].get('samples')} light paths, seed {c['run'].get('seed')}, "
-            f"{c['run'].get('seconds', 0):.1f} s",
-            f"- E_h: luxest {eh_l:.1f} lx (the tabulated map's integral, sun included), Radiance "
-            f"{eh_r:.1f} ± {eh_se:.1f} lx ({100 * (eh_l / eh_r - 1):+.2f} %)",
-            f"- {c['points']} points, tolerance {100 * tol:g} % + 3σ: **{c['points'] - c['fails']} agree**, "
-            f"worst |Δ| / allowed {c['worst']:.2f}; mean relative difference {100 * c['mean_rel']:+.2f} %, "
-            f"largest {100 * c['max_rel']:.2f} %",
+            (
+                f"- luxest: `estimate sensors` {c['run'].get('samples')} light paths, seed {c['run'].get('seed')}, "
+                f"{c['run'].get('seconds', 0):.1f} s"
+            ),
+            (
+                f"- E_h: luxest {eh_l:.1f} lx (the tabulated map's integral, sun included), Radiance "
+                f"{eh_r:.1f} ± {eh_se:.1f} lx ({100 * (eh_l / eh_r - 1):+.2f} %)"
+            ),
+            (
+                f"- {c['points']} points, tolerance {100 * tol:g} % + 3σ: **{c['points'] - c['fails']} agree**, "
+                f"worst |Δ| / allowed {c['worst']:.2f}; mean relative difference {100 * c['mean_rel']:+.2f} %, "
+                f"largest {100 * c['max_rel']:.2f} %"
+            ),
             "",
             "| | median D % | D % on 95 % | min D % |",
             "|---|---|---|---|",
