@@ -18,6 +18,7 @@
 #   make bench     benchmarks (1M-triangle compile + load, local estimate, image, denoise)
 #   make lighting  the lighting report of the example office: reports/lighting/office/
 #                  (make lighting-radiance recomputes its Radiance peer; scripts/setup.sh --peers)
+#   make lighting-daylight  daylight factor and sun against Radiance: reports/lighting/daylight/
 
 .DEFAULT_GOAL := run
 CARGO ?= cargo
@@ -76,6 +77,7 @@ include pipelines/validate.mk
 include pipelines/singularity.mk
 include pipelines/eval.mk
 include pipelines/lighting.mk
+include pipelines/daylight.mk
 # The Mitsuba 3 cross-check (make mitsuba-check).
 include pipelines/mitsuba.mk
 include pipelines/bench.mk

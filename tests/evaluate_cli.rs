@@ -140,6 +140,7 @@ fn sensor_report_gives_z_scores_against_the_exact_value() {
         run: RunInfo::new("local-estimate", 1000, 1, 0.5, "0"),
         unit: "lx".into(),
         singularity: "ball".into(),
+        sky: None,
         sets: vec![SensorSetResult {
             name: "wall".into(),
             grid: None,

@@ -79,6 +79,7 @@ fn results(batches: &[Vec<f64>]) -> SensorResults {
         run: RunInfo::new("local-estimate", 4000, 1, 0.5, "00ff"),
         unit: "lx".into(),
         singularity: "none".into(),
+        sky: None,
         sets: vec![
             SensorSetResult {
                 name: "work-plane".into(),

@@ -3,6 +3,7 @@
 
 mod architecture;
 mod contract;
+mod daylight;
 mod denoise_cli;
 mod emitters;
 mod estimate_cli;

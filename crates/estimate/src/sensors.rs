@@ -132,6 +132,10 @@ pub fn results(
         unit: "lx".into(),
         singularity,
         sets,
+        sky: world.scene.header.emitters.iter().find_map(|e| match e {
+            luxest_render::compiled::Emitter::Environment { sky, .. } => sky.clone(),
+            _ => None,
+        }),
     })
 }
 

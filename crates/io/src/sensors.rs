@@ -19,6 +19,88 @@ pub struct SensorResults {
     /// How the kernel singularity was controlled, e.g. `ball(eps=0.001 m)`.
     pub singularity: String,
     pub sets: Vec<SensorSetResult>,
+    /// The daylight sky of the scene, when it has one: the unobstructed horizontal
+    /// illuminance that daylight factors divide by.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sky: Option<SkyInfo>,
+}
+
+/// A daylight sky as the sensor results record it (`luxest_render::sky`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SkyInfo {
+    /// gensky's command line of the same sky and the solar position.
+    pub description: String,
+    /// Unobstructed global horizontal illuminance, lx: the sky's (integrated over the
+    /// tabulated map the estimators use) plus the sun's direct part. Daylight factor =
+    /// E / this (under an overcast sky, which has no sun).
+    pub horizontal_illuminance_lux: f64,
+    /// The sky's diffuse part of it, lx.
+    pub sky_horizontal_illuminance_lux: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sun: Option<SunInfo>,
+}
+
+/// The sun of a daylight sky.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SunInfo {
+    /// Degrees above the horizon.
+    pub altitude_deg: f64,
+    /// Degrees west of south (gensky's convention).
+    pub azimuth_deg: f64,
+    /// On a plane facing the sun, lx.
+    pub direct_normal_illuminance_lux: f64,
+    /// On the unobstructed horizontal plane, lx.
+    pub direct_horizontal_illuminance_lux: f64,
+}
+
+/// EN 17037 daylight-factor figures of a set of points (percent).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DaylightFactors {
+    /// The median: the value reached on half of the points (EN 17037's target D_T).
+    pub median_percent: f64,
+    /// The value reached on 95 % of the points (EN 17037's minimum target D_TM).
+    pub p95_percent: f64,
+    /// The smallest point's.
+    pub min_percent: f64,
+    pub mean_percent: f64,
+}
+
+/// Daylight factors (%) of illuminances `values` (lx) under a sky of unobstructed horizontal
+/// illuminance `horizontal` (lx): D = 100 E / E_h; the median and the 95 %-fractile by linear
+/// interpolation between order statistics (the fraction of points at or above a value). An
+/// error for no points, a non-finite value, or a sky without light.
+pub fn daylight_factors(
+    values: &[f64],
+    horizontal: f64,
+) -> std::result::Result<DaylightFactors, String> {
+    if values.is_empty() {
+        return Err("daylight factors of no points".into());
+    }
+    if !(horizontal.is_finite() && horizontal > 0.0) {
+        return Err(format!(
+            "the sky's horizontal illuminance {horizontal} lx is not positive: no daylight factor"
+        ));
+    }
+    if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+        return Err(format!("illuminance {v} is not finite"));
+    }
+    let mut d: Vec<f64> = values.iter().map(|e| 100.0 * e / horizontal).collect();
+    d.sort_by(f64::total_cmp);
+    // The value exceeded by a fraction f of the points: quantile 1 − f.
+    let quantile = |q: f64| {
+        let x = q * (d.len() - 1) as f64;
+        let i = x.floor() as usize;
+        let j = (i + 1).min(d.len() - 1);
+        d[i] + (d[j] - d[i]) * (x - i as f64)
+    };
+    Ok(DaylightFactors {
+        median_percent: quantile(0.5),
+        p95_percent: quantile(0.05),
+        min_percent: d[0],
+        mean_percent: d.iter().sum::<f64>() / d.len() as f64,
+    })
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -186,5 +268,27 @@ impl SensorResults {
             }
             Ok(())
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn daylight_factor_figures() {
+        // 1 … 21 lx under 100 lx: D = 1 … 21 %; the median is the 11th, the 95 %-fractile
+        // lies at 1 + 0.05 · 20 = 2 %.
+        let e: Vec<f64> = (1..=21).rev().map(f64::from).collect();
+        let d = daylight_factors(&e, 100.0).unwrap();
+        assert_eq!(d.median_percent, 11.0);
+        assert!((d.p95_percent - 2.0).abs() < 1e-12);
+        assert_eq!(d.min_percent, 1.0);
+        assert!((d.mean_percent - 11.0).abs() < 1e-12);
+        assert!(daylight_factors(&e, 0.0)
+            .unwrap_err()
+            .contains("not positive"));
+        assert!(daylight_factors(&[], 1.0).is_err());
+        assert!(daylight_factors(&[f64::NAN], 1.0).is_err());
     }
 }

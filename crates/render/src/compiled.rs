@@ -211,8 +211,16 @@ pub enum Emitter {
         /// The equirectangular map, its texels in the array section; `None`: constant.
         map: Option<EnvironmentMap>,
         /// The flux through the disk of the scene's bounding sphere
-        /// ([`SceneHeader::bounding_sphere`]): π R² ∫ L dω, lm per channel.
+        /// ([`SceneHeader::bounding_sphere`]): π R² ∫ L dω, lm per channel (the sun's
+        /// included).
         flux_rgb: Rgb,
+        /// A daylight sky's sun, added to the map (see [`crate::environment::SunDisk`]).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        sun: Option<crate::environment::SunDisk>,
+        /// A daylight sky's description and unobstructed horizontal illuminance (what
+        /// `estimate sensors` copies into its results for daylight factors).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        sky: Option<luxest_io::sensors::SkyInfo>,
     },
 }
 
@@ -830,6 +838,8 @@ mod tests {
                 height: 2,
                 to_world: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             }),
+            sun: None,
+            sky: None,
             flux_rgb: Rgb::splat(1.0),
         });
         s.header.emitter_cdf.push(1.0);

@@ -18,6 +18,13 @@
 //! marginal (row) and a conditional (column) distribution, each from one of the two random
 //! numbers, which are then reused inside the cell.
 //!
+//! The sun ([`SunDisk`], a daylight sky's: [`crate::sky`]) is an analytic disk added to the
+//! map: radiance inside its cone of half-angle δ, sampled uniformly in that cone (density
+//! 1/Ω_sun, Ω_sun = 2π(1 − cos δ)) with probability p_sun, the map with 1 − p_sun; `pdf` is
+//! the mixture's, so every estimator's multiple importance sampling sees one emitter. p_sun is
+//! the sun's share of the luminance integral ∫ Y dω, kept within [0.1, 0.9] so that neither
+//! part starves. An environment without a sun skips all of it.
+//!
 //! Light paths enter through the disk of radius R perpendicular to the direction of travel and
 //! tangent to the scene's bounding sphere (centre c, radius R: `SceneHeader::bounding_sphere`);
 //! a path with direction ω towards the sky and disk point p carries the flux weight
@@ -27,7 +34,43 @@
 use crate::sampling::{concentric_disk, uniform_sphere, Distribution1D};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+
+/// A distant disk source (the sun): unit direction towards it, angular radius, radiance.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SunDisk {
+    pub direction: Vec3,
+    pub half_angle_deg: f64,
+    /// cd/m² per channel.
+    pub radiance_rgb: Rgb,
+}
+
+impl SunDisk {
+    /// Ω = 2π (1 − cos δ), sr.
+    pub fn solid_angle(&self) -> f64 {
+        2.0 * PI * (1.0 - self.half_angle_deg.to_radians().cos())
+    }
+
+    /// L Ω (lx): the illuminance on a plane facing the sun.
+    pub fn direct_normal_illuminance(&self) -> f64 {
+        self.radiance_rgb.luminance() * self.solid_angle()
+    }
+}
+
+/// The run-time sun: its disk, frame and sampling probability.
+#[derive(Clone, Debug)]
+struct Sun {
+    direction: Vec3,
+    tangent: Vec3,
+    bitangent: Vec3,
+    cos_max: f64,
+    solid_angle: f64,
+    radiance: Rgb,
+    /// Probability of sampling the sun rather than the map.
+    p: f64,
+}
 
 /// An equirectangular map's texels and the sampling distribution over its cells.
 #[derive(Clone, Debug)]
@@ -53,6 +96,7 @@ pub struct EnvironmentLight {
     /// The bounding sphere light paths enter through.
     center: Vec3,
     radius: f64,
+    sun: Option<Sun>,
 }
 
 /// A direction towards the environment with the radiance arriving along it.
@@ -252,6 +296,7 @@ impl EnvironmentLight {
             to_world: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             center,
             radius,
+            sun: None,
         }
     }
 
@@ -270,13 +315,46 @@ impl EnvironmentLight {
             to_world,
             center,
             radius,
+            sun: None,
         })
     }
 
-    /// Radiance per channel (cd/m²) arriving from the unit world direction `w` (pointing from
-    /// the scene towards the sky): what a ray travelling along `w` that escapes sees.
+    /// The same environment with the sun disk `sun` added; an error for a disk that is not a
+    /// direction, a half-angle outside (0°, 5°], or a radiance not finite and positive.
+    pub fn with_sun(mut self, sun: &SunDisk) -> Result<EnvironmentLight, String> {
+        let direction = sun
+            .direction
+            .try_normalize()
+            .ok_or("the sun's direction is not a direction")?;
+        if !(sun.half_angle_deg > 0.0 && sun.half_angle_deg <= 5.0) {
+            return Err(format!(
+                "the sun's half-angle {}° is outside (0°, 5°]",
+                sun.half_angle_deg
+            ));
+        }
+        let y = sun.radiance_rgb.luminance();
+        if !(sun.radiance_rgb.is_finite() && sun.radiance_rgb.min_component() >= 0.0 && y > 0.0) {
+            return Err("the sun's radiance is not finite and positive".into());
+        }
+        let solid_angle = sun.solid_angle();
+        let sky = self.luminance_integral();
+        let share = y * solid_angle / (y * solid_angle + sky);
+        let (tangent, bitangent) = direction.orthonormal_basis();
+        self.sun = Some(Sun {
+            direction,
+            tangent,
+            bitangent,
+            cos_max: sun.half_angle_deg.to_radians().cos(),
+            solid_angle,
+            radiance: sun.radiance_rgb,
+            p: share.clamp(0.1, 0.9),
+        });
+        Ok(self)
+    }
+
+    /// Radiance of the map (or constant) alone along `w`.
     #[inline]
-    pub fn radiance(&self, w: Vec3) -> Rgb {
+    fn sky_radiance(&self, w: Vec3) -> Rgb {
         match &self.map {
             None => self.radiance,
             Some(m) => {
@@ -286,8 +364,8 @@ impl EnvironmentLight {
         }
     }
 
-    /// Solid-angle density with which [`Self::sample`] returns the unit direction `w`.
-    pub fn pdf(&self, w: Vec3) -> f64 {
+    /// Density of the map (or constant) sampler alone.
+    fn sky_pdf(&self, w: Vec3) -> f64 {
         match &self.map {
             None => 1.0 / (4.0 * PI),
             Some(m) => {
@@ -297,13 +375,63 @@ impl EnvironmentLight {
         }
     }
 
+    /// The map (or constant) sampler alone.
+    fn sky_sample(&self, u1: f64, u2: f64) -> Vec3 {
+        match &self.map {
+            None => uniform_sphere(u1, u2),
+            Some(m) => mul(&self.to_world, m.sample(u1, u2).0),
+        }
+    }
+
+    /// Radiance per channel (cd/m²) arriving from the unit world direction `w` (pointing from
+    /// the scene towards the sky): what a ray travelling along `w` that escapes sees.
+    #[inline]
+    pub fn radiance(&self, w: Vec3) -> Rgb {
+        let l = self.sky_radiance(w);
+        match &self.sun {
+            Some(s) if w.dot(s.direction) >= s.cos_max => l + s.radiance,
+            _ => l,
+        }
+    }
+
+    /// Solid-angle density with which [`Self::sample`] returns the unit direction `w`.
+    pub fn pdf(&self, w: Vec3) -> f64 {
+        match &self.sun {
+            None => self.sky_pdf(w),
+            Some(s) => {
+                let cone = if w.dot(s.direction) >= s.cos_max {
+                    1.0 / s.solid_angle
+                } else {
+                    0.0
+                };
+                (1.0 - s.p) * self.sky_pdf(w) + s.p * cone
+            }
+        }
+    }
+
     /// A direction towards the sky for two uniform numbers, its radiance and density.
     pub fn sample(&self, u1: f64, u2: f64) -> EnvironmentSample {
-        let (direction, pdf) = match &self.map {
-            None => (uniform_sphere(u1, u2), 1.0 / (4.0 * PI)),
-            Some(m) => {
-                let (d, pdf) = m.sample(u1, u2);
-                (mul(&self.to_world, d), pdf)
+        let (direction, pdf) = match &self.sun {
+            None => match &self.map {
+                None => (uniform_sphere(u1, u2), 1.0 / (4.0 * PI)),
+                Some(m) => {
+                    let (d, pdf) = m.sample(u1, u2);
+                    (mul(&self.to_world, d), pdf)
+                }
+            },
+            Some(s) => {
+                let d = if u1 < s.p {
+                    // Uniform in the cone, u1 rescaled to [0, 1).
+                    let r = (u1 / s.p).min(1.0 - f64::EPSILON / 2.0);
+                    let ct = 1.0 - r * (1.0 - s.cos_max);
+                    let st = (1.0 - ct * ct).max(0.0).sqrt();
+                    let (sp, cp) = (2.0 * PI * u2).sin_cos();
+                    s.tangent * (st * cp) + s.bitangent * (st * sp) + s.direction * ct
+                } else {
+                    let r = ((u1 - s.p) / (1.0 - s.p)).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
+                    self.sky_sample(r, u2)
+                };
+                (d, self.pdf(d))
             }
         };
         EnvironmentSample {
@@ -315,17 +443,25 @@ impl EnvironmentLight {
 
     /// ∫ Y(L(ω)) dω, cd/m² · sr (Y the luminance of the RGB radiance).
     pub fn luminance_integral(&self) -> f64 {
-        match &self.map {
+        let sky = match &self.map {
             None => 4.0 * PI * self.radiance.luminance(),
             Some(m) => m.luminance_integral() * self.radiance.luminance(),
-        }
+        };
+        sky + self
+            .sun
+            .as_ref()
+            .map_or(0.0, |s| s.radiance.luminance() * s.solid_angle)
     }
 
     /// The environment's flux through the bounding disk, lm per channel, with the RGB split
     /// of the map's mean (π R² ∫ L dω).
     pub fn flux_rgb(&self) -> Rgb {
         let disk = PI * self.radius * self.radius;
-        match &self.map {
+        let sun = self
+            .sun
+            .as_ref()
+            .map_or(Rgb::BLACK, |s| s.radiance * (s.solid_angle * disk));
+        sun + match &self.map {
             None => self.radiance * (4.0 * PI * disk),
             Some(m) => {
                 // Per channel: the same midpoint rule as the luminance integral, on the
@@ -541,5 +677,54 @@ mod tests {
             "flux {:?}",
             env.flux_rgb()
         );
+    }
+
+    #[test]
+    fn sun_sampling_is_consistent_and_integrates_the_radiance() {
+        // A map with a sun of 2° radius (wide enough to be hit by the map's samples too):
+        // the returned density is the mixture's, and E[Y(L)/p] = ∫ Y(L) dω, sun included.
+        let (w, h, t) = test_map();
+        let sun = SunDisk {
+            direction: Vec3::new(0.3, 0.8, -0.2),
+            half_angle_deg: 2.0,
+            radiance_rgb: Rgb([2000.0, 1800.0, 1500.0]),
+        };
+        let env = EnvironmentLight::map((w, h, t), 1.0, rot_x(10.0), (Vec3::ZERO, 1.0))
+            .unwrap()
+            .with_sun(&sun)
+            .unwrap();
+        let mut r = Rng::new(4, 4);
+        let n = 200_000;
+        let (mut s1, mut s2, mut in_sun) = (0.0, 0.0, 0);
+        for _ in 0..n {
+            let s = env.sample(r.next_f64(), r.next_f64());
+            assert!((env.pdf(s.direction) - s.pdf).abs() <= 1e-9 * s.pdf);
+            let x = s.radiance.luminance() / s.pdf;
+            s1 += x;
+            s2 += x * x;
+            if s.direction.dot(sun.direction.try_normalize().unwrap()) >= 2f64.to_radians().cos() {
+                in_sun += 1;
+            }
+        }
+        let mean = s1 / n as f64;
+        let se = ((s2 / n as f64 - mean * mean) / n as f64).sqrt();
+        let exact = env.luminance_integral();
+        let sun_part = sun.radiance_rgb.luminance() * sun.solid_angle();
+        assert!(sun_part > 0.2 * exact, "the sun matters in this test");
+        assert!(
+            (mean - exact).abs() < 4.0 * se + 1e-3 * exact,
+            "{mean} ± {se} vs {exact}"
+        );
+        assert!(in_sun > n / 10, "{in_sun}");
+        // Without the sun, the same environment's integral is the map's.
+        let plain = EnvironmentLight::map(test_map(), 1.0, rot_x(10.0), (Vec3::ZERO, 1.0)).unwrap();
+        assert!((exact - plain.luminance_integral() - sun_part).abs() < 1e-9 * exact);
+        // Bad suns.
+        let mut bad = sun.clone();
+        bad.half_angle_deg = 0.0;
+        assert!(plain.clone().with_sun(&bad).is_err());
+        bad = sun.clone();
+        bad.radiance_rgb = Rgb([f64::NAN, 1.0, 1.0]);
+        assert!(plain.with_sun(&bad).is_err());
     }
 }

@@ -10,7 +10,8 @@
 //!   mip-mapped minification);
 //! - [`luminaire`]: goniometric luminaires (photometric files) as delta lights and emitters;
 //!   [`spot`]: spot lights' cones; [`environment`]: the environment emitter (constant sky,
-//!   equirectangular map) and its sampling;
+//!   equirectangular map, a sun disk) and its sampling; [`sky`]: daylight skies with Radiance
+//!   gensky's conventions (CIE overcast, clear and intermediate skies, the sun);
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
 //! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
 //!   flush-to-zero mode, hence here and not in `luxest-io`).
@@ -24,6 +25,7 @@ pub mod parallel;
 pub mod rt;
 pub mod sampling;
 pub mod scene;
+pub mod sky;
 pub mod sobol;
 pub mod spot;
 pub mod texture;

@@ -46,6 +46,24 @@ pub struct Scene {
     /// Light arriving from infinitely far away (sky, HDR environment map); see [`Environment`].
     #[serde(default)]
     pub environment: Option<Environment>,
+    /// Openings cut into the wall quads they lie in (daylight through them); see [`Window`].
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub windows: Vec<Window>,
+}
+
+/// A window: the parallelogram `corner + s u + t v` (world space, s, t in [0, 1]) cut out of
+/// the `Quad` object it lies in, its edges along the quad's (docs/scene-format.md, *Windows*).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Window {
+    #[serde(default)]
+    pub name: Option<String>,
+    pub corner: Vec3,
+    pub u: Vec3,
+    pub v: Vec3,
+    /// A material (of `materials`) filling the opening, e.g. `ThinDielectric` glass; none: open.
+    #[serde(default)]
+    pub glazing: Option<String>,
 }
 
 /// A texture: a PNG, JPEG or EXR file (or a checkerboard) and how it is looked up.
@@ -135,6 +153,9 @@ pub enum Environment {
         #[serde(default = "identity")]
         to_world: [[f64; 3]; 3],
     },
+    /// A daylight sky with Radiance gensky's conventions (CIE overcast, clear, intermediate;
+    /// with or without the sun), see [`crate::sky`] and docs/scene-format.md, *Skies*.
+    Sky(crate::sky::Sky),
 }
 
 fn identity() -> [[f64; 3]; 3] {

@@ -957,7 +957,10 @@ fn environment_light(
     let sphere = scene.header.bounding_sphere();
     for (ei, e) in scene.header.emitters.iter().enumerate() {
         if let Emitter::Environment {
-            radiance_rgb, map, ..
+            radiance_rgb,
+            map,
+            sun,
+            ..
         } = e
         {
             let light = match map {
@@ -972,6 +975,10 @@ fn environment_light(
                     m.to_world,
                     sphere,
                 )?,
+            };
+            let light = match sun {
+                Some(s) => light.with_sun(s)?,
+                None => light,
             };
             return Ok(Some((ei as u32, light)));
         }

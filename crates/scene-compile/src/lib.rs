@@ -12,7 +12,8 @@
 //! [`meshes`] (OBJ and glTF), [`ply`] (PLY meshes), [`serialized`] (Mitsuba's serialized
 //! meshes), [`luminaires`], [`environment`] (the
 //! environment emitter and its map), [`surfaces`], [`textures`] (bitmap textures and the
-//! per-material surfaces), [`mitsuba`] (export to Mitsuba 3); this file assembles the
+//! per-material surfaces), [`windows`] (openings cut from wall quads), [`mitsuba`] (export to
+//! Mitsuba 3); this file assembles the
 //! world-space scene.
 
 pub mod cli;
@@ -27,6 +28,7 @@ pub mod shapes;
 pub mod surfaces;
 pub mod textures;
 pub mod validate;
+pub mod windows;
 
 pub use cli::{run, Args};
 
@@ -350,6 +352,8 @@ fn lossless_albedo(m: &Material, c: usize) -> f64 {
 /// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
 pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     validate::check_scene(path, scene)?;
+    let cut = windows::cut(scene, path)?;
+    let scene = cut.as_ref().unwrap_or(scene);
     let mut report = Report::default();
     let material_index: std::collections::BTreeMap<&str, u32> = scene
         .materials
@@ -683,7 +687,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     // everything else, so it comes last.
     let mut environment_texels = Vec::new();
     if let Some(env) = &scene.environment {
-        let (emitter, texels) = environment::compile(path, env, &header)?;
+        let (emitter, texels) = environment::compile(path, env, &header, &mut report.warnings)?;
         header.emitters.push(emitter);
         environment_texels = texels;
     }

@@ -249,6 +249,15 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
             format!("luminaire \"{name}\": Mitsuba 3 has no goniometric emitter to export it to"),
         ));
     }
+    if h.emitters
+        .iter()
+        .any(|e| matches!(e, Emitter::Environment { sun: Some(_), .. }))
+    {
+        return Err(Error::input(
+            path,
+            "the sky's sun: Mitsuba 3 has no distant disk emitter to export it to",
+        ));
+    }
     let mut xml = String::new();
     let _ = writeln!(
         xml,

@@ -377,7 +377,8 @@ fn check_point_light(c: &Check, place: &str, l: &PointLight) -> Result<()> {
 }
 
 /// An environment: a constant radiance like an emitter's; a map's scale positive and its
-/// `to_world` a rotation (the file is read when compiling).
+/// `to_world` a rotation (the file is read when compiling); a sky's date, place and level in
+/// range and its sky not black.
 fn check_environment(c: &Check, env: &Environment) -> Result<()> {
     match env {
         Environment::Constant(l) => c.emission_rgb("environment.Constant", *l),
@@ -397,6 +398,10 @@ fn check_environment(c: &Check, env: &Environment) -> Result<()> {
             luxest_render::compiled::check_rotation(to_world)
                 .map_err(|m| c.fail("environment.to_world", m))
         }
+        Environment::Sky(sky) => sky
+            .model()
+            .map(|_| ())
+            .map_err(|m| c.fail("environment.Sky", m)),
     }
 }
 
