@@ -102,6 +102,8 @@ fn results(batches: &[Vec<f64>]) -> SensorResults {
                 batches: vec![],
             },
         ],
+        glare: Vec::new(),
+        sky: None,
     }
 }
 

@@ -132,6 +132,8 @@ pub fn results(
         unit: "lx".into(),
         singularity,
         sets,
+        glare: Vec::new(),
+        sky: None,
     })
 }
 

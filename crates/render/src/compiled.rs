@@ -191,7 +191,11 @@ pub enum Emitter {
         frame: [[f64; 3]; 3],
         /// Index into `SceneHeader::photometries`.
         photometry: u32,
+        /// The scene's multiplier × its maintenance factor.
         multiplier: f64,
+        /// The scene's maintenance factor (included in `multiplier`; for reports).
+        #[serde(default = "one", skip_serializing_if = "is_one")]
+        maintenance_factor: f64,
         /// Tint with luminance 1.
         color_rgb: Rgb,
         /// multiplier · table flux · color, lm per channel.
@@ -302,6 +306,17 @@ pub struct SensorSet {
     /// this; point k = j · nu + i is cell (i, j)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub calculation_grid: Option<GridLayout>,
+    /// For a calculation surface: its requirements, which the report checks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub requirements: Option<crate::scene::Requirements>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
 }
 
 /// The layout of a calculation surface's grid, in world space.

@@ -271,6 +271,7 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
                 })
                 .collect::<Result<Vec<_>>>()?,
             calculation_grid: None,
+            requirements: None,
         },
         Sensor::Grid {
             name,
@@ -307,6 +308,7 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
                     nu: counts.0,
                     nv: counts.1,
                 }),
+                requirements: None,
             }
         }
     })
