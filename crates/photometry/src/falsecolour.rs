@@ -254,10 +254,12 @@ mod tests {
             let (px, py) = (x0 + 10 * (k as u32 % 3) + 5, y0 + 10 * (k as u32 / 3) + 5);
             assert_eq!(fc.raster.pixel(px, py), *c, "pixel {k}");
         }
-        // The bar: the highest colour at its top, the lowest at its bottom.
+        // The bar: row r from the top has the colour of (h − 1 − r) / (h − 1), the highest
+        // at its top, the lowest at its bottom.
         let (bx, by, bw, bh) = fc.bar_rect;
-        assert_eq!(fc.raster.pixel(bx + bw / 2, by + 2), colour(1.0));
-        assert_eq!(fc.raster.pixel(bx + bw / 2, by + bh - 3), colour(0.0));
+        let row = |r: u32| colour((bh - 1 - r) as f64 / (bh - 1) as f64);
+        assert_eq!(fc.raster.pixel(bx + bw / 2, by + 2), row(2));
+        assert_eq!(fc.raster.pixel(bx + bw / 2, by + bh - 3), row(bh - 3));
         let bad = render_falsecolour(3, 2, &[0.0, 1.0, f64::NAN, 1.0, 1.0, 1.0], &opts);
         assert!(bad.unwrap_err().0.contains("pixel (2, 0)"));
     }
