@@ -241,7 +241,8 @@ pub fn run(args: Args) -> Result<()> {
     plan.write_bytes(&html_path, html::render(&ctx, &reports).as_bytes())?;
     plan.commit()?;
     args.console.note(format_args!(
-        "report: wrote {} ({} surface{}, {:.2} s)",
+        "report: wrote {} and {} ({} surface{}, {:.2} s)",
+        html_path.display(),
         md_path.display(),
         surfaces.len(),
         if surfaces.len() == 1 { "" } else { "s" },

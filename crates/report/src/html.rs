@@ -37,7 +37,7 @@ p{margin:6px 0}
 table{border-collapse:collapse;margin:6px 0 10px 0}
 th,td{border:1px solid #9a9a9a;padding:3px 8px;text-align:left;vertical-align:middle}
 th{background:#ececec}
-td.num{text-align:right;font-variant-numeric:tabular-nums}
+td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
 .mark{display:inline-block;min-width:64px;padding:2px 6px;color:#fff;font-weight:bold;text-align:center}
 .pass{background:#1a7f37}
 .fail{background:#c62828}
@@ -188,12 +188,12 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
         daylight_section(&mut s, sky, surfaces);
     }
     schedule_section(&mut s, ctx);
-    if let Some((file, l)) = &ctx.luminance {
+    if let Some((_, l)) = &ctx.luminance {
         let _ = writeln!(s, "<h2>Luminance</h2>");
         let _ = writeln!(
             s,
             "<p>False-colour luminance of the room from <code>{}</code> ({} × {} px, {}), on a logarithmic scale from {} to {} cd/m²; median {:.1} cd/m², largest {:.0} cd/m².</p>",
-            escape(file),
+            escape(&l.source),
             l.width,
             l.height,
             escape(&l.provenance),
@@ -277,6 +277,17 @@ fn surface_section(s: &mut String, r: &SurfaceReport) {
         "{}",
         img(&r.png_bytes, &format!("isolux plot of {}", r.surface.name))
     );
+    if let Some(c) = &r.comparison {
+        let agree = c.points.iter().filter(|p| p.agrees).count();
+        let _ = writeln!(
+            s,
+            "<p>Peer comparison: {agree} of {} points within {:.0} % + {:.0}σ of the peer's; mean relative difference {:+.2} % (point by point in report.md).</p>",
+            c.points.len(),
+            100.0 * crate::peer::REL_TOLERANCE,
+            crate::peer::SIGMAS,
+            100.0 * c.mean_rel_diff()
+        );
+    }
 }
 
 fn glare_section(s: &mut String, ctx: &ReportContext) {

@@ -26,6 +26,8 @@ pub struct LuminanceImage {
     pub max: f64,
     /// The estimator and sample count its header states, e.g. `path-tracing, 64 samples`.
     pub provenance: String,
+    /// The image file as given.
+    pub source: String,
 }
 
 /// Reads `path` and draws it; `scene_hash` is the results' (checked when the image states one).
@@ -77,5 +79,6 @@ pub fn render(path: &Path, title: &str, scene_hash: &str) -> Result<LuminanceIma
         median: sorted[sorted.len() / 2],
         max: sorted[sorted.len() - 1],
         provenance,
+        source: path.display().to_string(),
     })
 }

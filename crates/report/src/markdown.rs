@@ -231,8 +231,8 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
         let _ = writeln!(s, "## Luminance\n");
         let _ = writeln!(
             s,
-            "False-colour luminance of the room ({} × {} px, {}), on a logarithmic scale from {} to {} cd/m²; median {:.1} cd/m², largest {:.0} cd/m².\n\n![false-colour luminance]({file})\n",
-            l.width, l.height, l.provenance, l.lo, l.hi, l.median, l.max
+            "False-colour luminance of the room from `{}` ({} × {} px, {}), on a logarithmic scale from {} to {} cd/m²; median {:.1} cd/m², largest {:.0} cd/m².\n\n![false-colour luminance]({file})\n",
+            l.source, l.width, l.height, l.provenance, l.lo, l.hi, l.median, l.max
         );
     }
 

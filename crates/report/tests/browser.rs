@@ -186,7 +186,10 @@ fn find(shot: &Shot, img: &Shot, what: &str) -> (usize, usize) {
             }
         }
     }
-    panic!("{what} ({} x {} px) is not drawn in the screenshot", img.w, img.h);
+    panic!(
+        "{what} ({} x {} px) is not drawn in the screenshot",
+        img.w, img.h
+    );
 }
 
 /// The runs of rows holding a mark colour, top to bottom: (is pass, first row).
@@ -284,7 +287,11 @@ fn report_html_renders_in_headless_chromium_with_its_images_and_marks() {
     let first = (0..shot.h).find(|&y| inked(y)).expect("the page is blank");
     let last = (0..shot.h).rev().find(|&y| inked(y)).unwrap();
     assert!(first < 60, "content starts at row {first}");
-    assert!(last + 20 < shot.h, "the page is cut off at the window's {} px", shot.h);
+    assert!(
+        last + 20 < shot.h,
+        "the page is cut off at the window's {} px",
+        shot.h
+    );
 
     // The marks, in document order: the summary (3 of 6 requirements fail), Ē (330 < 500 lx)
     // and U0 (150/330 < 0.6) on the work plane, the two views (16.2 and 21.0 against 19), the
@@ -302,11 +309,17 @@ fn report_html_renders_in_headless_chromium_with_its_images_and_marks() {
     // signature block after it.
     let isolux = Shot::read(&out.join("work-plane.isolux.png"));
     let (_, iy) = find(&shot, &isolux, "the isolux plot");
-    assert!(m[2].1 < iy && iy + isolux.h < m[3].1, "isolux at row {iy}, marks {m:?}");
+    assert!(
+        m[2].1 < iy && iy + isolux.h < m[3].1,
+        "isolux at row {iy}, marks {m:?}"
+    );
     let lum = Shot::read(&out.join("luminance.png"));
     let (lx, ly) = find(&shot, &lum, "the false-colour luminance image");
     assert!(m[6].1 < ly, "luminance image at row {ly}, marks {m:?}");
-    assert!(last > ly + lum.h + 100, "no signature block below the image");
+    assert!(
+        last > ly + lum.h + 100,
+        "no signature block below the image"
+    );
     // Its halves in the scale's end colours: 1 cd/m² the lowest, 100 the highest.
     let fc = luxest_photometry::isolux::colour;
     let (x0, y0) = (lx + 16, ly + 44);
