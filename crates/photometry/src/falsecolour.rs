@@ -44,7 +44,7 @@ pub struct FalseColour {
 
 /// The position of `l` on the logarithmic scale [lo, hi], clamped to [0, 1].
 pub fn scale_position(l: f64, lo: f64, hi: f64) -> f64 {
-    if !(l > 0.0) {
+    if l.is_nan() || l <= 0.0 {
         return 0.0;
     }
     ((l / lo).ln() / (hi / lo).ln()).clamp(0.0, 1.0)

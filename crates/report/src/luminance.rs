@@ -24,7 +24,8 @@ pub struct LuminanceImage {
     /// Median and largest pixel luminance, cd/m².
     pub median: f64,
     pub max: f64,
-    /// The estimator and sample count its header states, e.g. `path-tracing, 64 samples`.
+    /// The estimator and sample count its header states, e.g. `double-local-estimate, 300
+    /// light paths`.
     pub provenance: String,
     /// The image file as given.
     pub source: String,
@@ -66,6 +67,12 @@ pub fn render(path: &Path, title: &str, scene_hash: &str) -> Result<LuminanceIma
         img.attribute(header::ESTIMATOR),
         img.attribute(header::SAMPLES),
     ) {
+        (Some(e), Some(n)) if e == header::estimator::PATH_TRACING => {
+            format!("{e}, {n} samples per pixel")
+        }
+        (Some(e), Some(n)) if e == header::estimator::DOUBLE_LOCAL_ESTIMATE => {
+            format!("{e}, {n} light paths")
+        }
         (Some(e), Some(n)) => format!("{e}, {n} samples"),
         (Some(e), None) => e.to_string(),
         _ => "estimator not stated".to_string(),
