@@ -219,6 +219,7 @@ fn report_figures_equal_the_jackknife_computed_independently() {
     assert_eq!(
         names,
         [
+            "report.html",
             "report.md",
             "work-plane.csv",
             "work-plane.isolux.png",
@@ -614,8 +615,16 @@ fn cos3_luminaire_over_a_black_floor_gives_the_closed_form_work_plane() {
     assert!(md.contains(&format!("| ≥ {u0_req} | **FAIL** |")), "{md}");
     assert!(md.contains("**FAIL**: 1 of 2 requirements met."), "{md}");
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
-    assert_eq!(html.matches("<span class=\"mark fail\">FAIL</span>").count(), 2);
-    assert_eq!(html.matches("<span class=\"mark pass\">PASS</span>").count(), 1);
+    assert_eq!(
+        html.matches("<span class=\"mark fail\">FAIL</span>")
+            .count(),
+        2
+    );
+    assert_eq!(
+        html.matches("<span class=\"mark pass\">PASS</span>")
+            .count(),
+        1
+    );
     assert!(
         md.contains(&format!("{flux:.1}")),
         "flux {flux:.1} lm not in\n{md}"
