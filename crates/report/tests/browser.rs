@@ -256,6 +256,18 @@ fn report_html_renders_in_headless_chromium_with_its_images_and_marks() {
     // Self-contained: no script, no file or network reference besides the data URIs.
     assert!(!text.contains("<script") && !text.contains("src=\"http"));
     assert_eq!(text.matches("src=\"data:image/png;base64,").count(), 2);
+    // The Markdown report has the same tables and verdicts.
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for row in [
+        "| work-plane | Ē | 330.00 ± 0.31 lx (0.09 %) | ≥ 500 lx | **FAIL** |",
+        "| desk | (2.00, 1.20, 2.50) | (1.00, 0.00, 0.00) | 16.20 ± 0.10 (0.62 %) | 40.00 ± 0.20 (0.50 %) | 1 | 19 | **PASS** |",
+        "| desk | (2.00, 1.20, 2.50) | (0.00, 0.00, -1.00) | 21.00 ± 0.10 (0.48 %) | 40.00 ± 0.20 (0.50 %) | 1 | 19 | **FAIL** |",
+        "| work-plane | DF min | 1.500 ± 0.015 % (1.00 %) | ≥ 0.7 % | **PASS** |",
+        "| L1 | `photometry/troffer-600-led.ies` | 3600 | 1 | 1 | 0.8 | 2880.0 | 2880 | 30 |",
+        "**FAIL**: 3 of 6 requirements met.",
+    ] {
+        assert!(md.contains(row), "{row}\nnot in\n{md}");
+    }
 
     let shot_path = dir.join("shot.png");
     let run = Command::new(&chromium)
