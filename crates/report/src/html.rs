@@ -20,7 +20,7 @@
 //! scales do not use, so a screenshot shows where they are; the page is 1000 px wide.
 
 use crate::checks::Check;
-use crate::markdown::{format_estimate, format_figure, ReportContext, SurfaceReport};
+use crate::markdown::{format_estimate, format_plain, ReportContext, SurfaceReport};
 use std::fmt::Write;
 
 /// The marks' background colours (sRGB), as the CSS gives them.
@@ -250,16 +250,24 @@ fn surface_section(s: &mut String, r: &SurfaceReport) {
             "undefined (no light)".to_string()
         }
     };
-    let _ = writeln!(s, "<table>\n<tr><th>Ē</th><th>Emin</th><th>Emax</th><th>U0 = Emin/Ē</th><th>Ud = Emin/Emax</th></tr>");
     let _ = writeln!(
         s,
-        "<tr><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>\n</table>",
-        escape(&format_estimate(st.e_avg, "lx")),
-        escape(&format_estimate(st.e_min, "lx")),
-        escape(&format_estimate(st.e_max, "lx")),
-        escape(&ratio(st.u0)),
-        escape(&ratio(st.ud))
+        "<table>\n<tr><th>figure</th><th>value ± standard error (relative)</th></tr>"
     );
+    for (figure, value) in [
+        ("Ē", format_estimate(st.e_avg, "lx")),
+        ("Emin", format_estimate(st.e_min, "lx")),
+        ("Emax", format_estimate(st.e_max, "lx")),
+        ("U0 = Emin/Ē", ratio(st.u0)),
+        ("Ud = Emin/Emax", ratio(st.ud)),
+    ] {
+        let _ = writeln!(
+            s,
+            "<tr><td>{figure}</td><td class=\"num\">{}</td></tr>",
+            escape(&value)
+        );
+    }
+    let _ = writeln!(s, "</table>");
     if r.checks.is_empty() {
         let _ = writeln!(
             s,
@@ -308,11 +316,10 @@ fn glare_section(s: &mut String, ctx: &ReportContext) {
             g.view.x,
             g.view.y,
             g.view.z,
-            escape(&format_figure(g.ugr, g.standard_error, "")),
-            escape(&format_figure(
+            escape(&format_plain(g.ugr, g.standard_error)),
+            escape(&format_plain(
                 g.background_luminance.value,
-                g.background_luminance.standard_error,
-                ""
+                g.background_luminance.standard_error
             )),
             g.sources.len(),
             g.limit.map_or("none".to_string(), |l| format!("{l}")),

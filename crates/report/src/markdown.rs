@@ -82,13 +82,19 @@ pub fn format_estimate(e: Estimate, unit: &str) -> String {
     format_figure(e.value, e.std_error, unit)
 }
 
-/// [`format_estimate`] of a value and its standard error.
-pub fn format_figure(value: f64, std_error: f64, unit: &str) -> String {
+/// `value ± se` with the precision of [`format_figure`], without the relative error (for
+/// figures on a log scale such as UGR, where a relative error means little).
+pub fn format_plain(value: f64, std_error: f64) -> String {
     let digits = if std_error > 0.0 {
         (1 - std_error.log10().floor() as i32).clamp(0, 6) as usize
     } else {
         3
     };
+    format!("{:.*} ± {:.*}", digits, value, digits, std_error)
+}
+
+/// [`format_estimate`] of a value and its standard error.
+pub fn format_figure(value: f64, std_error: f64, unit: &str) -> String {
     let rel = if value != 0.0 {
         format!(" ({:.2} %)", 100.0 * (std_error / value).abs())
     } else {
@@ -99,7 +105,7 @@ pub fn format_figure(value: f64, std_error: f64, unit: &str) -> String {
     } else {
         format!(" {unit}")
     };
-    format!("{:.*} ± {:.*}{unit}{rel}", digits, value, digits, std_error)
+    format!("{}{unit}{rel}", format_plain(value, std_error))
 }
 
 fn group_digits(x: f64) -> String {
@@ -272,11 +278,10 @@ fn glare_section(s: &mut String, ctx: &ReportContext) {
             g.view.x,
             g.view.y,
             g.view.z,
-            format_figure(g.ugr, g.standard_error, ""),
-            format_figure(
+            format_plain(g.ugr, g.standard_error),
+            format_plain(
                 g.background_luminance.value,
-                g.background_luminance.standard_error,
-                ""
+                g.background_luminance.standard_error
             ),
             g.sources.len(),
             g.limit.map_or("none".to_string(), |l| format!("{l}")),
