@@ -33,12 +33,14 @@ use std::path::Path;
 
 pub const MAGIC: &[u8; 8] = luxest_io::meta::COMPILED_MAGIC;
 /// Bumped whenever the layout or the meaning of a field changes.
+/// 4: luminaires' `maintenance_factor` (included in `multiplier`), calculation surfaces'
+/// `requirements`.
 /// 3: environment light (`Emitter::Environment`, its map's texels after the other arrays), spot
 /// lights (`Emitter::Point::spot`); texture coordinates, textures, surfaces (textured,
 /// one-sided and cut-out materials), textured area emitters.
 /// 2: goniometric luminaires (`Emitter::Luminaire`, `photometries`), sensor kinds and
 /// calculation-grid layouts.
-pub const SCHEMA_VERSION: u32 = 3;
+pub const SCHEMA_VERSION: u32 = 4;
 /// `triangle_emitter` value of a triangle that does not emit.
 pub const NO_EMITTER: u32 = u32::MAX;
 /// Fixed part before the RON header: magic, schema, reserved, hash, header length.
