@@ -2,7 +2,9 @@
 # Sets up everything luxest needs on a Debian machine. Idempotent: a second run only checks.
 #
 #   - Debian packages: libembree-dev (Embree 3.13, used through the `embree` crate), pkg-config,
-#     make, gcc, python3 + pip (to fetch the onnxruntime library);
+#     make, gcc, python3 + pip (to fetch the onnxruntime library); chromium-headless-shell
+#     (Debian's headless Chromium, /usr/bin/chromium-headless-shell: the report crate's test
+#     renders report.html with it and checks the screenshot);
 #   - the ONNX Runtime shared library, from the PyPI onnxruntime==1.31.* wheel, unpacked to
 #     $LUXEST_ORT_DIR (default ~/.cache/luxest/onnxruntime); stages find it through
 #     ORT_DYLIB_PATH or that default path;
@@ -35,7 +37,8 @@ if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
 
 missing=()
 # Slurm and munge: the real single-node cluster of make test-slurm (scripts/slurm-cluster.sh).
-for pkg in libembree-dev pkg-config make gcc python3 python3-pip python3-venv slurmctld slurmd slurm-client munge; do
+# chromium-headless-shell: the real browser that renders the lighting report in a test.
+for pkg in libembree-dev pkg-config make gcc python3 python3-pip python3-venv slurmctld slurmd slurm-client munge chromium-headless-shell; do
     if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q "install ok installed"; then
         missing+=("$pkg")
     fi

@@ -140,7 +140,6 @@ fn sensor_report_gives_z_scores_against_the_exact_value() {
         run: RunInfo::new("local-estimate", 1000, 1, 0.5, "0"),
         unit: "lx".into(),
         singularity: "ball".into(),
-        sky: None,
         sets: vec![SensorSetResult {
             name: "wall".into(),
             grid: None,
@@ -151,6 +150,8 @@ fn sensor_report_gives_z_scores_against_the_exact_value() {
                 point(Vec3::new(0.0, -1.0, 0.0), 199.0, 0.5),
             ],
         }],
+        glare: Vec::new(),
+        sky: None,
     };
     let ron_in = dir.path().join("s.sensors.ron");
     results.write_ron(&ron_in).unwrap();

@@ -79,7 +79,6 @@ fn results(batches: &[Vec<f64>]) -> SensorResults {
         run: RunInfo::new("local-estimate", 4000, 1, 0.5, "00ff"),
         unit: "lx".into(),
         singularity: "none".into(),
-        sky: None,
         sets: vec![
             SensorSetResult {
                 name: "work-plane".into(),
@@ -103,6 +102,8 @@ fn results(batches: &[Vec<f64>]) -> SensorResults {
                 batches: vec![],
             },
         ],
+        glare: Vec::new(),
+        sky: None,
     }
 }
 
@@ -218,6 +219,7 @@ fn report_figures_equal_the_jackknife_computed_independently() {
     assert_eq!(
         names,
         [
+            "report.html",
             "report.md",
             "work-plane.csv",
             "work-plane.isolux.png",
@@ -501,14 +503,37 @@ fn cos3_luminaire_over_a_black_floor_gives_the_closed_form_work_plane() {
     let dir = TempDir::new("report-cos3");
     dir.write("cos3.ies", cos3_ies());
     let (lx, ly, lz) = (1.7, 3.0, 1.2);
+    // EN 12464-1 layout, computed here: area 3 m x 2 m, d = 3 m (not a corridor),
+    // p = 0.2 · 5^log10(3) m, n = ⌈L/p⌉.
+    let p = 0.2 * 5f64.powf(3f64.log10());
+    let (nu, nv) = ((3.0 / p).ceil() as usize, (2.0 / p).ceil() as usize);
+    let mut e = Vec::new();
+    for j in 0..nv {
+        for i in 0..nu {
+            let x = 0.5 + (i as f64 + 0.5) * 3.0 / nu as f64;
+            let z = 3.0 - (0.5 + (j as f64 + 0.5) * 2.0 / nv as f64);
+            let d = [lx - x, ly - 0.75, lz - z];
+            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            let cos = d[1] / r2.sqrt();
+            // E = I(γ) cos γ / r² (inverse-square and cosine laws).
+            e.push(cos3_table(cos.acos().to_degrees()) * cos / r2);
+        }
+    }
+    // Requirements either side of the closed form: Ē passes, U0 fails.
+    let em_req = 0.9 * mean(&e);
+    let u0_req = (1.1 * min(&e) / mean(&e)).min(1.0);
+    assert!(u0_req > min(&e) / mean(&e));
+    // The multiplier 2 and the maintenance factor 0.5 multiply the intensities: the table's.
     let text = format!(
         r#"Scene(name: "cos3",
         materials: {{ "black": Lambertian(reflectance: (0.0, 0.0, 0.0)) }},
         objects: [(shape: Quad(corner: (-10.0, 0.0, -10.0), u: (0.0, 0.0, 20.0), v: (20.0, 0.0, 0.0)),
                    material: "black")],
-        luminaires: [(name: "spot", file: "cos3.ies", position: ({lx}, {ly}, {lz}))],
+        luminaires: [(name: "spot", file: "cos3.ies", position: ({lx}, {ly}, {lz}),
+                      multiplier: 2.0, maintenance_factor: 0.5)],
         calculation_surfaces: [(name: "work-plane", area: Floor(min: (0.0, 0.0), max: (4.0, 3.0), y: 0.0),
-                                offset: 0.75, margin: 0.5)])"#
+                                offset: 0.75, margin: 0.5,
+                                requirements: (em_lux: {em_req:?}, u0: {u0_req:?}))])"#
     );
     let lxs = compile_text(&dir, "cos3", &text);
     let res = dir.path().join("cos3.sensors.ron");
@@ -536,23 +561,7 @@ fn cos3_luminaire_over_a_black_floor_gives_the_closed_form_work_plane() {
     .unwrap();
     let table = tables::read_ron(&out.join("work-plane.ron")).unwrap();
 
-    // EN 12464-1 layout, computed here: area 3 m x 2 m, d = 3 m (not a corridor),
-    // p = 0.2 · 5^log10(3) m, n = ⌈L/p⌉.
-    let p = 0.2 * 5f64.powf(3f64.log10());
-    let (nu, nv) = ((3.0 / p).ceil() as usize, (2.0 / p).ceil() as usize);
     assert_eq!((table.nu, table.nv), (nu, nv));
-    let mut e = Vec::new();
-    for j in 0..nv {
-        for i in 0..nu {
-            let x = 0.5 + (i as f64 + 0.5) * 3.0 / nu as f64;
-            let z = 3.0 - (0.5 + (j as f64 + 0.5) * 2.0 / nv as f64);
-            let d = [lx - x, ly - 0.75, lz - z];
-            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-            let cos = d[1] / r2.sqrt();
-            // E = I(γ) cos γ / r² (inverse-square and cosine laws).
-            e.push(cos3_table(cos.acos().to_degrees()) * cos / r2);
-        }
-    }
     let eavg = mean(&e);
     let f = &table.figures;
     // Direct light only, computed deterministically by the local estimate: exact to 1e-9.
@@ -595,7 +604,27 @@ fn cos3_luminaire_over_a_black_floor_gives_the_closed_form_work_plane() {
         * 2.0
         * std::f64::consts::PI;
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(md.contains("| `cos3.ies` | 1 | 1 | "), "{md}");
+    // The schedule: luminaire, file, the file's lumens, count 1, multiplier 2, MF 0.5.
+    assert!(md.contains("| spot | `cos3.ies` | "), "{md}");
+    assert!(md.contains(" | 1 | 2 | 0.5 | "), "{md}");
+    // The requirements, from the scene through the compiled header, checked.
+    assert!(
+        md.contains("| work-plane | Ē | ") && md.contains(&format!("| ≥ {em_req} lx | **PASS** |")),
+        "{md}"
+    );
+    assert!(md.contains(&format!("| ≥ {u0_req} | **FAIL** |")), "{md}");
+    assert!(md.contains("**FAIL**: 1 of 2 requirements met."), "{md}");
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert_eq!(
+        html.matches("<span class=\"mark fail\">FAIL</span>")
+            .count(),
+        2
+    );
+    assert_eq!(
+        html.matches("<span class=\"mark pass\">PASS</span>")
+            .count(),
+        1
+    );
     assert!(
         md.contains(&format!("{flux:.1}")),
         "flux {flux:.1} lm not in\n{md}"

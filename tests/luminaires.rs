@@ -531,6 +531,48 @@ fn malformed_photometric_files_are_one_line_errors_and_leave_nothing() {
     );
     let (_, msg) = scene_compile(&[ron.to_str().unwrap(), "--check"]).unwrap_err();
     assert!(msg.contains("luminaires[0].multiplier"), "{msg}");
+    // A maintenance factor is a share of the new installation's light: in (0, 1].
+    for mf in ["0.0", "1.25", "inf"] {
+        let ron = dir.write(
+            "mf.ron",
+            scene("x.ies").replace(
+                "position: (0.0, 2.0, 0.0)",
+                &format!("position: (0.0, 2.0, 0.0), maintenance_factor: {mf}"),
+            ),
+        );
+        let (code, msg) = scene_compile(&[ron.to_str().unwrap(), "--check"]).unwrap_err();
+        assert_eq!(code, 1, "{mf}: {msg}");
+        assert!(
+            !msg.contains('\n') && msg.contains("luminaires[0].maintenance_factor"),
+            "{mf}: {msg}"
+        );
+    }
+    // A calculation surface's requirements must be numbers it can reach.
+    for (req, field) in [
+        ("(em_lux: -500.0)", "requirements.em_lux"),
+        ("(u0: 1.5)", "requirements.u0"),
+        (
+            "(daylight_factor: (median_percent: 2.0, min_percent: 0.0))",
+            "requirements.daylight_factor.min_percent",
+        ),
+    ] {
+        let ron = dir.write(
+            "req.ron",
+            scene("x.ies").replace(
+                "luminaires: [",
+                &format!(
+                    "calculation_surfaces: [(name: \"wp\", area: Floor(min: (0.0, 0.0), \
+                     max: (2.0, 2.0), y: 0.0), requirements: {req})], luminaires: ["
+                ),
+            ),
+        );
+        let (code, msg) = scene_compile(&[ron.to_str().unwrap(), "--check"]).unwrap_err();
+        assert_eq!(code, 1, "{req}: {msg}");
+        assert!(
+            !msg.contains('\n') && msg.contains(&format!("calculation_surfaces[0].{field}")),
+            "{req}: {msg}"
+        );
+    }
     // The table × multiplier is bounded like every emitter (1e300 cd gave Eavg inf ± NaN).
     dir.write("cos2.ies", &cos2);
     let ron = dir.write(

@@ -132,6 +132,7 @@ pub fn results(
         unit: "lx".into(),
         singularity,
         sets,
+        glare: Vec::new(),
         sky: world.scene.header.emitters.iter().find_map(|e| match e {
             luxest_render::compiled::Emitter::Environment { sky, .. } => sky.clone(),
             _ => None,

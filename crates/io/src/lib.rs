@@ -20,7 +20,9 @@
 //! - [`png`]: PNG previews of linear images, and the PNG encoder of 8-bit sRGB rasters;
 //! - [`texture_image`]: decoding of bitmap texture images (PNG, JPEG, OpenEXR) with their size
 //!   checked before allocating;
-//! - [`sensors`]: sensor results (RON + CSV);
+//! - [`sensors`]: sensor results (RON + CSV), with glare ratings and the sky's figures;
+//! - [`requirements`]: a calculation surface's EN 12464-1 / EN 17037 requirements (scene →
+//!   compiled scene → report);
 //! - [`math`], [`color`]: f64 vectors and transforms, RGB, luminance and the sRGB transfer
 //!   function;
 //! - [`chi2`]: a test utility, the chi-square test every sampling routine's tests call (no stage
@@ -46,6 +48,7 @@ pub mod num;
 pub mod outputs;
 pub mod png;
 pub mod progress;
+pub mod requirements;
 pub mod sensors;
 pub mod texture_image;
 

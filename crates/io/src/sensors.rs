@@ -19,10 +19,48 @@ pub struct SensorResults {
     /// How the kernel singularity was controlled, e.g. `ball(eps=0.001 m)`.
     pub singularity: String,
     pub sets: Vec<SensorSetResult>,
+    /// The unified glare rating per observer and line of sight (the scene's `observers`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub glare: Vec<GlareResult>,
     /// The daylight sky of the scene, when it has one: the unobstructed horizontal
     /// illuminance that daylight factors divide by.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sky: Option<SkyInfo>,
+}
+
+/// The UGR (CIE 117) of one observer looking along one line of sight.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GlareResult {
+    /// The scene's observer.
+    pub observer: String,
+    /// Eye position, m.
+    pub position: Vec3,
+    /// Line of sight (unit).
+    pub view: Vec3,
+    /// UGR = 8 log10(0.25 / L_b · Σ L² ω / p²). Below the formula's range (Σ → 0) it is the
+    /// value the formula gives, never −∞ or NaN; tables print such values as "<10".
+    pub ugr: f64,
+    pub standard_error: f64,
+    /// Background luminance L_b (indirect vertical illuminance at the eye / π), cd/m².
+    pub background_luminance: Part,
+    /// UGR_L of the observer's task area, when the scene gives it.
+    pub limit: Option<f64>,
+    /// The luminaires seen by the observer.
+    pub sources: Vec<GlareSource>,
+}
+
+/// One luminaire's term of a UGR sum.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GlareSource {
+    pub luminaire: String,
+    /// Luminance of the luminous parts towards the eye, cd/m².
+    pub luminance: f64,
+    /// Solid angle of the luminous parts seen from the eye, sr.
+    pub solid_angle_sr: f64,
+    /// Guth position index p.
+    pub position_index: f64,
 }
 
 /// A daylight sky as the sensor results record it (`luxest_render::sky`).

@@ -55,7 +55,7 @@ pub struct SrgbRaster {
 }
 
 impl SrgbRaster {
-    fn new(width: u32, height: u32, bg: [u8; 3]) -> Self {
+    pub(crate) fn new(width: u32, height: u32, bg: [u8; 3]) -> Self {
         SrgbRaster {
             width,
             height,
@@ -73,7 +73,7 @@ impl SrgbRaster {
             self.data[k + ch] = (old + (cv as f64 - old) * a).round() as u8;
         }
     }
-    fn set(&mut self, x: i64, y: i64, c: [u8; 3]) {
+    pub(crate) fn set(&mut self, x: i64, y: i64, c: [u8; 3]) {
         self.blend(x, y, c, 1.0);
     }
     /// The pixel at (x, y).
@@ -87,7 +87,7 @@ impl SrgbRaster {
     }
 
     /// An anti-aliased line of width `w` px (coverage from the distance to the segment).
-    fn line(&mut self, a: (f64, f64), b: (f64, f64), w: f64, c: [u8; 3]) {
+    pub(crate) fn line(&mut self, a: (f64, f64), b: (f64, f64), w: f64, c: [u8; 3]) {
         let r = w / 2.0 + 1.0;
         let (x0, x1) = (
             (a.0.min(b.0) - r).floor() as i64,
@@ -113,7 +113,7 @@ impl SrgbRaster {
             }
         }
     }
-    fn rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, c: [u8; 3]) {
+    pub(crate) fn rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, c: [u8; 3]) {
         for y in y0..y1 {
             for x in x0..x1 {
                 self.set(x, y, c);
@@ -121,7 +121,7 @@ impl SrgbRaster {
         }
     }
     /// Text at (x, y) (top-left), font pixels scaled by `s`; returns the width drawn.
-    fn text(&mut self, x: i64, y: i64, s: i64, t: &str, c: [u8; 3]) -> i64 {
+    pub(crate) fn text(&mut self, x: i64, y: i64, s: i64, t: &str, c: [u8; 3]) -> i64 {
         let mut cx = x;
         for ch in t.chars() {
             if let Some(g) = glyph(ch) {
@@ -146,7 +146,7 @@ impl SrgbRaster {
 }
 
 /// Width in px of `t` at scale `s`.
-fn text_width(t: &str, s: i64) -> i64 {
+pub(crate) fn text_width(t: &str, s: i64) -> i64 {
     6 * s * t.chars().count() as i64 - s
 }
 
@@ -154,8 +154,9 @@ fn glyph(c: char) -> Option<&'static [u8; 8]> {
     font().iter().find(|g| g.0 == c).map(|g| &g.1)
 }
 
-/// A lighting-report false-colour scale: dark blue, blue, cyan, green, yellow, orange, red.
-fn colour(t: f64) -> [u8; 3] {
+/// A lighting-report false-colour scale: dark blue, blue, cyan, green, yellow, orange, red, for
+/// t in [0, 1] (clamped; non-finite is 0). The isolux and the luminance images share it.
+pub fn colour(t: f64) -> [u8; 3] {
     const STOPS: [(f64, [f64; 3]); 7] = [
         (0.0, [38.0, 52.0, 140.0]),
         (0.17, [45.0, 110.0, 205.0]),

@@ -11,7 +11,8 @@
 //!   illuminance, and the direct illuminance from a luminaire treated as a point (far field).
 //! - [`grid`] lays out calculation grids (EN 12464-1 rule) and computes Eavg, Emin, Emax, U0, Ud
 //!   with Monte Carlo uncertainties propagated from the per-point estimates.
-//! - [`isolux`] renders a false-colour isolux PNG with contours, legend and outline.
+//! - [`isolux`] renders a false-colour isolux PNG with contours, legend and outline;
+//!   [`falsecolour`] a luminance image on a logarithmic false-colour scale with its cd/m² bar.
 //! - [`photometry`] holds the distribution both parsers produce, [`error`] the crate's one error
 //!   type.
 //!
@@ -47,6 +48,7 @@
 //! ```
 
 pub mod error;
+pub mod falsecolour;
 pub mod frame;
 pub mod grid;
 pub mod ies;

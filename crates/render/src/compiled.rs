@@ -33,12 +33,14 @@ use std::path::Path;
 
 pub const MAGIC: &[u8; 8] = luxest_io::meta::COMPILED_MAGIC;
 /// Bumped whenever the layout or the meaning of a field changes.
+/// 4: luminaires' `maintenance_factor` (included in `multiplier`), calculation surfaces'
+/// `requirements`.
 /// 3: environment light (`Emitter::Environment`, its map's texels after the other arrays), spot
 /// lights (`Emitter::Point::spot`); texture coordinates, textures, surfaces (textured,
 /// one-sided and cut-out materials), textured area emitters.
 /// 2: goniometric luminaires (`Emitter::Luminaire`, `photometries`), sensor kinds and
 /// calculation-grid layouts.
-pub const SCHEMA_VERSION: u32 = 3;
+pub const SCHEMA_VERSION: u32 = 4;
 /// `triangle_emitter` value of a triangle that does not emit.
 pub const NO_EMITTER: u32 = u32::MAX;
 /// Fixed part before the RON header: magic, schema, reserved, hash, header length.
@@ -191,7 +193,11 @@ pub enum Emitter {
         frame: [[f64; 3]; 3],
         /// Index into `SceneHeader::photometries`.
         photometry: u32,
+        /// The scene's multiplier × its maintenance factor.
         multiplier: f64,
+        /// The scene's maintenance factor (included in `multiplier`; for reports).
+        #[serde(default = "one", skip_serializing_if = "is_one")]
+        maintenance_factor: f64,
         /// Tint with luminance 1.
         color_rgb: Rgb,
         /// multiplier · table flux · color, lm per channel.
@@ -310,6 +316,17 @@ pub struct SensorSet {
     /// this; point k = j · nu + i is cell (i, j)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub calculation_grid: Option<GridLayout>,
+    /// For a calculation surface: its requirements, which the report checks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub requirements: Option<crate::scene::Requirements>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
 }
 
 /// The layout of a calculation surface's grid, in world space.

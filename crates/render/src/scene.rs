@@ -9,6 +9,10 @@ use luxest_io::math::Vec3;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// A calculation surface's EN 12464-1 / EN 17037 requirements (one type for the scene, the
+/// compiled header and the report).
+pub use luxest_io::requirements::{DaylightTarget, Requirements};
+
 /// A whole authored scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -696,9 +700,14 @@ pub struct Luminaire {
     pub tilt_deg: f64,
     #[serde(default)]
     pub rotation_deg: f64,
-    /// Multiplies every intensity: maintenance factor × dimming × count of lamps, ≥ 0; default 1.
+    /// Multiplies every intensity: dimming × count of lamps, > 0; default 1.
     #[serde(default = "one")]
     pub multiplier: f64,
+    /// Maintenance factor MF (EN 12464-1, CIE 97), in (0, 1]; default 1. Multiplies every
+    /// intensity like `multiplier` (the compiled luminaire's multiplier is their product); the
+    /// report's luminaire schedule shows it separately.
+    #[serde(default = "one")]
+    pub maintenance_factor: f64,
     /// Tint, rescaled to luminance 1 (the photometric magnitude is the file's).
     #[serde(default = "white")]
     pub color: Rgb,
@@ -759,6 +768,10 @@ pub struct CalculationSurface {
     /// What the points measure; default planar illuminance on the rectangle's normal.
     #[serde(default)]
     pub kind: IlluminanceKind,
+    /// The task area's requirements (EN 12464-1 Ē_m and U0, EN 17037 daylight factor), which
+    /// the report checks; default none.
+    #[serde(default)]
+    pub requirements: Option<Requirements>,
 }
 
 fn default_margin() -> f64 {
@@ -833,5 +846,64 @@ mod tests {
         );
         assert_eq!(get("worn metal").kind(), MaterialKind::Blend);
         assert!(names.len() >= 9, "{names:?}");
+    }
+
+    /// The `luminaires: [ … ]` and `calculation_surfaces: [ … ]` examples of
+    /// `docs/scene-format.md` parse, with the maintenance factor and requirements they state
+    /// and the defaults of what they leave out.
+    #[test]
+    fn the_documented_luminaires_and_requirements_parse() {
+        #[derive(Deserialize)]
+        struct Lighting {
+            #[serde(default)]
+            luminaires: Vec<Luminaire>,
+            #[serde(default)]
+            calculation_surfaces: Vec<CalculationSurface>,
+            #[serde(default)]
+            requirements: Option<Requirements>,
+        }
+        let doc = include_str!("../../../docs/scene-format.md");
+        let path = std::path::Path::new("docs/scene-format.md");
+        let (mut lums, mut surfaces, mut reqs) = (Vec::new(), Vec::new(), Vec::new());
+        for block in doc.split("```ron\n").skip(1) {
+            let block = block[..block.find("```").unwrap()].trim();
+            if [
+                "luminaires: [",
+                "calculation_surfaces: [",
+                "requirements: (",
+            ]
+            .iter()
+            .any(|k| block.starts_with(k))
+            {
+                let l: Lighting = luxest_io::fsio::parse_ron(path, &format!("({block})"))
+                    .unwrap_or_else(|e| panic!("{e}\n{block}"));
+                lums.extend(l.luminaires);
+                surfaces.extend(l.calculation_surfaces);
+                reqs.extend(l.requirements);
+            }
+        }
+        assert_eq!(lums[0].maintenance_factor, 0.8);
+        assert_eq!(lums[0].multiplier, 1.0);
+        assert_eq!(
+            surfaces[0].requirements,
+            Some(Requirements {
+                em_lux: Some(500.0),
+                u0: Some(0.6),
+                daylight_factor: None
+            })
+        );
+        // The wall sets no requirements: none by default.
+        assert_eq!(surfaces[1].requirements, None);
+        assert_eq!(
+            reqs,
+            [Requirements {
+                em_lux: Some(300.0),
+                u0: Some(0.4),
+                daylight_factor: Some(DaylightTarget {
+                    median_percent: 2.0,
+                    min_percent: Some(0.7)
+                }),
+            }]
+        );
     }
 }

@@ -1,9 +1,10 @@
-//! The `report` command line: reads sensor results and the compiled scene's header, writes the
-//! tables, isolux plots and Markdown report of every calculation surface (see the crate docs).
+//! The `report` command line: reads sensor results, the compiled scene's header and optionally
+//! a luminance image, writes the tables, isolux plots, the Markdown and the HTML report of every
+//! calculation surface (see the crate docs).
 
-use crate::markdown::{self, ReportContext, SurfaceReport};
+use crate::markdown::{self, ReportContext, Signature, SurfaceReport};
 use crate::surface::UncertaintyMethod;
-use crate::{input, peer, plot, scene_info, tables};
+use crate::{checks, daylight, html, input, luminance, peer, plot, scene_info, tables};
 use clap::Parser;
 use luxest_io::cli::Console;
 use luxest_io::outputs::{path_component, OutputPlan};
@@ -13,8 +14,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Lighting report of a scene's calculation surfaces: per surface a CSV and RON table, an
-/// isolux PNG, and one Markdown report with the luminaires, Eavg, Emin, Emax, U0, Ud (each ±
-/// its standard error) and an optional peer comparison.
+/// isolux PNG, and one Markdown and one self-contained HTML report with the luminaire schedule,
+/// Eavg, Emin, Emax, U0, Ud (each ± its standard error) checked against the scene's
+/// requirements, glare and daylight figures when the results carry them, the false-colour
+/// luminance image, an optional peer comparison and the signature block.
 #[derive(Parser, Debug)]
 #[command(name = "report", version)]
 pub struct Args {
@@ -34,6 +37,19 @@ pub struct Args {
     /// Fail (exit 1, after writing the report) if any point disagrees with the peer.
     #[arg(long, requires = "peer")]
     pub require_peer_agreement: bool,
+    /// A luminance image of the room (OpenEXR, linear RGB in cd/m², from `trace` or `estimate
+    /// image` on the same compiled scene): drawn in false colour with its cd/m² scale.
+    #[arg(long, value_name = "EXR")]
+    pub luminance: Option<PathBuf>,
+    /// The signature block's designer (left blank to sign by hand when not given).
+    #[arg(long)]
+    pub designer: Option<String>,
+    /// The signature block's date.
+    #[arg(long)]
+    pub date: Option<String>,
+    /// The signature block's checker.
+    #[arg(long)]
+    pub checked_by: Option<String>,
     #[command(flatten)]
     pub console: Console,
 }
@@ -42,13 +58,17 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let start = Instant::now();
     let results = SensorResults::read_ron(&args.results)?;
-    let sources = match &args.scene_info {
+    let header = match &args.scene_info {
         Some(p) => {
             let (header, hash) = scene_info::read(p)?;
             scene_info::check_matches(p, &header, hash.as_deref(), &args.results, &results)?;
-            Some(scene_info::light_sources(p, &header)?)
+            Some(header)
         }
         None => None,
+    };
+    let sources = match (&args.scene_info, &header) {
+        (Some(p), Some(h)) => Some(scene_info::light_sources(p, h)?),
+        _ => None,
     };
     let surfaces = input::surfaces(&args.results, &results)?;
     let peer = match &args.peer {
@@ -76,7 +96,12 @@ pub fn run(args: Args) -> Result<()> {
         ));
     }
     let md_path = dir.join("report.md");
-    let mut outputs = vec![md_path.clone()];
+    let html_path = dir.join("report.html");
+    let luminance_png = "luminance.png";
+    let mut outputs = vec![md_path.clone(), html_path.clone()];
+    if args.luminance.is_some() {
+        outputs.push(dir.join(luminance_png));
+    }
     for (c, r, p) in &names {
         outputs.extend([dir.join(c), dir.join(r), dir.join(p)]);
     }
@@ -85,6 +110,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(p) = &args.peer {
         inputs.push(p.clone());
     }
+    inputs.extend(args.luminance.clone());
     let mut plan = OutputPlan::new(&inputs, &outputs)?;
 
     let lum_positions: Vec<[f64; 3]> = sources
@@ -131,22 +157,60 @@ pub fn run(args: Args) -> Result<()> {
             Some((path, p)) => peer::compare(path, s, p)?,
             None => None,
         };
-        computed.push((stats, method, comparison));
+        let req = header
+            .as_ref()
+            .and_then(|h| scene_info::requirements(h, &s.name));
+        let surface_checks = checks::surface(req, &stats);
+        let daylight = match &results.sky {
+            Some(sky) => {
+                let f = daylight::figures(&args.results, &stats, sky)?;
+                let c = req
+                    .and_then(|r| r.daylight_factor.as_ref())
+                    .map_or(Vec::new(), |t| daylight::checks(t, &f));
+                Some((f, c))
+            }
+            None => None,
+        };
+        computed.push((stats, method, comparison, bytes, surface_checks, daylight));
     }
+    for g in &results.glare {
+        if !(g.ugr.is_finite() && g.standard_error.is_finite()) {
+            return Err(luxest_io::Error::at(
+                &args.results,
+                format!("glare of observer \"{}\"", g.observer),
+                format!(
+                    "UGR {} ± {} is not a finite number",
+                    g.ugr, g.standard_error
+                ),
+            ));
+        }
+    }
+    let luminance = match &args.luminance {
+        Some(p) => {
+            let title = format!("{}: luminance (cd/m2)", results.scene);
+            let l = luminance::render(p, &title, &results.run.scene_hash)?;
+            plan.write_bytes(&dir.join(luminance_png), &l.png)?;
+            Some((luminance_png.to_string(), l))
+        }
+        None => None,
+    };
 
     let reports: Vec<SurfaceReport> = surfaces
         .iter()
         .zip(&names)
         .zip(&computed)
         .map(
-            |((s, (csv, ron, png)), (stats, method, cmp))| SurfaceReport {
+            |((s, (csv, ron, png)), (stats, method, cmp, bytes, checks, daylight))| SurfaceReport {
                 surface: s,
                 stats,
                 method: *method,
                 png: png.clone(),
                 csv: csv.clone(),
                 ron: ron.clone(),
+                png_bytes: bytes.clone(),
                 comparison: cmp.clone(),
+                checks: checks.clone(),
+                daylight: daylight.clone(),
             },
         )
         .collect();
@@ -162,12 +226,23 @@ pub fn run(args: Args) -> Result<()> {
             (Some(n), Some((_, p))) => Some((n.as_str(), p)),
             _ => None,
         },
+        glare: &results.glare,
+        glare_checks: results.glare.iter().map(checks::glare).collect(),
+        sky: results.sky.as_ref(),
+        luminance,
+        signature: Signature {
+            designer: args.designer.clone(),
+            date: args.date.clone(),
+            checked_by: args.checked_by.clone(),
+        },
     };
     let text = markdown::render(&ctx, &reports);
     plan.write_bytes(&md_path, text.as_bytes())?;
+    plan.write_bytes(&html_path, html::render(&ctx, &reports).as_bytes())?;
     plan.commit()?;
     args.console.note(format_args!(
-        "report: wrote {} ({} surface{}, {:.2} s)",
+        "report: wrote {} and {} ({} surface{}, {:.2} s)",
+        html_path.display(),
         md_path.display(),
         surfaces.len(),
         if surfaces.len() == 1 { "" } else { "s" },

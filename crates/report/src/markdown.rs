@@ -1,10 +1,16 @@
-//! The Markdown report of a scene: run, luminaires, per-surface figures with their
-//! uncertainties and plot, and the peer comparison when one is given.
+//! The Markdown report of a scene (kept beside the HTML report for diffs, with the same
+//! tables): run, luminaire schedule, per-surface figures with their uncertainties, requirement
+//! checks and plot, glare, daylight, the luminance image, the peer comparison when one is given
+//! and the signature block. [`ReportContext`] and [`SurfaceReport`] are what both reports print.
 
+use crate::checks::Check;
+use crate::daylight::DaylightFigures;
+use crate::luminance::LuminanceImage;
 use crate::peer::{PeerResults, SurfaceComparison, REL_TOLERANCE, SIGMAS};
 use crate::scene_info::LightSources;
 use crate::surface::{Surface, UncertaintyMethod};
 use luxest_io::meta::RunInfo;
+use luxest_io::sensors::{GlareResult, SkyInfo};
 use luxest_photometry::{Estimate, GridStats};
 use std::fmt::Write;
 
@@ -17,7 +23,41 @@ pub struct SurfaceReport<'a> {
     pub png: String,
     pub csv: String,
     pub ron: String,
+    /// The isolux plot's PNG (the HTML report embeds it).
+    pub png_bytes: Vec<u8>,
     pub comparison: Option<SurfaceComparison>,
+    /// The surface's figures against its requirements.
+    pub checks: Vec<Check>,
+    /// Daylight factors (with a sky in the results) and their checks against the target.
+    pub daylight: Option<(DaylightFigures, Vec<Check>)>,
+}
+
+impl SurfaceReport<'_> {
+    /// How the standard errors were obtained, in a sentence (with the minimum's caveat).
+    pub fn method_text(&self) -> String {
+        format!(
+            "{}{}",
+            match self.method {
+                UncertaintyMethod::Jackknife { batches } => format!(
+                    "Standard errors by the delete-one-batch jackknife over {batches} independent batches of light paths (correlations between points included)."
+                ),
+                UncertaintyMethod::Independent => "Standard errors propagated from the per-point standard errors with the points assumed independent (the results carry no per-batch values), which underestimates them when points share light paths.".to_string(),
+            },
+            if self.stats.min_is_ambiguous(2.0) {
+                " Another point lies within 2 combined standard errors of the minimum, so Emin, U0 and Ud and their standard errors are approximate (a minimum of noisy values is biased low)."
+            } else {
+                ""
+            }
+        )
+    }
+}
+
+/// Who signs the report (empty fields are left to fill in by hand).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Signature {
+    pub designer: Option<String>,
+    pub date: Option<String>,
+    pub checked_by: Option<String>,
 }
 
 /// The report's inputs besides the surfaces.
@@ -28,6 +68,13 @@ pub struct ReportContext<'a> {
     pub singularity: &'a str,
     pub sources: Option<&'a LightSources>,
     pub peer: Option<(&'a str, &'a PeerResults)>,
+    /// UGR per observer and line of sight, and each one's check against its limit.
+    pub glare: &'a [GlareResult],
+    pub glare_checks: Vec<Option<Check>>,
+    pub sky: Option<&'a SkyInfo>,
+    /// The false-colour luminance image: its file name in the report's folder, and it.
+    pub luminance: Option<(String, LuminanceImage)>,
+    pub signature: Signature,
 }
 
 /// `value ± se unit (rel %)` with a precision that shows the standard error's first two digits.
@@ -35,13 +82,19 @@ pub fn format_estimate(e: Estimate, unit: &str) -> String {
     format_figure(e.value, e.std_error, unit)
 }
 
-/// [`format_estimate`] of a value and its standard error.
-pub fn format_figure(value: f64, std_error: f64, unit: &str) -> String {
+/// `value ± se` with the precision of [`format_figure`], without the relative error (for
+/// figures on a log scale such as UGR, where a relative error means little).
+pub fn format_plain(value: f64, std_error: f64) -> String {
     let digits = if std_error > 0.0 {
         (1 - std_error.log10().floor() as i32).clamp(0, 6) as usize
     } else {
         3
     };
+    format!("{:.*} ± {:.*}", digits, value, digits, std_error)
+}
+
+/// [`format_estimate`] of a value and its standard error.
+pub fn format_figure(value: f64, std_error: f64, unit: &str) -> String {
     let rel = if value != 0.0 {
         format!(" ({:.2} %)", 100.0 * (std_error / value).abs())
     } else {
@@ -52,12 +105,44 @@ pub fn format_figure(value: f64, std_error: f64, unit: &str) -> String {
     } else {
         format!(" {unit}")
     };
-    format!("{:.*} ± {:.*}{unit}{rel}", digits, value, digits, std_error)
+    format!("{}{unit}{rel}", format_plain(value, std_error))
 }
 
 fn group_digits(x: f64) -> String {
     format!("{x:.0}")
 }
+
+/// `Total: 5 luminaires, 14720 lm, 150.0 W input power.`
+pub fn total_line(src: &LightSources) -> String {
+    let count: usize = src.groups.iter().map(|g| g.count).sum();
+    format!(
+        "Total: {} luminaire{}, {} lm{}.",
+        count,
+        if count == 1 { "" } else { "s" },
+        group_digits(src.total_flux_lm()),
+        match src.total_input_watts() {
+            Some(w) if count > 0 => format!(", {w:.1} W input power"),
+            _ => ", input power not stated in every file".to_string(),
+        }
+    )
+}
+
+fn check_line(s: &mut String, what: &str, c: &Check) {
+    let value = match c.value {
+        Some(v) => format_estimate(v, c.unit),
+        None => "undefined (no light)".to_string(),
+    };
+    let _ = writeln!(
+        s,
+        "| {what} | {} | {value} | {} | **{}** |",
+        c.figure,
+        c.requirement_text(),
+        c.verdict_text()
+    );
+}
+
+const CHECK_HEAD: &str =
+    "| where | figure | value ± standard error | required | verdict |\n|---|---|---|---|---|";
 
 /// The whole Markdown text.
 pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
@@ -78,7 +163,21 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
         ctx.singularity
     );
 
-    let _ = writeln!(s, "## Luminaires\n");
+    let checks = crate::html::all_checks(ctx, surfaces);
+    if checks.is_empty() {
+        let _ = writeln!(s, "The scene states no requirements: nothing is checked.\n");
+    } else {
+        let failed = checks.iter().filter(|c| !c.pass).count();
+        let _ = writeln!(
+            s,
+            "**{}**: {} of {} requirements met.\n",
+            if failed == 0 { "PASS" } else { "FAIL" },
+            checks.len() - failed,
+            checks.len()
+        );
+    }
+
+    let _ = writeln!(s, "## Luminaire schedule\n");
     match ctx.sources {
         None => {
             let _ = writeln!(
@@ -93,19 +192,23 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
             if !src.groups.is_empty() {
                 let _ = writeln!(
                     s,
-                    "| photometric file | count | multiplier | flux per luminaire (lm) | input power per luminaire (W) | luminaires |\n|---|---:|---:|---:|---:|---|"
+                    "| luminaires | photometric file | lumens (file) | count | multiplier | maintenance factor | flux per luminaire (lm) | total flux (lm) | input power per luminaire (W) |\n|---|---|---:|---:|---:|---:|---:|---:|---:|"
                 );
                 for g in &src.groups {
                     let _ = writeln!(
                         s,
-                        "| `{}` | {} | {} | {:.1} | {} | {} |",
+                        "| {} | `{}` | {} | {} | {} | {} | {:.1} | {:.0} | {} |",
+                        g.names.join(", "),
                         g.file,
+                        g.file_flux_lm
+                            .map_or("not stated".to_string(), |f| format!("{f:.0}")),
                         g.count,
                         g.multiplier,
+                        g.maintenance_factor,
                         g.flux_lm,
+                        g.flux_lm * g.count as f64,
                         g.input_watts
                             .map_or("not stated".to_string(), |w| format!("{w}")),
-                        g.names.join(", ")
                     );
                 }
                 s.push('\n');
@@ -116,18 +219,7 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
             if !src.other.is_empty() {
                 s.push('\n');
             }
-            let count: usize = src.groups.iter().map(|g| g.count).sum();
-            let _ = writeln!(
-                s,
-                "Total: {} luminaire{}, {} lm{}.\n",
-                count,
-                if count == 1 { "" } else { "s" },
-                group_digits(src.total_flux_lm()),
-                match src.total_input_watts() {
-                    Some(w) if count > 0 => format!(", {w:.1} W input power"),
-                    _ => ", input power not stated in every file".to_string(),
-                }
-            );
+            let _ = writeln!(s, "{}\n", total_line(src));
         }
     }
 
@@ -135,11 +227,118 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
     for r in surfaces {
         surface_section(&mut s, r);
     }
+    if !ctx.glare.is_empty() {
+        glare_section(&mut s, ctx);
+    }
+    if let Some(sky) = ctx.sky {
+        daylight_section(&mut s, sky, surfaces);
+    }
+    if let Some((file, l)) = &ctx.luminance {
+        let _ = writeln!(s, "## Luminance\n");
+        let _ = writeln!(
+            s,
+            "False-colour luminance of the room from `{}` ({} × {} px, {}), on a logarithmic scale from {} to {} cd/m²; median {:.1} cd/m², largest {:.0} cd/m².\n\n![false-colour luminance]({file})\n",
+            l.source, l.width, l.height, l.provenance, l.lo, l.hi, l.median, l.max
+        );
+    }
 
     if let Some((file, peer)) = ctx.peer {
         peer_section(&mut s, ctx, file, peer, surfaces);
     }
+    let sig = &ctx.signature;
+    let _ = writeln!(s, "## Signatures\n\n| | name | signature |\n|---|---|---|");
+    for (what, v) in [
+        ("Designer", &sig.designer),
+        ("Date", &sig.date),
+        ("Checked by", &sig.checked_by),
+    ] {
+        let _ = writeln!(s, "| {what} | {} | |", v.as_deref().unwrap_or(""));
+    }
     s
+}
+
+fn glare_section(s: &mut String, ctx: &ReportContext) {
+    let _ = writeln!(s, "## Glare (UGR)\n");
+    let _ = writeln!(
+        s,
+        "Unified glare rating (CIE 117) per observer and line of sight; background luminance L_b = indirect vertical illuminance at the eye / π. Values below 10 are printed as computed (tables print \"<10\").\n"
+    );
+    let _ = writeln!(
+        s,
+        "| observer | eye (m) | line of sight | UGR ± SE | L_b (cd/m²) | luminaires seen | UGR_L | verdict |\n|---|---|---|---:|---:|---:|---:|---|"
+    );
+    for (g, c) in ctx.glare.iter().zip(&ctx.glare_checks) {
+        let _ = writeln!(
+            s,
+            "| {} | ({:.2}, {:.2}, {:.2}) | ({:.2}, {:.2}, {:.2}) | {} | {} | {} | {} | {} |",
+            g.observer,
+            g.position.x,
+            g.position.y,
+            g.position.z,
+            g.view.x,
+            g.view.y,
+            g.view.z,
+            format_plain(g.ugr, g.standard_error),
+            format_plain(
+                g.background_luminance.value,
+                g.background_luminance.standard_error
+            ),
+            g.sources.len(),
+            g.limit.map_or("none".to_string(), |l| format!("{l}")),
+            c.as_ref().map_or("not checked".to_string(), |c| format!(
+                "**{}**",
+                c.verdict_text()
+            ))
+        );
+    }
+    s.push('\n');
+}
+
+fn daylight_section(s: &mut String, sky: &SkyInfo, surfaces: &[SurfaceReport]) {
+    let _ = writeln!(s, "## Daylight\n");
+    let _ = writeln!(
+        s,
+        "{}: unobstructed horizontal illuminance E_h = {:.0} lx{}. Daylight factor DF = 100 % · E / E_h (EN 17037).\n",
+        sky.description,
+        sky.horizontal_illuminance_lux,
+        match &sky.sun {
+            Some(sun) => format!(
+                "; sun at altitude {:.1}°, azimuth {:.1}°",
+                sun.altitude_deg, sun.azimuth_deg
+            ),
+            None => String::new(),
+        }
+    );
+    let _ = writeln!(
+        s,
+        "| surface | DF median | DF min | DF mean |\n|---|---:|---:|---:|"
+    );
+    for r in surfaces {
+        if let Some((f, _)) = &r.daylight {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {} |",
+                r.surface.name,
+                format_estimate(f.median, "%"),
+                format_estimate(f.min, "%"),
+                format_estimate(f.mean, "%")
+            );
+        }
+    }
+    s.push('\n');
+    let mut head = false;
+    for r in surfaces {
+        for c in r.daylight.iter().flat_map(|d| &d.1) {
+            if !head {
+                let _ = writeln!(s, "{CHECK_HEAD}");
+                head = true;
+            }
+            check_line(s, &r.surface.name, c);
+        }
+    }
+    if head {
+        s.push('\n');
+    }
 }
 
 fn surface_section(s: &mut String, r: &SurfaceReport) {
@@ -181,25 +380,19 @@ fn surface_section(s: &mut String, r: &SurfaceReport) {
     };
     let _ = writeln!(s, "| U0 = Emin/Eavg | {u0} |");
     let _ = writeln!(s, "| Ud = Emin/Emax | {ud} |\n");
-    let _ = writeln!(
-        s,
-        "{}{}\n",
-        match r.method {
-            UncertaintyMethod::Jackknife { batches } => format!(
-                "Standard errors by the delete-one-batch jackknife over {batches} independent batches of light paths (correlations between points included)."
-            ),
-            UncertaintyMethod::Independent => "Standard errors propagated from the per-point standard errors with the points assumed independent (the results carry no per-batch values), which underestimates them when points share light paths.".to_string(),
-        },
-        if st.min_is_ambiguous(2.0) {
-            " Another point lies within 2 combined standard errors of the minimum, so Emin, U0 and Ud and their standard errors are approximate (a minimum of noisy values is biased low)."
-        } else {
-            ""
+    let _ = writeln!(s, "{}\n", r.method_text());
+    if !r.checks.is_empty() {
+        let _ = writeln!(s, "{CHECK_HEAD}");
+        for c in &r.checks {
+            check_line(s, &r.surface.name, c);
         }
-    );
+        s.push('\n');
+    }
     let _ = writeln!(s, "![isolux plot of {}]({})\n", r.surface.name, r.png);
 }
 
-fn capitalise(w: &str) -> String {
+/// `w` with its first letter upper-case.
+pub fn capitalise(w: &str) -> String {
     let mut c = w.chars();
     match c.next() {
         Some(f) => f.to_uppercase().collect::<String>() + c.as_str(),

@@ -1,5 +1,5 @@
-//! The luminaire list of a scene, read from its compiled header as `scene-compile --info` prints
-//! it (`build/<scene>/scene.info.ron`).
+//! The luminaire schedule and the calculation surfaces' requirements of a scene, read from its
+//! compiled header as `scene-compile --info` prints it (`build/<scene>/scene.info.ron`).
 //!
 //! The header's type lives in `luxest-render`, which a report stage must not depend on (no
 //! stage reaches the renderer's crate; a report needs no Embree). So this module reads the same
@@ -10,6 +10,7 @@
 
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
+use luxest_io::requirements::Requirements;
 use luxest_io::{Error, Result};
 use serde::Deserialize;
 use std::path::Path;
@@ -21,6 +22,16 @@ pub struct SceneHeader {
     pub emitters: Vec<Emitter>,
     #[serde(default)]
     pub photometries: Vec<PhotometricTable>,
+    #[serde(default)]
+    pub sensors: Vec<SensorSet>,
+}
+
+/// The part of each sensor set a report reads: a calculation surface's requirements.
+#[derive(Clone, Debug, Deserialize)]
+pub struct SensorSet {
+    pub name: String,
+    #[serde(default)]
+    pub requirements: Option<Requirements>,
 }
 
 /// The part of each emitter a report reads.
@@ -43,9 +54,16 @@ pub enum Emitter {
         name: String,
         position: Vec3,
         photometry: u32,
+        /// The scene's multiplier × its maintenance factor.
         multiplier: f64,
+        #[serde(default = "one")]
+        maintenance_factor: f64,
         flux_rgb: Rgb,
     },
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// The part of each photometric table a report reads.
@@ -59,13 +77,20 @@ pub struct PhotometricTable {
     pub input_watts: Option<f64>,
 }
 
-/// Luminaires of one kind (same file, same multiplier), as a report lists them.
+/// Luminaires of one kind (same file, multiplier and maintenance factor), as a report lists
+/// them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LuminaireGroup {
     pub file: String,
+    /// The scene's multiplier (dimming, lamps), the maintenance factor excluded.
     pub multiplier: f64,
+    pub maintenance_factor: f64,
     pub count: usize,
-    /// Flux of one luminaire: multiplier × table flux, lm.
+    /// The flux the file states for one luminaire (lamp lumens, or EULUMDAT's luminaire flux).
+    pub file_flux_lm: Option<f64>,
+    /// The table's flux, ∫ I dΩ, lm (multiplier 1, new).
+    pub table_flux_lm: f64,
+    /// Flux of one luminaire as computed: multiplier × maintenance factor × table flux, lm.
     pub flux_lm: f64,
     /// Input power of one luminaire as its file states it, W.
     pub input_watts: Option<f64>,
@@ -175,7 +200,8 @@ pub fn check_matches(
     Ok(())
 }
 
-/// The scene's luminaires grouped by file and multiplier; `path` names the file in errors.
+/// The scene's luminaires grouped by file, multiplier and maintenance factor; `path` names the
+/// file in errors.
 pub fn light_sources(path: &Path, h: &SceneHeader) -> Result<LightSources> {
     group(path, h)
 }
@@ -194,8 +220,20 @@ fn group(path: &Path, h: &SceneHeader) -> Result<LightSources> {
                 position,
                 photometry,
                 multiplier,
+                maintenance_factor,
                 ..
             } => {
+                if !(maintenance_factor.is_finite()
+                    && *maintenance_factor > 0.0
+                    && *maintenance_factor <= 1.0)
+                {
+                    return Err(Error::at(
+                        path,
+                        format!("emitter \"{name}\""),
+                        format!("maintenance factor {maintenance_factor} is not in (0, 1]"),
+                    ));
+                }
+                let scene_multiplier = multiplier / maintenance_factor;
                 let t = h.photometries.get(*photometry as usize).ok_or_else(|| {
                     Error::at(
                         path,
@@ -210,19 +248,22 @@ fn group(path: &Path, h: &SceneHeader) -> Result<LightSources> {
                     name: name.clone(),
                     position: [position.x, position.y, position.z],
                 });
-                match out
-                    .groups
-                    .iter_mut()
-                    .find(|g| g.file == t.source && g.multiplier == *multiplier)
-                {
+                match out.groups.iter_mut().find(|g| {
+                    g.file == t.source
+                        && g.multiplier == scene_multiplier
+                        && g.maintenance_factor == *maintenance_factor
+                }) {
                     Some(g) => {
                         g.count += 1;
                         g.names.push(name.clone());
                     }
                     None => out.groups.push(LuminaireGroup {
                         file: t.source.clone(),
-                        multiplier: *multiplier,
+                        multiplier: scene_multiplier,
+                        maintenance_factor: *maintenance_factor,
                         count: 1,
+                        file_flux_lm: t.file_flux_lm,
+                        table_flux_lm: t.table_flux_lm,
                         flux_lm: multiplier * t.table_flux_lm,
                         input_watts: t.input_watts,
                         names: vec![name.clone()],
@@ -232,4 +273,12 @@ fn group(path: &Path, h: &SceneHeader) -> Result<LightSources> {
         }
     }
     Ok(out)
+}
+
+/// The requirements of the calculation surface named `surface`, if the header gives any.
+pub fn requirements<'a>(h: &'a SceneHeader, surface: &str) -> Option<&'a Requirements> {
+    h.sensors
+        .iter()
+        .find(|s| s.name == surface)
+        .and_then(|s| s.requirements.as_ref())
 }

@@ -273,6 +273,7 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
                 })
                 .collect::<Result<Vec<_>>>()?,
             calculation_grid: None,
+            requirements: None,
         },
         Sensor::Grid {
             name,
@@ -309,6 +310,7 @@ fn expand_sensor(path: &Path, place: &str, s: &Sensor) -> Result<SensorSet> {
                     nu: counts.0,
                     nv: counts.1,
                 }),
+                requirements: None,
             }
         }
     })

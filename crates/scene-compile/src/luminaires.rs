@@ -59,6 +59,20 @@ pub(crate) fn check(c: &Check, place: &str, l: &Luminaire) -> Result<()> {
     c.finite(&format!("{place}.tilt_deg"), l.tilt_deg)?;
     c.finite(&format!("{place}.rotation_deg"), l.rotation_deg)?;
     c.positive(&format!("{place}.multiplier"), l.multiplier, "multiplier")?;
+    c.positive(
+        &format!("{place}.maintenance_factor"),
+        l.maintenance_factor,
+        "maintenance factor",
+    )?;
+    if l.maintenance_factor > 1.0 {
+        return Err(c.fail(
+            &format!("{place}.maintenance_factor"),
+            format!(
+                "{} is above 1: a maintenance factor is the share of the new installation's light that remains",
+                l.maintenance_factor
+            ),
+        ));
+    }
     c.emission_rgb(&format!("{place}.color"), l.color)?;
     let ext = Path::new(&l.file)
         .extension()
@@ -191,7 +205,9 @@ pub fn compile(scene_path: &Path, luminaires: &[Luminaire]) -> Result<CompiledLu
         let frame = frame_in_world(l.aim, l.tilt_deg, l.rotation_deg)
             .map_err(|m| Error::at(scene_path, &place, m))?;
         let color_rgb = l.color.with_luminance(1.0).expect("validated");
-        let flux_lm = l.multiplier * out.tables[index as usize].table_flux_lm;
+        // The maintenance factor scales the intensities like the multiplier.
+        let multiplier = l.multiplier * l.maintenance_factor;
+        let flux_lm = multiplier * out.tables[index as usize].table_flux_lm;
         let flux_rgb: Rgb = color_rgb * flux_lm;
         if !(flux_rgb.is_finite() && flux_lm > 0.0) {
             return Err(Error::at(
@@ -201,7 +217,7 @@ pub fn compile(scene_path: &Path, luminaires: &[Luminaire]) -> Result<CompiledLu
             ));
         }
         // The bound every other emitter has (a 1e300 cd table gave Eavg inf ± NaN).
-        let peak_cd = l.multiplier
+        let peak_cd = multiplier
             * out.tables[index as usize]
                 .cd
                 .iter()
@@ -249,7 +265,8 @@ pub fn compile(scene_path: &Path, luminaires: &[Luminaire]) -> Result<CompiledLu
             position: l.position,
             frame,
             photometry: index,
-            multiplier: l.multiplier,
+            multiplier,
+            maintenance_factor: l.maintenance_factor,
             color_rgb,
             flux_rgb,
             opening_points,

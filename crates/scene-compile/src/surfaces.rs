@@ -100,6 +100,9 @@ pub(crate) fn check(c: &Check, place: &str, s: &CalculationSurface) -> Result<Ca
         c.positive(&format!("{place}.spacing"), p, "spacing")?;
     }
     normalised_kind(c, &format!("{place}.kind"), &s.kind)?;
+    if let Some((field, msg)) = s.requirements.as_ref().and_then(|r| r.invalid()) {
+        return Err(c.fail(&format!("{place}.requirements.{field}"), msg));
+    }
     let grid = CalcGrid::new(spec(s)).map_err(|e| c.fail(place, e.0))?;
     if grid.len() > MAX_POINTS {
         return Err(c.fail(
@@ -148,5 +151,6 @@ pub fn expand(path: &Path, place: &str, s: &CalculationSurface) -> Result<Sensor
             nu: grid.nu as u32,
             nv: grid.nv as u32,
         }),
+        requirements: s.requirements.clone(),
     })
 }
