@@ -12,6 +12,7 @@
 //!   [`spot`]: spot lights' cones; [`environment`]: the environment emitter (constant sky,
 //!   equirectangular map) and its sampling;
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
+//!   [`shading`]: shading frames (vertex normals, normal maps) as Mitsuba 3 defines them;
 //! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
 //!   flush-to-zero mode, hence here and not in `luxest-io`).
 
@@ -24,6 +25,7 @@ pub mod parallel;
 pub mod rt;
 pub mod sampling;
 pub mod scene;
+pub mod shading;
 pub mod sobol;
 pub mod spot;
 pub mod texture;

@@ -85,10 +85,16 @@ pub struct Surface {
     /// Cut-out: where the surface is not there (leaves, grilles).
     #[serde(default)]
     pub opacity: Option<Opacity>,
-    /// Tangent-space normal map (glTF's convention: RGB = (x, y, z) · 0.5 + 0.5, y towards
-    /// decreasing v).
+    /// Tangent-space normal map as Mitsuba 3's `normalmap` reads it: linear RGB = (x, y, z) ·
+    /// 0.5 + 0.5 in the shading frame (x along ∂p/∂u made perpendicular to the shading normal,
+    /// y = normal × x, z the shading normal); see `docs/scene-format.md`, *Normal maps*.
     #[serde(default)]
     pub normal: Option<String>,
+    /// Multiplies the decoded normal's x and y before it is normalised (default (1, 1):
+    /// Mitsuba's `normalmap`; a glTF `normalTexture` with its `scale` s is (s, −s): glTF's y
+    /// points towards decreasing v).
+    #[serde(default = "unit_xy", skip_serializing_if = "is_unit_xy")]
+    pub normal_scale: [f64; 2],
     /// False: the surface reflects from its front side only (black from the back), as a
     /// Mitsuba 3 BSDF not wrapped in `twosided`.
     #[serde(default = "yes")]
@@ -97,6 +103,14 @@ pub struct Surface {
 
 fn yes() -> bool {
     true
+}
+
+fn unit_xy() -> [f64; 2] {
+    [1.0, 1.0]
+}
+
+fn is_unit_xy(v: &[f64; 2]) -> bool {
+    *v == [1.0, 1.0]
 }
 
 /// Opacity of a cut-out surface: `value` × the texture's `channel` (1 without a texture).

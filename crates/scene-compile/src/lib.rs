@@ -579,6 +579,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         transmission: any(bsdf::transmits),
         glossy: any(bsdf::is_glossy),
         smooth_normals: b.normals.iter().any(|n| *n != [0.0; 3]),
+        normal_maps: scene.surfaces.values().any(|s| s.normal.is_some()),
         spectral: false,
         camera: scene.camera.is_some(),
         sensors: !scene.sensors.is_empty() || !scene.calculation_surfaces.is_empty(),

@@ -251,6 +251,7 @@ fn mitsuba_scene_translates_field_by_field() {
             roughness: None,
             opacity: None,
             normal: None,
+            normal_scale: [1.0, 1.0],
             two_sided: false
         }
     );
@@ -283,6 +284,7 @@ fn mitsuba_scene_translates_field_by_field() {
                 cutoff: None
             }),
             normal: None,
+            normal_scale: [1.0, 1.0],
             two_sided: true
         }
     );
@@ -674,6 +676,7 @@ fn obj_mtl_scene_translates_its_materials() {
                 cutoff: None
             }),
             normal: None,
+            normal_scale: [1.0, 1.0],
             two_sided: true
         }
     );
@@ -805,6 +808,7 @@ fn gltf_scene_translates_nodes_materials_camera_and_lights() {
                 cutoff: Some(0.30000001192092896)
             }),
             normal: Some("leaf.png'".into()),
+            normal_scale: [1.0, 1.0],
             two_sided: true
         }
     );

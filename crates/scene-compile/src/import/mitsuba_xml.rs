@@ -1267,6 +1267,7 @@ impl<'a> Importer<'a> {
                     roughness: b.roughness,
                     opacity: b.opacity,
                     normal: None,
+                    normal_scale: [1.0, 1.0],
                     two_sided: b.two_sided,
                 },
             );

@@ -270,6 +270,7 @@ fn material(
         roughness: None,
         opacity,
         normal: None,
+        normal_scale: [1.0, 1.0],
         two_sided: true,
     });
     Ok((model, surface))
