@@ -249,6 +249,10 @@ mod tests {
 
     const UP: Vec3 = Vec3::new(0.0, 0.0, 1.0);
 
+    fn unit(x: f64, y: f64, z: f64) -> Vec3 {
+        Vec3::new(x, y, z).try_normalize().unwrap()
+    }
+
     fn lambert(r: f64) -> Material {
         Material::Lambertian {
             reflectance: Rgb::splat(r),
@@ -259,8 +263,8 @@ mod tests {
     fn a_flat_frame_is_the_bsdf_about_the_geometric_normal() {
         let s = Shading::flat(UP);
         let m = lambert(0.6);
-        let wo = Vec3::new(0.3, -0.2, 0.9).normalize();
-        let wi = Vec3::new(-0.5, 0.1, 0.4).normalize();
+        let wo = unit(0.3, -0.2, 0.9);
+        let wi = unit(-0.5, 0.1, 0.4);
         for mode in [Transport::Radiance, Transport::Flux] {
             let (f, p) = s.eval_and_pdf(&m, wo, wi, mode);
             let (g, q) = bsdf::eval_and_pdf_transport(&m, wo, wi, UP, UP, mode);
@@ -271,21 +275,21 @@ mod tests {
 
     #[test]
     fn the_adjoint_correction_is_veachs_and_stops_leaks() {
-        let ns = Vec3::new(0.3, 0.0, 1.0).normalize();
+        let ns = unit(0.3, 0.0, 1.0);
         let s = Shading::smooth(UP, ns);
-        let wo = Vec3::new(-0.2, 0.4, 0.8).normalize();
-        let wi = Vec3::new(0.6, -0.3, 0.5).normalize();
+        let wo = unit(-0.2, 0.4, 0.8);
+        let wi = unit(0.6, -0.3, 0.5);
         let expected = (wo.dot(ns) * wi.dot(UP) / (wi.dot(ns) * wo.dot(UP))).abs();
         assert!((s.adjoint(wo, wi) - expected).abs() < 1e-15);
         // Above the geometric surface, below the shading one: no light passes.
-        let leak = Vec3::new(-0.95, 0.0, 0.1).normalize();
+        let leak = unit(-0.95, 0.0, 0.1);
         assert!(leak.dot(UP) > 0.0 && leak.dot(ns) < 0.0);
         assert_eq!(s.adjoint(wo, leak), 0.0);
         assert_eq!(s.adjoint(leak, wi), 0.0);
         let m = lambert(0.5);
         assert_eq!(s.eval(&m, wo, leak, Transport::Flux), Rgb::BLACK);
         // A camera path has no such test: the value about ns alone (zero only below ns).
-        let above = Vec3::new(0.95, 0.0, -0.1).normalize();
+        let above = unit(0.95, 0.0, -0.1);
         assert!(above.dot(ns) > 0.0 && above.dot(UP) < 0.0);
         let f = s.eval(&m, wo, above, Transport::Radiance);
         assert!((f.0[0] - 0.5 / std::f64::consts::PI * above.dot(ns)).abs() < 1e-15);
@@ -296,10 +300,10 @@ mod tests {
     /// (wo, wi) equals the camera path's weight of (wi, wo) times |wi·ng| / |wo·ng|.
     #[test]
     fn light_and_camera_weights_are_adjoint() {
-        let ns = Vec3::new(-0.2, 0.25, 1.0).normalize();
+        let ns = unit(-0.2, 0.25, 1.0);
         let s = Shading::smooth(UP, ns);
         let m = lambert(0.7);
-        let mut rng = Rng::new(3);
+        let mut rng = Rng::new(3, 1);
         for _ in 0..50 {
             let a = crate::sampling::cosine_hemisphere(rng.next_f64(), rng.next_f64());
             let b = crate::sampling::cosine_hemisphere(rng.next_f64(), rng.next_f64());
@@ -315,7 +319,7 @@ mod tests {
 
     #[test]
     fn a_flat_normal_map_texel_changes_nothing_but_the_shadowing_term_is_one() {
-        let wo = Vec3::new(0.1, 0.7, 0.4).normalize();
+        let wo = unit(0.1, 0.7, 0.4);
         let s = Shading::mapped(
             (UP, UP),
             [0.5, 0.5, 1.0, 1.0],
@@ -325,7 +329,7 @@ mod tests {
         );
         assert!((s.n - UP).length() < 1e-15);
         let m = lambert(0.4);
-        let wi = Vec3::new(-0.3, 0.2, 0.6).normalize();
+        let wi = unit(-0.3, 0.2, 0.6);
         let (f, _) = s.eval_and_pdf(&m, wo, wi, Transport::Radiance);
         assert!((f.0[1] - 0.4 / std::f64::consts::PI * wi.dot(UP)).abs() < 1e-15);
     }
@@ -335,14 +339,14 @@ mod tests {
         // Texel (x, y, z) = (0.6, 0, 0.8) with ∂p/∂u along +y: the normal tilts towards +y.
         let texel = [0.8, 0.5, 0.9, 1.0];
         let dp_du = Vec3::new(0.0, 2.0, 0.0);
-        let wo = Vec3::new(0.0, 0.3, 1.0).normalize();
+        let wo = unit(0.0, 0.3, 1.0);
         let s = Shading::mapped((UP, UP), texel, [1.0, 1.0], dp_du, wo);
-        let expected = Vec3::new(0.0, 0.6, 0.8).normalize();
+        let expected = unit(0.0, 0.6, 0.8);
         assert!((s.n - expected).length() < 1e-6, "{:?}", s.n);
         // From a direction on the other side of the mapped normal (but above ns): x, y negated.
-        let grazing = Vec3::new(0.0, -1.0, 0.05).normalize();
+        let grazing = unit(0.0, -1.0, 0.05);
         let f = Shading::mapped((UP, UP), texel, [1.0, 1.0], dp_du, grazing);
-        let flipped = Vec3::new(0.0, -0.6, 0.8).normalize();
+        let flipped = unit(0.0, -0.6, 0.8);
         assert!((f.n - flipped).length() < 1e-6, "{:?}", f.n);
         // The y axis is ns × s: texel y tilts towards −x for ∂p/∂u along +y.
         let y = Shading::mapped((UP, UP), [0.5, 0.8, 0.9, 1.0], [1.0, 1.0], dp_du, wo);
@@ -357,7 +361,7 @@ mod tests {
         // Map normal at 30° from ns: tan² = 1/3, α² = 1/24.
         let t = (30f64).to_radians();
         let texel = [(t.sin() + 1.0) / 2.0, 0.5, (t.cos() + 1.0) / 2.0, 1.0];
-        let wo = Vec3::new(0.2, 0.0, 1.0).normalize();
+        let wo = unit(0.2, 0.0, 1.0);
         let s = Shading::mapped(
             (UP, UP),
             texel.map(|v| v as f32),
@@ -371,7 +375,7 @@ mod tests {
         let expected = 2.0 / (1.0 + (1.0 + alpha2 * tan2_wi).sqrt());
         assert!((s.map_factor(wi) - expected).abs() < 1e-6);
         // Below the mapped normal but above ns: nothing.
-        let below = Vec3::new(-0.9, 0.0, 0.3).normalize();
+        let below = unit(-0.9, 0.0, 0.3);
         assert!(below.dot(s.n) < 0.0 && below.dot(UP) > 0.0);
         assert_eq!(s.map_factor(below), 0.0);
     }
