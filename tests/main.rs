@@ -11,6 +11,7 @@ mod evaluate_cli;
 mod lighting;
 mod luminaires;
 mod metrics_parity;
+mod normals;
 mod progress;
 mod reliability;
 mod reliability_processes;
