@@ -169,6 +169,19 @@ fn read_mtl(
                     ));
                 }
             }
+            "bump" | "map_Bump" | "map_bump" | "norm" | "map_Kn" => {
+                // The MTL specification's `bump` is a height map, yet exporters write tangent-
+                // space normal maps under it and under `norm`, in either y convention (OpenGL
+                // or DirectX): which one a file means cannot be told from it.
+                return Err(Error::at(
+                    path,
+                    place,
+                    format!(
+                        "MTL statement \"{key}\" is ambiguous (a height map or a normal map, y \
+                         up or down) and is not imported: give the scene's `normal` map in RON"
+                    ),
+                ));
+            }
             _ => {
                 return Err(Error::at(
                     path,
