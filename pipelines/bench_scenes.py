@@ -478,7 +478,7 @@ def main(argv=None):
         help="public scenes are rendered at about this many pixels, their film's aspect kept",
     )
     ap.add_argument("--variant", default="llvm_ad_rgb")
-    ap.add_argument("--only", help="comma-separated names: run these scenes alone")
+    ap.add_argument("--only", help="comma-separated names of this script's scenes to run (others are skipped)")
     ap.add_argument("-o", "--out", required=True)
     a = ap.parse_args(argv)
     work, bins = Path(a.work_dir), Path(a.bins)
@@ -487,13 +487,13 @@ def main(argv=None):
 
     mi.set_variant(a.variant)
     scenes = write_scenes(work / "scenes", w, h)
+    if a.only is not None:
+        scenes = {k: v for k, v in scenes.items() if k in a.only.split(",")}
     for s in a.scene:
         name, _, path = s.partition("=")
         scenes[name] = Path(path)
     rows, failures = [], []
     public = {name for name, _ in (s.partition("=")[::2] for s in a.scene)}
-    if a.only:
-        scenes = {k: v for k, v in scenes.items() if k in a.only.split(",")}
     for name, xml in scenes.items():
         d = work / name
         d.mkdir(parents=True, exist_ok=True)
