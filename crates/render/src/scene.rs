@@ -412,6 +412,12 @@ pub struct Object {
     /// `face_normals`).
     #[serde(default, skip_serializing_if = "is_false")]
     pub face_normals: bool,
+    /// Where the mesh has no vertex normals, computes them as Mitsuba 3 does for its OBJ, PLY
+    /// and serialized meshes: each vertex the normalised sum of its faces' unit normals
+    /// weighted by the face's angle at it (Thürmer and Wüthrich 1998). Ignored with
+    /// `face_normals`; the Mitsuba importer sets it for those shapes.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub compute_normals: bool,
 }
 
 fn is_false(b: &bool) -> bool {

@@ -372,6 +372,8 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         let mut mesh = object_mesh(path, &place, &o.shape)?;
         if o.face_normals {
             mesh.normals = None;
+        } else if o.compute_normals && mesh.normals.is_none() {
+            mesh.normals = Some(shapes::angle_weighted_normals(&mesh));
         }
         let surface = scene.surfaces.get(&o.material);
         let textured_surface = surface.is_some_and(|s| {

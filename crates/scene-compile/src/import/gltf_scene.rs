@@ -421,6 +421,7 @@ pub fn import(path: &Path) -> Result<Imported> {
                 emission,
                 flip_normals: false,
                 face_normals: false,
+                compute_normals: false,
             });
         }
     }

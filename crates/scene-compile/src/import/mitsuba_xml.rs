@@ -19,7 +19,8 @@
 //! not read is an error, so nothing is dropped without a word.
 //!
 //! **Objects.** Shapes `obj`, `ply`, `serialized` (versions 3 and 4), `rectangle`, `cube`, `sphere`, `disk` (with `to_world`,
-//! `flip_normals`, `face_normals`); BSDFs `diffuse`, `dielectric`, `thindielectric`,
+//! `flip_normals`, `face_normals`; vertex normals computed as Mitsuba computes them for mesh
+//! files without, [`crate::shapes::angle_weighted_normals`]); BSDFs `diffuse`, `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor` and `roughconductor` (`eta`/`k`, or a `material` preset of
 //! [`super::mitsuba_tables`]; `none`, smooth, is luxest's `Mirror`), `plastic`,
 //! `roughplastic`, `blendbsdf` (constant weight), `twosided`, `mask`, `normalmap` (its
@@ -1564,6 +1565,11 @@ impl<'a> Importer<'a> {
             other => return Err(self.fail(e, format!("unsupported shape \"{other}\""))),
         };
         let face_normals = r.boolean("face_normals", false)?;
+        // Mitsuba computes vertex normals for the mesh files that have none.
+        let mesh_file = matches!(
+            shape,
+            Shape::Obj { .. } | Shape::Ply { .. } | Shape::Serialized { .. }
+        );
         let bsdfs = r.objects("bsdf");
         let emitters = r.objects("emitter");
         let material = match bsdfs.as_slice() {
@@ -1603,6 +1609,7 @@ impl<'a> Importer<'a> {
             emission,
             flip_normals,
             face_normals,
+            compute_normals: mesh_file,
         });
         Ok(())
     }

@@ -362,6 +362,7 @@ pub fn import(path: &Path) -> Result<Imported> {
             emission: (m.ke.max_component() > 0.0).then_some(Emission::Radiance(m.ke)),
             flip_normals: false,
             face_normals: false,
+            compute_normals: false,
         });
     }
     Ok(Imported { scene, warnings })
