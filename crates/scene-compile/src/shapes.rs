@@ -27,7 +27,7 @@ pub fn angle_weighted_normals(mesh: &LocalMesh) -> Vec<Vec3> {
         for k in 0..3 {
             let (a, b) = (v[(k + 1) % 3] - v[k], v[(k + 2) % 3] - v[k]);
             if let (Some(a), Some(b)) = (a.try_normalize(), b.try_normalize()) {
-                sums[t[k] as usize] = sums[t[k] as usize] + n * unit_angle(a, b);
+                sums[t[k] as usize] += n * unit_angle(a, b);
             }
         }
     }
