@@ -130,11 +130,20 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             Cow::Borrowed(world.material(sp.triangle))
         };
         let m = &*m;
-        // The frame scattering happens in: flat scenes' kernels use the geometric normal alone.
+        // The frame scattering happens in (flat scenes' kernels never build one: the BSDF about
+        // the geometric normal, `f_cos` and `scatter` below).
         let shading = if EXTRA {
             world.shading_of(&sp, wo)
         } else {
             Shading::flat(sp.ng)
+        };
+        let f_cos = |w: Vec3| {
+            if EXTRA {
+                shading.eval_and_pdf(m, wo, w, Transport::Radiance)
+            } else {
+                let (f, p) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
+                (f * w.dot(sp.ng).abs(), p)
+            }
         };
         let is_delta = SPECULAR && bsdf::is_delta(m);
         if !is_delta && (POINT || AREA) {
@@ -145,7 +154,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             if d2 > 0.0 {
                 let d = d2.sqrt();
                 let w = v / d;
-                let (f, bp) = shading.eval_and_pdf(m, wo, w, Transport::Radiance);
+                let (f, bp) = f_cos(w);
                 if f.max_component() > 0.0 {
                     let contribution = match lp.normal {
                         Some(nl) if AREA => {
@@ -185,7 +194,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             let (u1, u2) = rng.next_2d();
             let es = env.sample(u1, u2);
             let w = es.direction;
-            let (f, bp) = shading.eval_and_pdf(m, wo, w, Transport::Radiance);
+            let (f, bp) = f_cos(w);
             if es.pdf > 0.0 && f.max_component() > 0.0 {
                 let contribution = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
                 log.shadow += 1;
@@ -204,7 +213,12 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 }
             }
         }
-        let Some(s) = shading.sample(m, wo, rng, Transport::Radiance) else {
+        let sampled = if EXTRA {
+            shading.sample(m, wo, rng, Transport::Radiance)
+        } else {
+            bsdf::sample_flat(m, wo, sp.ng, rng, Transport::Radiance)
+        };
+        let Some(s) = sampled else {
             break;
         };
         beta = beta * s.weight;
