@@ -9,7 +9,8 @@ standard errors from its own per-pixel estimates (`trace --stderr`). Every seed 
 two renderers and between Mitsuba's runs.
 
 The scenes: the material and emitter scenes this script writes (every BSDF luxest imports, with
-textures, a cut-out and a one-sided surface; point, spot, textured area, constant and map
+textures, a cut-out and a one-sided surface; meshes with vertex normals and normal maps; point,
+spot, textured area, constant and map
 environment emitters through a window), and any public scenes given with --scene NAME=PATH
 (`scenes/public/*/scene.xml`: see its README for their authors and licences).
 
@@ -73,8 +74,9 @@ def exr_rgb(path, w, h, fn):
     mi.Bitmap(a).write(str(path))
 
 
-def icosphere_obj(path, radius=1.0, level=2):
-    """An icosphere OBJ (flat-shaded by both renderers: `face_normals`)."""
+def icosphere_obj(path, radius=1.0, level=2, normals=False):
+    """An icosphere OBJ (flat-shaded by both renderers with `face_normals`; with `normals`, its
+    radial vertex normals as `vn`, which both interpolate)."""
     t = (1 + 5**0.5) / 2
     verts = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t)]
     verts += [(t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
@@ -105,7 +107,11 @@ def icosphere_obj(path, radius=1.0, level=2):
         f"vt {0.5 + math.atan2(v[0], v[2]) / (2 * math.pi):.6f} {math.acos(max(-1, min(1, v[1]))) / math.pi:.6f}"
         for v in verts
     ]
-    lines += [f"f {a + 1}/{a + 1} {b + 1}/{b + 1} {c + 1}/{c + 1}" for a, b, c in faces]
+    if normals:
+        lines += [f"vn {v[0]:.6f} {v[1]:.6f} {v[2]:.6f}" for v in verts]
+        lines += [f"f {a + 1}/{a + 1}/{a + 1} {b + 1}/{b + 1}/{b + 1} {c + 1}/{c + 1}/{c + 1}" for a, b, c in faces]
+    else:
+        lines += [f"f {a + 1}/{a + 1} {b + 1}/{b + 1} {c + 1}/{c + 1}" for a, b, c in faces]
     Path(path).write_text("\n".join(lines) + "\n")
 
 
@@ -148,6 +154,15 @@ def textures(d):
         ],
         channels=4,
     )
+
+    # A tangent-space normal map (raw): ridges along u and bumps, (n + 1) / 2 per channel.
+    def bump(x, y):
+        nx = -0.6 * math.cos(2 * math.pi * x / 16)
+        ny = -0.35 * math.sin(2 * math.pi * (x + 2 * y) / 32)
+        k = 1 / math.sqrt(nx * nx + ny * ny + 1)
+        return tuple(round(255 * (c * k + 1) / 2) for c in (nx, ny, 1.0))
+
+    png(d / "bumps.png", n, n, [[bump(x, y) for x in range(n)] for y in range(n)])
     exr_rgb(d / "lamp.exr", 16, 16, lambda x, y: (1.0 + (x % 4 == 0), 1.0, 0.6 + 0.4 * (y / 15)))
     exr_rgb(
         d / "sky.exr",
@@ -219,6 +234,45 @@ def materials_scene(d, w, h):
     write_scene(d / "materials.xml", body, dict(fov=55, origin="0, 1.5, 3.6", target="0, 1.0, 0", w=w, h=h))
 
 
+def normals_scene(d, w, h):
+    """Shading normals and normal maps: spheres whose OBJ carries vertex normals (smooth gold,
+    rough plastic, diffuse; a one-sided rough conductor), a normal-mapped rough-plastic sphere,
+    a normal-mapped diffuse panel and a normal-mapped floor (Mitsuba `normalmap`, raw bitmap,
+    outside `twosided`), lit by the textured lamp and a point light."""
+    smooth = [
+        '<bsdf type="conductor"><string name="material" value="Au"/></bsdf>',
+        '<bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="0.1"/><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.7"/></bsdf>',
+        '<bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.6, 0.5"/></bsdf>',
+        '<bsdf type="roughconductor"><string name="material" value="Cu"/><string name="distribution" value="ggx"/><float name="alpha" value="0.15"/></bsdf>',
+    ]
+    bumps = '<texture type="bitmap" name="normalmap"><string name="filename" value="bumps.png"/><boolean name="raw" value="true"/></texture>'
+    body = ROOM.replace(
+        '<ref id="floor"/></shape>',
+        f'<bsdf type="normalmap">{bumps}<ref id="floor"/></bsdf></shape>',
+        1,
+    )
+    for i, bsdf in enumerate(smooth):
+        wrapped = bsdf if i == 3 else f'<bsdf type="twosided">{bsdf}</bsdf>'
+        x, y, z = -1.2 + 0.8 * i, 0.4, -0.6
+        body += (
+            '  <shape type="obj"><string name="filename" value="smooth.obj"/>'
+            f'<transform name="to_world"><scale value="0.35"/><translate x="{x}" y="{y}" z="{z}"/></transform>{wrapped}</shape>\n'
+        )
+    mapped = (
+        f'<bsdf type="normalmap">{bumps}<bsdf type="twosided"><bsdf type="roughplastic"><string name="distribution" value="ggx"/>'
+        '<float name="alpha" value="0.2"/><rgb name="diffuse_reflectance" value="0.6, 0.3, 0.2"/></bsdf></bsdf></bsdf>'
+    )
+    body += (
+        '  <shape type="obj"><string name="filename" value="smooth.obj"/>'
+        f'<transform name="to_world"><scale value="0.4"/><translate x="0" y="1.3" z="-1.2"/></transform>{mapped}</shape>\n'
+    )
+    body += f"""  <shape type="rectangle"><transform name="to_world"><scale x="0.5" y="0.4"/><rotate y="1" angle="-25"/><translate x="1.2" y="1.5" z="-0.5"/></transform><bsdf type="normalmap">{bumps}<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.8, 0.8"/></bsdf></bsdf></shape>
+  <shape type="rectangle"><transform name="to_world"><scale x="0.5" y="0.3"/><rotate x="1" angle="90"/><translate y="2.99" z="-0.3"/></transform><bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf><emitter type="area"><texture type="bitmap" name="radiance"><string name="filename" value="lamp.exr"/></texture></emitter></shape>
+  <emitter type="point"><point name="position" value="-1.2, 2.4, 1.0"/><rgb name="intensity" value="3, 2.8, 2.5"/></emitter>
+"""
+    write_scene(d / "normals.xml", body, dict(fov=55, origin="0, 1.5, 3.6", target="0, 1.0, 0", w=w, h=h))
+
+
 def cutout_scene(d, w, h):
     """A cut-out leaf (Mitsuba `mask` of an RGBA bitmap, which Mitsuba reads by its colour's
     luminance) before the textured lamp, a one-sided panel and a sphere, lit also by a point
@@ -270,10 +324,12 @@ def write_scenes(d, w, h):
     d.mkdir(parents=True, exist_ok=True)
     textures(d)
     icosphere_obj(d / "sphere.obj")
+    icosphere_obj(d / "smooth.obj", normals=True)
     materials_scene(d, w, h)
+    normals_scene(d, w, h)
     cutout_scene(d, w, h)
     emitters_scene(d, w, h)
-    return {name: d / f"{name}.xml" for name in ("materials", "cutout", "daylight", "overcast")}
+    return {name: d / f"{name}.xml" for name in ("materials", "normals", "cutout", "daylight", "overcast")}
 
 
 # ---- rendering and comparison --------------------------------------------------------------
@@ -434,6 +490,7 @@ def main(argv=None):
         help="public scenes are rendered at about this many pixels, their film's aspect kept",
     )
     ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--only", help="comma-separated names of this script's scenes to run (others are skipped)")
     ap.add_argument("-o", "--out", required=True)
     a = ap.parse_args(argv)
     work, bins = Path(a.work_dir), Path(a.bins)
@@ -442,6 +499,8 @@ def main(argv=None):
 
     mi.set_variant(a.variant)
     scenes = write_scenes(work / "scenes", w, h)
+    if a.only is not None:
+        scenes = {k: v for k, v in scenes.items() if k in a.only.split(",")}
     for s in a.scene:
         name, _, path = s.partition("=")
         scenes[name] = Path(path)

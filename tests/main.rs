@@ -12,6 +12,7 @@ mod evaluate_cli;
 mod lighting;
 mod luminaires;
 mod metrics_parity;
+mod normals;
 mod progress;
 mod reliability;
 mod reliability_processes;

@@ -390,7 +390,11 @@ fn mitsuba_export_carries_every_triangle_material_emitter_and_the_camera() {
                 })
                 .collect();
             for f in obj.lines().filter_map(|l| l.strip_prefix("f ")) {
-                let i: Vec<usize> = f.split(' ').map(|x| x.parse().unwrap()).collect();
+                // A corner is `v`, `v/vt`, `v//vn` or `v/vt/vn`: the position index first.
+                let i: Vec<usize> = f
+                    .split(' ')
+                    .map(|x| x.split('/').next().unwrap().parse().unwrap())
+                    .collect();
                 triangles.push([v[i[0] - 1], v[i[1] - 1], v[i[2] - 1]]);
             }
         }

@@ -636,7 +636,8 @@ fn an_imported_checkerboard_is_mitsubas() {
         } else {
             [0.1, 0.2, 0.3]
         };
-        let m = world.material_at(0, [u, v], luxest_io::math::Vec3::new(0.0, 0.0, 1.0));
+        let up = luxest_io::math::Vec3::new(0.0, 0.0, 1.0);
+        let m = world.material_at(0, [u, v], up, up);
         let luxest_render::scene::Material::Lambertian { reflectance } = &*m else {
             panic!("a diffuse material: {m:?}")
         };

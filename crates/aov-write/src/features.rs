@@ -85,7 +85,8 @@ pub const MAX_DELTA_VERTICES: u32 = 8;
 /// surface seen in it; at the first smooth dielectric or thin sheet, the Fresnel blend of the reflected and transmitted paths'
 /// features, at a later one its likelier branch alone (no random choice: the features stay
 /// noise-free); at most [`MAX_DELTA_VERTICES`] delta vertices, the last one's own features. The
-/// emission: see [`FirstHit::emission`]. The geometry is `trace`'s (flat normals, its offsets).
+/// emission: see [`FirstHit::emission`]. The geometry is `trace`'s (its shading frames and offsets);
+/// the normal is the shading frame's, normal maps applied.
 /// Textures are filtered over the ray's footprint, `spread` radians wide (the camera's pixel,
 /// [`PinholeCamera::pixel_spread`]) and widening with the distance along the delta path, so that
 /// one sample's albedo is already the pixel's average of a minified texture.
@@ -108,11 +109,14 @@ fn along(
     let wo = -dir;
     let travelled = travelled + sp.distance;
     let footprint = world.uv_footprint(&sp, wo, spread * travelled);
-    let m = world.material_filtered(sp.triangle, sp.uv, wo, footprint);
+    let m = world.material_filtered(sp.triangle, sp.uv, (wo, sp.ns), footprint);
     let m = &*m;
+    // trace's shading frame: the interpolated normal, the normal map's where there is one.
+    let shading = world.shading_of(&sp, wo);
+    let n = shading.n;
     let own = FirstHit {
         albedo: albedo(m),
-        normal: if sp.ns.dot(dir) > 0.0 { -sp.ns } else { sp.ns },
+        normal: if n.dot(dir) > 0.0 { -n } else { n },
         depth: sp.distance,
         emission: world.emitted_radiance(&sp, wo),
     };
@@ -124,7 +128,7 @@ fn along(
     // The sample's weight is the lobe's (a mirror's reflectance, a smooth metal's Fresnel
     // reflectance).
     let branch = |uc: f64, split: bool| {
-        let s = bsdf::sample(m, wo, sp.ng, sp.ng, (0.5, 0.5), uc, Transport::Radiance)?;
+        let s = shading.sample_with(m, wo, (0.5, 0.5), uc, Transport::Radiance)?;
         Some((
             s.weight,
             along(
@@ -137,11 +141,9 @@ fn along(
     };
     let fresnel = match m {
         // trace's Fresnel reflectance at this vertex (bsdf::sample with flat normals).
-        Material::Dielectric { ior } => {
-            Some(bsdf::dielectric_side(wo, sp.ng, sp.ng, *ior).reflectance)
-        }
+        Material::Dielectric { ior } => Some(bsdf::dielectric_side(wo, n, n, *ior).reflectance),
         Material::ThinDielectric { ior } => {
-            Some(bsdf::dielectric::thin_reflectance(wo.dot(sp.ng), *ior))
+            Some(bsdf::dielectric::thin_reflectance(wo.dot(n), *ior))
         }
         _ => None,
     };

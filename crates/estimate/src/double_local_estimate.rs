@@ -99,6 +99,8 @@ struct ViewPoint {
     pixel: usize,
     position: Vec3,
     ng: Vec3,
+    /// The mesh's shading normal ([`luxest_render::shading`]).
+    ns: Vec3,
     /// Direction towards the camera (along the specular chain).
     wo: Vec3,
     /// The triangle and texture coordinates of the point.
@@ -109,7 +111,7 @@ struct ViewPoint {
     /// Samples per pixel times the camera's area density at the point, for multiple importance
     /// sampling; `None` without it (points seen through specular bounces, or `--mis-paths 0`).
     camera_pdf: Option<f64>,
-    /// The short path of a Lambertian point: the normal on the camera's side and
+    /// The short path of a flat Lambertian point: the normal on the camera's side and
     /// `weight · reflectance / π`.
     diffuse: Option<(Vec3, Rgb)>,
 }
@@ -119,6 +121,8 @@ struct ViewPoint {
 struct Record {
     position: Vec3,
     ng: Vec3,
+    /// The mesh's shading normal (`ng` for emission points).
+    ns: Vec3,
     /// Direction the light came from (collisions), or the emitter normal (emission points).
     wo: Vec3,
     q: Rgb,
@@ -131,7 +135,7 @@ struct Record {
     /// Whether the light path may go on from here (the depth bound), for light tracing's
     /// density.
     can_continue: bool,
-    /// The short path of an emission point or a Lambertian collision: the normal on the
+    /// The short path of an emission point or a flat Lambertian collision: the normal on the
     /// light's side, `q · reflectance / π` (`q / π` for emission), and light tracing's
     /// solid-angle density per cosine times its paths per light path
     /// (`mis_paths · survival / π`; 0 when the path cannot go on).
@@ -203,12 +207,14 @@ fn view_points(
                 }
                 let m = world.material_seen(&sp, -dir);
                 let m = &*m;
+                let shading = world.shading_of(&sp, -dir);
                 if !bsdf::is_delta(m) {
                     let wo = -dir;
                     out.push(ViewPoint {
                         pixel,
                         position: sp.position,
                         ng: sp.ng,
+                        ns: sp.ns,
                         wo,
                         material: sp.triangle,
                         uv: sp.uv,
@@ -216,7 +222,7 @@ fn view_points(
                         camera_pdf: (cfg.mis_paths > 0 && bounce == 0)
                             .then(|| spp as f64 * cam.area_density(sp.position, sp.ng)),
                         diffuse: match m {
-                            Material::Lambertian { reflectance } => Some((
+                            Material::Lambertian { reflectance } if shading.is_flat() => Some((
                                 bsdf::facing_normal(wo, sp.ng),
                                 weight * *reflectance * (1.0 / PI),
                             )),
@@ -230,8 +236,7 @@ fn view_points(
                         break;
                     }
                 }
-                let Some(s) = bsdf::sample_flat(m, -dir, sp.ng, &mut rng, Transport::Radiance)
-                else {
+                let Some(s) = shading.sample(m, -dir, &mut rng, Transport::Radiance) else {
                     break;
                 };
                 if !s.delta {
@@ -278,6 +283,7 @@ fn light_records(
                     Record {
                         position,
                         ng: normal,
+                        ns: normal,
                         wo: normal,
                         q,
                         triangle: None,
@@ -294,9 +300,11 @@ fn light_records(
                 LightVertex::Collision { sp, dir, depth, .. } => {
                     let can_continue = depth + 1 < cfg.max_depth;
                     let wo = -dir;
+                    let flat = world.shading_of(&sp, wo).is_flat();
                     Record {
                         position: sp.position,
                         ng: sp.ng,
+                        ns: sp.ns,
                         wo,
                         q,
                         triangle: Some(sp.triangle),
@@ -304,7 +312,7 @@ fn light_records(
                         path,
                         can_continue,
                         diffuse: match &*world.material_seen(&sp, wo) {
-                            Material::Lambertian { reflectance } => Some((
+                            Material::Lambertian { reflectance } if flat => Some((
                                 bsdf::facing_normal(wo, sp.ng),
                                 q * *reflectance * (1.0 / PI),
                                 if can_continue {
@@ -374,8 +382,8 @@ fn light_tracing(
             let m = world.material_seen(&sp, wo);
             let m = &*m;
             // A light path's vertex: the adjoint BSDF (wo towards the light).
-            let f_cos =
-                |w: Vec3| bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs();
+            let shading = world.shading_of(&sp, wo);
+            let f_cos = |w: Vec3| shading.eval(m, wo, w, Transport::Flux);
             if let Some(link) =
                 connect_to_camera(world, cam, sp.position, ng, f_cos, &mut shadow_rays)
             {
@@ -428,7 +436,8 @@ fn contribution(
     let dist = d2.sqrt();
     let w = d / dist; // from the record to the view point
                       // BRDF at the view point, light arriving from -w, leaving towards the camera.
-    let f_v = bsdf::eval(m_v, v.wo, -w, v.ng, v.ng) * (w.dot(v.ng).abs());
+    let shading_v = world.shading(v.material, v.uv, (v.ng, v.ns), v.wo);
+    let f_v = shading_v.eval(m_v, v.wo, -w, Transport::Radiance);
     if f_v.max_component() <= 0.0 {
         return None;
     }
@@ -442,9 +451,9 @@ fn contribution(
             (Rgb::splat(c / PI), c / PI)
         }
         Some(t) => {
-            let m = world.material_at(t, r.uv, r.wo);
-            let (f, p) = bsdf::eval_and_pdf_transport(&m, r.wo, w, r.ng, r.ng, Transport::Flux);
-            let f = f * w.dot(r.ng).abs();
+            let m = world.material_at(t, r.uv, r.wo, r.ns);
+            let shading = world.shading(t, r.uv, (r.ng, r.ns), r.wo);
+            let (f, p) = shading.eval_and_pdf(&m, r.wo, w, Transport::Flux);
             let pdf = if p > 0.0 {
                 p * survival(f * (1.0 / p))
             } else {
@@ -568,7 +577,7 @@ pub fn render(
                     world,
                     &views
                         .iter()
-                        .map(|v| (v.position, v.ng, v.wo, (v.material, v.uv), v.weight))
+                        .map(|v| (v.position, (v.ng, v.ns), v.wo, (v.material, v.uv), v.weight))
                         .collect::<Vec<_>>(),
                 );
                 let weight = paths_in_round as f64;
@@ -586,7 +595,9 @@ pub fn render(
                     );
                     for (v, &k) in views.iter().zip(&view_local) {
                         let m = world.material(v.material);
-                        let l = environment_reflected(world, (v.position, v.ng, v.wo), m, &mut rng);
+                        let shading = world.shading(v.material, v.uv, (v.ng, v.ns), v.wo);
+                        let l =
+                            environment_reflected(world, (v.position, &shading, v.wo), m, &mut rng);
                         acc[b][k] = acc[b][k] + l * v.weight * weight;
                     }
                 }
@@ -620,7 +631,7 @@ pub fn render(
                     rays.clear();
                     targets.clear();
                     for (i, (v, &k)) in views.iter().zip(&view_local).enumerate() {
-                        let m_v = world.material_at(v.material, v.uv, v.wo);
+                        let m_v = world.material_at(v.material, v.uv, v.wo, v.ns);
                         if let Some((c, dir_to_view)) =
                             contribution(world, &cfg.singularity, mis_paths, rec, v, &m_v)
                         {

@@ -143,7 +143,8 @@ fn reflected_radiance(
         let m = world.material_seen(sp, wo);
         let m = &*m;
         let ng = bsdf::facing_normal(wo, sp.ng);
-        let f_cos = |w: Vec3| bsdf::eval(m, wo, w, sp.ng, sp.ng) * w.dot(sp.ng).abs();
+        let shading = world.shading_of(sp, wo);
+        let f_cos = |w: Vec3| shading.eval(m, wo, w, Transport::Radiance);
         let radiance = next_event(world, sp.position, ng, rng, f_cos, false)
             + environment_next_event(world, sp.position, ng, rng, f_cos);
         l = l + beta * radiance;

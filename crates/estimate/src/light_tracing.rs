@@ -32,7 +32,7 @@ use crate::transport::{walk_light_path, LightVertex};
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_io::progress::Progress;
-use luxest_render::bsdf::{self, Transport};
+use luxest_render::bsdf::Transport;
 use luxest_render::camera::{pixel_jitter, PinholeCamera};
 use luxest_render::parallel::{mean_and_standard_error, run_batches};
 use luxest_render::sampling::Rng;
@@ -147,10 +147,10 @@ fn run_batch(
                     let (wo, ng) = (-dir, sp.ng);
                     let m = world.material_seen(&sp, wo);
                     let m = &*m;
-                    // The adjoint BSDF (wo towards the light).
-                    let f_cos = |w: Vec3| {
-                        bsdf::eval_transport(m, wo, w, ng, ng, Transport::Flux) * w.dot(ng).abs()
-                    };
+                    // The adjoint BSDF (wo towards the light), with the light paths' rules for
+                    // shading normals.
+                    let shading = world.shading_of(&sp, wo);
+                    let f_cos = |w: Vec3| shading.eval(m, wo, w, Transport::Flux);
                     splat(world, cam, sp.position, ng, q, f_cos, &mut film);
                 }
             }

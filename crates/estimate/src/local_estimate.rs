@@ -42,10 +42,11 @@ use crate::transport::{
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_io::progress::Progress;
-use luxest_render::bsdf::{self, Transport};
+use luxest_render::bsdf::Transport;
 use luxest_render::rt::Ray;
 use luxest_render::sampling::Rng;
 use luxest_render::scene::{Material, SensorPoint};
+use luxest_render::shading::Shading;
 use luxest_render::world::World;
 
 /// The near-field split for sensors close to other surfaces: collisions closer than the
@@ -84,8 +85,7 @@ enum Source<'a> {
     Collision {
         material: &'a Material,
         wo: Vec3,
-        ng: Vec3,
-        ns: Vec3,
+        shading: Shading,
     },
     Emitter {
         normal: Vec3,
@@ -129,12 +129,11 @@ fn connect(
             Source::Collision {
                 material,
                 wo,
-                ng,
-                ns,
+                shading,
             } => {
-                // The adjoint BSDF (wo towards the light).
-                let f = bsdf::eval_transport(material, *wo, w, *ng, *ns, Transport::Flux);
-                f * w.dot(*ns).abs()
+                // The adjoint BSDF (wo towards the light), with the light paths' rules for
+                // shading normals.
+                shading.eval(material, *wo, w, Transport::Flux)
             }
             Source::Emitter { normal } => {
                 let c = normal.dot(w);
@@ -202,8 +201,7 @@ fn run_batch(
                     let src = Source::Collision {
                         material: &material,
                         wo: -dir,
-                        ng: sp.ng,
-                        ns: sp.ng,
+                        shading: world.shading_of(&sp, -dir),
                     };
                     ((sp.position, sp.ng), src)
                 }

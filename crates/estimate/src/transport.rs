@@ -23,6 +23,7 @@ use luxest_render::bsdf::{self, Transport};
 use luxest_render::sampling::{cosine_hemisphere, uniform_sphere, Rng};
 use luxest_render::scene::IlluminanceKind;
 use luxest_render::scene::SensorPoint;
+use luxest_render::shading::Shading;
 use luxest_render::world::{SurfacePoint, World};
 
 /// A non-specular vertex of a light path (what connections start from).
@@ -189,8 +190,9 @@ fn walk(world: &World, rng: &mut Rng, max_depth: u32, mut visit: impl FnMut(Step
     end
 }
 
-/// One step of a random walk: samples the BSDF (with geometric normals) at `sp` for a path
-/// that arrived along `dir` with throughput `beta`, applies analog Russian roulette (survival
+/// One step of a random walk: samples the BSDF in the shading frame at `sp` (with the light
+/// paths' rules for `Transport::Flux`, [`luxest_render::shading`]) for a path that arrived
+/// along `dir` with throughput `beta`, applies analog Russian roulette (survival
 /// probability = the sample's weight, at most 1, see [`survival`]); `None` when the path ends.
 pub fn scatter(
     world: &World,
@@ -201,7 +203,7 @@ pub fn scatter(
     rng: &mut Rng,
 ) -> Option<Scattered> {
     let m = world.material_seen(sp, -dir);
-    let s = bsdf::sample_flat(&m, -dir, sp.ng, rng, mode)?;
+    let s = world.shading_of(sp, -dir).sample(&m, -dir, rng, mode)?;
     let survival = survival(s.weight);
     if survival <= 0.0 || rng.next_f64() >= survival {
         return None;
@@ -258,18 +260,19 @@ pub fn delta_light_illuminance(world: &World, sensors: &[SensorPoint]) -> Vec<Rg
 }
 
 /// Exact delta-light (point source, luminaire) luminance towards the camera at view points
-/// given as (position, geometric normal, direction to the camera, (triangle, texture
-/// coordinates), weight).
-pub type ViewedPoint = (Vec3, Vec3, Vec3, (u32, [f64; 2]), Rgb);
+/// given as (position, (geometric normal, mesh shading normal), direction to the camera,
+/// (triangle, texture coordinates), weight).
+pub type ViewedPoint = (Vec3, (Vec3, Vec3), Vec3, (u32, [f64; 2]), Rgb);
 
 /// [`delta_light_illuminance`]'s counterpart for view points: the luminance they reflect.
 pub fn delta_light_reflected(world: &World, points: &[ViewedPoint]) -> Vec<Rgb> {
     let emitters = world.scene.header.emitters.len();
     points
         .iter()
-        .map(|&(x, ng, wo, (triangle, uv), weight)| {
-            let m = world.material_at(triangle, uv, wo);
+        .map(|&(x, (ng, ns), wo, (triangle, uv), weight)| {
+            let m = world.material_at(triangle, uv, wo, ns);
             let m = &*m;
+            let shading = world.shading(triangle, uv, (ng, ns), wo);
             let mut l = Rgb::BLACK;
             for ei in 0..emitters {
                 world.for_each_delta_source(ei, x, |position, intensity_rgb| {
@@ -279,7 +282,7 @@ pub fn delta_light_reflected(world: &World, points: &[ViewedPoint]) -> Vec<Rgb> 
                         return;
                     }
                     let w = v / d2.sqrt();
-                    let f = bsdf::eval(m, wo, w, ng, ng) * w.dot(ng).abs();
+                    let f = shading.eval(m, wo, w, Transport::Radiance);
                     if f.max_component() > 0.0 && !world.occluded(world.offset(x, ng, w), position)
                     {
                         l = l + intensity_rgb * f * (1.0 / d2);
@@ -354,13 +357,14 @@ pub fn environment_illuminance(
     e
 }
 
-/// One sample of the environment's light reflected at the surface point `x` (geometric normal
-/// `ng`, material `m`) towards `wo` (RGB luminance; black without an environment): a direction
-/// drawn from the map and one drawn from the BSDF, combined by the balance heuristic (a delta
-/// lobe's sample has weight 1: the map cannot draw it), each with a shadow ray to infinity.
+/// One sample of the environment's light reflected at the surface point `x` (shading frame
+/// `shading`, material `m`) towards `wo` (RGB luminance; black without an environment): a
+/// direction drawn from the map and one drawn from the BSDF, combined by the balance heuristic
+/// (a delta lobe's sample has weight 1: the map cannot draw it), each with a shadow ray to
+/// infinity.
 pub fn environment_reflected(
     world: &World,
-    (x, ng, wo): (Vec3, Vec3, Vec3),
+    (x, shading, wo): (Vec3, &Shading, Vec3),
     m: &luxest_render::scene::Material,
     rng: &mut Rng,
 ) -> Rgb {
@@ -368,15 +372,15 @@ pub fn environment_reflected(
         return Rgb::BLACK;
     };
     let mut l = Rgb::BLACK;
+    let ng = shading.ng;
     let seen = |w: Vec3| world.escapes(world.offset(x, ng, w), w);
     let from_map = env.sample(rng.next_f64(), rng.next_f64());
     let w = from_map.direction;
-    let (f, p_b) = bsdf::eval_and_pdf(m, wo, w, ng, ng);
-    let f = f * w.dot(ng).abs();
+    let (f, p_b) = shading.eval_and_pdf(m, wo, w, Transport::Radiance);
     if f.max_component() > 0.0 && from_map.pdf > 0.0 && seen(w) {
         l = l + f * from_map.radiance * (1.0 / (from_map.pdf + p_b));
     }
-    if let Some(b) = bsdf::sample_flat(m, wo, ng, rng, Transport::Radiance) {
+    if let Some(b) = shading.sample(m, wo, rng, Transport::Radiance) {
         let radiance = env.radiance(b.wi);
         if radiance.max_component() > 0.0 && b.weight.max_component() > 0.0 {
             let weight = if b.delta {

@@ -118,8 +118,11 @@ pub struct CompiledSurface {
     /// Its first channel multiplies the microfacet α.
     pub roughness: Option<u32>,
     pub opacity: Option<CompiledOpacity>,
-    /// Tangent-space normal map.
+    /// Tangent-space normal map ([`crate::scene::Surface::normal`]).
     pub normal: Option<u32>,
+    /// Multiplies the decoded normal's x and y ([`crate::scene::Surface::normal_scale`]).
+    #[serde(default = "unit_xy")]
+    pub normal_scale: [f64; 2],
     /// False: black seen from the back side.
     pub two_sided: bool,
 }
@@ -152,6 +155,10 @@ impl CompiledSurface {
 pub struct NamedMaterial {
     pub name: String,
     pub model: Material,
+}
+
+fn unit_xy() -> [f64; 2] {
+    [1.0, 1.0]
 }
 
 /// A light source in world space with its photometric power.
@@ -361,6 +368,9 @@ pub struct Features {
     pub glossy: bool,
     /// Any interpolated vertex normals (otherwise all shading is flat).
     pub smooth_normals: bool,
+    /// Any normal-mapped surface.
+    #[serde(default)]
+    pub normal_maps: bool,
     /// Always false: luxest is RGB; kept so the manifest states it.
     pub spectral: bool,
     pub camera: bool,

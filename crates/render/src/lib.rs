@@ -13,6 +13,7 @@
 //!   equirectangular map, a sun disk) and its sampling; [`sky`]: daylight skies with Radiance
 //!   gensky's conventions (CIE overcast, clear and intermediate skies, the sun);
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
+//!   [`shading`]: shading frames (vertex normals, normal maps) as Mitsuba 3 defines them;
 //! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
 //!   flush-to-zero mode, hence here and not in `luxest-io`).
 
@@ -25,6 +26,7 @@ pub mod parallel;
 pub mod rt;
 pub mod sampling;
 pub mod scene;
+pub mod shading;
 pub mod sky;
 pub mod sobol;
 pub mod spot;

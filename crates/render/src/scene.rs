@@ -107,10 +107,16 @@ pub struct Surface {
     /// Cut-out: where the surface is not there (leaves, grilles).
     #[serde(default)]
     pub opacity: Option<Opacity>,
-    /// Tangent-space normal map (glTF's convention: RGB = (x, y, z) · 0.5 + 0.5, y towards
-    /// decreasing v).
+    /// Tangent-space normal map as Mitsuba 3's `normalmap` reads it: linear RGB = (x, y, z) ·
+    /// 0.5 + 0.5 in the shading frame (x along ∂p/∂u made perpendicular to the shading normal,
+    /// y = normal × x, z the shading normal); see `docs/scene-format.md`, *Normal maps*.
     #[serde(default)]
     pub normal: Option<String>,
+    /// Multiplies the decoded normal's x and y before it is normalised (default (1, 1):
+    /// Mitsuba's `normalmap`; a glTF `normalTexture` with its `scale` s is (s, −s): glTF's y
+    /// points towards decreasing v).
+    #[serde(default = "unit_xy", skip_serializing_if = "is_unit_xy")]
+    pub normal_scale: [f64; 2],
     /// False: the surface reflects from its front side only (black from the back), as a
     /// Mitsuba 3 BSDF not wrapped in `twosided`.
     #[serde(default = "yes")]
@@ -119,6 +125,14 @@ pub struct Surface {
 
 fn yes() -> bool {
     true
+}
+
+fn unit_xy() -> [f64; 2] {
+    [1.0, 1.0]
+}
+
+fn is_unit_xy(v: &[f64; 2]) -> bool {
+    *v == [1.0, 1.0]
 }
 
 /// Opacity of a cut-out surface: `value` × the texture's `channel` (1 without a texture).
@@ -423,6 +437,12 @@ pub struct Object {
     /// `face_normals`).
     #[serde(default, skip_serializing_if = "is_false")]
     pub face_normals: bool,
+    /// Where the mesh has no vertex normals, computes them as Mitsuba 3 does for its OBJ, PLY
+    /// and serialized meshes: each vertex the normalised sum of its faces' unit normals
+    /// weighted by the face's angle at it (Thürmer and Wüthrich 1998). Ignored with
+    /// `face_normals`; the Mitsuba importer sets it for those shapes.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub compute_normals: bool,
 }
 
 fn is_false(b: &bool) -> bool {
@@ -813,6 +833,31 @@ mod tests {
     #[derive(Deserialize)]
     struct Materials {
         materials: BTreeMap<String, Material>,
+    }
+
+    /// The normal-map example of `docs/scene-format.md` parses: Mitsuba's convention by default,
+    /// glTF's y reversed where stated.
+    #[test]
+    fn the_documented_normal_maps_parse() {
+        #[derive(Deserialize)]
+        struct Maps {
+            #[allow(dead_code)]
+            textures: BTreeMap<String, TextureDesc>,
+            surfaces: BTreeMap<String, Surface>,
+        }
+        let doc = include_str!("../../../docs/scene-format.md");
+        let block = doc
+            .split("```ron\n")
+            .map(|b| &b[..b.find("```").unwrap_or(b.len())])
+            .find(|b| b.starts_with("textures: { \"bumps\""))
+            .expect("the normal-map example");
+        let path = std::path::Path::new("docs/scene-format.md");
+        let m: Maps = luxest_io::fsio::parse_ron(path, &format!("({block})"))
+            .unwrap_or_else(|e| panic!("{e}\n{block}"));
+        assert_eq!(m.surfaces["wall"].normal.as_deref(), Some("bumps"));
+        assert_eq!(m.surfaces["wall"].normal_scale, [1.0, 1.0]);
+        assert_eq!(m.surfaces["tiles"].normal_scale, [1.0, -1.0]);
+        assert!(m.surfaces["tiles"].two_sided);
     }
 
     /// Every `materials: { … }` example of `docs/scene-format.md` parses, with the defaults the

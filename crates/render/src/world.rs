@@ -11,6 +11,7 @@ use crate::sampling::{
     cosine_hemisphere, uniform_sphere, uniform_triangle, Distribution1D, Rng, Sampler,
 };
 use crate::scene::{Material, OpacityChannel};
+use crate::shading::Shading;
 use crate::texture::Texture;
 use luxest_io::color::Rgb;
 use luxest_io::error::Result;
@@ -24,8 +25,8 @@ pub struct SurfacePoint {
     pub position: Vec3,
     /// Unit geometric normal, front side `(b - a) x (c - a)`.
     pub ng: Vec3,
-    /// Unit shading normal (interpolated vertex normals, or `ng` for flat triangles), on the
-    /// same side as `ng`.
+    /// Unit shading normal: the interpolated vertex normals, as the mesh gives them (Mitsuba 3
+    /// does not turn them to `ng`'s side), or `ng` for flat triangles.
     pub ns: Vec3,
     pub triangle: u32,
     pub distance: f64,
@@ -418,6 +419,61 @@ impl World {
         })
     }
 
+    /// The shading frame at a point of `triangle` with texture coordinates `uv`, geometric
+    /// normal `ng` and mesh shading normal `ns`, seen from `wo` (see [`crate::shading`]): the
+    /// normal map of its surface applied, if it has one.
+    #[inline]
+    pub fn shading(
+        &self,
+        triangle: u32,
+        uv: [f64; 2],
+        (ng, ns): (Vec3, Vec3),
+        wo: Vec3,
+    ) -> Shading {
+        if self.scene.header.features.normal_maps {
+            let mi = self.scene.triangle_material[triangle as usize] as usize;
+            if let Some(s) = self.scene.header.surfaces.get(mi) {
+                if let Some(t) = s.normal {
+                    let texel = self.texture(t).eval(uv, 0.0);
+                    let dp_du = self.dp_du(triangle, ng);
+                    return Shading::mapped((ng, ns), texel, s.normal_scale, dp_du, wo);
+                }
+            }
+        }
+        if ns == ng {
+            Shading::flat(ng)
+        } else {
+            Shading::smooth(ng, ns)
+        }
+    }
+
+    /// [`World::shading`] at a hit.
+    #[inline]
+    pub fn shading_of(&self, sp: &SurfacePoint, wo: Vec3) -> Shading {
+        self.shading(sp.triangle, sp.uv, (sp.ng, sp.ns), wo)
+    }
+
+    /// ∂p/∂u of a triangle from its texture coordinates, as Mitsuba 3 computes it (p1 − p0
+    /// without texture coordinates; an axis perpendicular to `ng` where they are degenerate).
+    pub fn dp_du(&self, triangle: u32, ng: Vec3) -> Vec3 {
+        let idx = self.scene.indices[triangle as usize];
+        let [a, b, c] = idx.map(|i| Vec3::from(self.scene.positions[i as usize]));
+        let (dp0, dp1) = (b - a, c - a);
+        if !self.scene.header.features.uvs {
+            return dp0;
+        }
+        let [ta, tb, tc] = idx.map(|i| self.scene.uvs[i as usize].map(|x| x as f64));
+        let (d0, d1) = (
+            [tb[0] - ta[0], tb[1] - ta[1]],
+            [tc[0] - ta[0], tc[1] - ta[1]],
+        );
+        let det = d0[0] * d1[1] - d0[1] * d1[0];
+        if det == 0.0 {
+            return ng.orthonormal_basis().0;
+        }
+        (dp0 * d1[1] - dp1 * d0[1]) * (1.0 / det)
+    }
+
     /// The material of a triangle as authored (untextured, both sides); the estimators ask
     /// [`World::material_at`] instead.
     pub fn material(&self, triangle: u32) -> &Material {
@@ -426,10 +482,17 @@ impl World {
 
     /// The material at a surface point seen from direction `wo`: its textures evaluated at the
     /// point's texture coordinates `uv`, and black where a one-sided surface is seen from the
-    /// back. Borrowed (no copy) for untextured two-sided materials.
+    /// back — the side of its shading normal `ns`, as Mitsuba 3's BSDFs tell it. Borrowed (no
+    /// copy) for untextured two-sided materials.
     #[inline]
-    pub fn material_at(&self, triangle: u32, uv: [f64; 2], wo: Vec3) -> Cow<'_, Material> {
-        self.material_filtered(triangle, uv, wo, 0.0)
+    pub fn material_at(
+        &self,
+        triangle: u32,
+        uv: [f64; 2],
+        wo: Vec3,
+        ns: Vec3,
+    ) -> Cow<'_, Material> {
+        self.material_filtered(triangle, uv, (wo, ns), 0.0)
     }
 
     /// [`World::material_at`] with textures filtered over a footprint `footprint` wide in uv
@@ -439,7 +502,7 @@ impl World {
         &self,
         triangle: u32,
         uv: [f64; 2],
-        wo: Vec3,
+        (wo, ns): (Vec3, Vec3),
         footprint: f64,
     ) -> Cow<'_, Material> {
         let mi = self.scene.triangle_material[triangle as usize] as usize;
@@ -447,7 +510,7 @@ impl World {
         let Some(s) = self.scene.header.surfaces.get(mi) else {
             return Cow::Borrowed(m);
         };
-        if !s.two_sided && wo.dot(self.geometric_normal(triangle)) < 0.0 {
+        if !s.two_sided && wo.dot(ns) < 0.0 {
             return Cow::Borrowed(&BLACK);
         }
         if s.color.is_none() && s.roughness.is_none() {
@@ -466,7 +529,7 @@ impl World {
     /// [`World::material_at`] of a hit.
     #[inline]
     pub fn material_seen(&self, sp: &SurfacePoint, wo: Vec3) -> Cow<'_, Material> {
-        self.material_at(sp.triangle, sp.uv, wo)
+        self.material_at(sp.triangle, sp.uv, wo, sp.ns)
     }
 
     fn texture(&self, t: u32) -> &Texture {
@@ -526,7 +589,6 @@ impl World {
             let [na, nb, nc] = idx.map(|i| Vec3::from(self.scene.normals[i as usize]));
             (na * (1.0 - u - v) + nb * u + nc * v)
                 .try_normalize()
-                .map(|n| if n.dot(ng) < 0.0 { -n } else { n })
                 .unwrap_or(ng)
         } else {
             ng

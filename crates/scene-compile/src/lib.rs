@@ -378,6 +378,8 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         let mut mesh = object_mesh(path, &place, &o.shape)?;
         if o.face_normals {
             mesh.normals = None;
+        } else if o.compute_normals && mesh.normals.is_none() {
+            mesh.normals = Some(shapes::angle_weighted_normals(&mesh));
         }
         let surface = scene.surfaces.get(&o.material);
         let textured_surface = surface.is_some_and(|s| {
@@ -594,6 +596,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         transmission: any(bsdf::transmits),
         glossy: any(bsdf::is_glossy),
         smooth_normals: b.normals.iter().any(|n| *n != [0.0; 3]),
+        normal_maps: scene.surfaces.values().any(|s| s.normal.is_some()),
         spectral: false,
         camera: scene.camera.is_some(),
         sensors: !scene.sensors.is_empty() || !scene.calculation_surfaces.is_empty(),

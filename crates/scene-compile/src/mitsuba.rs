@@ -4,8 +4,10 @@
 //!
 //! What is written: `scene.xml` and one Wavefront OBJ per (material, emitter) group of
 //! triangles, in world coordinates (the compiled scene's triangles, winding kept, so that
-//! Mitsuba's face normals are luxest's geometric normals; `face_normals` is set because luxest
-//! shades with geometric normals). The mapping, chosen to be exact for RGB rendering:
+//! Mitsuba's face normals are luxest's geometric normals; triangles with vertex normals are
+//! written with `vn` in files of their own, the others with `face_normals` set, as Mitsuba
+//! would otherwise compute vertex normals for them). The mapping, chosen to be exact for RGB
+//! rendering:
 //!
 //! | luxest | Mitsuba 3 |
 //! |---|---|
@@ -26,6 +28,7 @@
 //! | colour texture of a material or emitter (multiplying a colour) | `bitmap` (`raw`, the filter, wrap mode and `to_uv` of the texture) reading an EXR of the texels times that colour, one per parameter |
 //! | roughness texture (multiplying α) | `bitmap` `alpha` of the baked α per texel |
 //! | one-sided surface | the model without `twosided` |
+//! | normal map (`normal_scale` (a, b)) | `normalmap` (outside `twosided`) reading an EXR of the texels c with 2c − 1 scaled by (a, b, 1) |
 //! | cut-out (opacity) | `mask` with the opacity (a constant, or a `bitmap` of value × alpha, thresholded per texel where there is a cut-off) |
 //! | texture coordinates | `vt` in the OBJ files (v flipped, as Mitsuba's loader flips it back) |
 //! | camera (pinhole, vertical field of view) | `perspective`, `fov_axis="y"`, `look_at` with the same up vector; `hdrfilm` with a `box` filter |
@@ -366,17 +369,21 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
             Emitter::Area { .. } | Emitter::Luminaire { .. } => {}
         }
     }
-    // Triangles grouped by (material, emitter), in order of first appearance.
-    let mut groups: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
+    // Triangles grouped by (material, emitter, smooth), in order of first appearance.
+    let mut groups: BTreeMap<(u32, u32, bool), Vec<usize>> = BTreeMap::new();
     for (t, (&m, &e)) in scene
         .triangle_material
         .iter()
         .zip(&scene.triangle_emitter)
         .enumerate()
     {
-        groups.entry((m, e)).or_default().push(t);
+        let smooth = h.features.smooth_normals
+            && scene.indices[t]
+                .iter()
+                .all(|&v| scene.normals[v as usize] != [0.0; 3]);
+        groups.entry((m, e, smooth)).or_default().push(t);
     }
-    for (g, ((m, e), triangles)) in groups.iter().enumerate() {
+    for (g, ((m, e, smooth), triangles)) in groups.iter().enumerate() {
         let material = &h.materials[*m as usize];
         let file = format!("mesh_{g:03}.obj");
         let mut obj = format!(
@@ -408,11 +415,24 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
                 let t = scene.uvs[v as usize];
                 let _ = writeln!(obj, "vt {} {}", t[0], 1.0 - t[1]);
             }
+        }
+        if *smooth {
+            for &(_, v) in &by_new {
+                let n = scene.normals[v as usize];
+                let _ = writeln!(obj, "vn {} {} {}", n[0], n[1], n[2]);
+            }
+        }
+        if h.features.uvs || *smooth {
+            let corner = |i: &str| match (h.features.uvs, *smooth) {
+                (true, true) => format!("{i}/{i}/{i}"),
+                (true, false) => format!("{i}/{i}"),
+                _ => format!("{i}//{i}"),
+            };
             faces = faces
                 .lines()
                 .map(|l| {
                     let f: Vec<&str> = l.split(' ').collect();
-                    format!("f {0}/{0} {1}/{1} {2}/{2}\n", f[1], f[2], f[3])
+                    format!("f {} {} {}\n", corner(f[1]), corner(f[2]), corner(f[3]))
                 })
                 .collect();
         }
@@ -449,6 +469,21 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
             &mut maps,
             surface.is_none_or(|s| s.two_sided),
         );
+        if let Some((t, scale)) = surface.and_then(|s| Some((texture(s.normal)?, s.normal_scale))) {
+            // Mitsuba decodes 2c − 1 and normalises: the texels baked with luxest's scale of x
+            // and y (linear in c, so bilinear lookups agree), stored as floats.
+            let file = format!("normal_{g:03}.exr");
+            let baked = bake(t, |v| {
+                let d = |c: f32| 2.0 * c as f64 - 1.0;
+                let n = [d(v[0]) * scale[0], d(v[1]) * scale[1], d(v[2])];
+                n.map(|x| (x + 1.0) / 2.0)
+            });
+            files.push((file.clone(), baked));
+            element = format!(
+                r#"<bsdf type="normalmap">{}{element}</bsdf>"#,
+                bitmap("normalmap", &file, t)
+            );
+        }
         if let Some(o) = surface.and_then(|s| s.opacity.as_ref()) {
             // Mitsuba's `mask` is stochastic: a cut-off is baked into the texels (exact for
             // nearest lookups; at texel edges a bilinear lookup of the thresholded texels
@@ -473,7 +508,8 @@ pub fn export(scene: &CompiledScene, path: &Path) -> Result<ExportFiles> {
         }
         let _ = writeln!(
             xml,
-            r#"  <shape type="obj"><string name="filename" value="{file}"/><boolean name="face_normals" value="true"/>{element}{emitter}</shape>"#
+            r#"  <shape type="obj"><string name="filename" value="{file}"/><boolean name="face_normals" value="{}"/>{element}{emitter}</shape>"#,
+            !smooth
         );
         files.push((file, obj.into_bytes()));
     }

@@ -14,6 +14,38 @@ pub struct LocalMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
+/// Vertex normals as Mitsuba 3 computes them for a mesh without (`recompute_vertex_normals`):
+/// each vertex the normalised sum of its faces' unit normals weighted by the face's angle at
+/// the vertex; (1, 0, 0) where the sum vanishes, as Mitsuba's placeholder.
+pub fn angle_weighted_normals(mesh: &LocalMesh) -> Vec<Vec3> {
+    let mut sums = vec![Vec3::ZERO; mesh.positions.len()];
+    for t in &mesh.triangles {
+        let v = t.map(|i| mesh.positions[i as usize]);
+        let Some(n) = (v[1] - v[0]).cross(v[2] - v[0]).try_normalize() else {
+            continue;
+        };
+        for k in 0..3 {
+            let (a, b) = (v[(k + 1) % 3] - v[k], v[(k + 2) % 3] - v[k]);
+            if let (Some(a), Some(b)) = (a.try_normalize(), b.try_normalize()) {
+                sums[t[k] as usize] += n * unit_angle(a, b);
+            }
+        }
+    }
+    sums.into_iter()
+        .map(|s| s.try_normalize().unwrap_or(Vec3::new(1.0, 0.0, 0.0)))
+        .collect()
+}
+
+/// The angle between unit vectors, accurate for small and large angles (Mitsuba's
+/// `unit_angle`).
+fn unit_angle(a: Vec3, b: Vec3) -> f64 {
+    if a.dot(b) < 0.0 {
+        std::f64::consts::PI - 2.0 * ((a + b).length() / 2.0).min(1.0).asin()
+    } else {
+        2.0 * ((a - b).length() / 2.0).min(1.0).asin()
+    }
+}
+
 impl LocalMesh {
     /// Appends `other`, keeping normals (and UVs) only if both have them (else flat
     /// everywhere, and no UVs).
@@ -169,6 +201,38 @@ pub fn icosphere(radius: f64, level: u32) -> LocalMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn angle_weighted_normals_of_a_cube_point_along_its_diagonals() {
+        // A closed unit cube of 8 shared vertices: each corner meets three faces at 90° each
+        // (however they are triangulated), so its normal is the outward diagonal; weighting by
+        // area or by triangle count would tilt it where two triangles of a face meet.
+        let positions: Vec<Vec3> = (0..8)
+            .map(|i| Vec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64))
+            .collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        let mesh = LocalMesh {
+            positions: positions.clone(),
+            triangles,
+            ..Default::default()
+        };
+        let c = Vec3::new(0.5, 0.5, 0.5);
+        for (p, n) in positions.iter().zip(angle_weighted_normals(&mesh)) {
+            let expected = (*p - c).try_normalize().unwrap();
+            assert!((n - expected).length() < 1e-12, "{p:?}: {n:?}");
+        }
+    }
 
     fn signed_volume(m: &LocalMesh) -> f64 {
         m.triangles

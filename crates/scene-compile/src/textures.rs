@@ -232,6 +232,7 @@ pub fn surfaces(scene: &Scene, loaded: &Loaded) -> Vec<CompiledSurface> {
                 roughness: None,
                 opacity: None,
                 normal: None,
+                normal_scale: [1.0, 1.0],
                 two_sided: true,
             },
             Some(s) => compile_surface(s, &tex),
@@ -250,6 +251,7 @@ fn compile_surface(s: &Surface, tex: &dyn Fn(&Option<String>) -> Option<u32>) ->
             cutoff: o.cutoff,
         }),
         normal: tex(&s.normal),
+        normal_scale: s.normal_scale,
         two_sided: s.two_sided,
     }
 }

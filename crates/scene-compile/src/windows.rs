@@ -166,6 +166,7 @@ pub fn cut(scene: &Scene, path: &Path) -> Result<Option<Scene>> {
                 emission: None,
                 flip_normals: o.flip_normals,
                 face_normals: o.face_normals,
+                compute_normals: false,
             });
         }
     }

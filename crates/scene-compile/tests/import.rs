@@ -251,6 +251,7 @@ fn mitsuba_scene_translates_field_by_field() {
             roughness: None,
             opacity: None,
             normal: None,
+            normal_scale: [1.0, 1.0],
             two_sided: false
         }
     );
@@ -283,6 +284,7 @@ fn mitsuba_scene_translates_field_by_field() {
                 cutoff: None
             }),
             normal: None,
+            normal_scale: [1.0, 1.0],
             two_sided: true
         }
     );
@@ -481,6 +483,7 @@ fn xml(body: &str) -> String {
 #[test]
 fn bad_mitsuba_input_is_one_line_naming_file_line_and_element() {
     let d = tmp("bad");
+    let wood = data().join("textures/wood.png").display().to_string();
     let cases: &[(&str, String, &str)] = &[
         (
             "plugin",
@@ -555,6 +558,16 @@ fn bad_mitsuba_input_is_one_line_naming_file_line_and_element() {
             "deep",
             xml(&format!("{}{}", "<bsdf type=\"twosided\">".repeat(100), "</bsdf>".repeat(100))),
             "deep.xml: line 4: <bsdf>: elements nest deeper than 64",
+        ),
+        (
+            "twosided-normalmap",
+            xml(&format!(r#"<bsdf type="twosided" id="t"><bsdf type="normalmap"><texture name="normalmap" type="bitmap"><string name="filename" value="{wood}"/></texture><bsdf type="diffuse"/></bsdf></bsdf>"#)),
+            "twosided-normalmap.xml: line 4: <bsdf type=\"twosided\" id=\"t\">: twosided around a normalmap is not supported",
+        ),
+        (
+            "normalmap-flag",
+            xml(&format!(r#"<bsdf type="normalmap" id="f"><boolean name="use_shadowing_function" value="false"/><texture name="normalmap" type="bitmap"><string name="filename" value="{wood}"/></texture><bsdf type="diffuse"/></bsdf>"#)),
+            "normalmap-flag.xml: line 4: <bsdf type=\"normalmap\" id=\"f\">: use_shadowing_function false is not supported",
         ),
         (
             "version",
@@ -674,6 +687,7 @@ fn obj_mtl_scene_translates_its_materials() {
                 cutoff: None
             }),
             normal: None,
+            normal_scale: [1.0, 1.0],
             two_sided: true
         }
     );
@@ -792,7 +806,8 @@ fn gltf_scene_translates_nodes_materials_camera_and_lights() {
     );
     assert_eq!(s.objects.len(), 3);
     // baseColorTexture (default sampler: repeat, bilinear), alpha MASK at the cutoff with the
-    // base colour's alpha, a normal map read linearly with its own sampler.
+    // base colour's alpha, a normal map read linearly with its own sampler, its y reversed
+    // (glTF's tangent-space y points towards decreasing v; scale 1).
     assert_eq!(
         s.surfaces["leaf"],
         Surface {
@@ -805,6 +820,7 @@ fn gltf_scene_translates_nodes_materials_camera_and_lights() {
                 cutoff: Some(0.30000001192092896)
             }),
             normal: Some("leaf.png'".into()),
+            normal_scale: [1.0, -1.0],
             two_sided: true
         }
     );
@@ -934,5 +950,41 @@ fn version_0_6_scenes_get_mitsubas_upgrade() {
         s.textures["wood.png@old:6"].uv_transform,
         Some(UvTransform([[2.0, 0.0, 0.5], [0.0, 3.0, 0.0]]))
     );
+    std::fs::remove_dir_all(&d).unwrap();
+}
+
+#[test]
+fn a_mitsuba_normalmap_is_the_surfaces_normal_map() {
+    // normalmap(twosided(diffuse)) and normalmap(diffuse) (one-sided): the bitmap becomes the
+    // surface's `normal` texture (raw: linear), Mitsuba's convention (scale (1, 1)).
+    let d = tmp("normalmap");
+    let scene = d.join("n.xml");
+    let wood = data().join("textures/wood.png").display().to_string();
+    let map = format!(
+        r#"<texture name="normalmap" type="bitmap"><string name="filename" value="{wood}"/><boolean name="raw" value="true"/></texture>"#
+    );
+    std::fs::write(
+        &scene,
+        xml(&format!(
+            r#"<shape type="rectangle"><bsdf type="normalmap" id="two">{map}<bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf></shape>
+    <shape type="rectangle"><bsdf type="normalmap" id="one">{map}<bsdf type="diffuse"/></bsdf></shape>"#
+        )),
+    )
+    .unwrap();
+    let s = read_scene(&scene).unwrap().scene;
+    for (name, two_sided) in [("two", true), ("one", false)] {
+        let surface = &s.surfaces[name];
+        let t = surface.normal.as_ref().expect("a normal map");
+        assert_eq!(s.textures[t].encoding, Some(Encoding::Linear));
+        assert!(s.textures[t].path.ends_with("wood.png"));
+        assert_eq!(surface.normal_scale, [1.0, 1.0]);
+        assert_eq!(surface.two_sided, two_sided, "{name}");
+        assert_eq!(
+            s.materials[name],
+            Material::Lambertian {
+                reflectance: Rgb::splat(0.5)
+            }
+        );
+    }
     std::fs::remove_dir_all(&d).unwrap();
 }

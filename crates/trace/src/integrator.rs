@@ -9,9 +9,10 @@
 //! carry a throughput of about 0.1 (starting roulette at the fourth vertex with survival
 //! min(0.95, max throughput) cost 1.2× the CPU time to equal error on the Cornell box and 3.3× on
 //! the 1M-triangle room: it cut the deep bounces that carry those rooms' indirect light).
-//! Scattering uses geometric normals (interpolated shading normals are kept for the normal AOV
-//! only: they break energy conservation, which the furnace test
-//! would catch).
+//! Scattering happens in the shading frame as Mitsuba 3's `path` does it
+//! ([`luxest_render::shading`]): interpolated vertex normals and normal maps, the cosine about
+//! the shading normal, no test against the geometric normal; rays leave on the geometric side
+//! they point to.
 //!
 //! Environment light ([`luxest_render::environment`]): a path that leaves the scene gathers the
 //! environment's radiance along its last direction, weighted by the power heuristic against
@@ -29,6 +30,7 @@ use luxest_io::math::Vec3;
 use luxest_render::bsdf::{self, Transport};
 use luxest_render::rt::Ray;
 use luxest_render::sampling::Sampler;
+use luxest_render::shading::Shading;
 use luxest_render::sobol::PixelSampler;
 use luxest_render::world::World;
 use std::borrow::Cow;
@@ -128,6 +130,21 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             Cow::Borrowed(world.material(sp.triangle))
         };
         let m = &*m;
+        // The frame scattering happens in (flat scenes' kernels never build one: the BSDF about
+        // the geometric normal, `f_cos` and `scatter` below).
+        let shading = if EXTRA {
+            world.shading_of(&sp, wo)
+        } else {
+            Shading::flat(sp.ng)
+        };
+        let f_cos = |w: Vec3| {
+            if EXTRA {
+                shading.eval_and_pdf(m, wo, w, Transport::Radiance)
+            } else {
+                let (f, p) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
+                (f * w.dot(sp.ng).abs(), p)
+            }
+        };
         let is_delta = SPECULAR && bsdf::is_delta(m);
         if !is_delta && (POINT || AREA) {
             // Next-event estimation.
@@ -137,8 +154,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             if d2 > 0.0 {
                 let d = d2.sqrt();
                 let w = v / d;
-                let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
-                let f = f * w.dot(sp.ng).abs();
+                let (f, bp) = f_cos(w);
                 if f.max_component() > 0.0 {
                     let contribution = match lp.normal {
                         Some(nl) if AREA => {
@@ -178,8 +194,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             let (u1, u2) = rng.next_2d();
             let es = env.sample(u1, u2);
             let w = es.direction;
-            let (f, bp) = bsdf::eval_and_pdf(m, wo, w, sp.ng, sp.ng);
-            let f = f * w.dot(sp.ng).abs();
+            let (f, bp) = f_cos(w);
             if es.pdf > 0.0 && f.max_component() > 0.0 {
                 let contribution = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
                 log.shadow += 1;
@@ -198,7 +213,12 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 }
             }
         }
-        let Some(s) = bsdf::sample_flat(m, wo, sp.ng, rng, Transport::Radiance) else {
+        let sampled = if EXTRA {
+            shading.sample(m, wo, rng, Transport::Radiance)
+        } else {
+            bsdf::sample_flat(m, wo, sp.ng, rng, Transport::Radiance)
+        };
+        let Some(s) = sampled else {
             break;
         };
         beta = beta * s.weight;
@@ -226,8 +246,9 @@ pub fn kernel_for(world: &World) -> Kernel {
     // A luminaire is a delta light like an isotropic point: the same next-event code serves
     // it (`sample_light_point` returns its intensity towards the receiver).
     let delta_lights = f.point_emitters || f.goniometric_luminaires;
-    // Textures, one-sided surfaces and the environment: compiled out where the scene has none.
-    let env = f.environment || f.textures || f.one_sided;
+    // Textures, one-sided surfaces, the environment and shading normals (vertex normals,
+    // normal maps): compiled out where the scene has none.
+    let env = f.environment || f.textures || f.one_sided || f.smooth_normals || f.normal_maps;
     match (delta_lights, f.area_emitters, f.specular_paths) {
         (true, true, true) => with_environment::<true, true, true>(env),
         (true, true, false) => with_environment::<true, true, false>(env),

@@ -13,7 +13,7 @@
 //! | `metallicFactor` m in (0, 1) | `Blend(weight: m, first: the dielectric, second: the metal)` |
 //! | `emissiveFactor` × `KHR_materials_emissive_strength` | `Radiance`, cd/m² |
 //! | `baseColorTexture` | the surface's colour texture (multiplying baseColor) |
-//! | `normalTexture` (scale 1) | the surface's normal map (linear) |
+//! | `normalTexture` (`scale` s) | the surface's normal map (linear), `normal_scale` (s, −s) |
 //! | `emissiveTexture` | `Emission::Texture` scaled by the emissive factor |
 //! | `alphaMode` `MASK` / `BLEND` | a cut-out of opacity baseColor alpha × the texture's alpha, at `alphaCutoff` / stochastic |
 //!
@@ -154,14 +154,16 @@ fn material(
         )?),
         None => None,
     };
+    let mut normal_scale = [1.0, 1.0];
     let normal = match m.normal_texture() {
         Some(n) => {
-            if n.scale() != 1.0 {
-                return Err(fail(format!(
-                    "normalTexture scale {} is not supported (only 1)",
-                    n.scale()
-                )));
+            let scale = n.scale() as f64;
+            if !scale.is_finite() {
+                return Err(fail(format!("normalTexture scale {scale} is not finite")));
             }
+            // glTF's tangent-space y points towards decreasing v; luxest's (Mitsuba's) y is
+            // normal × ∂p/∂u, towards increasing v where the mapping is not mirrored.
+            normal_scale = [scale, -scale];
             Some(texture(
                 path,
                 &place,
@@ -253,6 +255,7 @@ fn material(
         roughness: None,
         opacity,
         normal,
+        normal_scale,
         two_sided: true,
     });
     Ok((model, surface, emission))
@@ -418,6 +421,7 @@ pub fn import(path: &Path) -> Result<Imported> {
                 emission,
                 flip_normals: false,
                 face_normals: false,
+                compute_normals: false,
             });
         }
     }

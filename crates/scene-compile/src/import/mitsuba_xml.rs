@@ -19,10 +19,13 @@
 //! not read is an error, so nothing is dropped without a word.
 //!
 //! **Objects.** Shapes `obj`, `ply`, `serialized` (versions 3 and 4), `rectangle`, `cube`, `sphere`, `disk` (with `to_world`,
-//! `flip_normals`, `face_normals`); BSDFs `diffuse`, `dielectric`, `thindielectric`,
+//! `flip_normals`, `face_normals`; vertex normals computed as Mitsuba computes them for mesh
+//! files without, [`crate::shapes::angle_weighted_normals`]); BSDFs `diffuse`, `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor` and `roughconductor` (`eta`/`k`, or a `material` preset of
 //! [`super::mitsuba_tables`]; `none`, smooth, is luxest's `Mirror`), `plastic`,
-//! `roughplastic`, `blendbsdf` (constant weight), `twosided`, `mask`; a BSDF not inside
+//! `roughplastic`, `blendbsdf` (constant weight), `twosided`, `mask`, `normalmap` (its
+//! texture the surface's normal map, with Mitsuba's default flags; outside `twosided`, not
+//! inside it); a BSDF not inside
 //! `twosided` is one-sided (a surface with `two_sided: false`), and a shape without one gets
 //! Mitsuba's default (a one-sided diffuse 0.5); `bitmap` textures as the main colour, a rough
 //! BSDF's α, a mask's opacity and an area emitter's radiance; emitters `area` (inside a shape),
@@ -945,6 +948,8 @@ struct Bsdf {
     color: Option<String>,
     roughness: Option<String>,
     opacity: Option<Opacity>,
+    /// A `normalmap`'s texture.
+    normal: Option<String>,
 }
 
 impl Bsdf {
@@ -955,10 +960,14 @@ impl Bsdf {
             color: None,
             roughness: None,
             opacity: None,
+            normal: None,
         }
     }
     fn textured(&self) -> bool {
-        self.color.is_some() || self.roughness.is_some() || self.opacity.is_some()
+        self.color.is_some()
+            || self.roughness.is_some()
+            || self.opacity.is_some()
+            || self.normal.is_some()
     }
 }
 
@@ -1051,8 +1060,54 @@ impl<'a> Importer<'a> {
                     _ => return Err(self.fail(e, "twosided needs one nested BSDF")),
                 };
                 r.done()?;
+                if b.normal.is_some() {
+                    // Mitsuba's twosided mirrors the normal map's frame on the back side;
+                    // luxest's two-sided normal-mapped surface is normalmap(twosided(…)), whose
+                    // back side sees the mapped normal reversed.
+                    return Err(self.fail(
+                        e,
+                        "twosided around a normalmap is not supported (put the normalmap \
+                         outside: normalmap(twosided(…)))",
+                    ));
+                }
                 return Ok(Bsdf {
                     two_sided: true,
+                    ..b
+                });
+            }
+            "normalmap" => {
+                let texture = match r.props.get("normalmap") {
+                    Some(p) => match &p.value {
+                        Value::Object(t) if t.tag == "texture" => {
+                            p.used.set(true);
+                            self.texture(t)?
+                        }
+                        _ => return Err(r.wrong(p, "a texture")),
+                    },
+                    None => return Err(self.fail(e, "normalmap needs a normalmap texture")),
+                };
+                for flag in ["flip_invalid_normals", "use_shadowing_function"] {
+                    if !r.boolean(flag, true)? {
+                        return Err(self.fail(
+                            e,
+                            format!(
+                                "{flag} false is not supported (luxest's normal maps are \
+                                     Mitsuba's defaults)"
+                            ),
+                        ));
+                    }
+                }
+                let inner = r.objects("bsdf");
+                let [one] = inner.as_slice() else {
+                    return Err(self.fail(e, "normalmap needs one nested BSDF"));
+                };
+                let b = self.bsdf(one)?;
+                r.done()?;
+                if b.normal.is_some() {
+                    return Err(self.fail(e, "a normalmap inside a normalmap is not supported"));
+                }
+                return Ok(Bsdf {
+                    normal: Some(texture),
                     ..b
                 });
             }
@@ -1268,7 +1323,8 @@ impl<'a> Importer<'a> {
                     color: b.color,
                     roughness: b.roughness,
                     opacity: b.opacity,
-                    normal: None,
+                    normal: b.normal,
+                    normal_scale: [1.0, 1.0],
                     two_sided: b.two_sided,
                 },
             );
@@ -1511,6 +1567,11 @@ impl<'a> Importer<'a> {
             other => return Err(self.fail(e, format!("unsupported shape \"{other}\""))),
         };
         let face_normals = r.boolean("face_normals", false)?;
+        // Mitsuba computes vertex normals for the mesh files that have none.
+        let mesh_file = matches!(
+            shape,
+            Shape::Obj { .. } | Shape::Ply { .. } | Shape::Serialized { .. }
+        );
         let bsdfs = r.objects("bsdf");
         let emitters = r.objects("emitter");
         let material = match bsdfs.as_slice() {
@@ -1550,6 +1611,7 @@ impl<'a> Importer<'a> {
             emission,
             flip_normals,
             face_normals,
+            compute_normals: mesh_file,
         });
         Ok(())
     }

@@ -169,6 +169,19 @@ fn read_mtl(
                     ));
                 }
             }
+            "bump" | "map_Bump" | "map_bump" | "norm" | "map_Kn" => {
+                // The MTL specification's `bump` is a height map, yet exporters write tangent-
+                // space normal maps under it and under `norm`, in either y convention (OpenGL
+                // or DirectX): which one a file means cannot be told from it.
+                return Err(Error::at(
+                    path,
+                    place,
+                    format!(
+                        "MTL statement \"{key}\" is ambiguous (a height map or a normal map, y \
+                         up or down) and is not imported: give the scene's `normal` map in RON"
+                    ),
+                ));
+            }
             _ => {
                 return Err(Error::at(
                     path,
@@ -270,6 +283,7 @@ fn material(
         roughness: None,
         opacity,
         normal: None,
+        normal_scale: [1.0, 1.0],
         two_sided: true,
     });
     Ok((model, surface))
@@ -348,6 +362,7 @@ pub fn import(path: &Path) -> Result<Imported> {
             emission: (m.ke.max_component() > 0.0).then_some(Emission::Radiance(m.ke)),
             flip_normals: false,
             face_normals: false,
+            compute_normals: false,
         });
     }
     Ok(Imported { scene, warnings })
