@@ -194,7 +194,10 @@ pub fn ugr(lb: f64, lb_se: f64, terms: &[GlareTerm]) -> Result<Ugr, String> {
             value: 0.0,
             standard_error: 0.0,
             sum,
-            note: Some("no glare source in the field of view (UGR formula undefined; reported as 0)".into()),
+            note: Some(
+                "no glare source in the field of view (UGR formula undefined; reported as 0)"
+                    .into(),
+            ),
         });
     }
     Ok(Ugr {
@@ -298,7 +301,10 @@ mod tests {
             // Line of sight +x, up +z; the source R = 1 ahead, T to the side, H above.
             let p = position_index([1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, t, h]).unwrap();
             let rel = (p / p_table - 1.0).abs();
-            assert!(rel < 0.045, "T/R {t} H/R {h}: p {p:.3} vs table {p_table} ({rel:.3})");
+            assert!(
+                rel < 0.045,
+                "T/R {t} H/R {h}: p {p:.3} vs table {p_table} ({rel:.3})"
+            );
         }
     }
 
@@ -309,7 +315,7 @@ mod tests {
         assert!((position_index(v, up, [0.0, 3.0, 0.0]).unwrap() - 1.0).abs() < 1e-12);
         assert!(position_index(v, up, [0.0, -1.0, 0.5]).is_none());
         assert!(position_index(v, up, [1.0, 0.0, 0.0]).is_none()); // σ = 90°
-        // Straight above at 45°: τ = 0, σ = 45°.
+                                                                   // Straight above at 45°: τ = 0, σ = 45°.
         let (tau, sigma, above) = glare_angles(v, up, [0.0, 1.0, 1.0]).unwrap();
         assert!(tau.abs() < 1e-9 && (sigma - 45.0).abs() < 1e-9 && above);
         let p45 = (0.03398 * 45.0 + 21e-5 * 2025.0f64).exp();
@@ -334,7 +340,12 @@ mod tests {
         let o = rectangle_solid_angle_sr([0.0; 3], [0.0, 0.0, d], [a, 0.0, 0.0], [0.0, b, 0.0]);
         assert!((o - exact).abs() < 1e-12, "{o} {exact}");
         // Far away it tends to A cosθ / D².
-        let far = rectangle_solid_angle_sr([0.0; 3], [0.0, 300.0, 400.0], [0.1, 0.0, 0.0], [0.0, 0.1, 0.0]);
+        let far = rectangle_solid_angle_sr(
+            [0.0; 3],
+            [0.0, 300.0, 400.0],
+            [0.1, 0.0, 0.0],
+            [0.0, 0.1, 0.0],
+        );
         let approx = 0.04 * 0.8 / 250_000.0;
         assert!((far / approx - 1.0).abs() < 1e-4);
     }
@@ -352,7 +363,11 @@ mod tests {
         assert!((u.value - 8.0 * 1562.5f64.log10()).abs() < 1e-12);
         // First-order error: 8/ln10 · 1 % = 0.03474; check it against a finite difference.
         let up = ugr(40.4, 0.0, &[t]).unwrap().value;
-        assert!(((u.value - up) - u.standard_error).abs() < 2e-4, "{}", u.standard_error);
+        assert!(
+            ((u.value - up) - u.standard_error).abs() < 2e-4,
+            "{}",
+            u.standard_error
+        );
         // Doubling L_b lowers UGR by 8 log10 2.
         let half = ugr(80.0, 0.0, &[t]).unwrap().value;
         assert!((u.value - half - 8.0 * 2f64.log10()).abs() < 1e-12);

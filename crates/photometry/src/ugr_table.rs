@@ -113,7 +113,10 @@ fn direct_flux(p: &Photometry, frame: &Frame, x: f64, y: f64) -> [f64; 3] {
             }
         }
     }
-    let (nx, ny) = ((x / SPACING_H).round() as usize, (y / SPACING_H).round() as usize);
+    let (nx, ny) = (
+        (x / SPACING_H).round() as usize,
+        (y / SPACING_H).round() as usize,
+    );
     let (mut floor, mut walls) = (0.0, 0.0);
     for ix in 0..nx {
         let lx = (ix as f64 + 0.5) * SPACING_H;
@@ -179,7 +182,13 @@ fn solve3(mut a: [[f64; 4]; 3]) -> [f64; 3] {
 }
 
 /// The tabular UGR of one room (X, Y in units of H), reflectances and viewing direction.
-pub fn tabular_ugr(p: &Photometry, x: f64, y: f64, rho: [f64; 3], endwise: bool) -> Result<f64, String> {
+pub fn tabular_ugr(
+    p: &Photometry,
+    x: f64,
+    y: f64,
+    rho: [f64; 3],
+    endwise: bool,
+) -> Result<f64, String> {
     // Endwise: the C0–C180 axis (local x) along the line of sight (world +y).
     let frame = if endwise {
         Frame {
@@ -190,7 +199,10 @@ pub fn tabular_ugr(p: &Photometry, x: f64, y: f64, rho: [f64; 3], endwise: bool)
     };
     let lb = background(p, &frame, x, y, rho);
     let (eye, view, up) = ([0.5 * x, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
-    let (nx, ny) = ((x / SPACING_H).round() as usize, (y / SPACING_H).round() as usize);
+    let (nx, ny) = (
+        (x / SPACING_H).round() as usize,
+        (y / SPACING_H).round() as usize,
+    );
     let mut terms = Vec::with_capacity(nx * ny);
     for ix in 0..nx {
         for iy in 0..ny {
@@ -199,7 +211,11 @@ pub fn tabular_ugr(p: &Photometry, x: f64, y: f64, rho: [f64; 3], endwise: bool)
                 opening: p.opening,
                 frame: &frame,
                 multiplier: 1.0,
-                centre: [(ix as f64 + 0.5) * SPACING_H, (iy as f64 + 0.5) * SPACING_H, 1.0],
+                centre: [
+                    (ix as f64 + 0.5) * SPACING_H,
+                    (iy as f64 + 0.5) * SPACING_H,
+                    1.0,
+                ],
             };
             terms.extend(lum.term(eye, view, up, 1.0, SolidAngle::FarField)?);
         }
@@ -247,7 +263,14 @@ impl UgrTable {
         );
         let head: Vec<String> = REFLECTANCES
             .iter()
-            .map(|r| format!("{:.0}/{:.0}/{:.0}", 100.0 * r[0], 100.0 * r[1], 100.0 * r[2]))
+            .map(|r| {
+                format!(
+                    "{:.0}/{:.0}/{:.0}",
+                    100.0 * r[0],
+                    100.0 * r[1],
+                    100.0 * r[2]
+                )
+            })
             .collect();
         s += &format!(
             "{:>4} {:>4} | {:^44} | {:^44}\n",
@@ -257,8 +280,14 @@ impl UgrTable {
             "{:>4} {:>4} | {} | {}\n",
             "",
             "",
-            head.iter().map(|h| format!("{h:>8}")).collect::<Vec<_>>().join(" "),
-            head.iter().map(|h| format!("{h:>8}")).collect::<Vec<_>>().join(" ")
+            head.iter()
+                .map(|h| format!("{h:>8}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+            head.iter()
+                .map(|h| format!("{h:>8}"))
+                .collect::<Vec<_>>()
+                .join(" ")
         );
         for (r, &(x, y)) in ROOMS.iter().enumerate() {
             let cell = |v: f64, k: usize| {
@@ -284,9 +313,7 @@ impl UgrTable {
             );
         }
         let (c, e) = self.reference();
-        s += &format!(
-            "\nreference (4H × 8H, 70/50/20): crosswise {c:.1}, endwise {e:.1}\n"
-        );
+        s += &format!("\nreference (4H × 8H, 70/50/20): crosswise {c:.1}, endwise {e:.1}\n");
         s
     }
 
@@ -328,6 +355,9 @@ mod tests {
         // No upward light; a larger room's floor takes a larger share.
         assert!(f[0] == 0.0 && f[1] > 0.0 && f[2] > 0.0, "{f:?}");
         let g = direct_flux(&p, &Frame::default(), 8.0, 8.0);
-        assert!(g[2] / (g[1] + g[2]) > f[2] / (f[1] + f[2]) && g[2] > g[1], "{g:?}");
+        assert!(
+            g[2] / (g[1] + g[2]) > f[2] / (f[1] + f[2]) && g[2] > g[1],
+            "{g:?}"
+        );
     }
 }
