@@ -150,6 +150,7 @@ fn sensor_report_gives_z_scores_against_the_exact_value() {
                 point(Vec3::new(0.0, -1.0, 0.0), 199.0, 0.5),
             ],
         }],
+        glare: Vec::new(),
     };
     let ron_in = dir.path().join("s.sensors.ron");
     results.write_ron(&ron_in).unwrap();

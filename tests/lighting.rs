@@ -102,6 +102,7 @@ fn results(batches: &[Vec<f64>]) -> SensorResults {
                 batches: vec![],
             },
         ],
+        glare: Vec::new(),
     }
 }
 

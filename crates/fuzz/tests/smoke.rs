@@ -238,6 +238,7 @@ fn sensors_seeds() -> Vec<Vec<u8>> {
                 unit: "lx".into(),
                 singularity: "ball".into(),
                 sets,
+                glare: Vec::new(),
             };
             luxest_io::fsio::to_ron_string(&results).into_bytes()
         })

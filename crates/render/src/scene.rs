@@ -46,6 +46,32 @@ pub struct Scene {
     /// Light arriving from infinitely far away (sky, HDR environment map); see [`Environment`].
     #[serde(default)]
     pub environment: Option<Environment>,
+    /// Glare observers (EN 12464-1 / CIE 117): `estimate sensors` computes the UGR of every
+    /// observer and line of sight; see [`Observer`].
+    #[serde(default)]
+    pub observers: Vec<Observer>,
+}
+
+/// A glare observer (EN 12464-1 / CIE 117): eye position and horizontal lines of sight.
+///
+/// `estimate sensors` computes the unified glare rating along each line of sight
+/// (`luxest_photometry::ugr`): the background luminance is the indirect illuminance at the eye
+/// on the plane facing the line of sight / π, the sources are the luminaires seen from the eye
+/// (their luminous openings: `Opening::Area` or the file's dimensions), each with the share of
+/// its opening not hidden by the scene. The eye must be in open space: `scene-compile` refuses
+/// an eye inside an object or outside the room.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Observer {
+    /// Unique among observers; names the results.
+    pub name: String,
+    /// Eye, m (seated 1.2 m, standing 1.6 m above the floor).
+    pub position: Vec3,
+    /// Lines of sight (any length, normalised when compiled; usually horizontal); at least one.
+    pub views: Vec<Vec3>,
+    /// UGR_L of the task area (EN 12464-1), reported beside the value.
+    #[serde(default)]
+    pub ugr_limit: Option<f64>,
 }
 
 /// A texture: a PNG, JPEG or EXR file (or a checkerboard) and how it is looked up.

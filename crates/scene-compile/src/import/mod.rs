@@ -100,6 +100,7 @@ pub(crate) fn empty_scene() -> Scene {
         textures: Default::default(),
         surfaces: Default::default(),
         environment: None,
+        observers: Vec::new(),
     }
 }
 
