@@ -94,14 +94,10 @@ def read_ldt(path):
     t = Path(path).read_text(errors="replace").splitlines()
     isym, mc, dc, ng = int(t[2]), int(t[3]), float(t[4]), int(t[5])
     n_sets = int(t[25])
-    length, width = float(t[16]) / 1000, float(t[17]) / 1000  # luminous area, mm
+    length, width = float(t[15]) / 1000, float(t[16]) / 1000  # luminous area (lines 16, 17), mm
     conv = float(t[23])
-    lamp_lm = float(t[28 + n_sets]) if False else None
-    # Lamp data: per set 6 lines (number, type, flux, colour, CRI, watts) from line 26.
-    fluxes = [float(t[26 + 2 * n_sets + s]) for s in range(n_sets)]
-    counts = [abs(float(t[26 + s])) for s in range(n_sets)]
-    lamp_lm = sum(fluxes)
-    del counts
+    # Lamp data from line 27: per field one line per set (number, type, flux, colour, CRI, W).
+    lamp_lm = sum(float(t[26 + 2 * n_sets + s]) for s in range(n_sets))
     base = 26 + 6 * n_sets + 10  # after the lamp sets and the ten direct ratios
     c_all = [float(x) for x in t[base:base + mc]]
     g = [float(x) for x in t[base + mc:base + mc + ng]]

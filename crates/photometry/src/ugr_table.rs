@@ -26,7 +26,7 @@
 
 use crate::frame::{direction_from_c_gamma, Frame};
 use crate::photometry::Photometry;
-use crate::ugr::{GlareLuminaire, SolidAngle};
+use crate::ugr::{GlareLuminaire, GlareTerm, SolidAngle};
 use std::f64::consts::PI;
 
 /// The table's rooms (X, Y) in units of H, in the standard order.
@@ -135,8 +135,9 @@ fn direct_flux(p: &Photometry, frame: &Frame, x: f64, y: f64) -> [f64; 3] {
     [up * (nx * ny) as f64, walls, floor]
 }
 
-/// The background luminance (cd/m²) of the standard room: indirect wall illuminance / π.
-fn background(p: &Photometry, frame: &Frame, x: f64, y: f64, rho: [f64; 3]) -> f64 {
+/// The background luminance (cd/m²) of the standard room: indirect wall illuminance / π,
+/// from the direct flux on ceiling, walls and floor.
+fn background(flux: [f64; 3], x: f64, y: f64, rho: [f64; 3]) -> f64 {
     let (ac, aw) = (x * y, 2.0 * (x + y));
     let fcf = parallel_rectangles_form_factor(x, y, 1.0);
     let fcw = 1.0 - fcf;
@@ -147,7 +148,6 @@ fn background(p: &Photometry, frame: &Frame, x: f64, y: f64, rho: [f64; 3]) -> f
         [fwc, 1.0 - 2.0 * fwc, fwc],
         [fcf, fcw, 0.0],
     ];
-    let flux = direct_flux(p, frame, x, y);
     let area = [ac, aw, ac];
     // (I − diag(ρ) F) M = ρ E_direct.
     let mut a = [[0.0; 4]; 3];
@@ -181,6 +181,62 @@ fn solve3(mut a: [[f64; 4]; 3]) -> [f64; 3] {
     [0, 1, 2].map(|i| a[i][3] / a[i][i])
 }
 
+/// One standard room seen one way: the direct flux on ceiling, walls and floor (lm) and the
+/// glare sum Σ L² ω / p² (what does not depend on the reflectances).
+struct Room {
+    x: f64,
+    y: f64,
+    flux: [f64; 3],
+    terms: Vec<GlareTerm>,
+}
+
+impl Room {
+    fn new(p: &Photometry, x: f64, y: f64, endwise: bool) -> Result<Room, String> {
+        // Endwise: the C0–C180 axis (local x) along the line of sight (world +y).
+        let frame = if endwise {
+            Frame {
+                m: [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+            }
+        } else {
+            Frame::default()
+        };
+        let (eye, view, up) = ([0.5 * x, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+        let (nx, ny) = (
+            (x / SPACING_H).round() as usize,
+            (y / SPACING_H).round() as usize,
+        );
+        let mut terms = Vec::with_capacity(nx * ny);
+        for ix in 0..nx {
+            for iy in 0..ny {
+                let lum = GlareLuminaire {
+                    photometry: p,
+                    opening: p.opening,
+                    frame: &frame,
+                    multiplier: 1.0,
+                    centre: [
+                        (ix as f64 + 0.5) * SPACING_H,
+                        (iy as f64 + 0.5) * SPACING_H,
+                        1.0,
+                    ],
+                };
+                terms.extend(lum.term(eye, view, up, 1.0, SolidAngle::FarField)?);
+            }
+        }
+        Ok(Room {
+            x,
+            y,
+            flux: direct_flux(p, &frame, x, y),
+            terms,
+        })
+    }
+
+    fn ugr(&self, p: &Photometry, rho: [f64; 3]) -> Result<f64, String> {
+        let lb = background(self.flux, self.x, self.y, rho);
+        let u = crate::ugr::ugr(lb, 0.0, &self.terms).map_err(|m| format!("{}: {m}", p.name))?;
+        Ok(u.value)
+    }
+}
+
 /// The tabular UGR of one room (X, Y in units of H), reflectances and viewing direction.
 pub fn tabular_ugr(
     p: &Photometry,
@@ -189,39 +245,7 @@ pub fn tabular_ugr(
     rho: [f64; 3],
     endwise: bool,
 ) -> Result<f64, String> {
-    // Endwise: the C0–C180 axis (local x) along the line of sight (world +y).
-    let frame = if endwise {
-        Frame {
-            m: [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
-        }
-    } else {
-        Frame::default()
-    };
-    let lb = background(p, &frame, x, y, rho);
-    let (eye, view, up) = ([0.5 * x, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
-    let (nx, ny) = (
-        (x / SPACING_H).round() as usize,
-        (y / SPACING_H).round() as usize,
-    );
-    let mut terms = Vec::with_capacity(nx * ny);
-    for ix in 0..nx {
-        for iy in 0..ny {
-            let lum = GlareLuminaire {
-                photometry: p,
-                opening: p.opening,
-                frame: &frame,
-                multiplier: 1.0,
-                centre: [
-                    (ix as f64 + 0.5) * SPACING_H,
-                    (iy as f64 + 0.5) * SPACING_H,
-                    1.0,
-                ],
-            };
-            terms.extend(lum.term(eye, view, up, 1.0, SolidAngle::FarField)?);
-        }
-    }
-    let u = crate::ugr::ugr(lb, 0.0, &terms).map_err(|m| format!("{}: {m}", p.name))?;
-    Ok(u.value)
+    Room::new(p, x, y, endwise)?.ugr(p, rho)
 }
 
 /// The whole table of a luminaire (see the module docs).
@@ -234,10 +258,8 @@ pub fn ugr_table(p: &Photometry) -> Result<UgrTable, String> {
     };
     for &(x, y) in &ROOMS {
         let row = |endwise| -> Result<Vec<f64>, String> {
-            REFLECTANCES
-                .iter()
-                .map(|&r| tabular_ugr(p, x, y, r, endwise))
-                .collect()
+            let room = Room::new(p, x, y, endwise)?;
+            REFLECTANCES.iter().map(|&r| room.ugr(p, r)).collect()
         };
         t.crosswise.push(row(false)?);
         t.endwise.push(row(true)?);
@@ -342,6 +364,40 @@ mod tests {
         assert!((parallel_rectangles_form_factor(1.0, 1.0, 1.0) - 0.199825).abs() < 1e-5);
         // Large plates far apart → A / (π c²) · ...: close plates see each other almost fully.
         assert!(parallel_rectangles_form_factor(1000.0, 1000.0, 1.0) > 0.99);
+    }
+
+    /// The whole table of both example luminaires against pipelines/ugr_table_check.py's
+    /// independent evaluation of the same definition (committed CSVs), to ±0.5 UGR (the issue's
+    /// tolerance; they agree to a few hundredths).
+    #[test]
+    fn tables_agree_with_the_independent_evaluation() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        for (file, check) in [
+            ("troffer-600-led.ies", "troffer-600-led.check.csv"),
+            ("pendant-linear-4000.ldt", "pendant-linear-4000.check.csv"),
+        ] {
+            let p = crate::load(&root.join("scenes/photometry").join(file)).unwrap();
+            let t = ugr_table(&p).unwrap();
+            let text = std::fs::read_to_string(root.join("reports/lighting/ugr-table").join(check))
+                .unwrap();
+            let rows: Vec<Vec<f64>> = text
+                .lines()
+                .filter(|l| !l.starts_with('#') && !l.starts_with('x'))
+                .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+                .collect();
+            assert_eq!(rows.len(), ROOMS.len() * REFLECTANCES.len());
+            for (n, row) in rows.iter().enumerate() {
+                let (r, k) = (n / REFLECTANCES.len(), n % REFLECTANCES.len());
+                assert_eq!((row[0], row[1]), ROOMS[r]);
+                assert_eq!([row[2], row[3], row[4]], REFLECTANCES[k]);
+                for (ours, theirs) in [(t.crosswise[r][k], row[5]), (t.endwise[r][k], row[6])] {
+                    assert!(
+                        (ours - theirs).abs() <= 0.5,
+                        "{file} room {r} refl {k}: {ours} vs {theirs}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -839,4 +839,26 @@ mod tests {
         assert_eq!(get("worn metal").kind(), MaterialKind::Blend);
         assert!(names.len() >= 9, "{names:?}");
     }
+
+    /// The `observers: [ … ]` example of `docs/scene-format.md` parses with the defaults the
+    /// docs state.
+    #[test]
+    fn the_documented_observers_parse() {
+        #[derive(Deserialize)]
+        struct Observers {
+            observers: Vec<Observer>,
+        }
+        let doc = include_str!("../../../docs/scene-format.md");
+        let block = doc
+            .split("```ron\n")
+            .find(|b| b.starts_with("observers: ["))
+            .unwrap();
+        let block = &block[..block.find("```").unwrap()];
+        let path = std::path::Path::new("docs/scene-format.md");
+        let o: Observers = luxest_io::fsio::parse_ron(path, &format!("({block})")).unwrap();
+        assert_eq!(o.observers.len(), 2);
+        assert_eq!(o.observers[0].views.len(), 2);
+        assert_eq!(o.observers[0].ugr_limit, Some(19.0));
+        assert_eq!(o.observers[1].ugr_limit, None);
+    }
 }
