@@ -33,10 +33,10 @@ import tempfile
 import time
 from pathlib import Path
 
-import pyradiance  # noqa: F401  (the bundled Radiance binaries on PATH, RAYPATH set)
+import pyradiance  # the bundled Radiance binaries on PATH, RAYPATH set
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import radiance_office as ro  # noqa: E402
+import radiance_office as ro
 
 EFFICACY = 179.0
 
@@ -58,14 +58,14 @@ def read_ies_table(path):
     """(gamma, C, planes, width, length) of an IES LM-63 file (metres, absolute cd)."""
     text = Path(path).read_text(errors="replace").splitlines()
     k = next(i for i, line in enumerate(text) if line.startswith("TILT="))
-    nums = [float(x) for line in text[k + 1:] for x in line.replace(",", " ").split()]
+    nums = [float(x) for line in text[k + 1 :] for x in line.replace(",", " ").split()]
     _n, _lm, mult, ng, nc, _pt, units, width, length, _h = nums[:10]
     ballast = nums[10]
     ng, nc = int(ng), int(nc)
     rest = nums[13:]
-    g, c = rest[:ng], rest[ng:ng + nc]
-    vals = rest[ng + nc:ng + nc + ng * nc]
-    planes = [[v * mult * ballast for v in vals[i * ng:(i + 1) * ng]] for i in range(nc)]
+    g, c = rest[:ng], rest[ng : ng + nc]
+    vals = rest[ng + nc : ng + nc + ng * nc]
+    planes = [[v * mult * ballast for v in vals[i * ng : (i + 1) * ng]] for i in range(nc)]
     scale = 0.3048 if units == 1 else 1.0
     return g, c, planes, width * scale, length * scale
 
@@ -109,8 +109,22 @@ def luminaires_rad(scene_path, info, work):
                 continue
             stem = f"{e['name']}_{part}"
             (work / f"{stem}.ies").write_text(text)
-            cmd = ["ies2rad", "-dm", "-c", "1", "1", "1", *extra, "-m", repr(e["multiplier"]),
-                   "-l", str(work), "-o", stem, f"{stem}.ies"]
+            cmd = [
+                "ies2rad",
+                "-dm",
+                "-c",
+                "1",
+                "1",
+                "1",
+                *extra,
+                "-m",
+                repr(e["multiplier"]),
+                "-l",
+                str(work),
+                "-o",
+                stem,
+                f"{stem}.ies",
+            ]
             subprocess.run(cmd, check=True, cwd=work, capture_output=True)
             if part == "u":  # invisible to view rays: light -> illum without an alternate
                 r = (work / f"{stem}.rad").read_text()
@@ -120,8 +134,7 @@ def luminaires_rad(scene_path, info, work):
 
 
 def evalglare(pic, threshold):
-    r = subprocess.run(["evalglare", "-b", str(threshold), "-d", str(pic)],
-                       capture_output=True, text=True, check=True)
+    r = subprocess.run(["evalglare", "-b", str(threshold), "-d", str(pic)], capture_output=True, text=True, check=True)
     # The detailed output ends with "dgp,av_lum,E_v,lum_backg,E_v_dir,dgi,ugr,...: values".
     for line in r.stdout.splitlines():
         if line.startswith("dgp,") and ":" in line:
@@ -148,9 +161,34 @@ def main():
     glare = lux.get("glare") or []
     if not glare:
         raise SystemExit(f"error: {a.luxest}: no glare results (does the scene have observers?)")
-    settings = ["-ab", str(a.ab), "-ad", str(a.ad), "-as", str(a.ad // 4), "-aa", str(a.aa), "-ar", "128",
-                "-lw", "1e-4", "-ds", "0.02", "-dj", "0", "-ps", "1", "-pj", "0", "-dt", "0",
-                "-x", str(a.res), "-y", str(a.res)]
+    settings = [
+        "-ab",
+        str(a.ab),
+        "-ad",
+        str(a.ad),
+        "-as",
+        str(a.ad // 4),
+        "-aa",
+        str(a.aa),
+        "-ar",
+        "128",
+        "-lw",
+        "1e-4",
+        "-ds",
+        "0.02",
+        "-dj",
+        "0",
+        "-ps",
+        "1",
+        "-pj",
+        "0",
+        "-dt",
+        "0",
+        "-x",
+        str(a.res),
+        "-y",
+        str(a.res),
+    ]
     rows = []
     t0 = time.time()
     with tempfile.TemporaryDirectory() as tmp:
@@ -164,26 +202,48 @@ def main():
             pic = work / f"view{k}.hdr"
             with open(pic, "wb") as f:
                 subprocess.run(
-                    ["rpict", *settings, "-af", "scene.amb", "-vta", "-vp", *map(str, eye), "-vd", *map(str, view),
-                     "-vu", "0", "0", "1", "-vh", "180", "-vv", "180", "scene.oct"],
-                    check=True, cwd=work, stdout=f)
+                    [
+                        "rpict",
+                        *settings,
+                        "-af",
+                        "scene.amb",
+                        "-vta",
+                        "-vp",
+                        *map(str, eye),
+                        "-vd",
+                        *map(str, view),
+                        "-vu",
+                        "0",
+                        "0",
+                        "1",
+                        "-vh",
+                        "180",
+                        "-vv",
+                        "180",
+                        "scene.oct",
+                    ],
+                    check=True,
+                    cwd=work,
+                    stdout=f,
+                )
             ev = evalglare(pic, a.threshold)
             rows.append((g, ev))
-            print(f"{g['observer']} {g['view']}: luxest {g['ugr']:.2f} evalglare {ev['ugr']:.2f}",
-                  file=sys.stderr)
+            print(f"{g['observer']} {g['view']}: luxest {g['ugr']:.2f} evalglare {ev['ugr']:.2f}", file=sys.stderr)
     seconds = time.time() - t0
     out = Path(a.out)
-    csv = ["observer,view_x,view_y,view_z,ugr_luxest,ugr_luxest_se,ugr_evalglare,"
-           "lb_luxest,lb_evalglare,ev_evalglare"]
+    csv = ["observer,view_x,view_y,view_z,ugr_luxest,ugr_luxest_se,ugr_evalglare,lb_luxest,lb_evalglare,ev_evalglare"]
     md = [
         f"# Glare (UGR): luxest against Radiance evalglare, scene `{a.scene}`",
         "",
-        f"Written by `pipelines/radiance_glare.py` ({time.strftime('%Y-%m-%d')}): rpict "
-        f"`{' '.join(settings)} -vta -vh 180 -vv 180` from each eye, evalglare `-b "
-        f"{a.threshold:g} -d` (Radiance from PyPI pyradiance {pyradiance.__version__}); "
-        f"luxest: `{a.luxest}` ({lux['run']['samples']} light paths). {seconds:.0f} s of Radiance.",
+        (
+            f"Written by `pipelines/radiance_glare.py` ({time.strftime('%Y-%m-%d')}): rpict "
+            f"`{' '.join(settings)} -vta -vh 180 -vv 180` from each eye, evalglare `-b "
+            f"{a.threshold:g} -d` (Radiance from PyPI pyradiance {pyradiance.__version__}); "
+            f"luxest: `{a.luxest}` ({lux['run']['samples']} light paths). "
+            f"{seconds:.0f} s of Radiance."
+        ),
         "",
-        "| observer | view | UGR luxest | UGR evalglare | Δ | L_b luxest (cd/m²) | L_b evalglare | sources luxest / evalglare | |ΔUGR| ≤ 1 |",
+        "| observer | view | UGR luxest | UGR evalglare | Δ | L_b luxest (cd/m²) | L_b evalglare | luxest sources | |ΔUGR| ≤ 1 |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     worst = 0.0
@@ -195,10 +255,13 @@ def main():
         md.append(
             f"| {g['observer']} | ({v[0]:g}, {v[1]:g}, {v[2]:g}) | {g['ugr']:.2f} ± "
             f"{g['standard_error']:.2f} | {ev['ugr']:.2f} | {d:+.2f} | {lb:.1f} | "
-            f"{ev['lum_backg']:.1f} | {len(g['sources'])} / {ev.get('no_glaresources', float('nan')):g} "
-            f"| {'yes' if abs(d) <= 1 else 'NO'} |")
-        csv.append(f"{g['observer']},{v[0]},{v[1]},{v[2]},{g['ugr']:.4f},{g['standard_error']:.4f},"
-                   f"{ev['ugr']:.4f},{lb:.4f},{ev['lum_backg']:.4f},{ev['E_v']:.4f}")
+            f"{ev['lum_backg']:.1f} | {len(g['sources'])} "
+            f"| {'yes' if abs(d) <= 1 else 'NO'} |"
+        )
+        csv.append(
+            f"{g['observer']},{v[0]},{v[1]},{v[2]},{g['ugr']:.4f},{g['standard_error']:.4f},"
+            f"{ev['ugr']:.4f},{lb:.4f},{ev['lum_backg']:.4f},{ev['E_v']:.4f}"
+        )
     md += ["", f"Largest |ΔUGR|: {worst:.2f} ({'within' if worst <= 1 else 'OUTSIDE'} ±1)."]
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text("\n".join(md) + "\n")

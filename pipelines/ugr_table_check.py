@@ -28,8 +28,27 @@ from pathlib import Path
 
 import numpy as np
 
-ROOMS = [(2, 2), (2, 3), (2, 4), (2, 6), (2, 8), (2, 12), (4, 2), (4, 3), (4, 4), (4, 6),
-         (4, 8), (4, 12), (8, 4), (8, 6), (8, 8), (8, 12), (12, 4), (12, 6), (12, 8)]
+ROOMS = [
+    (2, 2),
+    (2, 3),
+    (2, 4),
+    (2, 6),
+    (2, 8),
+    (2, 12),
+    (4, 2),
+    (4, 3),
+    (4, 4),
+    (4, 6),
+    (4, 8),
+    (4, 12),
+    (8, 4),
+    (8, 6),
+    (8, 8),
+    (8, 12),
+    (12, 4),
+    (12, 6),
+    (12, 8),
+]
 REFL = [(0.7, 0.5, 0.2), (0.7, 0.3, 0.2), (0.5, 0.5, 0.2), (0.5, 0.3, 0.2), (0.3, 0.3, 0.2)]
 S = 0.25
 
@@ -37,9 +56,11 @@ S = 0.25
 class Table:
     """An intensity table over C in [0, 360], gamma in [0, 180] (cd) and a flat opening."""
 
-    def __init__(self, c, g, cd, length, width):
+    def __init__(self, c, g, cd, length, width, round_=False):
         self.c, self.g, self.cd = np.asarray(c, float), np.asarray(g, float), np.asarray(cd, float)
         self.length, self.width = length, width
+        # Flat opening area: a rectangle, or a disk / ellipse (IES negative dimensions).
+        self.area = length * width * (math.pi / 4 if round_ else 1.0)
 
     def intensity(self, c, g):
         c = np.mod(c, 360.0)
@@ -77,33 +98,33 @@ def expand(c_given, g, rows):
 def read_ies(path):
     text = Path(path).read_text(errors="replace").splitlines()
     k = next(i for i, line in enumerate(text) if line.startswith("TILT="))
-    nums = [float(x) for line in text[k + 1:] for x in line.split()]
-    n_lamps, lm, mult, ng, nc, _ptype, units, width, length, _height = nums[:10]
+    nums = [float(x) for line in text[k + 1 :] for x in line.split()]
+    _n_lamps, _lm, mult, ng, nc, _ptype, units, width, length, _height = nums[:10]
     ballast, _future, _watts = nums[10:13]
     scale = 0.3048 if units == 1 else 1.0
     ng, nc = int(ng), int(nc)
     rest = nums[13:]
     g = rest[:ng]
-    c = rest[ng:ng + nc]
-    vals = np.array(rest[ng + nc:ng + nc + ng * nc]).reshape(nc, ng) * mult * ballast
+    c = rest[ng : ng + nc]
+    vals = np.array(rest[ng + nc : ng + nc + ng * nc]).reshape(nc, ng) * mult * ballast
     cf, gf, cdf = expand(c, g, vals)
-    return Table(cf, gf, cdf, abs(length) * scale, abs(width) * scale)
+    return Table(cf, gf, cdf, abs(length) * scale, abs(width) * scale, length < 0 and width < 0)
 
 
 def read_ldt(path):
     t = Path(path).read_text(errors="replace").splitlines()
-    isym, mc, dc, ng = int(t[2]), int(t[3]), float(t[4]), int(t[5])
+    isym, mc, _dc, ng = int(t[2]), int(t[3]), float(t[4]), int(t[5])
     n_sets = int(t[25])
     length, width = float(t[15]) / 1000, float(t[16]) / 1000  # luminous area (lines 16, 17), mm
     conv = float(t[23])
     # Lamp data from line 27: per field one line per set (number, type, flux, colour, CRI, W).
     lamp_lm = sum(float(t[26 + 2 * n_sets + s]) for s in range(n_sets))
     base = 26 + 6 * n_sets + 10  # after the lamp sets and the ten direct ratios
-    c_all = [float(x) for x in t[base:base + mc]]
-    g = [float(x) for x in t[base + mc:base + mc + ng]]
+    c_all = [float(x) for x in t[base : base + mc]]
+    g = [float(x) for x in t[base + mc : base + mc + ng]]
     first = base + mc + ng
     given = {1: 1, 2: mc // 2 + 1, 3: mc // 2 + 1, 4: mc // 4 + 1}.get(isym, mc)
-    vals = [float(x) for x in t[first:first + given * ng]]
+    vals = [float(x) for x in t[first : first + given * ng]]
     rows = np.array(vals).reshape(given, ng) * conv * lamp_lm / 1000.0
     if isym == 1:
         c = [0.0]
@@ -114,7 +135,8 @@ def read_ldt(path):
     else:
         sys.exit(f"{path}: EULUMDAT symmetry {isym} not handled by this check")
     cf, gf, cdf = expand(c, g, rows)
-    return Table(cf, gf, cdf, length, width)
+    # EULUMDAT: width 0 means a circular area of diameter `length`.
+    return Table(cf, gf, cdf, length, width or length, width == 0)
 
 
 def position_index(tau, sigma):
@@ -140,20 +162,26 @@ def patches(x0, x1, n0, y0, y1, n1):
 
 
 def direct_flux(table, X, Y, endwise, h=0.05):
-    lum = np.array([((i + 0.5) * S, (j + 0.5) * S) for i in range(int(X / S))
-                    for j in range(int(Y / S))])
+    lum = np.array([((i + 0.5) * S, (j + 0.5) * S) for i in range(int(X / S)) for j in range(int(Y / S))])
     # Receivers: floor points (normal +z) and wall points (normal inwards), with patch areas.
     (fx, fy), fa = patches(0, X, int(X / h), 0, Y, int(Y / h))
     rec = [np.stack([fx.ravel(), fy.ravel(), np.zeros(fx.size)], 1)]
     nrm = [np.tile([0.0, 0.0, 1.0], (fx.size, 1))]
     area = [np.full(fx.size, fa)]
-    for (p0, p1, nrm_w, along) in [((0, 0), (X, 0), (0, 1, 0), "x"), ((0, Y), (X, Y), (0, -1, 0), "x"),
-                                  ((0, 0), (0, Y), (1, 0, 0), "y"), ((X, 0), (X, Y), (-1, 0, 0), "y")]:
+    for p0, p1, nrm_w, along in [
+        ((0, 0), (X, 0), (0, 1, 0), "x"),
+        ((0, Y), (X, Y), (0, -1, 0), "x"),
+        ((0, 0), (0, Y), (1, 0, 0), "y"),
+        ((X, 0), (X, Y), (-1, 0, 0), "y"),
+    ]:
         length = X if along == "x" else Y
         (s, z), wa = patches(0, length, int(length / h), 0, 1, int(1 / h))
         s, z = s.ravel(), z.ravel()
-        pts = np.stack([p0[0] + s, np.full(s.size, p0[1]), z], 1) if along == "x" else \
-            np.stack([np.full(s.size, p0[0]), p0[1] + s, z], 1)
+        pts = (
+            np.stack([p0[0] + s, np.full(s.size, p0[1]), z], 1)
+            if along == "x"
+            else np.stack([np.full(s.size, p0[0]), p0[1] + s, z], 1)
+        )
         rec.append(pts)
         nrm.append(np.tile(nrm_w, (s.size, 1)).astype(float))
         area.append(np.full(s.size, wa))
@@ -168,7 +196,7 @@ def direct_flux(table, X, Y, endwise, h=0.05):
         cos_r = np.maximum(-np.einsum("ij,ij->i", d, nrm) / r, 0.0)
         total += table.intensity(c, g) * cos_r / r2 * area
     floor = total[: sizes[0]].sum()
-    walls = total[sizes[0]:].sum()
+    walls = total[sizes[0] :].sum()
     # Upward flux (to the ceiling): the table's integral over gamma > 90 (rarely non-zero).
     gg = np.linspace(90, 180, 181)
     cc = np.linspace(0, 360, 361)
@@ -198,14 +226,13 @@ def tabular(table, X, Y, refl, endwise, flux, ff):
     m = np.linalg.solve(np.eye(3) - rho[:, None] * F, rho * e)
     lb = F[1] @ m / math.pi
     eye = np.array([X / 2, 0.0, 0.0])
-    lum = np.array([((i + 0.5) * S, (j + 0.5) * S, 1.0) for i in range(int(X / S))
-                    for j in range(int(Y / S))])
+    lum = np.array([((i + 0.5) * S, (j + 0.5) * S, 1.0) for i in range(int(X / S)) for j in range(int(Y / S))])
     d = lum - eye
     dist = np.linalg.norm(d, axis=1)
     sigma = np.degrees(np.arccos(d[:, 1] / dist))
     tau = np.degrees(np.arctan2(np.abs(d[:, 0]), d[:, 2]))
     c, g = local_angles(-d, endwise)
-    ap = table.length * table.width * np.cos(np.radians(g))
+    ap = table.area * np.cos(np.radians(g))
     lumi = table.intensity(c, g) / ap
     omega = ap / dist**2
     p = position_index(tau, sigma)
@@ -227,11 +254,11 @@ def main():
             cw = tabular(table, X, Y, r, False, fl[False], ff)
             ew = tabular(table, X, Y, r, True, fl[True], ff)
             rows.append(f"{X},{Y},{r[0]},{r[1]},{r[2]},{cw:.3f},{ew:.3f}")
-        print(f"{X}H x {Y}H: crosswise {rows[-5].split(',')[5]} endwise {rows[-5].split(',')[6]}",
-              file=sys.stderr)
+        print(f"{X}H x {Y}H: crosswise {rows[-5].split(',')[5]} endwise {rows[-5].split(',')[6]}", file=sys.stderr)
     Path(a.out).write_text(
         f"# independent tabular UGR of {a.file} (pipelines/ugr_table_check.py)\n"
-        "x_h,y_h,ceiling,walls,floor,crosswise,endwise\n" + "\n".join(rows) + "\n")
+        "x_h,y_h,ceiling,walls,floor,crosswise,endwise\n" + "\n".join(rows) + "\n"
+    )
 
 
 if __name__ == "__main__":

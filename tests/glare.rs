@@ -64,9 +64,10 @@ fn ugr_agrees_with_evalglare_in_the_downlight_lobby() {
     }
 }
 
-/// A source's luminance and solid angle against the closed form: the downlight radiates
-/// I = A cos³γ from a 150 mm disk, so from an eye at distance D under the angle γ it has
-/// L = A cos²γ / (π r²) and ω = π r² cos γ / D² (the far field of a small disk).
+/// A source's luminance and solid angle against the closed form: the downlight's file tabulates
+/// I = A cos³γ every 5° (interpolated linearly in γ between, as LM-63 prescribes) from a 150 mm
+/// disk, so from an eye at distance D under the angle γ it has L = I(γ) / (π r² cos γ) and
+/// ω = π r² cos γ / D² (the far field of a small disk).
 #[test]
 fn a_downlights_luminance_is_its_closed_form() {
     let dir = TempDir::new("glare-disk");
@@ -79,7 +80,11 @@ fn a_downlights_luminance_is_its_closed_form() {
     let d = (dx * dx + dy * dy).sqrt();
     let cos_g = dy / d;
     let area = std::f64::consts::PI * radius * radius;
-    let l = a * cos_g * cos_g / area;
+    let gamma = cos_g.acos().to_degrees();
+    let g0 = (gamma / 5.0).floor() * 5.0;
+    let f = |g: f64| a * g.to_radians().cos().powi(3);
+    let intensity = f(g0) + (f(g0 + 5.0) - f(g0)) * (gamma - g0) / 5.0;
+    let l = intensity / (area * cos_g);
     assert!(
         (s.luminance / l - 1.0).abs() < 0.01,
         "{} vs {l}",

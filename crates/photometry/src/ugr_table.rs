@@ -172,8 +172,9 @@ fn solve3(mut a: [[f64; 4]; 3]) -> [f64; 3] {
         for i in 0..3 {
             if i != k {
                 let r = a[i][k] / a[k][k];
-                for j in k..4 {
-                    a[i][j] -= r * a[k][j];
+                let pivot_row = a[k];
+                for (x, p) in a[i].iter_mut().zip(pivot_row).skip(k) {
+                    *x -= r * p;
                 }
             }
         }
