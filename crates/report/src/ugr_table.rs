@@ -3,14 +3,12 @@
 //! 70/50/20, in brackets) and, with `-o`, written as CSV (`x_h,y_h,ceiling,walls,floor,
 //! crosswise,endwise`) or text (`.txt`).
 
-use clap::Parser;
 use luxest_io::outputs::OutputPlan;
 use luxest_io::{Error, Result};
 use std::path::PathBuf;
 
 /// The UGR table of a luminaire file (CIE 190 tabular method).
-#[derive(Parser, Debug)]
-#[command(name = "report ugr-table", version)]
+#[derive(clap::Args, Debug)]
 pub struct Args {
     /// The photometric file (.ies or .ldt).
     pub file: PathBuf,
