@@ -367,7 +367,7 @@ mod tests {
         assert!(parallel_rectangles_form_factor(1000.0, 1000.0, 1.0) > 0.99);
     }
 
-    /// The whole table of both example luminaires against pipelines/ugr_table_check.py's
+    /// The whole table of the three example luminaires against pipelines/ugr_table_check.py's
     /// independent evaluation of the same definition (committed CSVs), to ±0.5 UGR (the issue's
     /// tolerance; they agree to a few hundredths).
     #[test]
@@ -376,6 +376,7 @@ mod tests {
         for (file, check) in [
             ("troffer-600-led.ies", "troffer-600-led.check.csv"),
             ("pendant-linear-4000.ldt", "pendant-linear-4000.check.csv"),
+            ("downlight-150-round.ies", "downlight-150-round.check.csv"),
         ] {
             let p = crate::load(&root.join("scenes/photometry").join(file)).unwrap();
             let t = ugr_table(&p).unwrap();
