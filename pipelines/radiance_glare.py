@@ -143,54 +143,9 @@ def evalglare(pic, threshold):
     raise SystemExit(f"error: evalglare gave no result for {pic}:\n{r.stdout}\n{r.stderr}")
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--scene", required=True)
-    ap.add_argument("--info", required=True)
-    ap.add_argument("--luxest", required=True, help="estimate sensors results with glare")
-    ap.add_argument("-o", "--out", required=True, help="Markdown report; a CSV is written beside")
-    ap.add_argument("--res", type=int, default=500, help="fisheye pixels per side")
-    ap.add_argument("--threshold", type=float, default=1000.0, help="evalglare -b, cd/m^2")
-    ap.add_argument("--ab", type=int, default=4)
-    ap.add_argument("--ad", type=int, default=1024)
-    ap.add_argument("--aa", type=float, default=0.15)
-    a = ap.parse_args()
-    scene = ro.read_ron(a.scene)
-    info = ro.read_ron(a.info)
-    lux = ro.read_ron(a.luxest)
-    glare = lux.get("glare") or []
-    if not glare:
-        raise SystemExit(f"error: {a.luxest}: no glare results (does the scene have observers?)")
-    settings = [
-        "-ab",
-        str(a.ab),
-        "-ad",
-        str(a.ad),
-        "-as",
-        str(a.ad // 4),
-        "-aa",
-        str(a.aa),
-        "-ar",
-        "128",
-        "-lw",
-        "1e-4",
-        "-ds",
-        "0.02",
-        "-dj",
-        "0",
-        "-ps",
-        "1",
-        "-pj",
-        "0",
-        "-dt",
-        "0",
-        "-x",
-        str(a.res),
-        "-y",
-        str(a.res),
-    ]
+def render(a, scene, info, glare, settings):
+    """evalglare's numbers for every observer and view (rpict -vta from each eye)."""
     rows = []
-    t0 = time.time()
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         (work / "room.rad").write_text(ro.scene_rad(scene, a.scene))
@@ -229,6 +184,75 @@ def main():
             ev = evalglare(pic, a.threshold)
             rows.append((g, ev))
             print(f"{g['observer']} {g['view']}: luxest {g['ugr']:.2f} evalglare {ev['ugr']:.2f}", file=sys.stderr)
+    return rows
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scene", required=True)
+    ap.add_argument("--info", required=True)
+    ap.add_argument("--luxest", required=True, help="estimate sensors results with glare")
+    ap.add_argument("-o", "--out", required=True, help="Markdown report; a CSV is written beside")
+    ap.add_argument("--res", type=int, default=500, help="fisheye pixels per side")
+    ap.add_argument("--threshold", type=float, default=1000.0, help="evalglare -b, cd/m^2")
+    ap.add_argument("--ab", type=int, default=4)
+    ap.add_argument("--ad", type=int, default=1024)
+    ap.add_argument("--aa", type=float, default=0.15)
+    ap.add_argument(
+        "--reuse",
+        help="a CSV this script wrote before for the same room: compare with its evalglare "
+        "numbers instead of rendering again (its settings line is kept)",
+    )
+    a = ap.parse_args()
+    scene = ro.read_ron(a.scene)
+    info = ro.read_ron(a.info)
+    lux = ro.read_ron(a.luxest)
+    glare = lux.get("glare") or []
+    if not glare:
+        raise SystemExit(f"error: {a.luxest}: no glare results (does the scene have observers?)")
+    settings = [
+        "-ab",
+        str(a.ab),
+        "-ad",
+        str(a.ad),
+        "-as",
+        str(a.ad // 4),
+        "-aa",
+        str(a.aa),
+        "-ar",
+        "128",
+        "-lw",
+        "1e-4",
+        "-ds",
+        "0.02",
+        "-dj",
+        "0",
+        "-ps",
+        "1",
+        "-pj",
+        "0",
+        "-dt",
+        "0",
+        "-x",
+        str(a.res),
+        "-y",
+        str(a.res),
+    ]
+    rows = []
+    t0 = time.time()
+    previous = None
+    if a.reuse:
+        lines = Path(a.reuse).read_text().splitlines()
+        previous = [dict(zip(lines[0].split(","), line.split(","))) for line in lines[1:]]
+        if len(previous) != len(glare):
+            raise SystemExit(f"error: {a.reuse}: {len(previous)} views, the results have {len(glare)}")
+        for g, prev in zip(glare, previous):
+            if prev["observer"] != g["observer"]:
+                raise SystemExit(f"error: {a.reuse}: observer {prev['observer']} is not {g['observer']}")
+            ev = {"ugr": float(prev["ugr_evalglare"]), "lum_backg": float(prev["lb_evalglare"])}
+            rows.append((g, dict(ev, E_v=float(prev["ev_evalglare"]))))
+    else:
+        rows = render(a, scene, info, glare, settings)
     seconds = time.time() - t0
     out = Path(a.out)
     csv = ["observer,view_x,view_y,view_z,ugr_luxest,ugr_luxest_se,ugr_evalglare,lb_luxest,lb_evalglare,ev_evalglare"]
@@ -240,7 +264,11 @@ def main():
             f"`{' '.join(settings)} -vta -vh 180 -vv 180` from each eye, evalglare `-b "
             f"{a.threshold:g} -d` (Radiance from PyPI pyradiance {pyradiance.__version__}); "
             f"luxest: `{a.luxest}` ({lux['run']['samples']} light paths). "
-            f"{seconds:.0f} s of Radiance."
+            + (
+                f"evalglare numbers reused from `{a.reuse}` (rendered with these settings)."
+                if a.reuse
+                else f"{seconds:.0f} s of Radiance."
+            )
         ),
         "",
         "| observer | view | UGR luxest | UGR evalglare | Δ | L_b luxest (cd/m²) | L_b evalglare | luxest sources | |ΔUGR| ≤ 1 |",

@@ -28,9 +28,11 @@
 //! **Luminance and solid angle.** A luminaire with a flat luminous opening of area A seen from
 //! the eye at distance D along the unit direction d (luminaire frame) has the projected area
 //! A_p = A |d_z| ([`crate::LuminousOpening::projected_area_m2`]) and the luminance
-//! L = I(−d) / A_p, the file's intensity towards the eye over the projected area. ω is the
-//! exact solid angle of the opening's polygon ([`rectangle_solid_angle_sr`]; A_p / D² for round
-//! openings), not the far-field A_p / D², since observers sit close to luminaires.
+//! L = I(−d) / A_p, the file's intensity towards the eye over the projected area. Observers sit
+//! close to luminaires, so at an observer ([`SolidAngle::Exact`]) a flat opening is divided into
+//! cells, each with its own direction, luminance, solid angle and position index, and the
+//! luminaire's term is their sum (a 1.5 m pendant 1.5 m away spans 30° of elevation); the
+//! tabular method keeps the far-field centre term ([`SolidAngle::FarField`]).
 //!
 //! **Uncertainty.** Only L_b carries Monte Carlo error (the sources are computed exactly), so
 //! the standard error of UGR is 8 / ln 10 · s(L_b) / L_b (first order).
@@ -222,9 +224,15 @@ pub struct GlareLuminaire<'a> {
 /// How [`GlareLuminaire::term`] sizes the solid angle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SolidAngle {
-    /// The exact solid angle of the opening's rectangle (A_p / D² for other shapes).
+    /// A flat opening (rectangle, disk, ellipse) divided into cells no larger than a tenth of
+    /// the distance to the eye (at most 32 per side), each with its own luminance I(ω_i)/A_p,
+    /// solid angle and position index, so that a large luminaire close to the eye counts as
+    /// the sum of its parts (other shapes: the centre, A_p / D²). The returned term carries the
+    /// summed ω, the ω-weighted mean luminance and the position index that makes L² ω / p²
+    /// equal the sum.
     Exact,
-    /// The far-field A_p / D² (the CIE 117 / CIE 190 tabular method).
+    /// The far-field centre term: A_p / D², the luminance and position index towards the
+    /// centre (the CIE 117 / CIE 190 tabular method).
     FarField,
 }
 
@@ -243,9 +251,9 @@ impl GlareLuminaire<'_> {
     ) -> Result<Option<GlareTerm>, String> {
         let to_source = sub(self.centre, eye);
         let d2 = dot(to_source, to_source);
-        let Some(p) = position_index(view, up, to_source) else {
+        if !(d2 > 0.0) || visible <= 0.0 {
             return Ok(None);
-        };
+        }
         let toward_eye = self.frame.to_local(to_source.map(|x| -x / d2.sqrt()));
         let Some(area) = self.opening.projected_area_m2(toward_eye) else {
             return Err(format!(
@@ -254,27 +262,94 @@ impl GlareLuminaire<'_> {
                 self.photometry.name, self.opening.shape
             ));
         };
+        let flat = matches!(
+            self.opening.shape,
+            OpeningShape::Rectangular | OpeningShape::Circular | OpeningShape::Elliptical
+        );
+        let visible = visible.min(1.0);
+        if solid_angle == SolidAngle::Exact && flat {
+            // Cell by cell: part of a luminaire beside the eye may be in view when its centre
+            // is not.
+            return Ok(self.subdivided(eye, view, up, d2.sqrt()).map(|mut t| {
+                t.solid_angle_sr *= visible;
+                t
+            }));
+        }
+        let Some(p) = position_index(view, up, to_source) else {
+            return Ok(None);
+        };
         let intensity = self.multiplier * self.photometry.intensity_dir_cd(toward_eye);
         if area <= 1e-9 * self.opening.length_m.max(self.opening.width_m).powi(2)
             || intensity <= 0.0
-            || visible <= 0.0
         {
             return Ok(None);
         }
-        let omega = match (solid_angle, self.opening.shape) {
-            (SolidAngle::Exact, OpeningShape::Rectangular) => rectangle_solid_angle_sr(
-                eye,
-                self.centre,
-                self.frame.to_world([0.5 * self.opening.length_m, 0.0, 0.0]),
-                self.frame.to_world([0.0, 0.5 * self.opening.width_m, 0.0]),
-            ),
-            _ => area / d2,
-        };
         Ok(Some(GlareTerm {
             luminance: intensity / area,
-            solid_angle_sr: omega * visible.min(1.0),
+            solid_angle_sr: area / d2 * visible,
             position_index: p,
         }))
+    }
+
+    /// The sum over the cells of a flat opening (see [`SolidAngle::Exact`]); `None` when no
+    /// cell is in view and lit towards the eye.
+    fn subdivided(
+        &self,
+        eye: [f64; 3],
+        view: [f64; 3],
+        up: [f64; 3],
+        dist: f64,
+    ) -> Option<GlareTerm> {
+        let o = &self.opening;
+        let cells = |side: f64| ((side / (0.1 * dist)).ceil() as usize).clamp(1, 32);
+        let (nl, nw) = (cells(o.length_m), cells(o.width_m));
+        let round = o.shape != OpeningShape::Rectangular;
+        let mut inside = Vec::with_capacity(nl * nw);
+        for i in 0..nl {
+            for j in 0..nw {
+                let (s, t) = (
+                    (i as f64 + 0.5) / nl as f64 - 0.5,
+                    (j as f64 + 0.5) / nw as f64 - 0.5,
+                );
+                if !round || s * s + t * t <= 0.25 {
+                    inside.push([s * o.length_m, t * o.width_m, 0.0]);
+                }
+            }
+        }
+        if inside.is_empty() {
+            inside.push([0.0; 3]);
+        }
+        let full = o.flat_area_m2()?;
+        let cell_area = full / inside.len() as f64;
+        let (mut sum, mut omega, mut l_omega) = (0.0, 0.0, 0.0);
+        for local in inside {
+            let w = self.frame.to_world(local);
+            let c = [0, 1, 2].map(|k| self.centre[k] + w[k]);
+            let to_cell = sub(c, eye);
+            let d2 = dot(to_cell, to_cell);
+            let Some(p) = position_index(view, up, to_cell) else {
+                continue;
+            };
+            let toward_eye = self.frame.to_local(to_cell.map(|x| -x / d2.sqrt()));
+            let cos = toward_eye[2].abs();
+            let intensity = self.multiplier * self.photometry.intensity_dir_cd(toward_eye);
+            if cos <= 0.0 || intensity <= 0.0 {
+                continue;
+            }
+            let l = intensity / (full * cos);
+            let om = cell_area * cos / d2;
+            sum += (l / p).powi(2) * om;
+            omega += om;
+            l_omega += l * om;
+        }
+        (sum > 0.0).then(|| {
+            let luminance = l_omega / omega;
+            GlareTerm {
+                luminance,
+                solid_angle_sr: omega,
+                position_index: (luminance * luminance * omega / sum).sqrt(),
+            }
+        })
     }
 }
 
@@ -377,5 +452,74 @@ mod tests {
         assert!(none.note.is_some());
         assert!(ugr(0.0, 0.0, &[t]).is_err());
         assert!(ugr(f64::NAN, 0.0, &[t]).is_err());
+    }
+
+    /// A uniform-luminance opening close to the eye, cell by cell: luminance I0/A everywhere,
+    /// the summed solid angle the exact one of the rectangle, and a large luminaire straddling
+    /// the plane beside the eye counted by its half in view.
+    #[test]
+    fn a_close_lambertian_panel_is_summed_cell_by_cell() {
+        // I = I0 cos γ (γ < 90°) in every C plane: L = I0 / A from every direction.
+        let g: Vec<f64> = (0..=36).map(|k| k as f64 * 5.0).collect();
+        let row: Vec<f64> = g
+            .iter()
+            .map(|&x| {
+                if x < 90.0 {
+                    1000.0 * x.to_radians().cos()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let c = [0.0, 90.0, 180.0, 270.0];
+        let p = Photometry::from_table("lambert", &c, &g, &vec![row; 4]).unwrap();
+        let opening = LuminousOpening::from_ies(0.6, 1.2, 0.0);
+        let frame = Frame::default();
+        let lum = GlareLuminaire {
+            photometry: &p,
+            opening,
+            frame: &frame,
+            multiplier: 1.0,
+            centre: [0.0, 1.0, 0.8],
+        };
+        let (eye, view, up) = ([0.0; 3], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+        let t = lum
+            .term(eye, view, up, 1.0, SolidAngle::Exact)
+            .unwrap()
+            .unwrap();
+        // The bilinear cos γ between 5° samples is within 0.4 % of cos γ.
+        assert!(
+            (t.luminance / (1000.0 / 0.72) - 1.0).abs() < 4e-3,
+            "{}",
+            t.luminance
+        );
+        let exact = rectangle_solid_angle_sr(eye, lum.centre, [0.6, 0.0, 0.0], [0.0, 0.3, 0.0]);
+        assert!(
+            (t.solid_angle_sr / exact - 1.0).abs() < 5e-3,
+            "{} {exact}",
+            t.solid_angle_sr
+        );
+        assert!(t.position_index > 1.0 && t.position_index < MAX_POSITION_INDEX);
+        // Centred beside the eye (σ = 90° at the centre): the far-field term has none, the
+        // cells in front count.
+        let beside = GlareLuminaire {
+            centre: [0.0, 0.0, 0.8],
+            ..lum
+        };
+        assert!(beside
+            .term(eye, view, up, 1.0, SolidAngle::FarField)
+            .unwrap()
+            .is_none());
+        let half = beside
+            .term(eye, view, up, 1.0, SolidAngle::Exact)
+            .unwrap()
+            .unwrap();
+        let front =
+            rectangle_solid_angle_sr(eye, [0.0, 0.15, 0.8], [0.6, 0.0, 0.0], [0.0, 0.15, 0.0]);
+        assert!(
+            (half.solid_angle_sr / front - 1.0).abs() < 0.02,
+            "{} {front}",
+            half.solid_angle_sr
+        );
     }
 }
