@@ -4,10 +4,11 @@
 //! Per observer and line of sight: the local estimate evaluates one more sensor point, at the
 //! eye facing the line of sight ([`points`]); its indirect part (light reflected at least once)
 //! over π is the background luminance L_b of CIE 117, with its standard error from the same
-//! batches. Each luminaire is a glare source (`luxest_photometry::ugr`): its luminance towards
-//! the eye is its intensity over the projected luminous area, its solid angle that of the
-//! opening times the share of [`VISIBILITY_SAMPLES`] points on the opening the eye sees
-//! through the scene (shadow rays), its position index Guth's (the observer's up is +y).
+//! batches. Each luminaire is a glare source (`luxest_photometry::ugr`, `SolidAngle::Exact`):
+//! its opening summed cell by cell, each cell's luminance its intensity towards the eye over the
+//! projected luminous area, with its own solid angle and Guth position index (the observer's up
+//! is +y); the solid angle times the share of [`VISIBILITY_SAMPLES`]² points on the opening the
+//! eye sees through the scene (shadow rays).
 
 use crate::sensors::Estimate;
 use luxest_io::math::Vec3;

@@ -251,7 +251,7 @@ impl GlareLuminaire<'_> {
     ) -> Result<Option<GlareTerm>, String> {
         let to_source = sub(self.centre, eye);
         let d2 = dot(to_source, to_source);
-        if !(d2 > 0.0) || visible <= 0.0 {
+        if d2.is_nan() || d2 <= 0.0 || visible <= 0.0 {
             return Ok(None);
         }
         let toward_eye = self.frame.to_local(to_source.map(|x| -x / d2.sqrt()));
