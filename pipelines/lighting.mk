@@ -54,3 +54,40 @@ lighting-radiance: build/$(LIGHTING_SCENE)/scene.info.ron pipelines/radiance_off
 	$(PEERS_PYTHON) pipelines/radiance_office.py --scene scenes/$(LIGHTING_SCENE).ron \
 		--info $< -o reports/lighting/$(LIGHTING_SCENE)/radiance.csv
 	$(MAKE) lighting LIGHTING_SCENES=$(LIGHTING_SCENE)
+
+# `make lighting-glare`: UGR at the observers of the glare rooms (the office with its troffers
+# and pendant, three pendants alone, bare round downlights) by luxest (`estimate sensors`) and by
+# Radiance evalglare on rpict -vta fisheyes of the same rooms (pipelines/radiance_glare.py;
+# needs `scripts/setup.sh --peers`): reports/lighting/glare/<scene>.md and .csv (committed; the
+# CSV's evalglare numbers are what tests/glare.rs checks). `make ugr-tables` writes the CIE 190
+# tables of the example luminaires and their independent check (pipelines/ugr_table_check.py).
+GLARE_SCENES ?= office glare-pendants glare-downlights
+GLARE_DIR ?= reports/lighting/glare
+GLARE_PATHS ?= 200000
+# Radiance settings of the committed reports (a 2-core machine shared by several jobs).
+GLARE_RADIANCE ?= --res 300 --ab 3 --ad 256 --aa 0.2
+UGR_TABLE_DIR ?= reports/lighting/ugr-table
+UGR_LUMINAIRES ?= troffer-600-led.ies pendant-linear-4000.ldt downlight-150-round.ies
+
+.PHONY: lighting-glare ugr-tables
+
+lighting-glare: $(foreach s,$(GLARE_SCENES),$(GLARE_DIR)/$(s).md)
+
+build/%/glare.sensors.ron: build/%/scene.lxs $(ESTIMATE)
+	$(LAUNCH) $(ESTIMATE) sensors $< -o $@ --paths $(GLARE_PATHS) --seed 1
+
+$(GLARE_DIR)/%.md: build/%/glare.sensors.ron build/%/scene.info.ron pipelines/radiance_glare.py
+	@test -x $(PEERS_PYTHON) || { echo "error: $(PEERS_PYTHON) not found: run scripts/setup.sh --no-python --no-ort --peers" >&2; exit 1; }
+	$(PEERS_PYTHON) pipelines/radiance_glare.py --scene scenes/$*.ron --info build/$*/scene.info.ron \
+		--luxest $< -o $@ $(GLARE_RADIANCE)
+
+build/%/scene.info.ron: build/%/scene.lxs $(SCENE_COMPILE)
+	$(LAUNCH) $(SCENE_COMPILE) --info $< > $@.tmp && mv $@.tmp $@
+
+ugr-tables: $(foreach f,$(UGR_LUMINAIRES),$(UGR_TABLE_DIR)/$(basename $(f)).csv $(UGR_TABLE_DIR)/$(basename $(f)).check.csv)
+
+$(UGR_TABLE_DIR)/%.csv: $(REPORT)
+	$(REPORT) ugr-table $(firstword $(wildcard scenes/photometry/$*.ies scenes/photometry/$*.ldt)) -o $@ > $(UGR_TABLE_DIR)/$*.txt
+
+$(UGR_TABLE_DIR)/%.check.csv: pipelines/ugr_table_check.py
+	$(PEERS_PYTHON) pipelines/ugr_table_check.py $(firstword $(wildcard scenes/photometry/$*.ies scenes/photometry/$*.ldt)) -o $@

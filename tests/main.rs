@@ -9,6 +9,7 @@ mod emitters;
 mod estimate_cli;
 mod estimate_validation;
 mod evaluate_cli;
+mod glare;
 mod lighting;
 mod luminaires;
 mod metrics_parity;

@@ -146,6 +146,13 @@ def pendant(c, g):
     return 0.35 * (-cg) ** 1.5
 
 
+def downlight(c, g):
+    """Round recessed downlight, 150 mm opening; rotationally symmetric cos^3; no uplight."""
+    if g >= 90.0:
+        return 0.0
+    return math.cos(math.radians(g)) ** 3
+
+
 def table_flux(f, c_step, g_angles):
     """∫ I dΩ of the bilinear interpolation of f tabulated every c_step degrees of C (full circle)
     and at g_angles, integrated exactly cell by cell (the integral luxest-photometry computes)."""
@@ -188,6 +195,21 @@ def examples():
         4, 24, len(g), 5, g, lambda c, gg: b * pendant(c, gg), flux=lamp_lm, ityp=2,
         lum_mm=(1500, 60, 45), area_mm=(1450, 50), lorl=90.0, dff=100.0 * down / 3600.0, watts=30.0,
         lamp_type="LED module 4000 lm")
+
+    # Scaled so that the table emits 1200 lm; one C plane (rotational symmetry), circular opening.
+    d = 1200.0 / table_flux(downlight, 15, steps(0, 90, 5))
+    ies(os.path.join(EXAMPLES, "downlight-150-round.ies"), [
+        ("TEST", "synthetic example, not a measurement"),
+        ("TESTLAB", "none (computed)"),
+        ("ISSUEDATE", "2026-11-28"),
+        ("MANUFAC", "luxest example luminaires"),
+        ("LUMCAT", "LX-D150-12"),
+        ("LUMINAIRE", "recessed round LED downlight, 150 mm opening, clear reflector, 1200 lm"),
+        ("LAMP", "LED module, 3000 K"),
+        ("OTHER", "computed by scenes/photometry/generate.py from"),
+        ("MORE", "I = A cos(g)^3, g < 90, A = " + fmt(d) + " cd"),
+    ], [0.0], steps(0, 90, 5), lambda c, g: d * downlight(c, g), lumens=-1, dims=(-0.15, -0.15, 0),
+        watts=11.0)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ use crate::sensors::{
     all_sensors, evaluation_points, load_world, record_evaluation_points, results, Estimate,
 };
 use crate::singularity::Singularity;
-use crate::{exact_table, gather, work};
+use crate::{exact_table, gather, glare, work};
 use clap::{Parser, Subcommand, ValueEnum};
 use luxest_io::cli::{CommonArgs, Console};
 use luxest_io::exr::write_rgb_to;
@@ -597,8 +597,13 @@ fn sensors(
     let near_radius = near_radius.unwrap_or(DEFAULT_NEAR_FRACTION * world.room_scale);
     let console = run.common.console;
     let edge_offset = run.edge_offset(&world)?;
-    let placed = evaluation_points(&world, edge_offset, near_radius);
+    let mut placed = evaluation_points(&world, edge_offset, near_radius);
     note_moved(console, &placed, edge_offset);
+    // The observers' eyes (glare): evaluated after the scene's sensors, reported apart.
+    let sensor_count = placed.points.len();
+    let eyes = crate::placement::place(&world, &glare::points(&world), edge_offset, near_radius);
+    placed.points.extend(eyes.points);
+    placed.near_radius.extend(eyes.near_radius);
     let near_field = (near_samples > 0).then_some(NearField {
         samples: near_samples,
     });
@@ -639,8 +644,17 @@ fn sensors(
     let info = run.info(&world, estimator::LOCAL_ESTIMATE, paths, r.seconds);
     let batches = batch_values.then_some(r.batch_values.as_slice());
     let mut values = r.estimates();
+    let at_eye = values.split_off(sensor_count);
     record_evaluation_points(&world, &mut values, &placed.points);
-    let results = results(&run.scene, &world, info, sing.to_string(), &values)?;
+    let mut results = results(&run.scene, &world, info, sing.to_string(), &values)?;
+    results.glare = glare::results(&run.scene, &world, &at_eye)?;
+    for g in &results.glare {
+        console.note(format_args!(
+            "glare: observer \"{}\" along ({:.3}, {:.3}, {:.3}): UGR {:.2} ± {:.2} (L_b {:.2} cd/m², {} sources)",
+            g.observer, g.view.x, g.view.y, g.view.z, g.ugr, g.standard_error,
+            g.background_luminance.value, g.sources.len()
+        ));
+    }
     write_results(&mut plan, &out, run, results, batches)?;
     console.note(format_args!(
         "wrote {}: {} paths, {} collisions, {} shadow rays, {:.2} s",

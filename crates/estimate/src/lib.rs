@@ -12,7 +12,8 @@
 //! the exact point-source light), [`sensor_batches`] (batches of light paths at sensor points
 //! and their standard errors), [`image`] (the image estimators' result), [`singularity`] (the
 //! kernel's treatment); [`placement`] and [`sensors`] (sensor points and the results
-//! contract), [`work`] (each run's work and memory, predicted before it starts), [`exact_table`]
+//! contract), [`work`] (each run's work and memory, predicted before it starts), [`glare`] (UGR at the
+//! scene's observers, from the local estimate's indirect part at the eye), [`exact_table`]
 //! (`estimate exact`), [`cli`] (arguments and runs).
 //!
 //! Dependencies run one way: `cli` → the methods → `transport`, `sensor_batches`, `image`;
@@ -24,6 +25,7 @@ pub mod direct_simulation;
 pub mod double_local_estimate;
 pub mod exact_table;
 pub mod gather;
+pub mod glare;
 pub mod image;
 pub mod light_tracing;
 pub mod local_estimate;

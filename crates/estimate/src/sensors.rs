@@ -16,10 +16,10 @@ use std::path::Path;
 /// Loads a compiled scene and checks that it has sensors.
 pub fn load_world(path: &Path) -> Result<World> {
     let scene = CompiledScene::load(path)?;
-    if scene.header.sensors.is_empty() {
+    if scene.header.sensors.is_empty() && scene.header.glare.is_none() {
         return Err(Error::input(
             path,
-            "scene has no sensors (add Points or Grid sensors to the .ron)",
+            "scene has no sensors (add Points or Grid sensors or observers to the .ron)",
         ));
     }
     World::load_from(path, scene, Traversal::Robust)

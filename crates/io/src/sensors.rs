@@ -19,7 +19,8 @@ pub struct SensorResults {
     /// How the kernel singularity was controlled, e.g. `ball(eps=0.001 m)`.
     pub singularity: String,
     pub sets: Vec<SensorSetResult>,
-    /// The unified glare rating per observer and line of sight (the scene's `observers`).
+    /// The unified glare rating at every observer and line of sight of the scene (`estimate
+    /// sensors`; see [`GlareResult`]); absent when the scene has no observers.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub glare: Vec<GlareResult>,
     /// The daylight sky of the scene, when it has one: the unobstructed horizontal
@@ -28,38 +29,48 @@ pub struct SensorResults {
     pub sky: Option<SkyInfo>,
 }
 
-/// The UGR (CIE 117) of one observer looking along one line of sight.
+/// The unified glare rating (CIE 117) seen by one observer along one line of sight:
+/// UGR = 8 log10(0.25 / L_b · Σ L² ω / p²) over `sources` (`luxest_photometry::ugr`).
+///
+/// UGR below the formula's range: with no source in view (Σ = 0) `ugr` is 0 and `note` says
+/// so (never −∞ or NaN); a value below 10 is kept as computed (EN 12464-1 and CIE tables print
+/// it as "<10").
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GlareResult {
-    /// The scene's observer.
+    /// The observer's name in the scene.
     pub observer: String,
     /// Eye position, m.
     pub position: Vec3,
     /// Line of sight (unit).
     pub view: Vec3,
-    /// UGR = 8 log10(0.25 / L_b · Σ L² ω / p²). Below the formula's range (Σ → 0) it is the
-    /// value the formula gives, never −∞ or NaN; tables print such values as "<10".
     pub ugr: f64,
+    /// Standard error of `ugr`, propagated from the background luminance's.
     pub standard_error: f64,
-    /// Background luminance L_b (indirect vertical illuminance at the eye / π), cd/m².
+    /// L_b = indirect illuminance at the eye (on the plane facing `view`) / π, cd/m², with its
+    /// standard error from the same batches.
     pub background_luminance: Part,
-    /// UGR_L of the observer's task area, when the scene gives it.
+    /// The task area's limit UGR_L (EN 12464-1) when the scene gives one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub limit: Option<f64>,
-    /// The luminaires seen by the observer.
+    /// Every luminaire in the field of view and not hidden, with its terms.
     pub sources: Vec<GlareSource>,
+    /// Why `ugr` is not the formula's value (no source in view), when it is not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
-/// One luminaire's term of a UGR sum.
+/// One luminaire's terms in a [`GlareResult`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GlareSource {
+    /// The luminaire's name in the scene.
     pub luminaire: String,
-    /// Luminance of the luminous parts towards the eye, cd/m².
+    /// Luminance towards the eye, cd/m².
     pub luminance: f64,
-    /// Solid angle of the luminous parts seen from the eye, sr.
+    /// Solid angle of its visible luminous area, sr.
     pub solid_angle_sr: f64,
-    /// Guth position index p.
+    /// Guth position index.
     pub position_index: f64,
 }
 

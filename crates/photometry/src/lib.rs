@@ -13,6 +13,9 @@
 //!   with Monte Carlo uncertainties propagated from the per-point estimates.
 //! - [`isolux`] renders a false-colour isolux PNG with contours, legend and outline;
 //!   [`falsecolour`] a luminance image on a logarithmic false-colour scale with its cd/m² bar.
+//! - [`ugr`] computes the unified glare rating (CIE 117): Guth's position index, a luminaire's
+//!   luminance and solid angle seen from an eye, UGR with its standard error; [`ugr_table`] the
+//!   tabular UGR of a luminaire (CIE 190).
 //! - [`photometry`] holds the distribution both parsers produce, [`error`] the crate's one error
 //!   type.
 //!
@@ -57,6 +60,8 @@ pub mod isolux;
 pub mod ldt;
 pub mod photometry;
 pub mod sampling;
+pub mod ugr;
+pub mod ugr_table;
 
 pub use error::PhotometryError;
 pub use frame::{c_gamma_from_direction, direction_from_c_gamma, Frame, Luminaire, Orientation};
@@ -67,6 +72,8 @@ pub use photometry::{
     FluxCheck, LampFlux, LuminousOpening, OpeningShape, Photometry, SourceFormat, Symmetry,
 };
 pub use sampling::{IntensitySample, IntensitySampler};
+pub use ugr::{GlareLuminaire, GlareTerm, SolidAngle, Ugr};
+pub use ugr_table::{ugr_table, UgrTable};
 
 use std::path::Path;
 

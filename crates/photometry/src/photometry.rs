@@ -128,6 +128,21 @@ impl LuminousOpening {
 }
 
 impl LuminousOpening {
+    /// The IES LM-63 signed dimensions (width, length, height) of this opening, m: what
+    /// [`LuminousOpening::from_ies`] reads back into the same shape (zeros for a point and for
+    /// [`OpeningShape::Other`]).
+    pub fn ies_signed(&self) -> [f64; 3] {
+        let (l, w, h) = (self.length_m, self.width_m, self.height_m);
+        match self.shape {
+            OpeningShape::Point | OpeningShape::Other => [0.0; 3],
+            OpeningShape::Rectangular => [w, l, 0.0],
+            OpeningShape::RectangularWithSides => [w, l, h],
+            OpeningShape::Circular | OpeningShape::Elliptical => [-w, -l, 0.0],
+            OpeningShape::Sphere | OpeningShape::Ellipsoid => [-w, -l, -h],
+            OpeningShape::VerticalCylinder => [-w, -l, h],
+        }
+    }
+
     /// Projected (silhouette) area in m² seen from the unit direction `d` of the luminaire frame:
     /// flat rectangle l·w·|d_z|, flat circle or ellipse π l w/4 · |d_z|, box with luminous sides
     /// l w |d_z| + w h |d_x| + l h |d_y|, vertical cylinder π l w/4 · |d_z| + l h √(1 − d_z²),

@@ -71,8 +71,42 @@ pub struct SceneHeader {
     /// material has any (every material untextured and two-sided).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub surfaces: Vec<CompiledSurface>,
+    /// The glare observers and the luminous openings of the luminaires they rate; `None`
+    /// when the scene has no observers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glare: Option<GlareSetup>,
     pub features: Features,
     pub stats: Stats,
+}
+
+/// What `estimate sensors` needs to rate glare (see `scene::Observer`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GlareSetup {
+    pub observers: Vec<CompiledObserver>,
+    /// One per `Emitter::Luminaire`, in emitter order.
+    pub openings: Vec<LuminousArea>,
+}
+
+/// A glare observer with its lines of sight normalised.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompiledObserver {
+    pub name: String,
+    pub position: Vec3,
+    pub views: Vec<Vec3>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ugr_limit: Option<f64>,
+}
+
+/// A luminaire's luminous opening as glare sees it: the emitter's index and the opening's
+/// IES LM-63 signed dimensions (width, length, height; m; negative: round), the scene's
+/// `Opening::Area` rectangle or else the file's; all zero when neither gives one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LuminousArea {
+    pub emitter: u32,
+    pub ies_dimensions_m: [f64; 3],
 }
 
 /// A luminaire's intensity distribution, expanded to the full C-γ sphere (no reference to the
@@ -826,6 +860,7 @@ mod tests {
                 photometries: vec![],
                 textures: vec![],
                 surfaces: vec![],
+                glare: None,
                 features: Features::default(),
                 stats: Stats {
                     vertices: 3,

@@ -53,6 +53,10 @@ pub struct Scene {
     /// Openings cut into the wall quads they lie in (daylight through them); see [`Window`].
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub windows: Vec<Window>,
+    /// Glare observers (EN 12464-1 / CIE 117): `estimate sensors` computes the UGR of every
+    /// observer and line of sight; see [`Observer`].
+    #[serde(default)]
+    pub observers: Vec<Observer>,
 }
 
 /// A window: the parallelogram `corner + s u + t v` (world space, s, t in [0, 1]) cut out of
@@ -68,6 +72,28 @@ pub struct Window {
     /// A material (of `materials`) filling the opening, e.g. `ThinDielectric` glass; none: open.
     #[serde(default)]
     pub glazing: Option<String>,
+}
+
+/// A glare observer (EN 12464-1 / CIE 117): eye position and horizontal lines of sight.
+///
+/// `estimate sensors` computes the unified glare rating along each line of sight
+/// (`luxest_photometry::ugr`): the background luminance is the indirect illuminance at the eye
+/// on the plane facing the line of sight / π, the sources are the luminaires seen from the eye
+/// (their luminous openings: `Opening::Area` or the file's dimensions), each with the share of
+/// its opening not hidden by the scene. The eye must be in open space: `scene-compile` refuses
+/// an eye inside an object or outside the room.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Observer {
+    /// Unique among observers; names the results.
+    pub name: String,
+    /// Eye, m (seated 1.2 m, standing 1.6 m above the floor).
+    pub position: Vec3,
+    /// Lines of sight (any length, normalised when compiled; usually horizontal); at least one.
+    pub views: Vec<Vec3>,
+    /// UGR_L of the task area (EN 12464-1), reported beside the value.
+    #[serde(default)]
+    pub ugr_limit: Option<f64>,
 }
 
 /// A texture: a PNG, JPEG or EXR file (or a checkerboard) and how it is looked up.
@@ -950,5 +976,27 @@ mod tests {
                 }),
             }]
         );
+    }
+
+    /// The `observers: [ … ]` example of `docs/scene-format.md` parses with the defaults the
+    /// docs state.
+    #[test]
+    fn the_documented_observers_parse() {
+        #[derive(Deserialize)]
+        struct Observers {
+            observers: Vec<Observer>,
+        }
+        let doc = include_str!("../../../docs/scene-format.md");
+        let block = doc
+            .split("```ron\n")
+            .find(|b| b.starts_with("observers: ["))
+            .unwrap();
+        let block = &block[..block.find("```").unwrap()];
+        let path = std::path::Path::new("docs/scene-format.md");
+        let o: Observers = luxest_io::fsio::parse_ron(path, &format!("({block})")).unwrap();
+        assert_eq!(o.observers.len(), 2);
+        assert_eq!(o.observers[0].views.len(), 2);
+        assert_eq!(o.observers[0].ugr_limit, Some(19.0));
+        assert_eq!(o.observers[1].ugr_limit, None);
     }
 }

@@ -18,11 +18,22 @@ use std::time::Instant;
 /// Eavg, Emin, Emax, U0, Ud (each ± its standard error) checked against the scene's
 /// requirements, glare and daylight figures when the results carry them, the false-colour
 /// luminance image, an optional peer comparison and the signature block.
+///
+/// `report ugr-table FILE` prints the CIE 190 UGR table of a luminaire file instead
+/// (the `ugr_table` module).
 #[derive(Parser, Debug)]
-#[command(name = "report", version)]
+#[command(
+    name = "report",
+    version,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
 pub struct Args {
+    #[command(subcommand)]
+    pub command: Option<Command>,
     /// Sensor results of `estimate sensors` (.sensors.ron).
-    pub results: PathBuf,
+    #[arg(required = true)]
+    pub results: Option<PathBuf>,
     /// The compiled scene's header as `scene-compile --info SCENE.lxs` prints it, for the
     /// luminaire list and the luminaires' marks on the plots.
     #[arg(long)]
@@ -54,14 +65,29 @@ pub struct Args {
     pub console: Console,
 }
 
+/// The subcommands beside the report itself.
+#[derive(clap::Subcommand, Debug)]
+pub enum Command {
+    /// The CIE 190 tabular UGR of a luminaire file (.ies or .ldt).
+    UgrTable(crate::ugr_table::Args),
+}
+
 /// Runs the command line.
 pub fn run(args: Args) -> Result<()> {
+    if let Some(Command::UgrTable(a)) = args.command {
+        return crate::ugr_table::run(a);
+    }
+    let Some(results_path) = args.results.clone() else {
+        return Err(luxest_io::Error::Usage(
+            "the following required arguments were not provided: <RESULTS>".into(),
+        ));
+    };
     let start = Instant::now();
-    let results = SensorResults::read_ron(&args.results)?;
+    let results = SensorResults::read_ron(&results_path)?;
     let header = match &args.scene_info {
         Some(p) => {
             let (header, hash) = scene_info::read(p)?;
-            scene_info::check_matches(p, &header, hash.as_deref(), &args.results, &results)?;
+            scene_info::check_matches(p, &header, hash.as_deref(), &results_path, &results)?;
             Some(header)
         }
         None => None,
@@ -70,25 +96,25 @@ pub fn run(args: Args) -> Result<()> {
         (Some(p), Some(h)) => Some(scene_info::light_sources(p, h)?),
         _ => None,
     };
-    let surfaces = input::surfaces(&args.results, &results)?;
+    let surfaces = input::surfaces(&results_path, &results)?;
     let peer = match &args.peer {
         Some(p) => {
             let read = peer::read(p)?;
             let names: Vec<&str> = surfaces.iter().map(|s| s.name.as_str()).collect();
-            peer::check_sets(p, &read, &names, &args.results)?;
+            peer::check_sets(p, &read, &names, &results_path)?;
             Some((p, read))
         }
         None => None,
     };
 
-    let scene = path_component(&results.scene, &args.results, "scene")?;
+    let scene = path_component(&results.scene, &results_path, "scene")?;
     let dir = args
         .out
         .clone()
         .unwrap_or_else(|| Path::new("reports").join("lighting").join(scene));
     let mut names = Vec::new();
     for s in &surfaces {
-        let stem = path_component(&s.name, &args.results, "set name")?;
+        let stem = path_component(&s.name, &results_path, "set name")?;
         names.push((
             format!("{stem}.csv"),
             format!("{stem}.ron"),
@@ -105,7 +131,7 @@ pub fn run(args: Args) -> Result<()> {
     for (c, r, p) in &names {
         outputs.extend([dir.join(c), dir.join(r), dir.join(p)]);
     }
-    let mut inputs = vec![args.results.clone()];
+    let mut inputs = vec![results_path.clone()];
     inputs.extend(args.scene_info.clone());
     if let Some(p) = &args.peer {
         inputs.push(p.clone());
@@ -119,7 +145,7 @@ pub fn run(args: Args) -> Result<()> {
         .collect();
     let mut computed = Vec::new();
     for (n, (s, (csv, ron, png))) in surfaces.iter().zip(&names).enumerate() {
-        let (stats, method) = s.stats(&args.results)?;
+        let (stats, method) = s.stats(&results_path)?;
         let uncertainty = match method {
             UncertaintyMethod::Jackknife { batches } => format!("jackknife over {batches} batches"),
             UncertaintyMethod::Independent => "independent points".to_string(),
@@ -151,7 +177,7 @@ pub fn run(args: Args) -> Result<()> {
             &tables::table(&results.scene, s, &stats, &uncertainty),
         )?;
         let title = format!("{}: {} {} illuminance (lx)", results.scene, s.name, s.kind);
-        let bytes = plot::isolux_png(s, &stats, &title, &lum_positions, &args.results)?;
+        let bytes = plot::isolux_png(s, &stats, &title, &lum_positions, &results_path)?;
         plan.write_bytes(&dir.join(png), &bytes)?;
         let comparison = match &peer {
             Some((path, p)) => peer::compare(path, s, p)?,
@@ -163,7 +189,7 @@ pub fn run(args: Args) -> Result<()> {
         let surface_checks = checks::surface(req, &stats);
         let daylight = match &results.sky {
             Some(sky) => {
-                let f = daylight::figures(&args.results, &stats, sky)?;
+                let f = daylight::figures(&results_path, &stats, sky)?;
                 let c = req
                     .and_then(|r| r.daylight_factor.as_ref())
                     .map_or(Vec::new(), |t| daylight::checks(t, &f));
@@ -176,7 +202,7 @@ pub fn run(args: Args) -> Result<()> {
     for g in &results.glare {
         if !(g.ugr.is_finite() && g.standard_error.is_finite()) {
             return Err(luxest_io::Error::at(
-                &args.results,
+                &results_path,
                 format!("glare of observer \"{}\"", g.observer),
                 format!(
                     "UGR {} ± {} is not a finite number",
@@ -214,7 +240,7 @@ pub fn run(args: Args) -> Result<()> {
             },
         )
         .collect();
-    let results_name = args.results.display().to_string();
+    let results_name = results_path.display().to_string();
     let peer_name = args.peer.as_ref().map(|p| p.display().to_string());
     let ctx = ReportContext {
         scene: &results.scene,

@@ -32,7 +32,8 @@
 //!
 //! Modules: [`cli`] (arguments and the run), [`input`] (the sensor results it reads),
 //! [`surface`] (a calculation surface's grid and values), [`tables`], [`plot`], [`checks`],
-//! [`daylight`], [`luminance`], [`markdown`], [`html`], [`scene_info`], [`peer`].
+//! [`daylight`], [`luminance`], [`markdown`], [`html`], [`scene_info`], [`peer`]; [`ugr_table`]
+//! is the `report ugr-table FILE` subcommand (the CIE 190 tabular UGR of a luminaire file).
 //!
 //! All outputs are planned before anything is written and committed together
 //! (`luxest_io::outputs::OutputPlan`): a run that fails leaves no partial report.
@@ -49,3 +50,4 @@ pub mod plot;
 pub mod scene_info;
 pub mod surface;
 pub mod tables;
+pub mod ugr_table;

@@ -80,6 +80,7 @@ fn results() -> SensorResults {
             solid_angle_sr: 0.01,
             position_index: 2.0,
         }],
+        note: None,
     };
     SensorResults {
         scene: "room".into(),

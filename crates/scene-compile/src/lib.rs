@@ -10,7 +10,7 @@
 //! Modules: [`cli`] (arguments and run), [`import`] (whole scenes from Mitsuba 3 XML, glTF and
 //! OBJ+MTL, translated into an authored scene), [`validate`], [`shapes`] (tessellation),
 //! [`meshes`] (OBJ and glTF), [`ply`] (PLY meshes), [`serialized`] (Mitsuba's serialized
-//! meshes), [`luminaires`], [`environment`] (the
+//! meshes), [`luminaires`], [`observers`] (glare observers), [`environment`] (the
 //! environment emitter and its map), [`surfaces`], [`textures`] (bitmap textures and the
 //! per-material surfaces), [`windows`] (openings cut from wall quads), [`mitsuba`] (export to
 //! Mitsuba 3); this file assembles the
@@ -22,6 +22,7 @@ pub mod import;
 pub mod luminaires;
 pub mod meshes;
 pub mod mitsuba;
+pub mod observers;
 pub mod ply;
 pub mod serialized;
 pub mod shapes;
@@ -534,6 +535,13 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     }
     let lum = luminaires::compile(path, &scene.luminaires)?;
     report.warnings.extend(lum.warnings);
+    let glare = observers::compile(
+        path,
+        &scene.observers,
+        &scene.luminaires,
+        emitters.len(),
+        &lum.openings,
+    )?;
     emitters.extend(lum.emitters);
 
     let used: std::collections::BTreeSet<u32> = b.triangle_material.iter().copied().collect();
@@ -684,6 +692,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         sensors,
         photometries: lum.tables,
         surfaces: textures::surfaces(scene, &loaded),
+        glare,
         textures: loaded.infos,
         features,
         stats,
@@ -716,6 +725,7 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     compiled
         .check_consistency()
         .map_err(|m| Error::input(path, m))?;
+    observers::check_open_space(path, &compiled)?;
     Ok((compiled, report))
 }
 

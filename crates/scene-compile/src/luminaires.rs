@@ -11,7 +11,7 @@ use crate::validate::Check;
 use luxest_io::color::Rgb;
 use luxest_io::math::Vec3;
 use luxest_io::{Error, Result};
-use luxest_photometry::{Photometry, PhotometryError};
+use luxest_photometry::{LuminousOpening, Photometry, PhotometryError};
 use luxest_render::compiled::{Emitter, PhotometricTable};
 use luxest_render::luminaire::{frame_in_world, table_from_photometry};
 use luxest_render::scene::{Luminaire, Opening};
@@ -165,6 +165,9 @@ pub struct CompiledLuminaires {
     pub emitters: Vec<Emitter>,
     pub tables: Vec<PhotometricTable>,
     pub warnings: Vec<String>,
+    /// Per luminaire (scene order), its luminous opening's IES signed dimensions (width,
+    /// length, height), m: the `Opening::Area` rectangle, else the file's (for glare).
+    pub openings: Vec<[f64; 3]>,
 }
 
 /// Loads every luminaire's file (each distinct file once) and builds its emitter.
@@ -173,9 +176,10 @@ pub fn compile(scene_path: &Path, luminaires: &[Luminaire]) -> Result<CompiledLu
         emitters: Vec::new(),
         tables: Vec::new(),
         warnings: Vec::new(),
+        openings: Vec::new(),
     };
     // Per distinct file: its table's index and its luminous opening (length, width), m.
-    let mut by_file: BTreeMap<PathBuf, (u32, f64, f64)> = BTreeMap::new();
+    let mut by_file: BTreeMap<PathBuf, (u32, LuminousOpening)> = BTreeMap::new();
     let dir = scene_path.parent().unwrap_or(Path::new("."));
     for (i, l) in luminaires.iter().enumerate() {
         let place = format!("luminaires[{i}]");
@@ -190,14 +194,14 @@ pub fn compile(scene_path: &Path, luminaires: &[Luminaire]) -> Result<CompiledLu
             };
             return Err(Error::at(scene_path, format!("{place}.file"), problem));
         }
-        let (index, file_length, file_width) = match by_file.get(&full) {
+        let (index, file_opening) = match by_file.get(&full) {
             Some(&k) => k,
             None => {
                 let (p, warning) = load_photometry(&full)?;
                 out.warnings.extend(warning);
                 let k = out.tables.len() as u32;
                 out.tables.push(table_from_photometry(&l.file, &p));
-                let entry = (k, p.opening.length_m, p.opening.width_m);
+                let entry = (k, p.opening);
                 by_file.insert(full.clone(), entry);
                 entry
             }
@@ -236,6 +240,15 @@ pub fn compile(scene_path: &Path, luminaires: &[Luminaire]) -> Result<CompiledLu
                 ),
             ));
         }
+        let (file_length, file_width) = (file_opening.length_m, file_opening.width_m);
+        out.openings.push(match &l.opening {
+            Opening::Point => file_opening.ies_signed(),
+            Opening::Area { length, width, .. } => [
+                width.unwrap_or(file_width),
+                length.unwrap_or(file_length),
+                0.0,
+            ],
+        });
         let opening_points = match &l.opening {
             Opening::Point => Vec::new(),
             Opening::Area {
