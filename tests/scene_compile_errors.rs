@@ -230,7 +230,13 @@ fn degenerate_triangles_are_dropped_with_a_count() {
         &scene(MATERIALS, &format!("{FLOOR} {emitting}"), LIGHT),
         &[("flat.obj", b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n")],
     );
-    assert_has(&msg, &["objects[1]", "emitting object has no non-degenerate triangles"]);
+    assert_has(
+        &msg,
+        &[
+            "objects[1]",
+            "emitting object has no non-degenerate triangles",
+        ],
+    );
 }
 
 #[test]
