@@ -243,6 +243,9 @@ fn a_constant_normal_map_tilts_the_cosine_law_as_mitsubas_normalmap() {
         let wc = c * (1.0 / c.length());
         RHO / PI * wl.y * wc.dot(n).max(0.0) * shadowing(wc.y) / (wc.y * d2)
     };
+    // The denoiser's normal feature is the mapped normal (facing the ray).
+    let hit = aov_write::features::first_hit(&world, dcam.position, dcam.direction(6.0, 6.0), 0.0);
+    assert!((hit.normal - tilted()).length() < 1e-6, "{:?}", hit.normal);
     let (lcam, lt) = light_tracing(&scene, 300_000);
     for side in [-1.0, 1.0] {
         let (mean, se, e) = floor_mean(&lcam, &lt, &light_traced, side);
