@@ -111,7 +111,8 @@ bench-slurm: $(SCENE_COMPILE) $(TRACE) $(AOV_WRITE) $(ESTIMATE) $(VENV)/$(VENV_S
 
 # `make bench-scenes` (needs .venv-peers): luxest's trace against Mitsuba 3 on Mitsuba 3 XML
 # scenes, both renderers loading the same files in the same run (pipelines/bench_scenes.py): the
-# material and emitter scenes it writes (every imported BSDF, textures, a cut-out, point, spot,
+# material and emitter scenes it writes (every imported BSDF, textures, a cut-out, meshes with
+# vertex normals and normal maps, point, spot,
 # textured area and environment emitters through a window) and the public scenes under
 # scenes/public/ (their README credits the authors); whole-image and block z-tests,
 # reports/bench/scenes.md. Fails where they disagree beyond noise.

@@ -243,6 +243,9 @@ fn a_constant_normal_map_tilts_the_cosine_law_as_mitsubas_normalmap() {
         let wc = c * (1.0 / c.length());
         RHO / PI * wl.y * wc.dot(n).max(0.0) * shadowing(wc.y) / (wc.y * d2)
     };
+    // The denoiser's normal feature is the mapped normal (facing the ray).
+    let hit = aov_write::features::first_hit(&world, dcam.position, dcam.direction(6.0, 6.0), 0.0);
+    assert!((hit.normal - tilted()).length() < 1e-6, "{:?}", hit.normal);
     let (lcam, lt) = light_tracing(&scene, 300_000);
     for side in [-1.0, 1.0] {
         let (mean, se, e) = floor_mean(&lcam, &lt, &light_traced, side);
@@ -254,4 +257,99 @@ fn a_constant_normal_map_tilts_the_cosine_law_as_mitsubas_normalmap() {
         let (_, _, other) = floor_mean(&lcam, &lt, &path_traced, side);
         assert!((other - e).abs() > 10.0 * se, "side {side}: {other} vs {e}");
     }
+}
+
+#[test]
+fn sensors_see_the_shading_normals_cosine_law_in_the_local_estimate_and_gather() {
+    // A sensor 0.5 m above the floor's centre facing down receives the luminance the floor
+    // reflects, L(x) = ρ/π I (w·ns)/d², over its solid angle: E = ∫ L cos_x cos_s / r² dA. The
+    // local estimate's light paths reach it through Veach's adjoint correction, gather's
+    // backward paths through the shading-frame BSDF; both give the quadrature.
+    let dir = TempDir::new("normals-sensor");
+    let sensor = Vec3::new(0.0, 0.5, 0.0);
+    let scene = floor(
+        &dir,
+        "sensor",
+        Some(tilted()),
+        r#"sensors: [Points(name: "s", points: [(position: (0.0, 0.5, 0.0), normal: (0.0, -1.0, 0.0))])],"#,
+    );
+    let law = cosine_law(tilted(), false);
+    let n = 400;
+    let mut e = 0.0;
+    for j in 0..n {
+        for i in 0..n {
+            let x = Vec3::new(
+                -1.0 + 2.0 * (i as f64 + 0.5) / n as f64,
+                0.0,
+                -1.0 + 2.0 * (j as f64 + 0.5) / n as f64,
+            );
+            let r2 = (sensor - x).length_squared();
+            e += law(x) * (0.5 * 0.5 / r2) / r2;
+        }
+    }
+    e *= 4.0 / (n * n) as f64;
+    let world = luxest_render::world::World::new(
+        luxest_render::compiled::CompiledScene::load(&scene).unwrap(),
+    )
+    .unwrap();
+    let sensors = estimate::all_sensors(&world);
+    let le = estimate::local_estimate::estimate(
+        &world,
+        &sensors,
+        &[0.0],
+        &estimate::local_estimate::LocalConfig {
+            batches: estimate::sensor_batches::Batches {
+                paths: 200_000,
+                batches: 16,
+                seed: 4,
+                threads: 2,
+            },
+            singularity: estimate::local_estimate::Singularity::Ball { eps: 1e-4 },
+            max_depth: 100,
+            near_field: None,
+            environment_samples: 0,
+        },
+        &Progress::off(),
+    );
+    let (v, se) = (le.value[0], le.standard_error[0]);
+    assert!(
+        (v - e).abs() < 4.0 * se && se < 0.02 * e,
+        "local estimate {v} ± {se} vs {e}"
+    );
+    let g = estimate::gather::estimate(
+        &world,
+        &sensors,
+        &estimate::gather::GatherConfig {
+            samples: 20_000,
+            batches: 16,
+            seed: 5,
+            threads: 2,
+            max_depth: 100,
+        },
+        &Progress::off(),
+    );
+    let (_, m, se) = g[0];
+    assert!(
+        (m - e).abs() < 4.0 * se && se < 0.02 * e,
+        "gather {m} ± {se} vs {e}"
+    );
+    // The geometric normal's law is another number: the test tells them apart.
+    let flat = cosine_law(Vec3::new(0.0, 1.0, 0.0), false);
+    let mut ef = 0.0;
+    for j in 0..n {
+        for i in 0..n {
+            let x = Vec3::new(
+                -1.0 + 2.0 * (i as f64 + 0.5) / n as f64,
+                0.0,
+                -1.0 + 2.0 * (j as f64 + 0.5) / n as f64,
+            );
+            let r2 = (sensor - x).length_squared();
+            ef += flat(x) * (0.25 / r2) / r2;
+        }
+    }
+    ef *= 4.0 / (n * n) as f64;
+    assert!(
+        (ef - e).abs() > 10.0 * se.max(le.standard_error[0]),
+        "{ef} vs {e}"
+    );
 }

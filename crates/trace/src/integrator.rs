@@ -130,8 +130,8 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             Cow::Borrowed(world.material(sp.triangle))
         };
         let m = &*m;
-        // The frame scattering happens in (flat scenes' kernels never build one: the BSDF about
-        // the geometric normal, `f_cos` and `scatter` below).
+        // The frame scattering happens in; flat scenes' kernels use none (`f_cos` and the
+        // sampling below call the BSDF about the geometric normal, as they always did).
         let shading = if EXTRA {
             world.shading_of(&sp, wo)
         } else {
