@@ -200,8 +200,7 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
                         "| {} | `{}` | {} | {} | {} | {} | {:.1} | {:.0} | {} |",
                         g.names.join(", "),
                         g.file,
-                        g.file_flux_lm
-                            .map_or("not stated".to_string(), |f| format!("{f:.0}")),
+                        g.lumens_text(),
                         g.count,
                         g.multiplier,
                         g.maintenance_factor,

@@ -97,6 +97,17 @@ pub struct LuminaireGroup {
     pub names: Vec<String>,
 }
 
+impl LuminaireGroup {
+    /// The schedule's lumens: what the file states, or, for a file that states none (IES
+    /// absolute photometry, lamp lumens −1), its table's integral, said so.
+    pub fn lumens_text(&self) -> String {
+        match self.file_flux_lm {
+            Some(f) => format!("{f:.0}"),
+            None => format!("{:.0} (table; none stated)", self.table_flux_lm),
+        }
+    }
+}
+
 /// A placed luminaire (for the plots' marks).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LuminairePlace {
