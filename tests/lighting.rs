@@ -606,7 +606,7 @@ fn cos3_luminaire_over_a_black_floor_gives_the_closed_form_work_plane() {
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     // The schedule: luminaire, file, lumens (the file states none: the table's), count 1,
     // multiplier 2, MF 0.5.
-    let row = format!("| spot | `cos3.ies` | {flux:.0} (table; none stated) | 1 | 2 | 0.5 | ");
+    let row = format!("| spot | `cos3.ies` | {flux:.0} (table) | 1 | 2 | 0.5 | ");
     assert!(md.contains(&row), "{row}\nnot in\n{md}");
     // The requirements, from the scene through the compiled header, checked.
     assert!(

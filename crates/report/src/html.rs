@@ -411,6 +411,13 @@ fn schedule_section(s: &mut String, ctx: &ReportContext) {
             escape(name)
         );
     }
+    if src.groups.iter().any(|g| g.file_flux_lm.is_none()) {
+        let _ = writeln!(
+            s,
+            "<p class=\"note\">{}</p>",
+            escape(crate::scene_info::TABLE_LUMENS_NOTE)
+        );
+    }
     let _ = writeln!(s, "<p>{}</p>", escape(&crate::markdown::total_line(src)));
 }
 

@@ -218,6 +218,9 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
             if !src.other.is_empty() {
                 s.push('\n');
             }
+            if src.groups.iter().any(|g| g.file_flux_lm.is_none()) {
+                let _ = writeln!(s, "{}\n", crate::scene_info::TABLE_LUMENS_NOTE);
+            }
             let _ = writeln!(s, "{}\n", total_line(src));
         }
     }
