@@ -392,8 +392,7 @@ fn schedule_section(s: &mut String, ctx: &ReportContext) {
                 "<tr><td>{}</td><td><code>{}</code></td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{:.1}</td><td class=\"num\">{:.0}</td><td class=\"num\">{}</td></tr>",
                 escape(&g.names.join(", ")),
                 escape(&g.file),
-                g.file_flux_lm
-                    .map_or("not stated".to_string(), |f| format!("{f:.0}")),
+                g.lumens_text(),
                 g.count,
                 g.multiplier,
                 g.maintenance_factor,
@@ -410,6 +409,13 @@ fn schedule_section(s: &mut String, ctx: &ReportContext) {
             s,
             "<p>Other emitter <code>{}</code>: {flux:.1} lm.</p>",
             escape(name)
+        );
+    }
+    if src.groups.iter().any(|g| g.file_flux_lm.is_none()) {
+        let _ = writeln!(
+            s,
+            "<p class=\"note\">{}</p>",
+            escape(crate::scene_info::TABLE_LUMENS_NOTE)
         );
     }
     let _ = writeln!(s, "<p>{}</p>", escape(&crate::markdown::total_line(src)));

@@ -200,8 +200,7 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
                         "| {} | `{}` | {} | {} | {} | {} | {:.1} | {:.0} | {} |",
                         g.names.join(", "),
                         g.file,
-                        g.file_flux_lm
-                            .map_or("not stated".to_string(), |f| format!("{f:.0}")),
+                        g.lumens_text(),
                         g.count,
                         g.multiplier,
                         g.maintenance_factor,
@@ -218,6 +217,9 @@ pub fn render(ctx: &ReportContext, surfaces: &[SurfaceReport]) -> String {
             }
             if !src.other.is_empty() {
                 s.push('\n');
+            }
+            if src.groups.iter().any(|g| g.file_flux_lm.is_none()) {
+                let _ = writeln!(s, "{}\n", crate::scene_info::TABLE_LUMENS_NOTE);
             }
             let _ = writeln!(s, "{}\n", total_line(src));
         }

@@ -97,6 +97,22 @@ pub struct LuminaireGroup {
     pub names: Vec<String>,
 }
 
+/// What `(table)` in the schedule's lumens means.
+pub const TABLE_LUMENS_NOTE: &str = "(table): the file states no lumens (absolute photometry); \
+     the integral of its intensity table, ∫ I dΩ, is given.";
+
+impl LuminaireGroup {
+    /// The schedule's lumens: what the file states, or, for a file that states none (IES
+    /// absolute photometry, lamp lumens −1), its table's integral marked `(table)` (see
+    /// [`TABLE_LUMENS_NOTE`]).
+    pub fn lumens_text(&self) -> String {
+        match self.file_flux_lm {
+            Some(f) => format!("{f:.0}"),
+            None => format!("{:.0} (table)", self.table_flux_lm),
+        }
+    }
+}
+
 /// A placed luminaire (for the plots' marks).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LuminairePlace {

@@ -116,9 +116,13 @@ fn results() -> SensorResults {
 
 const SCENE_INFO: &str = r#"(name: "room",
  emitters: [Luminaire(name: "L1", position: (3.5, 2.8, 2.5), photometry: 0, multiplier: 0.8,
-                      maintenance_factor: 0.8, flux_rgb: (2880.0, 2880.0, 2880.0))],
+                      maintenance_factor: 0.8, flux_rgb: (2880.0, 2880.0, 2880.0)),
+            Luminaire(name: "downlight-with-a-long-name", position: (1.5, 2.8, 1.5),
+                      photometry: 1, multiplier: 1.0, flux_rgb: (1500.0, 1500.0, 1500.0))],
  photometries: [(source: "photometry/troffer-600-led.ies", table_flux_lm: 3600.0,
-                 file_flux_lm: 3600.0, input_watts: 30.0)],
+                 file_flux_lm: 3600.0, input_watts: 30.0),
+                (source: "photometry/a-downlight-from-a-manufacturer-catalogue.ies",
+                 table_flux_lm: 1500.0)],
  sensors: [(name: "work-plane",
             requirements: (em_lux: 500.0, u0: 0.6,
                            daylight_factor: (median_percent: 2.0, min_percent: 0.7)))])
@@ -267,6 +271,7 @@ fn report_html_renders_in_headless_chromium_with_its_images_and_marks() {
         "| work-plane | DF min | 1.500 ± 0.015 % (1.00 %) | ≥ 0.7 % | **PASS** |",
         "| L1 | `photometry/troffer-600-led.ies` | 3600 | 1 | 1 | 0.8 | 2880.0 | 2880 | 30 |",
         "**FAIL**: 3 of 6 requirements met.",
+        "| downlight-with-a-long-name | `photometry/a-downlight-from-a-manufacturer-catalogue.ies` | 1500 (table) | 1 | 1 | 1 | 1500.0 | 1500 | not stated |",
     ] {
         assert!(md.contains(row), "{row}\nnot in\n{md}");
     }
