@@ -112,19 +112,23 @@ bench-slurm: $(SCENE_COMPILE) $(TRACE) $(AOV_WRITE) $(ESTIMATE) $(VENV)/$(VENV_S
 # `make bench-scenes` (needs .venv-peers): luxest's trace against Mitsuba 3 on Mitsuba 3 XML
 # scenes, both renderers loading the same files in the same run (pipelines/bench_scenes.py): the
 # material and emitter scenes it writes (every imported BSDF, textures, a cut-out, meshes with
-# vertex normals and normal maps, point, spot,
-# textured area and environment emitters through a window) and the public scenes under
-# scenes/public/ (their README credits the authors); whole-image and block z-tests,
-# reports/bench/scenes.md. Fails where they disagree beyond noise.
+# vertex normals and normal maps, point, spot, textured area and environment emitters through a
+# window), and any public Mitsuba 3 XML files given on the command line (`make bench-scenes
+# PUBLIC_SCENES="…/docs/scenes/bsdf_conductor_gold.xml …"`, named after their file); whole-image
+# and block z-tests, reports/bench/scenes.md. `make bench-scenes-public`: the public interiors
+# committed under scenes/public/ (its README credits the authors), reports/bench/scenes-public.md.
+# Both fail where the renderers disagree beyond noise.
 BENCH_SCENES_SPP ?= 4096
 BENCH_SCENES_RESOLUTION ?= 256x192
-# Public scenes: scenes/public/<name>/scene.xml, or any Mitsuba 3 XML files given on the command
-# line (`make bench-scenes PUBLIC_SCENES="…/docs/scenes/bsdf_conductor_gold.xml …"`, named after
-# their file).
-PUBLIC_SCENES ?= $(wildcard scenes/public/*/scene.xml)
+PUBLIC_SCENES ?=
+# The committed interiors: 4096 spp at about 128 x 96 pixels (their films' aspects kept), about
+# 20 CPU-minutes for both renderers.
+BENCH_PUBLIC_SCENES ?= $(wildcard scenes/public/*/scene.xml)
+BENCH_PUBLIC_SPP ?= 4096
+BENCH_PUBLIC_PIXELS ?= 12288
 public_name = $(if $(filter scene.xml,$(notdir $(1))),$(notdir $(patsubst %/,%,$(dir $(1)))),$(basename $(notdir $(1))))
 
-.PHONY: bench-scenes
+.PHONY: bench-scenes bench-scenes-public
 
 reports/bench/scenes.md: pipelines/bench_scenes.py $(SCENE_COMPILE) $(TRACE) $(PUBLIC_SCENES)
 	@test -x $(PEERS_PYTHON) || { echo "error: $(PEERS_PYTHON) missing: run scripts/setup.sh --no-python --no-ort --peers" >&2; exit 1; }
@@ -133,3 +137,11 @@ reports/bench/scenes.md: pipelines/bench_scenes.py $(SCENE_COMPILE) $(TRACE) $(P
 		$(foreach s,$(PUBLIC_SCENES),--scene $(call public_name,$(s))=$(s)) -o $@
 
 bench-scenes: reports/bench/scenes.md
+
+reports/bench/scenes-public.md: pipelines/bench_scenes.py $(SCENE_COMPILE) $(TRACE) $(BENCH_PUBLIC_SCENES)
+	@test -x $(PEERS_PYTHON) || { echo "error: $(PEERS_PYTHON) missing: run scripts/setup.sh --no-python --no-ort --peers" >&2; exit 1; }
+	$(PEERS_PYTHON) pipelines/bench_scenes.py --bins $(RELEASE) --work-dir build/bench/scenes-public \
+		--only "" --spp $(BENCH_PUBLIC_SPP) --public-pixels $(BENCH_PUBLIC_PIXELS) \
+		$(foreach s,$(BENCH_PUBLIC_SCENES),--scene $(call public_name,$(s))=$(s)) -o $@
+
+bench-scenes-public: reports/bench/scenes-public.md
