@@ -115,9 +115,9 @@ bench-slurm: $(SCENE_COMPILE) $(TRACE) $(AOV_WRITE) $(ESTIMATE) $(VENV)/$(VENV_S
 # vertex normals and normal maps, point, spot, textured area and environment emitters through a
 # window), and any public Mitsuba 3 XML files given on the command line (`make bench-scenes
 # PUBLIC_SCENES="…/docs/scenes/bsdf_conductor_gold.xml …"`, named after their file); whole-image
-# and block z-tests, reports/bench/scenes.md. `make bench-scenes-public`: the public interiors
-# committed under scenes/public/ (its README credits the authors), reports/bench/scenes-public.md.
-# Both fail where the renderers disagree beyond noise.
+# and block z-tests, reports/bench/scenes.md; and the public interiors committed under
+# scenes/public/ (its README credits the authors), reports/bench/scenes-public.md, which `make
+# bench-scenes-public` writes alone. Both fail where the renderers disagree beyond noise.
 BENCH_SCENES_SPP ?= 4096
 BENCH_SCENES_RESOLUTION ?= 256x192
 PUBLIC_SCENES ?=
@@ -136,7 +136,7 @@ reports/bench/scenes.md: pipelines/bench_scenes.py $(SCENE_COMPILE) $(TRACE) $(P
 		--spp $(BENCH_SCENES_SPP) --resolution $(BENCH_SCENES_RESOLUTION) \
 		$(foreach s,$(PUBLIC_SCENES),--scene $(call public_name,$(s))=$(s)) -o $@
 
-bench-scenes: reports/bench/scenes.md
+bench-scenes: reports/bench/scenes.md reports/bench/scenes-public.md
 
 reports/bench/scenes-public.md: pipelines/bench_scenes.py $(SCENE_COMPILE) $(TRACE) $(BENCH_PUBLIC_SCENES)
 	@test -x $(PEERS_PYTHON) || { echo "error: $(PEERS_PYTHON) missing: run scripts/setup.sh --no-python --no-ort --peers" >&2; exit 1; }
