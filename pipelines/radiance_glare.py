@@ -25,7 +25,6 @@ difference, and both background luminances; the check is |dUGR| <= 1.
 """
 
 import argparse
-import math
 import re
 import subprocess
 import sys
@@ -91,17 +90,7 @@ def luminaire_sources(source, name):
 
 def luminaires_rad(scene_path, info, work):
     out = []
-    P = ((1, 0, 0), (0, 0, -1), (0, 1, 0))
-    base = Path(scene_path).parent
-    for e in info["emitters"]:
-        if e["__name__"] != "Luminaire":
-            raise SystemExit(f"error: emitter {e['name']!r}: only luminaires are exported")
-        m = e["frame"]
-        pm = [[sum(P[r][k] * m[k][cc] for k in range(3)) for cc in range(3)] for r in range(3)]
-        if abs(pm[2][2] - 1) > 1e-9:
-            raise SystemExit(f"error: luminaire {e['name']!r}: only luminaires aimed straight down")
-        rz = math.degrees(math.atan2(pm[1][0], pm[0][0]))
-        source = base / info["photometries"][e["photometry"]]["source"]
+    for e, rz, source in ro.luminaire_placements(scene_path, info):
         down, up = luminaire_sources(source, e["name"])
         x, y, z = ro.rad(e["position"])
         for part, text, extra in [("d", down, []), ("u", up, ["-i", "0.005"])]:

@@ -267,10 +267,9 @@ def ldt_to_ies(ldt, ies):
     Path(ies).write_text("\n".join(lines) + "\n")
 
 
-def luminaires_rad(scene_path, info, work):
-    """Each luminaire as an ies2rad illum sphere placed by its frame: an IES file as it is, an
-    LDT file through ldt_to_ies; the multiplier through ies2rad -m."""
-    out = []
+def luminaire_placements(scene_path, info):
+    """Each luminaire of the scene header `info` as (emitter, its turn about Radiance's z in
+    degrees, its photometric file); only luminaires aimed straight down are exported."""
     P = ((1, 0, 0), (0, 0, -1), (0, 1, 0))
     base = Path(scene_path).parent
     for e in info["emitters"]:
@@ -282,7 +281,14 @@ def luminaires_rad(scene_path, info, work):
         if abs(pm[2][2] - 1) > 1e-9:
             raise SystemExit(f"error: luminaire {e['name']!r}: only luminaires aimed straight down are exported")
         rz = math.degrees(math.atan2(pm[1][0], pm[0][0]))
-        source = base / info["photometries"][e["photometry"]]["source"]
+        yield e, rz, base / info["photometries"][e["photometry"]]["source"]
+
+
+def luminaires_rad(scene_path, info, work):
+    """Each luminaire as an ies2rad illum sphere placed by its frame: an IES file as it is, an
+    LDT file through ldt_to_ies; the multiplier through ies2rad -m."""
+    out = []
+    for e, rz, source in luminaire_placements(scene_path, info):
         ies = work / f"{e['name']}.ies"
         if source.suffix.lower() == ".ldt":
             ldt_to_ies(source, ies)
