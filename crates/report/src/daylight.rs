@@ -26,6 +26,24 @@ pub struct DaylightFigures {
     pub horizontal_lux: f64,
 }
 
+/// The reports' sentence about the sky (Markdown and HTML alike): its description, the
+/// unobstructed horizontal illuminance E_h, the sun's position when there is a sun, and how the
+/// daylight factor follows from E_h.
+pub fn sky_sentence(sky: &SkyInfo) -> String {
+    let sun = match &sky.sun {
+        Some(sun) => format!(
+            "; sun at altitude {:.1}°, azimuth {:.1}°",
+            sun.altitude_deg, sun.azimuth_deg
+        ),
+        None => String::new(),
+    };
+    format!(
+        "{}: unobstructed horizontal illuminance E_h = {:.0} lx{sun}. Daylight factor DF = 100 % · \
+         E / E_h (EN 17037).",
+        sky.description, sky.horizontal_illuminance_lux
+    )
+}
+
 /// The daylight factors of a surface with figures `stats` under `sky`; `file` names the
 /// results in errors (a sky without horizontal illuminance gives no daylight factor).
 pub fn figures(file: &Path, stats: &GridStats, sky: &SkyInfo) -> Result<DaylightFigures> {

@@ -331,19 +331,7 @@ fn glare_section(s: &mut String, ctx: &ReportContext) {
 
 fn daylight_section(s: &mut String, sky: &luxest_io::sensors::SkyInfo, surfaces: &[SurfaceReport]) {
     let _ = writeln!(s, "<h2>Daylight</h2>");
-    let _ = writeln!(
-        s,
-        "<p>{}: unobstructed horizontal illuminance E_h = {:.0} lx{}. Daylight factor DF = 100 % · E / E_h (EN 17037).</p>",
-        escape(&sky.description),
-        sky.horizontal_illuminance_lux,
-        match &sky.sun {
-            Some(sun) => format!(
-                "; sun at altitude {:.1}°, azimuth {:.1}°",
-                sun.altitude_deg, sun.azimuth_deg
-            ),
-            None => String::new(),
-        }
-    );
+    let _ = writeln!(s, "<p>{}</p>", escape(&crate::daylight::sky_sentence(sky)));
     let _ = writeln!(
         s,
         "<table>\n<tr><th>surface</th><th>DF median</th><th>DF min</th><th>DF mean</th></tr>"

@@ -298,19 +298,7 @@ fn glare_section(s: &mut String, ctx: &ReportContext) {
 
 fn daylight_section(s: &mut String, sky: &SkyInfo, surfaces: &[SurfaceReport]) {
     let _ = writeln!(s, "## Daylight\n");
-    let _ = writeln!(
-        s,
-        "{}: unobstructed horizontal illuminance E_h = {:.0} lx{}. Daylight factor DF = 100 % · E / E_h (EN 17037).\n",
-        sky.description,
-        sky.horizontal_illuminance_lux,
-        match &sky.sun {
-            Some(sun) => format!(
-                "; sun at altitude {:.1}°, azimuth {:.1}°",
-                sun.altitude_deg, sun.azimuth_deg
-            ),
-            None => String::new(),
-        }
-    );
+    let _ = writeln!(s, "{}\n", crate::daylight::sky_sentence(sky));
     let _ = writeln!(
         s,
         "| surface | DF median | DF min | DF mean |\n|---|---:|---:|---:|"
