@@ -3,7 +3,7 @@
 //! errors, and a small committed case against Radiance (reports/lighting/daylight/, written by
 //! pipelines/radiance_daylight.py).
 
-use crate::util::{compile_text, estimate, repo_root, scene_compile, TempDir};
+use crate::util::{compile_text, estimate_sensors, repo_root, scene_compile, TempDir};
 use luxest_io::math::Vec3;
 use luxest_io::sensors::SensorResults;
 use luxest_render::sky::{Sky, SkyKind, SunAngles};
@@ -33,18 +33,7 @@ fn box_with_roof_window(hole: f64, sky: &str) -> String {
 
 /// The one sensor's illuminance and standard error.
 fn run(dir: &TempDir, name: &str, scene: &str, paths: &str) -> (f64, f64, SensorResults) {
-    let lxs = compile_text(dir, name, scene);
-    let out = dir.path().join(format!("{name}.sensors.ron"));
-    estimate(&[
-        "sensors",
-        lxs.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--paths",
-        paths,
-    ])
-    .unwrap();
-    let r: SensorResults = luxest_io::fsio::read_ron(&out).unwrap();
+    let r = estimate_sensors(&compile_text(dir, name, scene), paths, &[]);
     let p = &r.sets[0].points[0];
     (p.value, p.standard_error, r)
 }
@@ -227,18 +216,7 @@ fn one_window_room_agrees_with_radiance_at_three_points() {
         points.join(", ")
     );
     let dir = TempDir::new("daylight-radiance");
-    let lxs = compile_text(&dir, "room", &text);
-    let out = dir.path().join("room.sensors.ron");
-    estimate(&[
-        "sensors",
-        lxs.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--paths",
-        "60000",
-    ])
-    .unwrap();
-    let r: SensorResults = luxest_io::fsio::read_ron(&out).unwrap();
+    let r = estimate_sensors(&compile_text(&dir, "room", &text), "60000", &[]);
     for (p, &k) in r.sets[0].points.iter().zip(&picked) {
         let (_, e_r, se_r) = peer[k];
         let allowed = 0.02 * e_r + 3.0 * p.standard_error.hypot(se_r);

@@ -3,7 +3,7 @@
 //! angle against the closed form of its distribution, and observers placed where no eye can be
 //! (one-line errors naming the scene).
 
-use crate::util::{estimate, repo_root, scene_compile, TempDir};
+use crate::util::{estimate_sensors, repo_root, scene_compile, TempDir};
 use luxest_io::sensors::SensorResults;
 
 /// The committed evalglare UGR of `scene` per (observer, view) from the peer's CSV.
@@ -23,19 +23,8 @@ fn evalglare(scene: &str) -> Vec<(String, [f64; 3], f64)> {
 fn estimate_glare(dir: &TempDir, scene: &str, paths: &str) -> SensorResults {
     let ron = repo_root().join(format!("scenes/{scene}.ron"));
     let lxs = dir.path().join(format!("{scene}.lxs"));
-    let out = dir.path().join(format!("{scene}.sensors.ron"));
     scene_compile(&[ron.to_str().unwrap(), "-o", lxs.to_str().unwrap(), "-q"]).unwrap();
-    estimate(&[
-        "sensors",
-        lxs.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--paths",
-        paths,
-        "-q",
-    ])
-    .unwrap();
-    SensorResults::read_ron(&out).unwrap()
+    estimate_sensors(&lxs, paths, &["-q"])
 }
 
 /// The downlight lobby: luxest's UGR within ±1 of evalglare's on the same room (plus 3 σ of
@@ -154,18 +143,6 @@ fn observers_where_no_eye_can_be_are_refused() {
         "(name: \"ok\", position: (0.5, 1.2, 0.5), views: [(1.0, 0.0, 1.0)])",
     );
     r.unwrap();
-    let lxs = dir.path().join("room.lxs");
-    let out = dir.path().join("room.sensors.ron");
-    estimate(&[
-        "sensors",
-        lxs.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--paths",
-        "2000",
-        "-q",
-    ])
-    .unwrap();
-    let g = &SensorResults::read_ron(&out).unwrap().glare[0];
+    let g = &estimate_sensors(&dir.path().join("room.lxs"), "2000", &["-q"]).glare[0];
     assert!(g.ugr.is_finite() && g.sources.len() == 1, "{g:?}");
 }

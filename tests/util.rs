@@ -1,5 +1,6 @@
 //! Test helpers: hermetic temporary directories and running a stage in-process.
 
+use luxest_io::sensors::SensorResults;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -91,6 +92,23 @@ pub fn compile_text(dir: &TempDir, name: &str, text: &str) -> PathBuf {
     let out = dir.path().join(format!("{name}.lxs"));
     scene_compile(&[ron.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"]).unwrap();
     out
+}
+
+/// Runs `estimate sensors` on the compiled scene `lxs` with `paths` light paths (and `extra`
+/// arguments), writing `<lxs stem>.sensors.ron` beside it; returns the results read back.
+pub fn estimate_sensors(lxs: &Path, paths: &str, extra: &[&str]) -> SensorResults {
+    let out = lxs.with_extension("sensors.ron");
+    let mut args = vec![
+        "sensors",
+        lxs.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--paths",
+        paths,
+    ];
+    args.extend_from_slice(extra);
+    estimate(&args).unwrap();
+    SensorResults::read_ron(&out).unwrap()
 }
 
 /// Runs `denoise` in-process.
