@@ -273,21 +273,24 @@ fn sensors_see_the_shading_normals_cosine_law_in_the_local_estimate_and_gather()
         Some(tilted()),
         r#"sensors: [Points(name: "s", points: [(position: (0.0, 0.5, 0.0), normal: (0.0, -1.0, 0.0))])],"#,
     );
-    let law = cosine_law(tilted(), false);
-    let n = 400;
-    let mut e = 0.0;
-    for j in 0..n {
-        for i in 0..n {
-            let x = Vec3::new(
-                -1.0 + 2.0 * (i as f64 + 0.5) / n as f64,
-                0.0,
-                -1.0 + 2.0 * (j as f64 + 0.5) / n as f64,
-            );
-            let r2 = (sensor - x).length_squared();
-            e += law(x) * (0.5 * 0.5 / r2) / r2;
+    // Midpoint rule on 400 × 400 cells of the 2 m × 2 m floor: cos_x cos_s / r² = (0.5 / r)² / r².
+    let quadrature = |law: &dyn Fn(Vec3) -> f64| {
+        let n = 400;
+        let mut e = 0.0;
+        for j in 0..n {
+            for i in 0..n {
+                let x = Vec3::new(
+                    -1.0 + 2.0 * (i as f64 + 0.5) / n as f64,
+                    0.0,
+                    -1.0 + 2.0 * (j as f64 + 0.5) / n as f64,
+                );
+                let r2 = (sensor - x).length_squared();
+                e += law(x) * (0.5 * 0.5 / r2) / r2;
+            }
         }
-    }
-    e *= 4.0 / (n * n) as f64;
+        e * 4.0 / (n * n) as f64
+    };
+    let e = quadrature(&cosine_law(tilted(), false));
     let world = luxest_render::world::World::new(
         luxest_render::compiled::CompiledScene::load(&scene).unwrap(),
     )
@@ -334,20 +337,7 @@ fn sensors_see_the_shading_normals_cosine_law_in_the_local_estimate_and_gather()
         "gather {m} ± {se} vs {e}"
     );
     // The geometric normal's law is another number: the test tells them apart.
-    let flat = cosine_law(Vec3::new(0.0, 1.0, 0.0), false);
-    let mut ef = 0.0;
-    for j in 0..n {
-        for i in 0..n {
-            let x = Vec3::new(
-                -1.0 + 2.0 * (i as f64 + 0.5) / n as f64,
-                0.0,
-                -1.0 + 2.0 * (j as f64 + 0.5) / n as f64,
-            );
-            let r2 = (sensor - x).length_squared();
-            ef += flat(x) * (0.25 / r2) / r2;
-        }
-    }
-    ef *= 4.0 / (n * n) as f64;
+    let ef = quadrature(&cosine_law(Vec3::new(0.0, 1.0, 0.0), false));
     assert!(
         (ef - e).abs() > 10.0 * se.max(le.standard_error[0]),
         "{ef} vs {e}"
