@@ -3,7 +3,9 @@
 luxest image of the same scene: whole-image and 4 x 4 block means of Y and of each channel, as
 ratios Mitsuba / luxest. Runs in .venv-peers (`scripts/setup.sh --peers`); prints the CPU
 seconds of loading and rendering the scene (JIT compilation included; Python and Mitsuba's
-import excluded), alone as `cpu_seconds <s> wall_seconds <s>` without --summary."""
+import excluded), alone as `cpu_seconds <s> wall_seconds <s> sample_count <n>` without --summary (the
+sample count the sampler used: `stratified` and `multijitter` round it up to a square or a
+product of near factors, `ldsampler` to a power of two)."""
 
 import argparse
 import os
@@ -24,10 +26,14 @@ def read_exr(path):
     return np.array(mi.Bitmap(str(path)), dtype=np.float64)[..., :3]
 
 
-def scene_xml(mi, path, resolution=None, integrator="path"):
-    """The text of an exported scene, with the film size `resolution` ("WxH") and `integrator`
-    in place of the exported `path` when given; registers the scene's folder with Mitsuba's
-    file resolver (meshes are named relative to the scene file)."""
+SAMPLERS = ("independent", "stratified", "ldsampler", "multijitter")
+
+
+def scene_xml(mi, path, resolution=None, integrator="path", sampler="independent"):
+    """The text of an exported scene, with the film size `resolution` ("WxH"), `integrator` in
+    place of the exported `path` and `sampler` in place of the exported `independent` when
+    given; registers the scene's folder with Mitsuba's file resolver (meshes are named relative
+    to the scene file)."""
     xml = open(path).read()
     if resolution:
         # The exporter writes the film size as literal integers: substitute them.
@@ -36,6 +42,10 @@ def scene_xml(mi, path, resolution=None, integrator="path"):
             xml = re.sub(rf'(<integer name="{name}" value=")\d+(")', rf"\g<1>{v}\g<2>", xml, count=1)
     if integrator != "path":
         xml = xml.replace('<integrator type="path">', f'<integrator type="{integrator}">', 1)
+    if sampler != "independent":
+        if '<sampler type="independent">' not in xml:
+            sys.exit(f'error: {path}: no <sampler type="independent"> to replace by {sampler}')
+        xml = xml.replace('<sampler type="independent">', f'<sampler type="{sampler}">', 1)
     mi.file_resolver().prepend(os.path.dirname(os.path.abspath(path)))
     return xml
 
@@ -53,6 +63,12 @@ def main(argv=None):
         choices=["path", "ptracer"],
         help="the exported `path` (max_depth -1, rr_depth 5) or `ptracer` with the same settings",
     )
+    ap.add_argument(
+        "--sampler",
+        default="independent",
+        choices=SAMPLERS,
+        help="the sensor's sampler, in place of the exported `independent`",
+    )
     ap.add_argument("--luxest", help="a luxest image of the same scene (EXR), to compare with")
     ap.add_argument("-o", "--out", required=True, help="the Mitsuba image (EXR)")
     ap.add_argument("--summary", help="the comparison (Markdown; with --luxest)")
@@ -62,7 +78,7 @@ def main(argv=None):
     import mitsuba as mi
 
     mi.set_variant(a.variant)
-    xml = scene_xml(mi, a.scene, a.resolution, a.integrator)
+    xml = scene_xml(mi, a.scene, a.resolution, a.integrator, a.sampler)
     import drjit as dr
 
     t, w = time.process_time(), time.time()
@@ -73,14 +89,15 @@ def main(argv=None):
     cpu, wall = time.process_time() - t, time.time() - w
     mi.util.write_bitmap(a.out, img, write_async=False)
     if a.luxest is None:
-        print(f"cpu_seconds {cpu:.4f} wall_seconds {wall:.4f}")
+        spp = scene.sensors()[0].sampler().sample_count()
+        print(f"cpu_seconds {cpu:.4f} wall_seconds {wall:.4f} sample_count {spp}")
         return
     m, lx = read_exr(a.out), read_exr(a.luxest)
     if m.shape != lx.shape:
         sys.exit(f"error: {a.luxest}: {lx.shape[1]}x{lx.shape[0]}, Mitsuba rendered {m.shape[1]}x{m.shape[0]}")
     y_m, y_l = luminance(m), luminance(lx)
     rows = [
-        f"Mitsuba 3 `{a.variant}` `path`, {a.spp} spp: {cpu:.1f} CPU-s ({wall:.1f} s wall), against `{a.luxest}`.",
+        f"Mitsuba 3 `{a.variant}` `{a.integrator}` ({a.sampler}), {a.spp} spp: {cpu:.1f} CPU-s ({wall:.1f} s wall), against `{a.luxest}`.",
         "",
         "| region | Y ratio Mitsuba / luxest |",
         "|---|---|",

@@ -1,4 +1,6 @@
-//! The Embree wrapper: the only module that talks to Embree (through `embree::sys`).
+//! The Embree wrapper: the only module that talks to Embree — Debian's Embree 3 through
+//! `embree::sys` by default, Embree 4 through its own declarations with the `embree4` feature
+//! (`embree4_sys`).
 //!
 //! [`RayTracer`] owns one Embree device and one committed scene built from world-space
 //! triangles. After construction it is immutable, and Embree's traversal functions are
@@ -10,7 +12,11 @@
 //! `geometric_normal` is Embree's `Ng`, which for our counter-clockwise triangles is the
 //! unnormalised `(b - a) x (c - a)` (a test pins this, so the pipeline has one front side).
 
+#[cfg(not(feature = "embree4"))]
 use embree::sys;
+#[cfg(feature = "embree4")]
+#[path = "embree4_sys.rs"]
+mod sys;
 use luxest_io::error::{Error, Result};
 use luxest_io::math::Vec3;
 use std::ptr;
@@ -143,6 +149,8 @@ fn empty_hit() -> sys::RTCHit {
         primID: u32::MAX,
         geomID: u32::MAX,
         instID: [u32::MAX],
+        #[cfg(feature = "embree4")]
+        instPrimID: [u32::MAX],
     }
 }
 

@@ -146,6 +146,68 @@ pub fn uniform_triangle(u1: f64, u2: f64) -> (f64, f64) {
     (s * (1.0 - u2), s * u2)
 }
 
+/// Uniformly distributed points on a triangle mesh (an area emitter) from one 2D sample, so that
+/// a low-discrepancy sampler's stratification of that sample carries over to the surface.
+///
+/// A mesh of two triangles `(a, b, c)`, `(a, c, d)` that form a parallelogram (a quad
+/// light, fan-triangulated) maps the sample affinely onto it, `a + s (b − a) + t (d − a)`:
+/// the 2D strata become strata of equal area on the light. Any other mesh picks its triangle
+/// by area with the first coordinate and reuses that coordinate, rescaled within the chosen
+/// triangle's interval, for the point on it ([`uniform_triangle`]). Either way the density is
+/// one over the total area.
+#[derive(Clone, Debug)]
+pub struct TriangleMeshSampler {
+    choice: Distribution1D,
+    parallelogram: bool,
+}
+
+impl TriangleMeshSampler {
+    /// From the triangles' corners and edges `(a, b − a, c − a)`; `None` if they have no area.
+    pub fn new(triangles: &[[Vec3; 3]]) -> Option<TriangleMeshSampler> {
+        let areas: Vec<f64> = triangles
+            .iter()
+            .map(|[_, e1, e2]| 0.5 * e1.cross(*e2).length())
+            .collect();
+        let choice = Distribution1D::new(&areas)?;
+        let parallelogram = match triangles {
+            // (a, b, c) and (a, c, d) with d − a = c − b: the second triangle's first edge is
+            // the first one's second, and its second edge closes the parallelogram.
+            [[a0, e01, e02], [a1, e11, e12]] => {
+                let scale = e01.length().max(e02.length());
+                let close = |p: Vec3, q: Vec3| (p - q).max_abs_component() <= 1e-9 * scale;
+                close(*a0, *a1) && close(*e02, *e11) && close(*e12, *e02 - *e01)
+            }
+            _ => false,
+        };
+        Some(TriangleMeshSampler {
+            choice,
+            parallelogram,
+        })
+    }
+
+    /// Whether the mesh is mapped as one parallelogram.
+    pub fn is_parallelogram(&self) -> bool {
+        self.parallelogram
+    }
+
+    /// A point for `(u1, u2)` uniform in [0, 1)²: its triangle and barycentric coordinates
+    /// (b1, b2) there (the point is `a + b1 (b − a) + b2 (c − a)`).
+    #[inline]
+    pub fn sample(&self, u1: f64, u2: f64) -> (usize, f64, f64) {
+        if self.parallelogram {
+            // a + s (b − a) + t (d − a) lies in (a, b, c) at (s − t, t) when s ≥ t, else in
+            // (a, c, d) at (s, t − s).
+            let (s, t) = (u1, u2);
+            return if s >= t { (0, s - t, t) } else { (1, s, t - s) };
+        }
+        let (i, p) = self.choice.sample(u1);
+        let lo = if i == 0 { 0.0 } else { self.choice.cdf[i - 1] };
+        let v = ((u1 - lo) / p).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
+        let (b1, b2) = uniform_triangle(v, u2);
+        (i, b1, b2)
+    }
+}
+
 /// sin and cos of x for |x| <= π/4 by their Taylor polynomials to x^15 / x^16 (truncation
 /// error below 5e-17): a hot path of the samplers, several times faster than libm's sincos.
 #[inline]
@@ -313,6 +375,79 @@ mod tests {
             index = 4 * index + k;
         }
         index
+    }
+
+    /// A mesh's triangles as (a, b − a, c − a) from corner triples.
+    fn mesh(corners: &[[[f64; 3]; 3]]) -> Vec<[Vec3; 3]> {
+        corners
+            .iter()
+            .map(|c| {
+                let [a, b, c] = c.map(Vec3::from);
+                [a, b - a, c - a]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn mesh_sampler_maps_a_quad_uniformly_onto_the_parallelogram() {
+        // A skewed parallelogram a, b, c = b + d − a, d, fan-triangulated from a.
+        let (a, b, d) = ([0.1, 0.2, 0.3], [1.1, 0.4, 0.3], [0.4, 1.2, 0.5]);
+        let c = [b[0] + d[0] - a[0], b[1] + d[1] - a[1], b[2] + d[2] - a[2]];
+        let tris = mesh(&[[a, b, c], [a, c, d]]);
+        let m = TriangleMeshSampler::new(&tris).unwrap();
+        assert!(m.is_parallelogram());
+        let (a, eb, ed) = (
+            Vec3::from(a),
+            Vec3::from(b) - Vec3::from(a),
+            Vec3::from(d) - Vec3::from(a),
+        );
+        let n = eb.cross(ed);
+        let mut r = Rng::new(6, 0);
+        // The point's parallelogram coordinates (s, t), recovered from its position, are
+        // uniform on the unit square: density 1.
+        ChiSquareTest::new(Rectangle::UNIT)
+            .run(
+                || {
+                    let (i, b1, b2) = m.sample(r.next_f64(), r.next_f64());
+                    let [o, e1, e2] = tris[i];
+                    let q = o + e1 * b1 + e2 * b2 - a;
+                    let s = q.cross(ed).dot(n) / n.length_squared();
+                    let t = eb.cross(q).dot(n) / n.length_squared();
+                    Some([s, t])
+                },
+                |_| 1.0,
+            )
+            .unwrap();
+        // A quad that is not a parallelogram is not mapped as one.
+        let bent = mesh(&[
+            [[0.0; 3], [1.0, 0.0, 0.0], [1.2, 1.0, 0.0]],
+            [[0.0; 3], [1.2, 1.0, 0.0], [0.0, 1.0, 0.0]],
+        ]);
+        assert!(!TriangleMeshSampler::new(&bent).unwrap().is_parallelogram());
+    }
+
+    #[test]
+    fn mesh_sampler_is_uniform_over_a_general_mesh() {
+        // Three triangles of areas 1/2, 1 and 1/8: each of their 16 equal sub-triangles has
+        // probability (its triangle's area / 1.625) / 16.
+        let tris = mesh(&[
+            [[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            [[0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [0.0, 1.0, 1.0]],
+            [[0.0, 0.0, 2.0], [0.5, 0.0, 2.0], [0.0, 0.5, 2.0]],
+        ]);
+        let areas = [0.5, 1.0, 0.125];
+        let m = TriangleMeshSampler::new(&tris).unwrap();
+        assert!(!m.is_parallelogram());
+        let mut r = Rng::new(7, 0);
+        ChiSquareTest::new(Discrete(48))
+            .run(
+                || {
+                    let (i, b1, b2) = m.sample(r.next_f64(), r.next_f64());
+                    Some(16 * i + subtriangle([1.0 - b1 - b2, b1, b2], 2))
+                },
+                |k| areas[k / 16] / 1.625 / 16.0,
+            )
+            .unwrap();
     }
 
     #[test]

@@ -8,7 +8,7 @@ use crate::environment::EnvironmentLight;
 use crate::luminaire::GoniometricLight;
 use crate::rt::{Hit, RayTracer};
 use crate::sampling::{
-    cosine_hemisphere, uniform_sphere, uniform_triangle, Distribution1D, Rng, Sampler,
+    cosine_hemisphere, uniform_sphere, Distribution1D, Rng, Sampler, TriangleMeshSampler,
 };
 use crate::scene::{Material, OpacityChannel};
 use crate::shading::Shading;
@@ -73,8 +73,9 @@ pub struct World {
     light_choice: Option<Distribution1D>,
     /// The one emitter of `light_choice`, if it has one alone (then no number is drawn).
     single_light: Option<usize>,
-    /// Per area emitter, the distribution of its triangles by area (None for point emitters).
-    triangle_choice: Vec<Option<Distribution1D>>,
+    /// Per area emitter, uniform points on its triangles from one 2D sample (None for point
+    /// emitters).
+    triangle_choice: Vec<Option<TriangleMeshSampler>>,
     /// Per area emitter, its triangles as (corner, edge 1, edge 2, unit normal), for fast
     /// sampling of points on lights.
     emitter_triangles: Vec<Vec<[Vec3; 4]>>,
@@ -318,11 +319,9 @@ impl World {
         let triangle_choice = emitter_triangles
             .iter()
             .map(|tris: &Vec<[Vec3; 4]>| {
-                let areas: Vec<f64> = tris
-                    .iter()
-                    .map(|[_, e1, e2, _]| 0.5 * e1.cross(*e2).length())
-                    .collect();
-                Distribution1D::new(&areas)
+                let corners: Vec<[Vec3; 3]> =
+                    tris.iter().map(|&[a, e1, e2, _]| [a, e1, e2]).collect();
+                TriangleMeshSampler::new(&corners)
             })
             .collect();
         let luminaires = if scene.header.features.goniometric_luminaires {
@@ -847,13 +846,12 @@ impl World {
         else {
             unreachable!("sample_area_point on a point emitter")
         };
-        let dist = self.triangle_choice[ei]
+        let mesh = self.triangle_choice[ei]
             .as_ref()
             .expect("area emitter has triangles");
-        let (ti, _) = dist.sample(rng.next_f64());
-        let [a, e1, e2, n] = self.emitter_triangles[ei][ti];
         let (u1, u2) = rng.next_2d();
-        let (b1, b2) = uniform_triangle(u1, u2);
+        let (ti, b1, b2) = mesh.sample(u1, u2);
+        let [a, e1, e2, n] = self.emitter_triangles[ei][ti];
         let radiance = match texture {
             None => *radiance_rgb,
             Some(_) => {

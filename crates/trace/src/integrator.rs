@@ -5,10 +5,11 @@
 //! area emitters; point sources and goniometric luminaires, being deltas, are reached by
 //! next-event estimation only (a luminaire's light point carries its intensity towards the
 //! shading point). Russian roulette after every bounce as a weight window: survival probability
-//! min(0.95, max throughput / 0.1), so paths whose throughput is still high go on, and survivors
-//! carry a throughput of about 0.1 (starting roulette at the fourth vertex with survival
-//! min(0.95, max throughput) cost 1.2× the CPU time to equal error on the Cornell box and 3.3× on
-//! the 1M-triangle room: it cut the deep bounces that carry those rooms' indirect light).
+//! min(0.95, max throughput / 0.25), so paths whose throughput is still high go on, and
+//! survivors carry a throughput of about 0.25 (starting roulette at the fourth vertex with
+//! survival min(0.95, max throughput) cost 1.2× the CPU time to equal error on the Cornell box
+//! and 3.3× on the 1M-triangle room: it cut the deep bounces that carry those rooms' indirect
+//! light; docs/measurements.md has the window's width measured).
 //! Scattering happens in the shading frame as Mitsuba 3's `path` does it
 //! ([`luxest_render::shading`]): interpolated vertex normals and normal maps, the cosine about
 //! the shading normal, no test against the geometric normal; rays leave on the geometric side
@@ -50,7 +51,7 @@ pub struct RayLog {
 
 /// Russian roulette's weight window: a path survives with probability
 /// min(0.95, max throughput / RR_WEIGHT), so survivors carry about RR_WEIGHT.
-const RR_WEIGHT: f64 = 0.1;
+const RR_WEIGHT: f64 = 0.25;
 
 fn power_heuristic(a: f64, b: f64) -> f64 {
     let (a2, b2) = (a * a, b * b);
