@@ -19,6 +19,7 @@ import argparse
 import csv
 import math
 import os
+import re
 import subprocess
 import sys
 import time
@@ -151,12 +152,13 @@ def main(argv=None):
                     out,
                 ]
             )
-            # `cpu_seconds <s> wall_seconds <s> sample_count <n>`: samplers round the count.
-            words = text.split()
-            cpu, spp_used = float(words[words.index("cpu_seconds") + 1]), int(words[words.index("sample_count") + 1])
+            # `cpu_seconds <s> wall_seconds <s> sample_count <n>`, after Mitsuba's own log lines (a
+            # sampler that rounds the count warns, with colour codes): samplers round the count.
+            m = re.search(r"cpu_seconds (\S+) wall_seconds \S+ sample_count (\d+)", text)
+            if m is None:
+                sys.exit(f"error: {MITSUBA}: no timing line in its output:\n{text.strip()}")
+            cpu, spp_used = float(m.group(1)), int(m.group(2))
             return cpu, out, spp_used * pixels
-
-        return run
 
         return run
 
@@ -290,14 +292,16 @@ def at_its_best(to_target, samplers, host):
 
 def plot(path, runs, rel, methods, title, host):
     """relMSE against CPU seconds, log-log: each method's mean over the repetitions per budget,
-    joined (Mitsuba dashed), with the targets as grey lines. Written atomically."""
+    joined (Mitsuba dashed, each method its own colour), with the targets as grey lines.
+    Written atomically."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 5), dpi=110)
-    for name, _, budgets, _, _ in methods:
+    colours = plt.get_cmap("tab20").colors  # 20 distinct colours: one per method
+    for k, (name, _, budgets, _, _) in enumerate(methods):
         xs, ys = [], []
         for b in budgets:
             rs = [r for r in runs if r[0] == name and r[2] == b]
@@ -306,7 +310,7 @@ def plot(path, runs, rel, methods, title, host):
             xs.append(sum(cpus) / len(cpus))
             ys.append(sum(errs) / len(errs))
         dashed = name.startswith("Mitsuba")
-        ax.loglog(xs, ys, "o--" if dashed else "o-", label=name, markersize=4)
+        ax.loglog(xs, ys, "o--" if dashed else "o-", label=name, markersize=4, color=colours[k % len(colours)])
     for t in TARGETS:
         ax.axhline(t, color="0.8", linewidth=0.8, zorder=0)
     ax.set_xlabel(f"CPU seconds ({host})")
