@@ -256,7 +256,8 @@ def at_its_best(to_target, samplers, host):
     """The report's closing lines: Mitsuba's best sampler per integrator and target, and luxest's
     CPU time to equal error over Mitsuba's at its best (and with each sampler)."""
     lines = []
-    simd = "AVX-512" if "AVX-512" in host else "AVX2"
+    # host_summary ends in "AVX-512", "AVX2 (no AVX-512)" or "no AVX2".
+    simd = "AVX-512" if host.endswith(", AVX-512") else "AVX2"
     pairs = [("luxest trace", "path")]
     pairs += [(n, "ptracer") for n in ("luxest light tracer", DLE, DLE_PLAIN) if (n, TARGETS[0]) in to_target]
     for integrator in ("path", "ptracer"):

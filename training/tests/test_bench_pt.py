@@ -1,0 +1,92 @@
+"""pipelines/bench_pt.py: the report names, for each target relMSE, the Mitsuba sampler that needs
+the least CPU time, and divides luxest's time by that sampler's; pipelines/mitsuba_render.py puts
+the chosen sampler in place of the exported one."""
+
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "pipelines"))
+import bench_pt  # noqa: E402
+import mitsuba_render  # noqa: E402
+
+SAMPLERS = ["independent", "stratified", "ldsampler", "multijitter"]
+
+
+def table():
+    """CPU-s to each target: Mitsuba path's best sampler differs between the targets."""
+    lo, hi = bench_pt.TARGETS
+    cpu = {
+        ("luxest trace", lo): 0.6,
+        ("luxest trace", hi): 4.8,
+        ("luxest light tracer", lo): 1.8,
+        ("luxest light tracer", hi): 17.0,
+    }
+    path = {"independent": (0.65, 6.0), "stratified": (0.40, 3.6), "ldsampler": (0.45, 3.5), "multijitter": (0.5, 3.2)}
+    ptracer = {
+        "independent": (1.0, 9.0),
+        "stratified": (0.9, 10.0),
+        "ldsampler": (1.2, 12.0),
+        "multijitter": (1.4, 10.0),
+    }
+    for integrator, times in (("path", path), ("ptracer", ptracer)):
+        for sm, (a, b) in times.items():
+            cpu[bench_pt.mitsuba_name(integrator, sm), lo] = a
+            cpu[bench_pt.mitsuba_name(integrator, sm), hi] = b
+    return cpu
+
+
+def test_best_sampler_is_the_fastest_to_each_target():
+    lo, hi = bench_pt.TARGETS
+    cpu = table()
+    assert bench_pt.best_sampler(cpu, "path", SAMPLERS, lo) == "stratified"
+    assert bench_pt.best_sampler(cpu, "path", SAMPLERS, hi) == "multijitter"
+    assert bench_pt.best_sampler(cpu, "ptracer", SAMPLERS, hi) == "independent"
+
+
+def test_ratios_divide_by_the_best_sampler_and_name_the_host_target():
+    lines = bench_pt.at_its_best(table(), SAMPLERS, "AMD EPYC, 2 CPUs, AVX-512")
+    trace = next(x for x in lines if x.startswith("luxest trace / Mitsuba path at its best"))
+    # 0.6 / 0.40 and 4.8 / 3.2; the AVX-512 target is 1.0.
+    assert "1.50 at 0.01 (stratified), 1.50 at 0.001 (multijitter)" in trace
+    assert "at most 1 on this AVX-512 host" in trace
+    each = next(x for x in lines if x.startswith("luxest trace / Mitsuba path with each sampler"))
+    assert "independent 0.80, stratified 1.33, ldsampler 1.37, multijitter 1.50" in each
+    lt = next(x for x in lines if x.startswith("luxest light tracer / Mitsuba ptracer at its best"))
+    assert "2.00 at 0.01 (stratified), 1.89 at 0.001 (independent)" in lt
+    avx2 = bench_pt.at_its_best(table(), SAMPLERS, "Intel Xeon, 8 CPUs, AVX2 (no AVX-512)")
+    assert any("at most 0.5 on this AVX2 host" in x for x in avx2)
+
+
+class FakeResolver:
+    def prepend(self, path):
+        self.path = path
+
+
+class FakeMitsuba:
+    def __init__(self):
+        self.resolver = FakeResolver()
+
+    def file_resolver(self):
+        return self.resolver
+
+
+def test_scene_xml_swaps_the_sampler_and_the_integrator(tmp_path):
+    xml = tmp_path / "scene.xml"
+    xml.write_text(
+        '<scene><integrator type="path"><integer name="max_depth" value="-1"/></integrator><sensor><film><integer name="width" value="512"/>'
+        '<integer name="height" value="512"/></film>'
+        '<sampler type="independent"><integer name="sample_count" value="16"/></sampler></sensor></scene>'
+    )
+    out = mitsuba_render.scene_xml(FakeMitsuba(), str(xml), "64x32", "ptracer", "multijitter")
+    assert '<sampler type="multijitter">' in out and "independent" not in out
+    assert '<integrator type="ptracer">' in out
+    assert '"width" value="64"' in out and '"height" value="32"' in out
+    # The default keeps the exported sampler.
+    assert '<sampler type="independent">' in mitsuba_render.scene_xml(FakeMitsuba(), str(xml))
+    # A scene without the exported sampler cannot take another: an error, not a silent default.
+    xml.write_text('<scene><integrator type="path"/></scene>')
+    with pytest.raises(SystemExit, match="no <sampler"):
+        mitsuba_render.scene_xml(FakeMitsuba(), str(xml), None, "path", "ldsampler")
