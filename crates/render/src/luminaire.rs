@@ -235,6 +235,30 @@ impl GoniometricLight {
         self.scale_rgb * self.photometry.flux_from_table_lm()
     }
 
+    /// Bounds for the light BVH: the largest intensity (cd, luminance, all sources together)
+    /// towards any direction, and the cosine of the angle γ about the nadir beyond which the
+    /// table (bilinear, zero outside its γ range) radiates nothing.
+    pub fn intensity_bound(&self) -> (f64, f64) {
+        let p = &self.photometry;
+        let (cs, gs) = (p.c_angles_deg().len(), p.gamma_angles_deg().len());
+        let mut max_cd: f64 = 0.0;
+        let mut last_lit = None;
+        for j in 0..gs {
+            for i in 0..cs {
+                let cd = p.table_cd(i, j);
+                if cd > 0.0 {
+                    max_cd = max_cd.max(cd);
+                    last_lit = Some(j);
+                }
+            }
+        }
+        let cos_gamma = match last_lit {
+            None => 1.0,
+            Some(j) => p.gamma_angles_deg()[(j + 1).min(gs - 1)].to_radians().cos(),
+        };
+        (max_cd * self.scale_rgb.luminance(), cos_gamma)
+    }
+
     /// The world direction of the nadir (γ = 0).
     pub fn nadir(&self) -> Vec3 {
         Vec3::from(apply(&self.frame.m, [0.0, 0.0, -1.0]))

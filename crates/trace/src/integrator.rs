@@ -1,7 +1,8 @@
 //! The path tracer: radiance along a camera ray.
 //!
-//! Unidirectional path tracing with next-event estimation (one light point per vertex, chosen
-//! by flux) combined with BSDF sampling by multiple importance sampling (power heuristic) for
+//! Unidirectional path tracing with next-event estimation (one light point per vertex, the
+//! light chosen by the world's light sampler: by importance at the vertex through the light
+//! BVH, or by flux) combined with BSDF sampling by multiple importance sampling (power heuristic) for
 //! area emitters; point sources and goniometric luminaires, being deltas, are reached by
 //! next-event estimation only (a luminaire's light point carries its intensity towards the
 //! shading point). Russian roulette after every bounce as a weight window: survival probability
@@ -79,6 +80,8 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
     // Solid-angle pdf of the BSDF sample that produced `dir`, and whether it was a delta.
     let mut bsdf_pdf = 0.0;
     let mut delta = true;
+    // The vertex `dir` leaves from (the receiver of the light choice there).
+    let mut from_vertex = origin;
     for depth in 0..max_depth {
         rng.start_bounce(depth);
         log.closest += 1;
@@ -117,7 +120,8 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                     } else {
                         let cos_l = sp.ng.dot(wo).abs();
                         let light_pdf =
-                            world.light_point_pdf(e) * sp.distance * sp.distance / cos_l;
+                            world.light_point_pdf(e, from_vertex) * sp.distance * sp.distance
+                                / cos_l;
                         power_heuristic(bsdf_pdf, light_pdf)
                     };
                     l = l + beta * le * w;
@@ -235,6 +239,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             break;
         }
         origin = world.offset(sp.position, sp.ng, s.wi);
+        from_vertex = sp.position;
         dir = s.wi;
     }
     l
