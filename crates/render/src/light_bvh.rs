@@ -114,7 +114,11 @@ impl LightBounds {
     /// The importance at the point `p` (see the module docs); 0 where nothing in the box can
     /// emit towards `p`.
     pub fn importance(&self, p: Vec3) -> f64 {
-        Packed::new(self).importance(p)
+        let mut pair = Pair::default();
+        let packed = Packed::new(self);
+        pair.set(0, &packed);
+        pair.set(1, &packed);
+        pair.importance(p)[0]
     }
 }
 
@@ -146,47 +150,6 @@ impl Packed {
             sin_o: (1.0 - b.cos_o * b.cos_o).max(0.0).sqrt(),
             cos_e: b.cos_e,
         }
-    }
-
-    /// See [`LightBounds::importance`].
-    #[inline]
-    fn importance(&self, p: Vec3) -> f64 {
-        let to_p = p - self.centre;
-        let dist2 = to_p.length_squared();
-        if dist2 <= self.r2 {
-            // Inside the bounding sphere every direction is possible (θ_b = π): θ' = 0.
-            return if self.r2 > 0.0 {
-                self.phi / self.r2
-            } else {
-                0.0 // a point source at the receiver itself lights nothing there
-            };
-        }
-        let inv_d = 1.0 / dist2.sqrt();
-        let cos_w = (self.w.dot(to_p) * inv_d).clamp(-1.0, 1.0);
-        let cos_p = if cos_w >= self.cos_o {
-            1.0 // p lies within the cone: θ_x = 0
-        } else {
-            let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
-            // θ_x = θ_w − θ_o > 0, then θ' = max(0, θ_x − θ_b).
-            let sin_x = sin_w * self.cos_o - cos_w * self.sin_o;
-            let cos_x = cos_w * self.cos_o + sin_w * self.sin_o;
-            let sin_b = self.r * inv_d;
-            let cos_b = (1.0 - sin_b * sin_b).max(0.0).sqrt();
-            if cos_x >= cos_b {
-                1.0
-            } else {
-                cos_x * cos_b + sin_x * sin_b
-            }
-        };
-        if self.cos_e >= 1.0 {
-            // A hard cone: light only where θ' = 0.
-            if cos_p < 1.0 {
-                return 0.0;
-            }
-        } else if cos_p <= self.cos_e {
-            return 0.0;
-        }
-        self.phi * cos_p * (inv_d * inv_d)
     }
 }
 
@@ -235,80 +198,331 @@ fn orientation_measure(b: &LightBounds) -> f64 {
         + 0.5 * PI * (2.0 * t_w * s_o - (t_o - 2.0 * t_w).cos() - 2.0 * t_o * s_o + c_o)
 }
 
+/// A node of the tree as it is built.
 #[derive(Clone, Debug)]
-enum Children {
-    Leaf(u32),
-    /// Indices of the two children.
-    Inner(u32, u32),
+struct BuildNode {
+    bounds: LightBounds,
+    /// `None` for a leaf.
+    children: Option<(usize, usize)>,
+    light: u32,
 }
 
-#[derive(Clone, Debug)]
-struct Node {
-    bounds: Packed,
-    children: Children,
-    parent: u32,
+/// The bounds of an inner node's two children side by side (lane 0, lane 1), so that both
+/// importances are computed together.
+#[derive(Clone, Copy, Debug, Default)]
+struct Pair {
+    cx: [f64; 2],
+    cy: [f64; 2],
+    cz: [f64; 2],
+    r: [f64; 2],
+    r2: [f64; 2],
+    phi: [f64; 2],
+    wx: [f64; 2],
+    wy: [f64; 2],
+    wz: [f64; 2],
+    cos_o: [f64; 2],
+    sin_o: [f64; 2],
+    cos_e: [f64; 2],
+}
+
+impl Pair {
+    fn set(&mut self, k: usize, b: &Packed) {
+        self.cx[k] = b.centre.x;
+        self.cy[k] = b.centre.y;
+        self.cz[k] = b.centre.z;
+        self.r[k] = b.r;
+        self.r2[k] = b.r2;
+        self.phi[k] = b.phi;
+        self.wx[k] = b.w.x;
+        self.wy[k] = b.w.y;
+        self.wz[k] = b.w.z;
+        self.cos_o[k] = b.cos_o;
+        self.sin_o[k] = b.sin_o;
+        self.cos_e[k] = b.cos_e;
+    }
+
+    /// Both children's importance at `p` (see [`LightBounds::importance`]), without
+    /// branches, the two lanes together.
+    #[inline]
+    fn importance(&self, p: Vec3) -> [f64; 2] {
+        use lanes::F2;
+        let (zero, one) = (F2::splat(0.0), F2::splat(1.0));
+        let dx = F2::splat(p.x) - F2::load(&self.cx);
+        let dy = F2::splat(p.y) - F2::load(&self.cy);
+        let dz = F2::splat(p.z) - F2::load(&self.cz);
+        let dist2 = dx * dx + dy * dy + dz * dz;
+        let r2 = F2::load(&self.r2);
+        let inside = dist2.le(r2);
+        let inv_d = one / dist2.max(F2::splat(f64::MIN_POSITIVE)).sqrt();
+        let wdot = F2::load(&self.wx) * dx + F2::load(&self.wy) * dy + F2::load(&self.wz) * dz;
+        let cos_w = (wdot * inv_d).min(one).max(F2::splat(-1.0));
+        let sin_w = (one - cos_w * cos_w).max(zero).sqrt();
+        let (cos_o, sin_o) = (F2::load(&self.cos_o), F2::load(&self.sin_o));
+        // θ_x = max(0, θ_w − θ_o), then θ' = max(0, θ_x − θ_b).
+        let in_cone = cos_w.ge(cos_o);
+        let sin_x = sin_w * cos_o - cos_w * sin_o;
+        let cos_x = cos_w * cos_o + sin_w * sin_o;
+        let sin_b = (F2::load(&self.r) * inv_d).min(one);
+        let cos_b = (one - sin_b * sin_b).max(zero).sqrt();
+        let full = in_cone.or(cos_x.ge(cos_b));
+        let cos_p = F2::select(full, one, cos_x * cos_b + sin_x * sin_b);
+        // A hard cone (cos θ_e = 1) emits only where θ' = 0; otherwise up to θ_e.
+        let cos_e = F2::load(&self.cos_e);
+        let dark = F2::select(cos_e.ge(one), cos_p.lt(one), cos_p.le(cos_e));
+        let phi = F2::load(&self.phi);
+        let outside = F2::select(dark, zero, phi * cos_p * (inv_d * inv_d));
+        // Inside the bounding sphere every direction is possible: phi / r²; a point source at
+        // the receiver itself lights nothing there.
+        let within = F2::select(
+            r2.gt(zero),
+            phi / r2.max(F2::splat(f64::MIN_POSITIVE)),
+            zero,
+        );
+        F2::select(inside, within, outside).to_array()
+    }
+}
+
+/// Two f64 lanes: SSE2 on x86-64 (every x86-64 processor has it), plain arrays elsewhere.
+mod lanes {
+    #[cfg(target_arch = "x86_64")]
+    use std::arch::x86_64::*;
+
+    /// Two f64 values; comparisons give lane masks that [`F2::select`] and [`F2::or`] take.
+    #[cfg(target_arch = "x86_64")]
+    #[derive(Clone, Copy)]
+    pub struct F2(__m128d);
+
+    #[cfg(not(target_arch = "x86_64"))]
+    #[derive(Clone, Copy)]
+    pub struct F2([f64; 2]);
+
+    macro_rules! binary {
+        ($trait:ident, $method:ident, $intrinsic:ident, $op:tt) => {
+            impl std::ops::$trait for F2 {
+                type Output = F2;
+                #[inline]
+                fn $method(self, o: F2) -> F2 {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: SSE2 is part of the x86-64 baseline.
+                    unsafe {
+                        F2($intrinsic(self.0, o.0))
+                    }
+                    #[cfg(not(target_arch = "x86_64"))]
+                    F2([self.0[0] $op o.0[0], self.0[1] $op o.0[1]])
+                }
+            }
+        };
+    }
+    binary!(Add, add, _mm_add_pd, +);
+    binary!(Sub, sub, _mm_sub_pd, -);
+    binary!(Mul, mul, _mm_mul_pd, *);
+    binary!(Div, div, _mm_div_pd, /);
+
+    #[cfg(target_arch = "x86_64")]
+    impl F2 {
+        #[inline]
+        pub fn load(a: &[f64; 2]) -> F2 {
+            // SAFETY: SSE2 is part of the x86-64 baseline; the unaligned load reads the array.
+            unsafe { F2(_mm_loadu_pd(a.as_ptr())) }
+        }
+        #[inline]
+        pub fn splat(v: f64) -> F2 {
+            // SAFETY: as above.
+            unsafe { F2(_mm_set1_pd(v)) }
+        }
+        #[inline]
+        pub fn to_array(self) -> [f64; 2] {
+            let mut a = [0.0; 2];
+            // SAFETY: as above; the unaligned store writes the array.
+            unsafe { _mm_storeu_pd(a.as_mut_ptr(), self.0) };
+            a
+        }
+        #[inline]
+        pub fn sqrt(self) -> F2 {
+            // SAFETY: as above.
+            unsafe { F2(_mm_sqrt_pd(self.0)) }
+        }
+        #[inline]
+        pub fn min(self, o: F2) -> F2 {
+            // SAFETY: as above.
+            unsafe { F2(_mm_min_pd(self.0, o.0)) }
+        }
+        #[inline]
+        pub fn max(self, o: F2) -> F2 {
+            // SAFETY: as above.
+            unsafe { F2(_mm_max_pd(self.0, o.0)) }
+        }
+        #[inline]
+        pub fn le(self, o: F2) -> F2 {
+            // SAFETY: as above.
+            unsafe { F2(_mm_cmple_pd(self.0, o.0)) }
+        }
+        #[inline]
+        pub fn lt(self, o: F2) -> F2 {
+            // SAFETY: as above.
+            unsafe { F2(_mm_cmplt_pd(self.0, o.0)) }
+        }
+        #[inline]
+        pub fn ge(self, o: F2) -> F2 {
+            // SAFETY: as above.
+            unsafe { F2(_mm_cmpge_pd(self.0, o.0)) }
+        }
+        #[inline]
+        pub fn gt(self, o: F2) -> F2 {
+            // SAFETY: as above.
+            unsafe { F2(_mm_cmpgt_pd(self.0, o.0)) }
+        }
+        /// The lanes where either mask is set.
+        #[inline]
+        pub fn or(self, o: F2) -> F2 {
+            // SAFETY: as above.
+            unsafe { F2(_mm_or_pd(self.0, o.0)) }
+        }
+        /// `a` where `mask` is set, else `b`.
+        #[inline]
+        pub fn select(mask: F2, a: F2, b: F2) -> F2 {
+            // SAFETY: as above.
+            unsafe {
+                F2(_mm_or_pd(
+                    _mm_and_pd(mask.0, a.0),
+                    _mm_andnot_pd(mask.0, b.0),
+                ))
+            }
+        }
+    }
+
+    #[cfg(not(target_arch = "x86_64"))]
+    impl F2 {
+        #[inline]
+        pub fn load(a: &[f64; 2]) -> F2 {
+            F2(*a)
+        }
+        #[inline]
+        pub fn splat(v: f64) -> F2 {
+            F2([v, v])
+        }
+        #[inline]
+        pub fn to_array(self) -> [f64; 2] {
+            self.0
+        }
+        fn map(self, f: impl Fn(f64) -> f64) -> F2 {
+            F2([f(self.0[0]), f(self.0[1])])
+        }
+        fn zip(self, o: F2, f: impl Fn(f64, f64) -> f64) -> F2 {
+            F2([f(self.0[0], o.0[0]), f(self.0[1], o.0[1])])
+        }
+        fn mask(b: bool) -> f64 {
+            if b {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        pub fn sqrt(self) -> F2 {
+            self.map(f64::sqrt)
+        }
+        pub fn min(self, o: F2) -> F2 {
+            self.zip(o, |a, b| if a < b { a } else { b })
+        }
+        pub fn max(self, o: F2) -> F2 {
+            self.zip(o, |a, b| if a > b { a } else { b })
+        }
+        pub fn le(self, o: F2) -> F2 {
+            self.zip(o, |a, b| Self::mask(a <= b))
+        }
+        pub fn lt(self, o: F2) -> F2 {
+            self.zip(o, |a, b| Self::mask(a < b))
+        }
+        pub fn ge(self, o: F2) -> F2 {
+            self.zip(o, |a, b| Self::mask(a >= b))
+        }
+        pub fn gt(self, o: F2) -> F2 {
+            self.zip(o, |a, b| Self::mask(a > b))
+        }
+        pub fn or(self, o: F2) -> F2 {
+            self.zip(o, |a, b| Self::mask(a != 0.0 || b != 0.0))
+        }
+        pub fn select(mask: F2, a: F2, b: F2) -> F2 {
+            F2([0, 1].map(|k| if mask.0[k] != 0.0 { a.0[k] } else { b.0[k] }))
+        }
+    }
+}
+
+/// An inner node: its children's bounds and indices ([`LEAF`] marks a light index).
+#[derive(Clone, Copy, Debug)]
+struct Inner {
+    pair: Pair,
+    child: [u32; 2],
+    /// The parent inner node and the lane this node is in there ([`NO_PARENT`] at the root).
+    parent: (u32, u32),
 }
 
 /// The light BVH: built once per scene from the lights' bounds, shared by all threads.
 #[derive(Clone, Debug)]
 pub struct LightBvh {
-    nodes: Vec<Node>,
-    /// Per light index (the emitter index the bounds were given with), its leaf node.
-    leaf_of: Vec<Option<u32>>,
+    /// Inner nodes, the root first; empty when the tree is one light.
+    inner: Vec<Inner>,
+    /// The root: an inner node's index, or [`LEAF`] | a light index.
+    root: u32,
+    /// Per light index (the emitter index the bounds were given with), its parent inner node
+    /// and lane ([`NO_PARENT`] for a tree of one light); `None` for lights not in the tree.
+    leaf_of: Vec<Option<(u32, u32)>>,
 }
 
 const NO_PARENT: u32 = u32::MAX;
+const LEAF: u32 = 1 << 31;
 const BUCKETS: usize = 12;
 
 impl LightBvh {
-    /// The tree over `lights`: (bounds, light index). Lights with `phi <= 0` or non-finite
-    /// bounds are left out (they are never chosen, and their pmf is 0); `None` when none is
-    /// left.
+    /// The tree over `lights`: (bounds, light index below 2^31). Lights with `phi <= 0` or
+    /// non-finite bounds are left out (they are never chosen, and their pmf is 0); `None` when
+    /// none is left.
     pub fn new(lights: &[(LightBounds, u32)]) -> Option<LightBvh> {
         let mut items: Vec<(LightBounds, u32)> = lights
             .iter()
-            .filter(|(b, _)| {
-                b.phi > 0.0 && b.phi.is_finite() && b.lo.is_finite() && b.hi.is_finite()
+            .filter(|(b, i)| {
+                b.phi > 0.0
+                    && b.phi.is_finite()
+                    && b.lo.is_finite()
+                    && b.hi.is_finite()
+                    && *i < LEAF
             })
             .copied()
             .collect();
         if items.is_empty() {
             return None;
         }
+        let mut nodes = Vec::with_capacity(2 * items.len());
+        build(&mut nodes, &mut items);
         let max_index = items.iter().map(|(_, i)| *i).max().unwrap_or(0) as usize;
         let mut bvh = LightBvh {
-            nodes: Vec::with_capacity(2 * items.len()),
+            inner: Vec::with_capacity(items.len()),
+            root: 0,
             leaf_of: vec![None; max_index + 1],
         };
-        bvh.build(&mut items, NO_PARENT);
+        bvh.root = bvh.flatten(&nodes, 0, (NO_PARENT, 0));
         Some(bvh)
     }
 
-    /// Builds the subtree over `items`, returning its node index.
-    fn build(&mut self, items: &mut [(LightBounds, u32)], parent: u32) -> u32 {
-        let index = self.nodes.len() as u32;
-        let bounds = items[1..]
-            .iter()
-            .fold(items[0].0, |acc, (b, _)| acc.union(b));
-        if items.len() == 1 {
-            self.nodes.push(Node {
-                bounds: Packed::new(&bounds),
-                children: Children::Leaf(items[0].1),
-                parent,
-            });
-            self.leaf_of[items[0].1 as usize] = Some(index);
-            return index;
-        }
-        self.nodes.push(Node {
-            bounds: Packed::new(&bounds),
-            children: Children::Leaf(u32::MAX),
+    /// Appends the subtree of build node `n` (whose parent is `parent`); returns its encoding.
+    fn flatten(&mut self, nodes: &[BuildNode], n: usize, parent: (u32, u32)) -> u32 {
+        let node = &nodes[n];
+        let Some((a, b)) = node.children else {
+            self.leaf_of[node.light as usize] = Some(parent);
+            return LEAF | node.light;
+        };
+        let index = self.inner.len() as u32;
+        let mut pair = Pair::default();
+        pair.set(0, &Packed::new(&nodes[a].bounds));
+        pair.set(1, &Packed::new(&nodes[b].bounds));
+        self.inner.push(Inner {
+            pair,
+            child: [0, 0],
             parent,
         });
-        let mid = split(items);
-        let (left, right) = items.split_at_mut(mid);
-        let a = self.build(left, index);
-        let b = self.build(right, index);
-        self.nodes[index as usize].children = Children::Inner(a, b);
+        let ca = self.flatten(nodes, a, (index, 0));
+        let cb = self.flatten(nodes, b, (index, 1));
+        self.inner[index as usize].child = [ca, cb];
         index
     }
 
@@ -325,59 +539,70 @@ impl LightBvh {
     /// A light chosen for the receiver `p` with the uniform number `u` in [0, 1): (light
     /// index, its probability); `None` when no light can reach `p`.
     pub fn sample(&self, p: Vec3, mut u: f64) -> Option<(usize, f64)> {
-        let mut node = 0usize;
+        let mut node = self.root;
         let mut pmf = 1.0;
-        loop {
-            match self.nodes[node].children {
-                Children::Leaf(light) => return Some((light as usize, pmf)),
-                Children::Inner(a, b) => {
-                    let ia = self.nodes[a as usize].bounds.importance(p);
-                    let ib = self.nodes[b as usize].bounds.importance(p);
-                    let total = ia + ib;
-                    if total.is_nan() || total <= 0.0 {
-                        return None;
-                    }
-                    let pa = ia / total;
-                    if u < pa {
-                        u = (u / pa).min(ONE_MINUS_EPSILON);
-                        pmf *= pa;
-                        node = a as usize;
-                    } else {
-                        let pb = ib / total;
-                        u = ((u - pa) / pb).clamp(0.0, ONE_MINUS_EPSILON);
-                        pmf *= pb;
-                        node = b as usize;
-                    }
-                }
+        while node & LEAF == 0 {
+            let n = &self.inner[node as usize];
+            let [ia, ib] = n.pair.importance(p);
+            let total = ia + ib;
+            if total.is_nan() || total <= 0.0 {
+                return None;
+            }
+            let pa = ia / total;
+            if u < pa {
+                u = (u / pa).min(ONE_MINUS_EPSILON);
+                pmf *= pa;
+                node = n.child[0];
+            } else {
+                let pb = ib / total;
+                u = ((u - pa) / pb).clamp(0.0, ONE_MINUS_EPSILON);
+                pmf *= pb;
+                node = n.child[1];
             }
         }
+        Some(((node & !LEAF) as usize, pmf))
     }
 
     /// The probability with which [`LightBvh::sample`] chooses light `light` for the receiver
     /// `p` (0 for a light not in the tree or out of reach of `p`).
     pub fn pmf(&self, light: usize, p: Vec3) -> f64 {
-        let Some(Some(leaf)) = self.leaf_of.get(light) else {
+        let Some(Some((mut parent, mut lane))) = self.leaf_of.get(light) else {
             return 0.0;
         };
         let mut pmf = 1.0;
-        let mut child = *leaf;
-        let mut parent = self.nodes[child as usize].parent;
         while parent != NO_PARENT {
-            let Children::Inner(a, b) = self.nodes[parent as usize].children else {
-                unreachable!("a parent is an inner node")
-            };
-            let ia = self.nodes[a as usize].bounds.importance(p);
-            let ib = self.nodes[b as usize].bounds.importance(p);
-            let total = ia + ib;
+            let n = &self.inner[parent as usize];
+            let i = n.pair.importance(p);
+            let total = i[0] + i[1];
             if total.is_nan() || total <= 0.0 {
                 return 0.0;
             }
-            pmf *= if child == a { ia } else { ib } / total;
-            child = parent;
-            parent = self.nodes[parent as usize].parent;
+            pmf *= i[lane as usize] / total;
+            (parent, lane) = n.parent;
         }
         pmf
     }
+}
+
+/// Builds the subtree over `items` into `nodes`, returning its index.
+fn build(nodes: &mut Vec<BuildNode>, items: &mut [(LightBounds, u32)]) -> usize {
+    let index = nodes.len();
+    let bounds = items[1..]
+        .iter()
+        .fold(items[0].0, |acc, (b, _)| acc.union(b));
+    nodes.push(BuildNode {
+        bounds,
+        children: None,
+        light: items[0].1,
+    });
+    if items.len() > 1 {
+        let mid = split(items);
+        let (left, right) = items.split_at_mut(mid);
+        let a = build(nodes, left);
+        let b = build(nodes, right);
+        nodes[index].children = Some((a, b));
+    }
+    index
 }
 
 /// The largest f64 below 1.
