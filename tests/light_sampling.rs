@@ -100,13 +100,13 @@ fn trace_images_are_the_same_with_the_bvh_and_the_power_choice() {
     }
 }
 
-/// Unoccluded direct illuminance at `x` (normal `n`) by next-event estimation: (mean, standard
-/// error) over `samples` light points.
+/// Unoccluded direct illuminance at `x` (normal `n`, which the light choice is given) by
+/// next-event estimation: (mean, standard error) over `samples` light points.
 fn direct_illuminance(world: &World, x: Vec3, n: Vec3, samples: usize, seed: u64) -> (f64, f64) {
     let mut rng = Rng::new(seed, 7);
     let (mut s, mut s2) = (0.0, 0.0);
     for _ in 0..samples {
-        let l = world.sample_light_point(&mut rng, x);
+        let l = world.sample_light_point_facing(&mut rng, x, Some(n));
         let v = l.position - x;
         let d2 = v.length_squared();
         let mut e = 0.0;
@@ -142,11 +142,11 @@ fn next_event_estimates_agree_and_the_pdf_is_the_sampled_one() {
         // The area density of every sampled area point is light_point_pdf of one of the area
         // emitters at this receiver (MIS weighs emitter hits with it).
         let pdfs: Vec<f64> = (0..world.scene.header.emitters.len() as u32)
-            .map(|e| world.light_point_pdf(e, x))
+            .map(|e| world.light_point_pdf_facing(e, x, Some(n)))
             .collect();
         let mut rng = Rng::new(9, k as u64);
         for _ in 0..200 {
-            let l = world.sample_light_point(&mut rng, x);
+            let l = world.sample_light_point_facing(&mut rng, x, Some(n));
             if l.normal.is_some() {
                 assert!(
                     pdfs.iter().any(|p| (p - l.pdf).abs() <= 1e-12 * l.pdf),

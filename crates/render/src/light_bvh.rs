@@ -118,7 +118,7 @@ impl LightBounds {
         let packed = Packed::new(self);
         pair.set(0, &packed);
         pair.set(1, &packed);
-        pair.importance(p)[0]
+        pair.importance(p, None)[0]
     }
 }
 
@@ -241,10 +241,11 @@ impl Pair {
         self.cos_e[k] = b.cos_e;
     }
 
-    /// Both children's importance at `p` (see [`LightBounds::importance`]), without
-    /// branches, the two lanes together.
+    /// Both children's importance at `p` (see [`LightBounds::importance`]), times the
+    /// receiver's cosine bound when its normal `n` is given, without branches, the two lanes
+    /// together.
     #[inline]
-    fn importance(&self, p: Vec3) -> [f64; 2] {
+    fn importance(&self, p: Vec3, n: Option<Vec3>) -> [f64; 2] {
         use lanes::F2;
         let (zero, one) = (F2::splat(0.0), F2::splat(1.0));
         let dx = F2::splat(p.x) - F2::load(&self.cx);
@@ -278,7 +279,20 @@ impl Pair {
             phi / r2.max(F2::splat(f64::MIN_POSITIVE)),
             zero,
         );
-        F2::select(inside, within, outside).to_array()
+        let importance = F2::select(inside, within, outside);
+        match n {
+            None => importance.to_array(),
+            Some(n) => {
+                // cos θ'_i = cos(max(0, θ_i − θ_b)), θ_i between the normal (either side) and
+                // the direction to the centre; 1 inside the sphere (sin θ_b = 1 there).
+                let ndot = F2::splat(n.x) * dx + F2::splat(n.y) * dy + F2::splat(n.z) * dz;
+                let c = ndot * inv_d;
+                let cos_i = c.max(zero - c).min(one);
+                let sin_i = (one - cos_i * cos_i).max(zero).sqrt();
+                let cos_pi = F2::select(cos_i.ge(cos_b), one, cos_i * cos_b + sin_i * sin_b);
+                (importance * F2::select(inside, one, cos_pi.max(zero))).to_array()
+            }
+        }
     }
 }
 
@@ -536,14 +550,15 @@ impl LightBvh {
         self.len() == 0
     }
 
-    /// A light chosen for the receiver `p` with the uniform number `u` in [0, 1): (light
-    /// index, its probability); `None` when no light can reach `p`.
-    pub fn sample(&self, p: Vec3, mut u: f64) -> Option<(usize, f64)> {
+    /// A light chosen for the receiver `p` (of unit normal `n`, either side, when given) with
+    /// the uniform number `u` in [0, 1): (light index, its probability); `None` when no light
+    /// can reach `p`.
+    pub fn sample(&self, p: Vec3, n: Option<Vec3>, mut u: f64) -> Option<(usize, f64)> {
         let mut node = self.root;
         let mut pmf = 1.0;
         while node & LEAF == 0 {
-            let n = &self.inner[node as usize];
-            let [ia, ib] = n.pair.importance(p);
+            let node_ref = &self.inner[node as usize];
+            let [ia, ib] = node_ref.pair.importance(p, n);
             let total = ia + ib;
             if total.is_nan() || total <= 0.0 {
                 return None;
@@ -552,33 +567,33 @@ impl LightBvh {
             if u < pa {
                 u = (u / pa).min(ONE_MINUS_EPSILON);
                 pmf *= pa;
-                node = n.child[0];
+                node = node_ref.child[0];
             } else {
                 let pb = ib / total;
                 u = ((u - pa) / pb).clamp(0.0, ONE_MINUS_EPSILON);
                 pmf *= pb;
-                node = n.child[1];
+                node = node_ref.child[1];
             }
         }
         Some(((node & !LEAF) as usize, pmf))
     }
 
     /// The probability with which [`LightBvh::sample`] chooses light `light` for the receiver
-    /// `p` (0 for a light not in the tree or out of reach of `p`).
-    pub fn pmf(&self, light: usize, p: Vec3) -> f64 {
+    /// `p` (normal `n`) (0 for a light not in the tree or out of reach of `p`).
+    pub fn pmf(&self, light: usize, p: Vec3, n: Option<Vec3>) -> f64 {
         let Some(Some((mut parent, mut lane))) = self.leaf_of.get(light) else {
             return 0.0;
         };
         let mut pmf = 1.0;
         while parent != NO_PARENT {
-            let n = &self.inner[parent as usize];
-            let i = n.pair.importance(p);
+            let node = &self.inner[parent as usize];
+            let i = node.pair.importance(p, n);
             let total = i[0] + i[1];
             if total.is_nan() || total <= 0.0 {
                 return 0.0;
             }
             pmf *= i[lane as usize] / total;
-            (parent, lane) = n.parent;
+            (parent, lane) = node.parent;
         }
         pmf
     }
@@ -752,13 +767,14 @@ mod tests {
             .collect()
     }
 
-    fn receivers() -> Vec<Vec3> {
+    /// Receiving points with a unit normal each.
+    fn receivers() -> Vec<(Vec3, Vec3)> {
         vec![
-            Vec3::new(0.1, 0.0, 0.2),
-            Vec3::new(6.0, 0.0, 0.1),
-            Vec3::new(12.0, 1.0, 4.0),
-            Vec3::new(-0.5, 1.5, 2.0),
-            Vec3::new(3.0, 2.95, 2.0),
+            (Vec3::new(0.1, 0.0, 0.2), Vec3::new(0.0, 1.0, 0.0)),
+            (Vec3::new(6.0, 0.0, 0.1), Vec3::new(0.0, 1.0, 0.0)),
+            (Vec3::new(12.0, 1.0, 4.0), unit(Vec3::new(-1.0, 0.2, 0.0))),
+            (Vec3::new(-0.5, 1.5, 2.0), Vec3::new(1.0, 0.0, 0.0)),
+            (Vec3::new(3.0, 2.95, 2.0), Vec3::new(0.0, -1.0, 0.0)),
         ]
     }
 
@@ -767,37 +783,42 @@ mod tests {
         let ls = lights();
         let bvh = LightBvh::new(&ls).unwrap();
         assert_eq!(bvh.len(), ls.len());
-        for p in receivers() {
-            let total: f64 = ls.iter().map(|(_, i)| bvh.pmf(*i as usize, p)).sum();
-            assert!((total - 1.0).abs() < 1e-12, "at {p:?}: {total}");
-            // Indices not in the tree are never chosen.
-            assert_eq!(bvh.pmf(1, p), 0.0);
-            assert_eq!(bvh.pmf(10_000, p), 0.0);
+        for (p, n) in receivers() {
+            for n in [None, Some(n)] {
+                let total: f64 = ls.iter().map(|(_, i)| bvh.pmf(*i as usize, p, n)).sum();
+                assert!((total - 1.0).abs() < 1e-12, "at {p:?}, {n:?}: {total}");
+                // Indices not in the tree are never chosen.
+                assert_eq!(bvh.pmf(1, p, n), 0.0);
+                assert_eq!(bvh.pmf(10_000, p, n), 0.0);
+            }
         }
     }
 
     #[test]
     fn sampled_lights_follow_the_pmf() {
-        // Chi-square of the chosen light's index against `pmf`, at each receiver; the pmf
-        // `sample` returns is the one `pmf` retraces.
+        // Chi-square of the chosen light's index against `pmf`, at each receiver, without and
+        // with its normal; the pmf `sample` returns is the one `pmf` retraces.
         let ls = lights();
-        let n = 2 * ls.len();
+        let bins = 2 * ls.len();
         let bvh = LightBvh::new(&ls).unwrap();
         let rs = receivers();
-        for (k, &p) in rs.iter().enumerate() {
-            let mut rng = Rng::new(31, k as u64);
-            ChiSquareTest::new(Discrete(n))
-                .samples(40_000)
-                .tests(rs.len())
-                .run(
-                    || {
-                        let (i, pmf) = bvh.sample(p, rng.next_f64())?;
-                        assert!((pmf - bvh.pmf(i, p)).abs() <= 1e-12 * pmf, "{i} at {p:?}");
-                        Some(i)
-                    },
-                    |i| bvh.pmf(i, p),
-                )
-                .unwrap();
+        for (k, &(p, normal)) in rs.iter().enumerate() {
+            for n in [None, Some(normal)] {
+                let mut rng = Rng::new(31, k as u64);
+                ChiSquareTest::new(Discrete(bins))
+                    .samples(20_000)
+                    .tests(2 * rs.len())
+                    .run(
+                        || {
+                            let (i, pmf) = bvh.sample(p, n, rng.next_f64())?;
+                            let retraced = bvh.pmf(i, p, n);
+                            assert!((pmf - retraced).abs() <= 1e-12 * pmf, "{i} at {p:?}");
+                            Some(i)
+                        },
+                        |i| bvh.pmf(i, p, n),
+                    )
+                    .unwrap();
+            }
         }
     }
 
@@ -835,6 +856,7 @@ mod tests {
         let (mut lit, mut unlit, mut in_cone) = (0, 0, 0);
         for _ in 0..400 {
             let p = Vec3::new(6.0 * next(), 6.0 * next(), 6.0 * next());
+            let receiver_normal = unit(Vec3::new(next(), next(), next()));
             for (corners, n, quad_bounds, k) in &quads {
                 let front = corners.iter().any(|c| n.dot(p - *c) > 1e-9);
                 // Behind the plane by more than the box's bounding sphere: nothing of the box
@@ -842,17 +864,20 @@ mod tests {
                 let (lo, hi) = (quad_bounds.lo, quad_bounds.hi);
                 let r = 0.5 * (hi - lo).length();
                 let behind = n.dot(p - (lo + hi) * 0.5) < -r - 1e-9;
-                let pmf = bvh.pmf(*k as usize, p);
+                let pmf = bvh.pmf(*k as usize, p, None);
+                let facing = bvh.pmf(*k as usize, p, Some(receiver_normal));
                 if front {
                     lit += 1;
                     assert!(pmf > 0.0, "quad {k} lights {p:?} but has pmf 0");
+                    // Any receiver normal: the quad lies off its tangent plane.
+                    assert!(facing > 0.0, "quad {k} lights {p:?} (facing) but has pmf 0");
                 } else if behind {
                     unlit += 1;
                     assert_eq!(pmf, 0.0, "quad {k} faces away from {p:?}");
                 }
             }
             let cos = spot_axis.dot(unit(p - spot_at));
-            let pmf = bvh.pmf(40, p);
+            let pmf = bvh.pmf(40, p, Some(receiver_normal));
             if cos > cos_cut + 1e-9 {
                 in_cone += 1;
                 assert!(pmf > 0.0, "the spot reaches {p:?}");

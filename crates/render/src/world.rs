@@ -890,20 +890,33 @@ impl World {
     /// Where the BVH finds no light that can reach `receiver`, the point is `receiver` itself
     /// with no emission (a zero-length connection, which the estimators skip).
     pub fn sample_light_point(&self, rng: &mut impl Sampler, receiver: Vec3) -> LightPoint {
+        self.sample_light_point_facing(rng, receiver, None)
+    }
+
+    /// [`World::sample_light_point`] for a receiver whose unit normal (either side) is known:
+    /// the light BVH weighs each light by the receiver's cosine bound too.
+    pub fn sample_light_point_facing(
+        &self,
+        rng: &mut impl Sampler,
+        receiver: Vec3,
+        normal: Option<Vec3>,
+    ) -> LightPoint {
         // One emitter needs no choice (no random number drawn).
         let (ei, p_e) = match (self.single_light, self.light_sampler, &self.light_bvh) {
             (Some(i), _, _) => (i, 1.0),
-            (None, LightSampler::Bvh, Some(bvh)) => match bvh.sample(receiver, rng.next_f64()) {
-                Some(chosen) => chosen,
-                None => {
-                    return LightPoint {
-                        position: receiver,
-                        normal: None,
-                        emitted: Rgb::BLACK,
-                        pdf: 1.0,
+            (None, LightSampler::Bvh, Some(bvh)) => {
+                match bvh.sample(receiver, normal, rng.next_f64()) {
+                    Some(chosen) => chosen,
+                    None => {
+                        return LightPoint {
+                            position: receiver,
+                            normal: None,
+                            emitted: Rgb::BLACK,
+                            pdf: 1.0,
+                        }
                     }
                 }
-            },
+            }
             _ => match &self.light_choice {
                 Some(choice) => choice.sample(rng.next_f64()),
                 None => unreachable!("next-event estimation of a scene without light points"),
@@ -977,12 +990,12 @@ impl World {
         }
     }
 
-    /// The probability with which [`World::sample_light_point`] chooses the emitter `emitter`
-    /// for the receiver `receiver`.
-    pub fn light_choice_pmf(&self, emitter: u32, receiver: Vec3) -> f64 {
+    /// The probability with which [`World::sample_light_point_facing`] chooses the emitter
+    /// `emitter` for the receiver `receiver` of normal `normal`.
+    pub fn light_choice_pmf(&self, emitter: u32, receiver: Vec3, normal: Option<Vec3>) -> f64 {
         match (self.single_light, self.light_sampler, &self.light_bvh) {
             (Some(i), _, _) => f64::from(u8::from(i == emitter as usize)),
-            (None, LightSampler::Bvh, Some(bvh)) => bvh.pmf(emitter as usize, receiver),
+            (None, LightSampler::Bvh, Some(bvh)) => bvh.pmf(emitter as usize, receiver, normal),
             _ => self
                 .light_choice
                 .as_ref()
@@ -993,13 +1006,24 @@ impl World {
     /// Area density with which [`World::sample_light_point`] picks a point on the area emitter
     /// `emitter` for the receiver `receiver` (for multiple importance sampling).
     pub fn light_point_pdf(&self, emitter: u32, receiver: Vec3) -> f64 {
+        self.light_point_pdf_facing(emitter, receiver, None)
+    }
+
+    /// Area density with which [`World::sample_light_point_facing`] picks a point on the area
+    /// emitter `emitter` for the receiver `receiver` of normal `normal`.
+    pub fn light_point_pdf_facing(
+        &self,
+        emitter: u32,
+        receiver: Vec3,
+        normal: Option<Vec3>,
+    ) -> f64 {
         if !matches!(
             self.scene.header.emitters[emitter as usize],
             Emitter::Area { .. }
         ) {
             return 0.0;
         }
-        let p_e = self.light_choice_pmf(emitter, receiver);
+        let p_e = self.light_choice_pmf(emitter, receiver, normal);
         match &self.scene.header.emitters[emitter as usize] {
             Emitter::Area { area_m2, .. } => p_e / area_m2,
             Emitter::Point { .. } | Emitter::Luminaire { .. } | Emitter::Environment { .. } => 0.0,

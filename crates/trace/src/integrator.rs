@@ -80,8 +80,10 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
     // Solid-angle pdf of the BSDF sample that produced `dir`, and whether it was a delta.
     let mut bsdf_pdf = 0.0;
     let mut delta = true;
-    // The vertex `dir` leaves from (the receiver of the light choice there).
+    // The vertex `dir` leaves from and its geometric normal (the receiver of the light choice
+    // there).
     let mut from_vertex = origin;
+    let mut from_normal = None;
     for depth in 0..max_depth {
         rng.start_bounce(depth);
         log.closest += 1;
@@ -119,9 +121,10 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                         1.0
                     } else {
                         let cos_l = sp.ng.dot(wo).abs();
-                        let light_pdf =
-                            world.light_point_pdf(e, from_vertex) * sp.distance * sp.distance
-                                / cos_l;
+                        let light_pdf = world.light_point_pdf_facing(e, from_vertex, from_normal)
+                            * sp.distance
+                            * sp.distance
+                            / cos_l;
                         power_heuristic(bsdf_pdf, light_pdf)
                     };
                     l = l + beta * le * w;
@@ -152,7 +155,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
         let is_delta = SPECULAR && bsdf::is_delta(m);
         if !is_delta && (POINT || AREA) {
             // Next-event estimation.
-            let lp = world.sample_light_point(rng, sp.position);
+            let lp = world.sample_light_point_facing(rng, sp.position, Some(sp.ng));
             let v = lp.position - sp.position;
             let d2 = v.length_squared();
             if d2 > 0.0 {
@@ -240,6 +243,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
         }
         origin = world.offset(sp.position, sp.ng, s.wi);
         from_vertex = sp.position;
+        from_normal = Some(sp.ng);
         dir = s.wi;
     }
     l
