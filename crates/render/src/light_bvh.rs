@@ -557,8 +557,8 @@ impl LightBvh {
         let mut node = self.root;
         let mut pmf = 1.0;
         while node & LEAF == 0 {
-            let node_ref = &self.inner[node as usize];
-            let [ia, ib] = node_ref.pair.importance(p, n);
+            let inner = &self.inner[node as usize];
+            let [ia, ib] = inner.pair.importance(p, n);
             let total = ia + ib;
             if total.is_nan() || total <= 0.0 {
                 return None;
@@ -567,12 +567,12 @@ impl LightBvh {
             if u < pa {
                 u = (u / pa).min(ONE_MINUS_EPSILON);
                 pmf *= pa;
-                node = node_ref.child[0];
+                node = inner.child[0];
             } else {
                 let pb = ib / total;
                 u = ((u - pa) / pb).clamp(0.0, ONE_MINUS_EPSILON);
                 pmf *= pb;
-                node = node_ref.child[1];
+                node = inner.child[1];
             }
         }
         Some(((node & !LEAF) as usize, pmf))
