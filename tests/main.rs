@@ -10,6 +10,7 @@ mod estimate_cli;
 mod estimate_validation;
 mod evaluate_cli;
 mod glare;
+mod light_sampling;
 mod lighting;
 mod luminaires;
 mod metrics_parity;

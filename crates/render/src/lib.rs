@@ -13,6 +13,8 @@
 //!   equirectangular map, a sun disk) and its sampling; [`sky`]: daylight skies with Radiance
 //!   gensky's conventions (CIE overcast, clear and intermediate skies, the sun);
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
+//!   [`light_bvh`]: the light BVH that chooses next-event estimation's light by its
+//!   importance at the receiver;
 //!   [`shading`]: shading frames (vertex normals, normal maps) as Mitsuba 3 defines them;
 //! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
 //!   flush-to-zero mode, hence here and not in `luxest-io`).
@@ -21,6 +23,7 @@ pub mod bsdf;
 pub mod camera;
 pub mod compiled;
 pub mod environment;
+pub mod light_bvh;
 pub mod luminaire;
 pub mod parallel;
 pub mod rt;

@@ -235,6 +235,30 @@ impl GoniometricLight {
         self.scale_rgb * self.photometry.flux_from_table_lm()
     }
 
+    /// Bounds for the light BVH: the largest intensity (cd, luminance, all sources together)
+    /// towards any direction, and the cosine of the angle γ about the nadir beyond which the
+    /// table (bilinear, zero outside its γ range) radiates nothing.
+    pub fn intensity_bound(&self) -> (f64, f64) {
+        let p = &self.photometry;
+        let (cs, gs) = (p.c_angles_deg().len(), p.gamma_angles_deg().len());
+        let mut max_cd: f64 = 0.0;
+        let mut last_lit = None;
+        for j in 0..gs {
+            for i in 0..cs {
+                let cd = p.table_cd(i, j);
+                if cd > 0.0 {
+                    max_cd = max_cd.max(cd);
+                    last_lit = Some(j);
+                }
+            }
+        }
+        let cos_gamma = match last_lit {
+            None => 1.0,
+            Some(j) => p.gamma_angles_deg()[(j + 1).min(gs - 1)].to_radians().cos(),
+        };
+        (max_cd * self.scale_rgb.luminance(), cos_gamma)
+    }
+
     /// The world direction of the nadir (γ = 0).
     pub fn nadir(&self) -> Vec3 {
         Vec3::from(apply(&self.frame.m, [0.0, 0.0, -1.0]))
@@ -321,6 +345,62 @@ mod tests {
             sampler: Arc::new(s),
             scale_rgb: Rgb::splat(2.0),
         }
+    }
+
+    #[test]
+    fn intensity_bound_holds_the_peak_and_the_lit_cone() {
+        // A downlight lit to γ = 60° (I = 500 cos γ + 10 C/360), dark from 70°: the bound is
+        // the table's peak times the scale, the cone about the nadir reaches 70°, and in
+        // random directions the intensity stays below the peak and is 0 outside the cone.
+        let c: Vec<f64> = (0..12).map(|k| k as f64 * 30.0).collect();
+        let g: Vec<f64> = (0..=18).map(|k| k as f64 * 10.0).collect();
+        let rows: Vec<Vec<f64>> = c
+            .iter()
+            .map(|cc| {
+                g.iter()
+                    .map(|gg| {
+                        if *gg <= 60.0 {
+                            500.0 * gg.to_radians().cos() + 10.0 * cc / 360.0
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let p = Photometry::from_table("down.ies", &c, &g, &rows).unwrap();
+        let s = IntensitySampler::new(&p).unwrap();
+        let m = frame_in_world(Vec3::new(0.3, -1.0, 0.4), 20.0, 35.0).unwrap();
+        let light = GoniometricLight {
+            position: Vec3::ZERO,
+            sources: vec![Vec3::ZERO],
+            share: 1.0,
+            frame: Frame { m },
+            photometry: Arc::new(p),
+            sampler: Arc::new(s),
+            scale_rgb: Rgb::splat(2.0),
+        };
+        let (phi, cos_gamma) = light.intensity_bound();
+        assert!(
+            (phi - 2.0 * (500.0 + 10.0 * 330.0 / 360.0)).abs() < 1e-9,
+            "{phi}"
+        );
+        assert!((cos_gamma - 70f64.to_radians().cos()).abs() < 1e-12);
+        let nadir = light.nadir();
+        let mut r = Rng::new(5, 5);
+        let (mut lit, mut dark) = (0, 0);
+        for _ in 0..20_000 {
+            let w = crate::sampling::uniform_sphere(r.next_f64(), r.next_f64());
+            let i = light.intensity_toward(w).luminance();
+            assert!(i <= phi * (1.0 + 1e-12), "{i} > {phi}");
+            if nadir.dot(w) < cos_gamma {
+                assert_eq!(i, 0.0, "lit outside the cone towards {w:?}");
+                dark += 1;
+            } else if i > 0.0 {
+                lit += 1;
+            }
+        }
+        assert!(lit > 1000 && dark > 1000, "{lit} {dark}");
     }
 
     #[test]

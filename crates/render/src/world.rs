@@ -5,6 +5,7 @@
 
 use crate::compiled::{CompiledScene, Emitter, NO_EMITTER};
 use crate::environment::EnvironmentLight;
+use crate::light_bvh::{LightBounds, LightBvh, LightSampler};
 use crate::luminaire::GoniometricLight;
 use crate::rt::{Hit, RayTracer};
 use crate::sampling::{
@@ -99,6 +100,10 @@ pub struct World {
     area_choice: Option<Distribution1D>,
     /// The environment emitter and its index, if the scene has one.
     environment: Option<(u32, EnvironmentLight)>,
+    /// The lights of `light_choice` in a BVH, indexed by emitter; `None` without them.
+    light_bvh: Option<LightBvh>,
+    /// How [`World::sample_light_point`] chooses its light.
+    light_sampler: LightSampler,
 }
 
 /// The cut-out test of a scene with opacity: a hit on a surface of opacity α (its `value`
@@ -399,6 +404,7 @@ impl World {
         // taken relative to the local coordinates (see `margin`); this is only the floor for
         // points near the origin.
         let epsilon = 1e-9 * extent;
+        let light_bvh = LightBvh::new(&light_bounds(&scene, &emitter_triangles, &luminaires));
         Ok(World {
             scene,
             tracer,
@@ -415,7 +421,20 @@ impl World {
             room_scale,
             area_choice,
             environment,
+            light_bvh,
+            light_sampler: LightSampler::Power,
         })
+    }
+
+    /// Chooses how [`World::sample_light_point`] picks its light (power by default; `trace`
+    /// uses the BVH).
+    pub fn set_light_sampler(&mut self, sampler: LightSampler) {
+        self.light_sampler = sampler;
+    }
+
+    /// How [`World::sample_light_point`] picks its light.
+    pub fn light_sampler(&self) -> LightSampler {
+        self.light_sampler
     }
 
     /// The shading frame at a point of `triangle` with texture coordinates `uv`, geometric
@@ -862,15 +881,44 @@ impl World {
         (a + e1 * b1 + e2 * b2, n, radiance)
     }
 
-    /// A point on a light chosen by flux among all emitters but the environment, for
+    /// A point on a light chosen among all emitters but the environment — by flux, or by
+    /// importance at `receiver` through the light BVH ([`World::set_light_sampler`]) — for
     /// next-event estimation at `receiver` (a luminaire's or spot's intensity depends on the
     /// direction towards it). Only for scenes with such a light ([`World::has_light_points`]).
+    /// Where the BVH finds no light that can reach `receiver`, the point is `receiver` itself
+    /// with no emission (a zero-length connection, which the estimators skip).
     pub fn sample_light_point(&self, rng: &mut impl Sampler, receiver: Vec3) -> LightPoint {
+        self.sample_light_point_facing(rng, receiver, None)
+    }
+
+    /// [`World::sample_light_point`] for a receiver whose unit normal (either side) is known:
+    /// the light BVH weighs each light by the receiver's cosine bound too.
+    pub fn sample_light_point_facing(
+        &self,
+        rng: &mut impl Sampler,
+        receiver: Vec3,
+        normal: Option<Vec3>,
+    ) -> LightPoint {
         // One emitter needs no choice (no random number drawn).
-        let (ei, p_e) = match (self.single_light, &self.light_choice) {
-            (Some(i), _) => (i, 1.0),
-            (None, Some(choice)) => choice.sample(rng.next_f64()),
-            (None, None) => unreachable!("next-event estimation of a scene without light points"),
+        let (ei, p_e) = match (self.single_light, self.light_sampler, &self.light_bvh) {
+            (Some(i), _, _) => (i, 1.0),
+            (None, LightSampler::Bvh, Some(bvh)) => {
+                match bvh.sample(receiver, normal, rng.next_f64()) {
+                    Some(chosen) => chosen,
+                    None => {
+                        return LightPoint {
+                            position: receiver,
+                            normal: None,
+                            emitted: Rgb::BLACK,
+                            pdf: 1.0,
+                        }
+                    }
+                }
+            }
+            _ => match &self.light_choice {
+                Some(choice) => choice.sample(rng.next_f64()),
+                None => unreachable!("next-event estimation of a scene without light points"),
+            },
         };
         match &self.scene.header.emitters[ei] {
             Emitter::Luminaire { .. } => {
@@ -940,13 +988,40 @@ impl World {
         }
     }
 
+    /// The probability with which [`World::sample_light_point_facing`] chooses the emitter
+    /// `emitter` for the receiver `receiver` of normal `normal`.
+    pub fn light_choice_pmf(&self, emitter: u32, receiver: Vec3, normal: Option<Vec3>) -> f64 {
+        match (self.single_light, self.light_sampler, &self.light_bvh) {
+            (Some(i), _, _) => f64::from(u8::from(i == emitter as usize)),
+            (None, LightSampler::Bvh, Some(bvh)) => bvh.pmf(emitter as usize, receiver, normal),
+            _ => self
+                .light_choice
+                .as_ref()
+                .map_or(0.0, |c| c.pmf(emitter as usize)),
+        }
+    }
+
     /// Area density with which [`World::sample_light_point`] picks a point on the area emitter
-    /// `emitter` (for multiple importance sampling).
-    pub fn light_point_pdf(&self, emitter: u32) -> f64 {
-        let p_e = self
-            .light_choice
-            .as_ref()
-            .map_or(0.0, |c| c.pmf(emitter as usize));
+    /// `emitter` for the receiver `receiver` (for multiple importance sampling).
+    pub fn light_point_pdf(&self, emitter: u32, receiver: Vec3) -> f64 {
+        self.light_point_pdf_facing(emitter, receiver, None)
+    }
+
+    /// Area density with which [`World::sample_light_point_facing`] picks a point on the area
+    /// emitter `emitter` for the receiver `receiver` of normal `normal`.
+    pub fn light_point_pdf_facing(
+        &self,
+        emitter: u32,
+        receiver: Vec3,
+        normal: Option<Vec3>,
+    ) -> f64 {
+        if !matches!(
+            self.scene.header.emitters[emitter as usize],
+            Emitter::Area { .. }
+        ) {
+            return 0.0;
+        }
+        let p_e = self.light_choice_pmf(emitter, receiver, normal);
         match &self.scene.header.emitters[emitter as usize] {
             Emitter::Area { area_m2, .. } => p_e / area_m2,
             Emitter::Point { .. } | Emitter::Luminaire { .. } | Emitter::Environment { .. } => 0.0,
@@ -998,6 +1073,69 @@ impl World {
             }
         }
     }
+}
+
+/// The light BVH's bounds of every emitter that next-event estimation draws from (all but the
+/// environment), with its index.
+fn light_bounds(
+    scene: &CompiledScene,
+    emitter_triangles: &[Vec<[Vec3; 4]>],
+    luminaires: &[Option<GoniometricLight>],
+) -> Vec<(LightBounds, u32)> {
+    let mut out = Vec::new();
+    for (ei, e) in scene.header.emitters.iter().enumerate() {
+        let bounds = match e {
+            Emitter::Area { .. } => {
+                let tris = &emitter_triangles[ei];
+                let Some(first) = tris.first() else { continue };
+                let (mut lo, mut hi) = (first[0], first[0]);
+                let mut cone = LightBounds::lambertian(first[0], first[0], 0.0, first[3], 1.0);
+                for &[a, e1, e2, n] in tris {
+                    for p in [a, a + e1, a + e2] {
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                    cone = cone.union(&LightBounds::lambertian(a, a, 0.0, n, 1.0));
+                }
+                LightBounds::lambertian(
+                    lo,
+                    hi,
+                    e.flux_lm() / std::f64::consts::PI,
+                    cone.w,
+                    cone.cos_o,
+                )
+            }
+            Emitter::Point {
+                position,
+                intensity_rgb,
+                spot,
+                ..
+            } => match spot {
+                None => LightBounds::point(*position, intensity_rgb.luminance()),
+                Some(c) => LightBounds::cone(
+                    *position,
+                    *position,
+                    intensity_rgb.luminance(),
+                    c.direction,
+                    c.cutoff_deg.to_radians().cos(),
+                ),
+            },
+            Emitter::Luminaire { .. } => {
+                let Some(Some(l)) = luminaires.get(ei) else {
+                    continue;
+                };
+                let (phi, cos_gamma) = l.intensity_bound();
+                let s = l.sources();
+                let (lo, hi) = s[1..]
+                    .iter()
+                    .fold((s[0], s[0]), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+                LightBounds::cone(lo, hi, phi, l.nadir(), cos_gamma)
+            }
+            Emitter::Environment { .. } => continue,
+        };
+        out.push((bounds, ei as u32));
+    }
+    out
 }
 
 /// A point source's intensity towards `toward`: the same in every direction, or a spot's

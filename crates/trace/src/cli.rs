@@ -11,6 +11,7 @@ use luxest_io::naming::{image_path, Kind, Level};
 use luxest_io::num::{Count, Real};
 use luxest_io::outputs::{check_prefix, Format, OutputPlan};
 use luxest_io::{Error, Result};
+use luxest_render::light_bvh::LightSampler;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -50,6 +51,10 @@ pub struct Args {
     /// Safety bound on path length, 1 to 2^20 (Russian roulette ends paths long before).
     #[arg(long, default_value_t = 1024, value_parser = MAX_DEPTH)]
     pub max_depth: u32,
+    /// How next-event estimation chooses its light: `bvh` (by importance at the shading
+    /// point, through a light BVH) or `power` (in proportion to flux).
+    #[arg(long, default_value = "bvh", value_parser = clap::value_parser!(LightSampler))]
+    pub light_sampler: LightSampler,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -89,7 +94,8 @@ pub fn run(args: Args) -> Result<()> {
         };
         check_prefix(out, "-o/--out", &image_path(out, level, Kind::Hdr))?;
     }
-    let (world, camera) = crate::load(&args.scene, args.resolution.as_deref())?;
+    let (mut world, camera) = crate::load(&args.scene, args.resolution.as_deref())?;
+    world.set_light_sampler(args.light_sampler);
     let prefix = args
         .out
         .clone()

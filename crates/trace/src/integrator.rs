@@ -1,7 +1,8 @@
 //! The path tracer: radiance along a camera ray.
 //!
-//! Unidirectional path tracing with next-event estimation (one light point per vertex, chosen
-//! by flux) combined with BSDF sampling by multiple importance sampling (power heuristic) for
+//! Unidirectional path tracing with next-event estimation (one light point per vertex, the
+//! light chosen by the world's light sampler: by importance at the vertex through the light
+//! BVH, or by flux) combined with BSDF sampling by multiple importance sampling (power heuristic) for
 //! area emitters; point sources and goniometric luminaires, being deltas, are reached by
 //! next-event estimation only (a luminaire's light point carries its intensity towards the
 //! shading point). Russian roulette after every bounce as a weight window: survival probability
@@ -80,6 +81,10 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
     // Solid-angle pdf of the BSDF sample that produced `dir`, and whether it was a delta.
     let mut bsdf_pdf = 0.0;
     let mut delta = true;
+    // The vertex `dir` leaves from and its geometric normal (the receiver of the light choice
+    // there).
+    let mut from_vertex = origin;
+    let mut from_normal = None;
     for depth in 0..max_depth {
         rng.start_bounce(depth);
         log.closest += 1;
@@ -117,8 +122,10 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                         1.0
                     } else {
                         let cos_l = sp.ng.dot(wo).abs();
-                        let light_pdf =
-                            world.light_point_pdf(e) * sp.distance * sp.distance / cos_l;
+                        let light_pdf = world.light_point_pdf_facing(e, from_vertex, from_normal)
+                            * sp.distance
+                            * sp.distance
+                            / cos_l;
                         power_heuristic(bsdf_pdf, light_pdf)
                     };
                     l = l + beta * le * w;
@@ -149,7 +156,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
         let is_delta = SPECULAR && bsdf::is_delta(m);
         if !is_delta && (POINT || AREA) {
             // Next-event estimation.
-            let lp = world.sample_light_point(rng, sp.position);
+            let lp = world.sample_light_point_facing(rng, sp.position, Some(sp.ng));
             let v = lp.position - sp.position;
             let d2 = v.length_squared();
             if d2 > 0.0 {
@@ -236,6 +243,8 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             break;
         }
         origin = world.offset(sp.position, sp.ng, s.wi);
+        from_vertex = sp.position;
+        from_normal = Some(sp.ng);
         dir = s.wi;
     }
     l
