@@ -11,7 +11,8 @@
 //! - [`luminaire`]: goniometric luminaires (photometric files) as delta lights and emitters;
 //!   [`spot`]: spot lights' cones; [`environment`]: the environment emitter (constant sky,
 //!   equirectangular map, a sun disk) and its sampling; [`sky`]: daylight skies with Radiance
-//!   gensky's conventions (CIE overcast, clear and intermediate skies, the sun);
+//!   gensky's conventions (CIE overcast, clear and intermediate skies, the sun); [`portal`]:
+//!   window portals and portal-masked sampling of the environment through them;
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
 //!   [`shading`]: shading frames (vertex normals, normal maps) as Mitsuba 3 defines them;
 //! - [`parallel`]: deterministic parallel batches (its worker threads set Embree's
@@ -23,6 +24,7 @@ pub mod compiled;
 pub mod environment;
 pub mod luminaire;
 pub mod parallel;
+pub mod portal;
 pub mod rt;
 pub mod sampling;
 pub mod scene;

@@ -4,7 +4,7 @@ use crate::film::Film;
 use crate::output::{image_files, write_image};
 use crate::progressive::{run_passes, Budget};
 use crate::renderer::Renderer;
-use clap::Parser;
+use clap::{Parser, ValueEnum};
 use luxest_io::cli::CommonArgs;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{image_path, Kind, Level};
@@ -50,8 +50,19 @@ pub struct Args {
     /// Safety bound on path length, 1 to 2^20 (Russian roulette ends paths long before).
     #[arg(long, default_value_t = 1024, value_parser = MAX_DEPTH)]
     pub max_depth: u32,
+    /// Next-event estimation of the environment through the scene's portals (its open windows
+    /// and `portals`): `auto` uses them where the scene has any, `off` samples the whole sky.
+    #[arg(long, value_enum, default_value_t = Portals::Auto)]
+    pub portals: Portals,
     #[command(flatten)]
     pub common: CommonArgs,
+}
+
+/// Whether `trace` samples the environment through the scene's portals.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub enum Portals {
+    Auto,
+    Off,
 }
 
 /// Longest render time --time accepts, s: a bound that makes `--time inf` (which never ended)
@@ -89,7 +100,8 @@ pub fn run(args: Args) -> Result<()> {
         };
         check_prefix(out, "-o/--out", &image_path(out, level, Kind::Hdr))?;
     }
-    let (world, camera) = crate::load(&args.scene, args.resolution.as_deref())?;
+    let (mut world, camera) = crate::load(&args.scene, args.resolution.as_deref())?;
+    world.set_portals(args.portals == Portals::Auto);
     let prefix = args
         .out
         .clone()

@@ -17,7 +17,8 @@
 //! Environment light ([`luxest_render::environment`]): a path that leaves the scene gathers the
 //! environment's radiance along its last direction, weighted by the power heuristic against
 //! next-event estimation of the environment (at every non-delta vertex one direction drawn
-//! from its map, besides the light point, tested with a shadow ray to infinity); a camera ray
+//! from its map — through the window portals where the scene has any,
+//! [`luxest_render::portal`] — besides the light point, tested with a shadow ray to infinity); a camera ray
 //! or a specular bounce that escapes takes it with weight 1. Spot lights are point sources whose
 //! light point carries the falloff towards the shading point.
 //!
@@ -79,6 +80,8 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
     // Solid-angle pdf of the BSDF sample that produced `dir`, and whether it was a delta.
     let mut bsdf_pdf = 0.0;
     let mut delta = true;
+    // The vertex `dir` leaves (where next-event estimation sampled the environment).
+    let mut vertex = origin;
     for depth in 0..max_depth {
         rng.start_bounce(depth);
         log.closest += 1;
@@ -97,7 +100,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 let w = if delta {
                     1.0
                 } else {
-                    power_heuristic(bsdf_pdf, world.environment_pdf(dir))
+                    power_heuristic(bsdf_pdf, world.environment_pdf(vertex, dir))
                 };
                 l = l + beta * le * w;
             }
@@ -188,11 +191,13 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 }
             }
         }
-        if let (true, false, Some(env)) = (EXTRA, is_delta, world.environment()) {
-            // Next-event estimation of the environment: one direction from its map, besides
-            // the light point above.
+        if let (true, false, true) = (EXTRA, is_delta, world.environment().is_some()) {
+            // Next-event estimation of the environment: one direction from its map (through
+            // the portals, where the scene has any), besides the light point above.
             let (u1, u2) = rng.next_2d();
-            let es = env.sample(u1, u2);
+            let es = world
+                .sample_environment(sp.position, u1, u2)
+                .expect("the scene has an environment");
             let w = es.direction;
             let (f, bp) = f_cos(w);
             if es.pdf > 0.0 && f.max_component() > 0.0 {
@@ -234,6 +239,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
         if beta.max_component() <= 0.0 {
             break;
         }
+        vertex = sp.position;
         origin = world.offset(sp.position, sp.ng, s.wi);
         dir = s.wi;
     }
