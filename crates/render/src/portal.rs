@@ -145,16 +145,31 @@ impl Table {
         self.f[i * self.n + j]
     }
 
+    /// The row and fraction of grid coordinate y, for [`Self::marginal_at`].
+    fn row(&self, y: f64) -> (usize, f64) {
+        let j = (y.floor() as usize).min(self.n - 1);
+        (j, y - j as f64)
+    }
+
+    /// [`Self::marginal`] at the column boundary x = i, with y0 and y1 given by [`Self::row`].
+    fn marginal_at(&self, i: usize, (j0, f0): (usize, f64), (j1, f1): (usize, f64)) -> f64 {
+        let s = &self.sat[i * (self.n + 1)..(i + 1) * (self.n + 1)];
+        let a1 = s[j1] + f1 * (s[j1 + 1] - s[j1]);
+        let a0 = s[j0] + f0 * (s[j0 + 1] - s[j0]);
+        a1 - a0
+    }
+
     /// (x, y) in [x0, x1] × [y0, y1] for two uniform numbers, given the rectangle's integral
     /// `total` (> 0).
     fn sample(&self, [x0, x1, y0, y1]: [f64; 4], total: f64, u1: f64, u2: f64) -> (f64, f64) {
         let g0 = self.marginal(x0, y0, y1);
         let target = g0 + u1 * total;
+        let (r0, r1) = (self.row(y0), self.row(y1));
         // The last column boundary in (x0, x1) at or below the target.
         let (mut lo, mut hi) = (x0.floor() as usize, (x1.ceil() as usize).min(self.n));
         while hi - lo > 1 {
             let mid = (lo + hi) / 2;
-            if self.marginal(mid as f64, y0, y1) <= target {
+            if self.marginal_at(mid, r0, r1) <= target {
                 lo = mid;
             } else {
                 hi = mid;
@@ -163,7 +178,7 @@ impl Table {
         let i = lo.min(self.n - 1);
         let xl = (i as f64).max(x0);
         let gl = self.marginal(xl, y0, y1);
-        let slope = self.marginal((i + 1) as f64, y0, y1) - self.marginal(i as f64, y0, y1);
+        let slope = self.marginal_at(i + 1, r0, r1) - self.marginal_at(i, r0, r1);
         let x = if slope > 0.0 {
             xl + (target - gl) / slope
         } else {
