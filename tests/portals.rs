@@ -126,6 +126,15 @@ fn sampled_directions_carry_the_density_environment_pdf_gives() {
             s.pdf
         );
     }
+    // On the edge where the ceiling meets the window wall, in the plane of both portals: no
+    // direction is drawn, and the density of every direction is 0 (BSDF sampling's alone).
+    let edge = Vec3::new(1.5, 1.0, 2.0);
+    assert!(world.sample_environment(edge, 0.3, 0.6).is_none());
+    assert_eq!(world.environment_pdf(edge, Vec3::new(0.0, -0.6, -0.8)), 0.0);
+    // Without portals the whole sky is sampled there.
+    let mut world = world;
+    world.set_portals(false);
+    assert!(world.sample_environment(edge, 0.3, 0.6).is_some());
 }
 
 #[test]

@@ -341,13 +341,13 @@ pub fn environment_illuminance(
         *shadow_rays += 1;
         world.escapes(world.offset(s.position, s.normal, w), w)
     };
-    let from_map = world
-        .sample_environment(s.position, rng.next_f64(), rng.next_f64())
-        .expect("the scene has an environment");
-    let g = s.response(from_map.direction);
-    if g > 0.0 && from_map.pdf > 0.0 && seen(from_map.direction) {
-        let p_s = sensor_direction_pdf(s, from_map.direction);
-        e = e + from_map.radiance * (g / (from_map.pdf + p_s));
+    // None where the portals are in use and the sensor sees none (density 0 there).
+    if let Some(from_map) = world.sample_environment(s.position, rng.next_f64(), rng.next_f64()) {
+        let g = s.response(from_map.direction);
+        if g > 0.0 && from_map.pdf > 0.0 && seen(from_map.direction) {
+            let p_s = sensor_direction_pdf(s, from_map.direction);
+            e = e + from_map.radiance * (g / (from_map.pdf + p_s));
+        }
     }
     let (w, p_s) = sensor_direction(s, rng);
     let g = s.response(w);
@@ -378,13 +378,12 @@ pub fn environment_reflected(
     let mut l = Rgb::BLACK;
     let ng = shading.ng;
     let seen = |w: Vec3| world.escapes(world.offset(x, ng, w), w);
-    let from_map = world
-        .sample_environment(x, rng.next_f64(), rng.next_f64())
-        .expect("the scene has an environment");
-    let w = from_map.direction;
-    let (f, p_b) = shading.eval_and_pdf(m, wo, w, Transport::Radiance);
-    if f.max_component() > 0.0 && from_map.pdf > 0.0 && seen(w) {
-        l = l + f * from_map.radiance * (1.0 / (from_map.pdf + p_b));
+    if let Some(from_map) = world.sample_environment(x, rng.next_f64(), rng.next_f64()) {
+        let w = from_map.direction;
+        let (f, p_b) = shading.eval_and_pdf(m, wo, w, Transport::Radiance);
+        if f.max_component() > 0.0 && from_map.pdf > 0.0 && seen(w) {
+            l = l + f * from_map.radiance * (1.0 / (from_map.pdf + p_b));
+        }
     }
     if let Some(b) = shading.sample(m, wo, rng, Transport::Radiance) {
         let radiance = env.radiance(b.wi);

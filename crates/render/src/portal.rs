@@ -22,9 +22,10 @@
 //! (α, β) is f / I_k; in solid angle f / (I_k J). A direction through several portals (a
 //! non-convex room) sums the portals' shares: the pdf is the whole mixture's, exactly.
 //!
-//! Where Σ I is zero (a point in a portal's plane, or portals behind which the environment is
-//! black), there is nothing to draw: [`PortalSampler::rectangles`] returns `None` and the caller
-//! falls back to the environment's own sampler, at that point for sampling and pdf alike.
+//! Where Σ I is zero (a point in the plane of every portal, such as the wall holding the
+//! windows, or portals behind which the environment is black), there is nothing to draw:
+//! [`PortalSampler::rectangles`] returns `None`, and `World::sample_environment` draws nothing
+//! there (density 0: BSDF sampling alone finds that point's sky).
 
 use crate::environment::EnvironmentLight;
 use luxest_io::math::Vec3;

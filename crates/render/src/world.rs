@@ -734,18 +734,18 @@ impl World {
 
     /// Solid-angle density with which next-event estimation at the point `from` draws the
     /// direction `w` towards the environment ([`World::sample_environment`], besides the light
-    /// point of [`World::sample_light_point`]), for multiple importance sampling; 0 without one.
+    /// point of [`World::sample_light_point`]), for multiple importance sampling; 0 without one,
+    /// and where the portals are in use and `from` sees none.
     pub fn environment_pdf(&self, from: Vec3, w: Vec3) -> f64 {
         let Some(env) = self.environment() else {
             return 0.0;
         };
-        match self
-            .portals
-            .as_ref()
-            .and_then(|p| Some((p, p.rectangles(from)?)))
-        {
-            None => env.pdf(w),
-            Some((portals, views)) => {
+        let Some(portals) = &self.portals else {
+            return env.pdf(w);
+        };
+        match portals.rectangles(from) {
+            None => 0.0,
+            Some(views) => {
                 let p_sun = sun_share_through(env, portals, &views);
                 p_sun * env.sun_pdf(w) + (1.0 - p_sun) * portals.pdf(&views, w)
             }
@@ -754,19 +754,17 @@ impl World {
 
     /// A direction from the point `from` towards the environment for two uniform numbers, its
     /// radiance and its density [`World::environment_pdf`]; `None` without an environment.
-    /// With portals: the sun's cone (with its share of [`EnvironmentLight::sample`], where the
-    /// sky has a sun whose cone may pass through a portal from `from`) or the map through the
-    /// portals ([`crate::portal`]); where `from` sees no portal, and without portals,
-    /// [`EnvironmentLight::sample`].
+    /// Without portals: [`EnvironmentLight::sample`]. With portals: the sun's cone (with its
+    /// share of [`EnvironmentLight::sample`], where the sky has a sun whose cone may pass
+    /// through a portal from `from`) or the map through the portals ([`crate::portal`]); `None`
+    /// where `from` sees no portal (a point in the portals' plane: the wall holding the
+    /// windows), whose sky is then left to BSDF sampling (the density there is 0).
     pub fn sample_environment(&self, from: Vec3, u1: f64, u2: f64) -> Option<EnvSample> {
         let env = self.environment()?;
-        let Some((portals, views)) = self
-            .portals
-            .as_ref()
-            .and_then(|p| Some((p, p.rectangles(from)?)))
-        else {
+        let Some(portals) = &self.portals else {
             return Some(env.sample(u1, u2));
         };
+        let views = portals.rectangles(from)?;
         let p_sun = sun_share_through(env, portals, &views);
         let direction = if u1 < p_sun {
             env.sample_sun(u1 / p_sun, u2)?

@@ -195,26 +195,26 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
             // Next-event estimation of the environment: one direction from its map (through
             // the portals, where the scene has any), besides the light point above.
             let (u1, u2) = rng.next_2d();
-            let es = world
-                .sample_environment(sp.position, u1, u2)
-                .expect("the scene has an environment");
-            let w = es.direction;
-            let (f, bp) = f_cos(w);
-            if es.pdf > 0.0 && f.max_component() > 0.0 {
-                let contribution = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
-                log.shadow += 1;
-                let from = world.offset(sp.position, sp.ng, w);
-                if log.record {
-                    log.shadow_depths.push(depth);
-                    log.shadow_rays.push(Ray {
-                        origin: from,
-                        direction: w,
-                        tnear: 0.0,
-                        tfar: f64::INFINITY,
-                    });
-                }
-                if world.escapes(from, w) {
-                    l = l + beta * contribution;
+            // None at a point that sees no portal (BSDF sampling alone finds its sky).
+            if let Some(es) = world.sample_environment(sp.position, u1, u2) {
+                let w = es.direction;
+                let (f, bp) = f_cos(w);
+                if es.pdf > 0.0 && f.max_component() > 0.0 {
+                    let contribution = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
+                    log.shadow += 1;
+                    let from = world.offset(sp.position, sp.ng, w);
+                    if log.record {
+                        log.shadow_depths.push(depth);
+                        log.shadow_rays.push(Ray {
+                            origin: from,
+                            direction: w,
+                            tnear: 0.0,
+                            tfar: f64::INFINITY,
+                        });
+                    }
+                    if world.escapes(from, w) {
+                        l = l + beta * contribution;
+                    }
                 }
             }
         }
