@@ -15,6 +15,7 @@ mod lighting;
 mod luminaires;
 mod metrics_parity;
 mod normals;
+mod portals;
 mod progress;
 mod reliability;
 mod reliability_processes;

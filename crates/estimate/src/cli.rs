@@ -63,6 +63,17 @@ pub struct RunArgs {
     /// most a tenth of it] (sensors and gather; estimate direct counts at the authored points).
     #[arg(long, value_parser = Real::positive("m"))]
     pub edge_offset: Option<f64>,
+    /// The environment sampled through the scene's portals (its open windows and `portals`)
+    /// where it has any (`auto`), or over the whole sky (`off`).
+    #[arg(long, value_enum, default_value_t = Portals::Auto)]
+    pub portals: Portals,
+}
+
+/// Whether a stage samples the environment through the scene's portals.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub enum Portals {
+    Auto,
+    Off,
 }
 
 impl RunArgs {
@@ -78,7 +89,8 @@ impl RunArgs {
     /// Loads the scene and checks that every batch's sums for every sensor point fit in the
     /// memory available (--batches 2^20 over a 1000-point grid would need 67 GB).
     fn load(&self) -> Result<World> {
-        let world = load_world(&self.scene)?;
+        let mut world = load_world(&self.scene)?;
+        world.set_portals(self.portals == Portals::Auto);
         let points: usize = world
             .scene
             .header
@@ -381,6 +393,10 @@ pub struct ImageArgs {
     /// whose camera would see mirrors or glass are refused.
     #[arg(long, conflicts_with_all = ["mis_paths", "pixel_samples", "singularity", "eps"])]
     pub light_tracing: bool,
+    /// The environment sampled through the scene's portals where it has any (`auto`), or over
+    /// the whole sky (`off`).
+    #[arg(long, value_enum, default_value_t = Portals::Auto)]
+    pub portals: Portals,
 }
 
 /// Runs the command line.
@@ -429,11 +445,13 @@ fn image_run(args: ImageArgs) -> Result<()> {
         max_depth,
         mis_paths,
         light_tracing,
+        portals,
     } = args;
     let explicit = singularity.is_some() || eps.is_some();
     let singularity = singularity.unwrap_or(SingularityMode::Clamp);
     check_eps(singularity, eps)?;
-    let (world, cam) = load_with_camera(&scene, resolution.as_deref(), Traversal::Robust)?;
+    let (mut world, cam) = load_with_camera(&scene, resolution.as_deref(), Traversal::Robust)?;
+    world.set_portals(portals == Portals::Auto);
     if explicit && mis_paths > 0 && !world.scene.header.features.specular_paths {
         return Err(no_effect(
             "--singularity/--eps",

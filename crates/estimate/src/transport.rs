@@ -323,7 +323,8 @@ fn sensor_direction_pdf(s: &SensorPoint, w: Vec3) -> f64 {
 }
 
 /// One sample of the direct illuminance from the environment at sensor `s` (RGB, lx; black
-/// without an environment): E = ∫ L(ω) g(ω) V(ω) dω, from a direction drawn from the map and
+/// without an environment): E = ∫ L(ω) g(ω) V(ω) dω, from a direction drawn from the map (through
+/// the window portals where the scene has any: [`World::sample_environment`]) and
 /// one drawn about the sensor ([`sensor_direction`]), combined by the balance heuristic, each
 /// tested with a shadow ray to infinity. Two shadow rays at most; `shadow_rays` counts them.
 pub fn environment_illuminance(
@@ -340,18 +341,20 @@ pub fn environment_illuminance(
         *shadow_rays += 1;
         world.escapes(world.offset(s.position, s.normal, w), w)
     };
-    let from_map = env.sample(rng.next_f64(), rng.next_f64());
-    let g = s.response(from_map.direction);
-    if g > 0.0 && from_map.pdf > 0.0 && seen(from_map.direction) {
-        let p_s = sensor_direction_pdf(s, from_map.direction);
-        e = e + from_map.radiance * (g / (from_map.pdf + p_s));
+    // None where the portals are in use and the sensor sees none (density 0 there).
+    if let Some(from_map) = world.sample_environment(s.position, rng.next_f64(), rng.next_f64()) {
+        let g = s.response(from_map.direction);
+        if g > 0.0 && from_map.pdf > 0.0 && seen(from_map.direction) {
+            let p_s = sensor_direction_pdf(s, from_map.direction);
+            e = e + from_map.radiance * (g / (from_map.pdf + p_s));
+        }
     }
     let (w, p_s) = sensor_direction(s, rng);
     let g = s.response(w);
     if g > 0.0 && p_s > 0.0 {
         let l = env.radiance(w);
         if l.max_component() > 0.0 && seen(w) {
-            e = e + l * (g / (p_s + env.pdf(w)));
+            e = e + l * (g / (p_s + world.environment_pdf(s.position, w)));
         }
     }
     e
@@ -359,7 +362,8 @@ pub fn environment_illuminance(
 
 /// One sample of the environment's light reflected at the surface point `x` (shading frame
 /// `shading`, material `m`) towards `wo` (RGB luminance; black without an environment): a
-/// direction drawn from the map and one drawn from the BSDF, combined by the balance heuristic
+/// direction drawn from the map (through the portals, as above) and one drawn from the BSDF,
+/// combined by the balance heuristic
 /// (a delta lobe's sample has weight 1: the map cannot draw it), each with a shadow ray to
 /// infinity.
 pub fn environment_reflected(
@@ -374,11 +378,12 @@ pub fn environment_reflected(
     let mut l = Rgb::BLACK;
     let ng = shading.ng;
     let seen = |w: Vec3| world.escapes(world.offset(x, ng, w), w);
-    let from_map = env.sample(rng.next_f64(), rng.next_f64());
-    let w = from_map.direction;
-    let (f, p_b) = shading.eval_and_pdf(m, wo, w, Transport::Radiance);
-    if f.max_component() > 0.0 && from_map.pdf > 0.0 && seen(w) {
-        l = l + f * from_map.radiance * (1.0 / (from_map.pdf + p_b));
+    if let Some(from_map) = world.sample_environment(x, rng.next_f64(), rng.next_f64()) {
+        let w = from_map.direction;
+        let (f, p_b) = shading.eval_and_pdf(m, wo, w, Transport::Radiance);
+        if f.max_component() > 0.0 && from_map.pdf > 0.0 && seen(w) {
+            l = l + f * from_map.radiance * (1.0 / (from_map.pdf + p_b));
+        }
     }
     if let Some(b) = shading.sample(m, wo, rng, Transport::Radiance) {
         let radiance = env.radiance(b.wi);
@@ -386,7 +391,7 @@ pub fn environment_reflected(
             let weight = if b.delta {
                 1.0
             } else {
-                b.pdf / (b.pdf + env.pdf(b.wi))
+                b.pdf / (b.pdf + world.environment_pdf(x, b.wi))
             };
             if weight > 0.0 && seen(b.wi) {
                 l = l + b.weight * radiance * weight;

@@ -75,6 +75,10 @@ pub struct SceneHeader {
     /// when the scene has no observers.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub glare: Option<GlareSetup>,
+    /// The environment's portals (the scene's `portals` and its open `windows`, world space);
+    /// empty without an environment.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub portals: Vec<crate::portal::Portal>,
     pub features: Features,
     pub stats: Stats,
 }
@@ -861,6 +865,7 @@ mod tests {
                 textures: vec![],
                 surfaces: vec![],
                 glare: None,
+                portals: vec![],
                 features: Features::default(),
                 stats: Stats {
                     vertices: 3,

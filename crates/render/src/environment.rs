@@ -72,6 +72,27 @@ struct Sun {
     p: f64,
 }
 
+impl Sun {
+    /// The direction of the cone for two uniform numbers (uniform in solid angle).
+    #[inline]
+    fn cone(&self, r: f64, u2: f64) -> Vec3 {
+        let ct = 1.0 - r * (1.0 - self.cos_max);
+        let st = (1.0 - ct * ct).max(0.0).sqrt();
+        let (sp, cp) = (2.0 * PI * u2).sin_cos();
+        self.tangent * (st * cp) + self.bitangent * (st * sp) + self.direction * ct
+    }
+
+    /// The cone's density at `w` (uniform inside, 0 outside).
+    #[inline]
+    fn cone_pdf(&self, w: Vec3) -> f64 {
+        if w.dot(self.direction) >= self.cos_max {
+            1.0 / self.solid_angle
+        } else {
+            0.0
+        }
+    }
+}
+
 /// An equirectangular map's texels and the sampling distribution over its cells.
 #[derive(Clone, Debug)]
 struct Map {
@@ -352,9 +373,9 @@ impl EnvironmentLight {
         Ok(self)
     }
 
-    /// Radiance of the map (or constant) alone along `w`.
+    /// Radiance of the map (or constant) alone along `w`, without the sun disk.
     #[inline]
-    fn sky_radiance(&self, w: Vec3) -> Rgb {
+    pub(crate) fn sky_radiance(&self, w: Vec3) -> Rgb {
         match &self.map {
             None => self.radiance,
             Some(m) => {
@@ -398,15 +419,30 @@ impl EnvironmentLight {
     pub fn pdf(&self, w: Vec3) -> f64 {
         match &self.sun {
             None => self.sky_pdf(w),
-            Some(s) => {
-                let cone = if w.dot(s.direction) >= s.cos_max {
-                    1.0 / s.solid_angle
-                } else {
-                    0.0
-                };
-                (1.0 - s.p) * self.sky_pdf(w) + s.p * cone
-            }
+            Some(s) => (1.0 - s.p) * self.sky_pdf(w) + s.p * s.cone_pdf(w),
         }
+    }
+
+    /// The probability with which [`Self::sample`] draws the sun's cone (0 without a sun).
+    pub fn sun_share(&self) -> f64 {
+        self.sun.as_ref().map_or(0.0, |s| s.p)
+    }
+
+    /// A direction uniform in the sun's cone for two uniform numbers; `None` without a sun.
+    pub fn sample_sun(&self, u1: f64, u2: f64) -> Option<Vec3> {
+        self.sun
+            .as_ref()
+            .map(|s| s.cone(u1.min(1.0 - f64::EPSILON / 2.0), u2))
+    }
+
+    /// The sun's unit direction and the cosine of its half-angle; `None` without a sun.
+    pub fn sun_cone(&self) -> Option<(Vec3, f64)> {
+        self.sun.as_ref().map(|s| (s.direction, s.cos_max))
+    }
+
+    /// The density of [`Self::sample_sun`] at `w` (0 without a sun).
+    pub fn sun_pdf(&self, w: Vec3) -> f64 {
+        self.sun.as_ref().map_or(0.0, |s| s.cone_pdf(w))
     }
 
     /// A direction towards the sky for two uniform numbers, its radiance and density.
@@ -422,11 +458,7 @@ impl EnvironmentLight {
             Some(s) => {
                 let d = if u1 < s.p {
                     // Uniform in the cone, u1 rescaled to [0, 1).
-                    let r = (u1 / s.p).min(1.0 - f64::EPSILON / 2.0);
-                    let ct = 1.0 - r * (1.0 - s.cos_max);
-                    let st = (1.0 - ct * ct).max(0.0).sqrt();
-                    let (sp, cp) = (2.0 * PI * u2).sin_cos();
-                    s.tangent * (st * cp) + s.bitangent * (st * sp) + s.direction * ct
+                    s.cone((u1 / s.p).min(1.0 - f64::EPSILON / 2.0), u2)
                 } else {
                     let r = ((u1 - s.p) / (1.0 - s.p)).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
                     self.sky_sample(r, u2)

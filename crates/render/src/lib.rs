@@ -11,7 +11,8 @@
 //! - [`luminaire`]: goniometric luminaires (photometric files) as delta lights and emitters;
 //!   [`spot`]: spot lights' cones; [`environment`]: the environment emitter (constant sky,
 //!   equirectangular map, a sun disk) and its sampling; [`sky`]: daylight skies with Radiance
-//!   gensky's conventions (CIE overcast, clear and intermediate skies, the sun);
+//!   gensky's conventions (CIE overcast, clear and intermediate skies, the sun); [`portal`]:
+//!   window portals and portal-masked sampling of the environment through them;
 //! - [`rt`], [`world`]: the one wrapper around Embree, and the traced world built on it;
 //!   [`light_bvh`]: the light BVH that chooses next-event estimation's light by its
 //!   importance at the receiver;
@@ -26,6 +27,7 @@ pub mod environment;
 pub mod light_bvh;
 pub mod luminaire;
 pub mod parallel;
+pub mod portal;
 pub mod rt;
 pub mod sampling;
 pub mod scene;

@@ -53,6 +53,11 @@ pub struct Scene {
     /// Openings cut into the wall quads they lie in (daylight through them); see [`Window`].
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub windows: Vec<Window>,
+    /// Rectangles through which the environment lights the interior (window openings of
+    /// imported scenes, which have no `windows`): next-event estimation samples the
+    /// environment through them; see [`crate::portal`]. Open `windows` are portals too.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub portals: Vec<crate::portal::Portal>,
     /// Glare observers (EN 12464-1 / CIE 117): `estimate sensors` computes the UGR of every
     /// observer and line of sight; see [`Observer`].
     #[serde(default)]
@@ -976,6 +981,26 @@ mod tests {
                 }),
             }]
         );
+    }
+
+    /// The `portals: [ … ]` example of `docs/scene-format.md` parses into one valid portal.
+    #[test]
+    fn the_documented_portals_parse() {
+        #[derive(Deserialize)]
+        struct Portals {
+            portals: Vec<crate::portal::Portal>,
+        }
+        let doc = include_str!("../../../docs/scene-format.md");
+        let block = doc
+            .split("```ron\n")
+            .find(|b| b.starts_with("portals: ["))
+            .unwrap();
+        let block = &block[..block.find("```").unwrap()];
+        let path = std::path::Path::new("docs/scene-format.md");
+        let p: Portals = luxest_io::fsio::parse_ron(path, &format!("({block})")).unwrap();
+        assert_eq!(p.portals.len(), 1);
+        assert_eq!(p.portals[0].name.as_deref(), Some("skylight"));
+        assert_eq!(p.portals[0].problem(), None);
     }
 
     /// The `observers: [ … ]` example of `docs/scene-format.md` parses with the defaults the

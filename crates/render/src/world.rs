@@ -4,9 +4,10 @@
 //! environment's radiance along rays that leave the scene, and scale-aware ray offsets.
 
 use crate::compiled::{CompiledScene, Emitter, NO_EMITTER};
-use crate::environment::EnvironmentLight;
 use crate::light_bvh::{LightBounds, LightBvh, LightSampler};
+use crate::environment::{EnvironmentLight, EnvironmentSample};
 use crate::luminaire::GoniometricLight;
+use crate::portal::{PortalSampler, Views};
 use crate::rt::{Hit, RayTracer};
 use crate::sampling::{
     cosine_hemisphere, uniform_sphere, Distribution1D, Rng, Sampler, TriangleMeshSampler,
@@ -104,7 +105,13 @@ pub struct World {
     light_bvh: Option<LightBvh>,
     /// How [`World::sample_light_point`] chooses its light.
     light_sampler: LightSampler,
+    /// The environment's portals (the compiled header's), if it has any and they are in use
+    /// ([`World::set_portals`]).
+    portals: Option<PortalSampler>,
 }
+
+/// A direction towards the environment from [`World::sample_environment`].
+pub type EnvSample = EnvironmentSample;
 
 /// The cut-out test of a scene with opacity: a hit on a surface of opacity α (its `value`
 /// times its texture's alpha at the hit) is kept where α reaches the cut-off, or, without a
@@ -337,6 +344,14 @@ impl World {
         };
         let environment = environment_light(&scene)
             .map_err(|m| luxest_io::Error::input(&scene.header.name, m))?;
+        let portals = match &environment {
+            Some((_, env)) if !scene.header.portals.is_empty() => Some(PortalSampler::new(
+                env,
+                &scene.header.portals,
+                crate::portal::RESOLUTION,
+            )),
+            _ => None,
+        };
         let smooth = scene.header.features.smooth_normals;
         let triangle_normals = (0..scene.triangle_count())
             .map(|t| {
@@ -423,6 +438,7 @@ impl World {
             environment,
             light_bvh,
             light_sampler: LightSampler::Power,
+            portals,
         })
     }
 
@@ -734,11 +750,71 @@ impl World {
         self.environment().map_or(Rgb::BLACK, |e| e.radiance(w))
     }
 
-    /// Solid-angle density with which next-event estimation draws the direction `w` towards
-    /// the environment (one [`EnvironmentLight::sample`] per vertex, besides the light point of
-    /// [`World::sample_light_point`]), for multiple importance sampling; 0 without one.
-    pub fn environment_pdf(&self, w: Vec3) -> f64 {
-        self.environment().map_or(0.0, |e| e.pdf(w))
+    /// Solid-angle density with which next-event estimation at the point `from` draws the
+    /// direction `w` towards the environment ([`World::sample_environment`], besides the light
+    /// point of [`World::sample_light_point`]), for multiple importance sampling; 0 without one,
+    /// and where the portals are in use and `from` sees none.
+    pub fn environment_pdf(&self, from: Vec3, w: Vec3) -> f64 {
+        let Some(env) = self.environment() else {
+            return 0.0;
+        };
+        let Some(portals) = &self.portals else {
+            return env.pdf(w);
+        };
+        match portals.rectangles(from) {
+            None => 0.0,
+            Some(views) => {
+                let p_sun = sun_share_through(env, portals, &views);
+                p_sun * env.sun_pdf(w) + (1.0 - p_sun) * portals.pdf(&views, w)
+            }
+        }
+    }
+
+    /// A direction from the point `from` towards the environment for two uniform numbers, its
+    /// radiance and its density [`World::environment_pdf`]; `None` without an environment.
+    /// Without portals: [`EnvironmentLight::sample`]. With portals: the sun's cone (with its
+    /// share of [`EnvironmentLight::sample`], where the sky has a sun whose cone may pass
+    /// through a portal from `from`) or the map through the portals ([`crate::portal`]); `None`
+    /// where `from` sees no portal (a point in the portals' plane: the wall holding the
+    /// windows), whose sky is then left to BSDF sampling (the density there is 0).
+    pub fn sample_environment(&self, from: Vec3, u1: f64, u2: f64) -> Option<EnvSample> {
+        let env = self.environment()?;
+        let Some(portals) = &self.portals else {
+            return Some(env.sample(u1, u2));
+        };
+        let views = portals.rectangles(from)?;
+        let p_sun = sun_share_through(env, portals, &views);
+        let direction = if u1 < p_sun {
+            env.sample_sun(u1 / p_sun, u2)?
+        } else {
+            let r = ((u1 - p_sun) / (1.0 - p_sun)).clamp(0.0, 1.0 - f64::EPSILON / 2.0);
+            portals.sample(&views, r, u2)
+        };
+        Some(EnvSample {
+            direction,
+            radiance: env.radiance(direction),
+            pdf: p_sun * env.sun_pdf(direction) + (1.0 - p_sun) * portals.pdf(&views, direction),
+        })
+    }
+
+    /// Uses the compiled scene's portals for [`World::sample_environment`] (`true`, the
+    /// default where it has any) or not; `false` samples the environment as if it had none.
+    pub fn set_portals(&mut self, on: bool) {
+        if !on {
+            self.portals = None;
+        } else if self.portals.is_none() {
+            self.portals = match &self.environment {
+                Some((_, env)) if !self.scene.header.portals.is_empty() => Some(
+                    PortalSampler::new(env, &self.scene.header.portals, crate::portal::RESOLUTION),
+                ),
+                _ => None,
+            };
+        }
+    }
+
+    /// The number of portals [`World::sample_environment`] uses.
+    pub fn portal_count(&self) -> usize {
+        self.portals.as_ref().map_or(0, PortalSampler::len)
     }
 
     /// Whether the scene has an emitter besides the environment (what
@@ -1145,6 +1221,16 @@ fn point_intensity(intensity: Rgb, spot: &Option<crate::spot::SpotCone>, toward:
     match spot {
         None => intensity,
         Some(cone) => intensity * cone.falloff(toward),
+    }
+}
+
+/// The probability of sampling the sun's cone from a point with portal views `views`: the
+/// environment's own share where the cone may pass through a portal, else 0 (the shadow ray of
+/// every sun direction would be blocked).
+fn sun_share_through(env: &EnvironmentLight, portals: &PortalSampler, views: &Views) -> f64 {
+    match env.sun_cone() {
+        Some((d, cos_max)) if portals.cone_may_pass(views, d, cos_max) => env.sun_share(),
+        _ => 0.0,
     }
 }
 

@@ -41,6 +41,7 @@ use luxest_render::compiled::{
     CompiledScene, Emitter, Features, GridLayout, NamedMaterial, ObjectRange, SceneHeader,
     SensorSet, SpotCone, Stats, NO_EMITTER,
 };
+use luxest_render::portal::Portal;
 use luxest_render::scene::{Emission, Material, PointPower, Scene, Sensor, SensorPoint, Shape};
 use shapes::LocalMesh;
 use std::f64::consts::PI;
@@ -352,9 +353,45 @@ fn lossless_albedo(m: &Material, c: usize) -> f64 {
     }
 }
 
+/// The environment's portals: the scene's `portals` (each checked: a rectangle of positive
+/// area), then its open `windows` that are rectangles (a glazed window passes no shadow ray, a
+/// parallelogram is no portal); at most [`luxest_render::portal::MAX_PORTALS`].
+fn portals(scene: &Scene, path: &Path) -> Result<Vec<Portal>> {
+    use luxest_render::portal::MAX_PORTALS;
+    for (k, p) in scene.portals.iter().enumerate() {
+        if let Some(m) = p.problem() {
+            return Err(Error::at(path, format!("portals[{k}]"), m));
+        }
+    }
+    if scene.portals.len() > MAX_PORTALS {
+        return Err(Error::at(
+            path,
+            "portals",
+            format!(
+                "{} portals: at most {MAX_PORTALS} are supported",
+                scene.portals.len()
+            ),
+        ));
+    }
+    let mut all = scene.portals.clone();
+    for w in &scene.windows {
+        let p = Portal {
+            name: w.name.clone(),
+            corner: w.corner,
+            u: w.u,
+            v: w.v,
+        };
+        if w.glazing.is_none() && p.problem().is_none() && all.len() < MAX_PORTALS {
+            all.push(p);
+        }
+    }
+    Ok(all)
+}
+
 /// Compiles a parsed scene; `path` locates mesh files and names the scene in messages.
 pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
     validate::check_scene(path, scene)?;
+    let portals = portals(scene, path)?;
     let cut = windows::cut(scene, path)?;
     let scene = cut.as_ref().unwrap_or(scene);
     let mut report = Report::default();
@@ -693,6 +730,11 @@ pub fn compile(scene: &Scene, path: &Path) -> Result<(CompiledScene, Report)> {
         photometries: lum.tables,
         surfaces: textures::surfaces(scene, &loaded),
         glare,
+        portals: if scene.environment.is_some() {
+            portals
+        } else {
+            Vec::new()
+        },
         textures: loaded.infos,
         features,
         stats,

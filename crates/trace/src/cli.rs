@@ -4,7 +4,7 @@ use crate::film::Film;
 use crate::output::{image_files, write_image};
 use crate::progressive::{run_passes, Budget};
 use crate::renderer::Renderer;
-use clap::Parser;
+use clap::{Parser, ValueEnum};
 use luxest_io::cli::CommonArgs;
 use luxest_io::meta::RunInfo;
 use luxest_io::naming::{image_path, Kind, Level};
@@ -55,8 +55,19 @@ pub struct Args {
     /// point, through a light BVH) or `power` (in proportion to flux).
     #[arg(long, default_value = "bvh", value_parser = clap::value_parser!(LightSampler))]
     pub light_sampler: LightSampler,
+    /// Next-event estimation of the environment through the scene's portals (its open windows
+    /// and `portals`): `auto` uses them where the scene has any, `off` samples the whole sky.
+    #[arg(long, value_enum, default_value_t = Portals::Auto)]
+    pub portals: Portals,
     #[command(flatten)]
     pub common: CommonArgs,
+}
+
+/// Whether `trace` samples the environment through the scene's portals.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub enum Portals {
+    Auto,
+    Off,
 }
 
 /// Longest render time --time accepts, s: a bound that makes `--time inf` (which never ended)
@@ -96,6 +107,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (mut world, camera) = crate::load(&args.scene, args.resolution.as_deref())?;
     world.set_light_sampler(args.light_sampler);
+    world.set_portals(args.portals == Portals::Auto);
     let prefix = args
         .out
         .clone()

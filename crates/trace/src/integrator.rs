@@ -19,7 +19,8 @@
 //! Environment light ([`luxest_render::environment`]): a path that leaves the scene gathers the
 //! environment's radiance along its last direction, weighted by the power heuristic against
 //! next-event estimation of the environment (at every non-delta vertex one direction drawn
-//! from its map, besides the light point, tested with a shadow ray to infinity); a camera ray
+//! from its map — through the window portals where the scene has any,
+//! [`luxest_render::portal`] — besides the light point, tested with a shadow ray to infinity); a camera ray
 //! or a specular bounce that escapes takes it with weight 1. Spot lights are point sources whose
 //! light point carries the falloff towards the shading point.
 //!
@@ -103,7 +104,7 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 let w = if delta {
                     1.0
                 } else {
-                    power_heuristic(bsdf_pdf, world.environment_pdf(dir))
+                    power_heuristic(bsdf_pdf, world.environment_pdf(from_vertex, dir))
                 };
                 l = l + beta * le * w;
             }
@@ -196,28 +197,30 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 }
             }
         }
-        if let (true, false, Some(env)) = (EXTRA, is_delta, world.environment()) {
-            // Next-event estimation of the environment: one direction from its map, besides
-            // the light point above.
+        if let (true, false, true) = (EXTRA, is_delta, world.environment().is_some()) {
+            // Next-event estimation of the environment: one direction from its map (through
+            // the portals, where the scene has any), besides the light point above.
             let (u1, u2) = rng.next_2d();
-            let es = env.sample(u1, u2);
-            let w = es.direction;
-            let (f, bp) = f_cos(w);
-            if es.pdf > 0.0 && f.max_component() > 0.0 {
-                let contribution = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
-                log.shadow += 1;
-                let from = world.offset(sp.position, sp.ng, w);
-                if log.record {
-                    log.shadow_depths.push(depth);
-                    log.shadow_rays.push(Ray {
-                        origin: from,
-                        direction: w,
-                        tnear: 0.0,
-                        tfar: f64::INFINITY,
-                    });
-                }
-                if world.escapes(from, w) {
-                    l = l + beta * contribution;
+            // None at a point that sees no portal (BSDF sampling alone finds its sky).
+            if let Some(es) = world.sample_environment(sp.position, u1, u2) {
+                let w = es.direction;
+                let (f, bp) = f_cos(w);
+                if es.pdf > 0.0 && f.max_component() > 0.0 {
+                    let contribution = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
+                    log.shadow += 1;
+                    let from = world.offset(sp.position, sp.ng, w);
+                    if log.record {
+                        log.shadow_depths.push(depth);
+                        log.shadow_rays.push(Ray {
+                            origin: from,
+                            direction: w,
+                            tnear: 0.0,
+                            tfar: f64::INFINITY,
+                        });
+                    }
+                    if world.escapes(from, w) {
+                        l = l + beta * contribution;
+                    }
                 }
             }
         }

@@ -101,6 +101,7 @@ pub(crate) fn empty_scene() -> Scene {
         surfaces: Default::default(),
         environment: None,
         windows: Vec::new(),
+        portals: Vec::new(),
         observers: Vec::new(),
     }
 }
