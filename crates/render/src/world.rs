@@ -4,8 +4,8 @@
 //! environment's radiance along rays that leave the scene, and scale-aware ray offsets.
 
 use crate::compiled::{CompiledScene, Emitter, NO_EMITTER};
-use crate::light_bvh::{LightBounds, LightBvh, LightSampler};
 use crate::environment::{EnvironmentLight, EnvironmentSample};
+use crate::light_bvh::{LightBounds, LightBvh, LightSampler};
 use crate::luminaire::GoniometricLight;
 use crate::portal::{PortalSampler, Views};
 use crate::rt::{Hit, RayTracer};
