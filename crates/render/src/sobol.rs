@@ -16,6 +16,13 @@
 //!
 //! For smooth integrands the error of a 2^k-point set falls like N^-1.5 instead of N^-0.5; the
 //! gain in a path tracer is in the first bounces (pixel area, light point, BSDF lobe).
+//!
+//! The first 2D draw of each Sobol bounce (the light point of next-event estimation) is not
+//! padded: it takes Sobol dimensions 2 and 3 at the shuffled index of the draw before it (the
+//! pixel position at bounce 0, the BSDF direction that led to bounce 1), with scrambles of its
+//! own, so that the two draws are one 4D Sobol point: the light point is stratified jointly
+//! with where the path came from, not paired with it at random. Each point stays uniform on
+//! [0, 1)^4 (Owen scrambling), so estimates stay unbiased.
 //! Dimensions are named, not counted: bounce `b` draws from dimensions `(b + 1) · 64 + k`, so a
 //! branch that skips a draw never shifts the dimensions of the next bounce. From bounce
 //! [`SOBOL_BOUNCES`] on, the draws come from an independent PCG stream keyed by
@@ -41,6 +48,75 @@ const SOBOL_1: [u32; 32] = {
     }
     v
 };
+
+/// Generator matrix (columns v_0 … v_31) of the Sobol dimension with primitive polynomial of
+/// degree `s` and inner coefficients `a` (bit s − 2 … bit 0: a_1 … a_{s−1}) and initial direction
+/// numbers `m` (Joe and Kuo's tables): m_k = 2 a_1 m_{k−1} ⊕ … ⊕ 2^{s−1} a_{s−1} m_{k−s+1} ⊕
+/// 2^s m_{k−s} ⊕ m_{k−s}, v_k = m_{k+1} · 2^{31−k}.
+const fn direction_numbers(s: usize, a: u32, init: [u32; 3]) -> [u32; 32] {
+    let mut m = [0u32; 32];
+    let mut k = 0;
+    while k < 32 {
+        if k < s {
+            m[k] = init[k];
+        } else {
+            let mut x = m[k - s] ^ (m[k - s] << s);
+            let mut j = 1;
+            while j < s {
+                if (a >> (s - 1 - j)) & 1 == 1 {
+                    x ^= m[k - j] << j;
+                }
+                j += 1;
+            }
+            m[k] = x;
+        }
+        k += 1;
+    }
+    let mut v = [0u32; 32];
+    let mut k = 0;
+    while k < 32 {
+        v[k] = m[k] << (31 - k);
+        k += 1;
+    }
+    v
+}
+
+/// Sobol dimensions 2 (x² + x + 1, m = 1, 3) and 3 (x³ + x + 1, m = 1, 3, 1).
+const SOBOL_2: [u32; 32] = direction_numbers(2, 1, [1, 3, 0]);
+const SOBOL_3: [u32; 32] = direction_numbers(3, 1, [1, 3, 1]);
+
+/// A generator matrix applied a byte at a time, bit-reversed (see [`SOBOL_1_REV_BYTES`]).
+const fn reversed_byte_tables(columns: [u32; 32]) -> [[u32; 256]; 4] {
+    let mut t = [[0u32; 256]; 4];
+    let mut b = 0;
+    while b < 4 {
+        let mut v = 0;
+        while v < 256 {
+            let mut x = 0;
+            let mut j = 0;
+            while j < 8 {
+                if v & (1 << j) != 0 {
+                    x ^= columns[8 * b + j].reverse_bits();
+                }
+                j += 1;
+            }
+            t[b][v] = x;
+            v += 1;
+        }
+        b += 1;
+    }
+    t
+}
+
+const SOBOL_2_REV_BYTES: [[u32; 256]; 4] = reversed_byte_tables(SOBOL_2);
+const SOBOL_3_REV_BYTES: [[u32; 256]; 4] = reversed_byte_tables(SOBOL_3);
+
+/// A bit-reversed Sobol dimension of index `i` from its byte tables.
+#[inline]
+fn apply_reversed(t: &[[u32; 256]; 4], i: u32) -> u32 {
+    let [b0, b1, b2, b3] = i.to_le_bytes();
+    t[0][b0 as usize] ^ t[1][b1 as usize] ^ t[2][b2 as usize] ^ t[3][b3 as usize]
+}
 
 /// [`SOBOL_1`] applied a byte at a time, bit-reversed: entry `[b][v]` is the XOR of the
 /// reversed columns of the set bits of byte value `v` at byte `b` of the index (the shuffled
@@ -118,6 +194,10 @@ pub struct PixelSampler {
     /// The independent stream for bounces from [`SOBOL_BOUNCES`] on.
     rng: Rng,
     sobol: bool,
+    /// The shuffled index of the last 2D draw, and whether the next 2D draw continues it in
+    /// Sobol dimensions 2 and 3 (the first 2D draw of each Sobol bounce).
+    last_index: Option<u32>,
+    pair_next: bool,
 }
 
 impl PixelSampler {
@@ -130,6 +210,8 @@ impl PixelSampler {
             dimension: 0,
             rng: Rng::new(seed, (pixel << 24) | sample as u64),
             sobol: true,
+            last_index: None,
+            pair_next: false,
         }
     }
 
@@ -143,6 +225,7 @@ impl PixelSampler {
     #[inline]
     pub fn start_bounce(&mut self, bounce: u32) {
         self.sobol = bounce < SOBOL_BOUNCES;
+        self.pair_next = self.sobol;
         self.dimension = (bounce + 1) * DIMS_PER_BOUNCE;
     }
 
@@ -165,6 +248,15 @@ impl PixelSampler {
 
     fn sobol_2d(&mut self) -> (f64, f64) {
         let (i, s0, s1) = self.next_dimension();
+        if let (true, Some(j)) = (std::mem::take(&mut self.pair_next), self.last_index) {
+            // Dimensions 2 and 3 of the previous 2D draw's point: the two draws are one 4D
+            // Sobol point (the light point of a bounce with the direction that led there).
+            return (
+                unit(laine_karras(apply_reversed(&SOBOL_2_REV_BYTES, j), s0).reverse_bits()),
+                unit(laine_karras(apply_reversed(&SOBOL_3_REV_BYTES, j), s1).reverse_bits()),
+            );
+        }
+        self.last_index = Some(i);
         (
             Self::dimension_0(i, s0),
             unit(laine_karras(sobol_1_reversed(i), s1).reverse_bits()),
@@ -213,6 +305,97 @@ mod tests {
                 .fold(0, |x, k| x ^ SOBOL_1[k]);
             assert_eq!(sobol_1(i), x, "index {i}");
         }
+    }
+
+    #[test]
+    fn sobol_dimensions_two_and_three_are_the_published_sequence() {
+        // The first points of Sobol dimensions 2 and 3 in Gray-code order (index n ⊕ n/2), as
+        // Joe and Kuo's and Bratley and Fox's tables list them.
+        let expect = [
+            (0.0, 0.0),
+            (0.5, 0.5),
+            (0.25, 0.25),
+            (0.75, 0.75),
+            (0.625, 0.875),
+            (0.125, 0.375),
+        ];
+        let point =
+            |v: &[u32; 32], i: u32| (0..32).filter(|k| i >> k & 1 == 1).fold(0, |x, k| x ^ v[k]);
+        for (n, &(d2, d3)) in expect.iter().enumerate() {
+            let g = n as u32 ^ (n as u32 >> 1);
+            assert_eq!(
+                (unit(point(&SOBOL_2, g)), unit(point(&SOBOL_3, g))),
+                (d2, d3),
+                "n {n}"
+            );
+        }
+        let mut r = Rng::new(4, 0);
+        for _ in 0..1000 {
+            let i = r.next_u32();
+            assert_eq!(
+                apply_reversed(&SOBOL_2_REV_BYTES, i).reverse_bits(),
+                point(&SOBOL_2, i)
+            );
+            assert_eq!(
+                apply_reversed(&SOBOL_3_REV_BYTES, i).reverse_bits(),
+                point(&SOBOL_3, i)
+            );
+        }
+        // Each dimension alone stratifies: its first 2^k points fall one in each 1/2^k interval.
+        for v in [&SOBOL_2, &SOBOL_3] {
+            let mut cells: Vec<u32> = (0..1u32 << 10).map(|i| point(v, i) >> 22).collect();
+            cells.sort_unstable();
+            assert_eq!(cells, (0..1u32 << 10).collect::<Vec<_>>());
+        }
+    }
+
+    #[test]
+    fn a_bounce_first_2d_draw_continues_the_previous_point_in_four_dimensions() {
+        // ∫ over [0, 1)^4 of exp(x0 x2 + x1 x3), whose variance is mostly in the interaction of
+        // the two pairs: the pixel position with the first 2D draw of bounce 0 (one 4D Sobol
+        // point) against the pixel position with the second (padded: independent pairing).
+        let exact = {
+            // ∫∫ e^{ab} da db over [0, 1)² = Σ 1 / (k! (k + 1)²), squared.
+            let (mut sum, mut fact) = (0.0, 1.0);
+            for k in 0..30 {
+                if k > 0 {
+                    fact *= k as f64;
+                }
+                sum += 1.0 / (fact * ((k + 1) * (k + 1)) as f64);
+            }
+            sum * sum
+        };
+        let rms = |n: u32, paired: bool| {
+            let reps = 64u64;
+            let se: f64 = (0..reps)
+                .map(|pixel| {
+                    let mean = (0..n)
+                        .map(|s| {
+                            let mut p = PixelSampler::new(11, pixel, s);
+                            let (x0, x1) = p.pixel_position();
+                            p.start_bounce(0);
+                            let first = p.next_2d();
+                            let (x2, x3) = if paired { first } else { p.next_2d() };
+                            (x0 * x2 + x1 * x3).exp()
+                        })
+                        .sum::<f64>()
+                        / n as f64;
+                    (mean - exact).powi(2)
+                })
+                .sum();
+            (se / reps as f64).sqrt()
+        };
+        let (paired, padded) = (rms(256, true), rms(256, false));
+        // Unbiased, and the joint point integrates the interaction several times better (the
+        // RMS of 64 replicates is itself uncertain by ~9 %).
+        assert!(
+            paired < padded / 3.0,
+            "paired {paired:e}, padded {padded:e}"
+        );
+        assert!(
+            rms(1024, true) < paired / 2.0,
+            "paired error must keep falling"
+        );
     }
 
     #[test]
