@@ -51,9 +51,10 @@ pub struct Args {
     #[arg(long, default_value_t = 1024, value_parser = MAX_DEPTH)]
     pub max_depth: u32,
     /// Next-event estimation of the environment through the scene's portals (its open windows
-    /// and `portals`): `auto` uses them where the scene has any, `off` samples the whole sky.
-    #[arg(long, value_enum, default_value_t = Portals::Auto)]
-    pub portals: Portals,
+    /// and `portals`): `auto` (the default) uses them, `off` samples the whole sky; refused
+    /// where the scene has none.
+    #[arg(long, value_enum)]
+    pub portals: Option<Portals>,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -101,7 +102,14 @@ pub fn run(args: Args) -> Result<()> {
         check_prefix(out, "-o/--out", &image_path(out, level, Kind::Hdr))?;
     }
     let (mut world, camera) = crate::load(&args.scene, args.resolution.as_deref())?;
-    world.set_portals(args.portals == Portals::Auto);
+    if args.portals.is_some() && world.portal_count() == 0 {
+        return Err(Error::Usage(
+            "--portals has no effect on a scene without portals (no open rectangular windows, \
+             no `portals`, or no environment); leave it out"
+                .into(),
+        ));
+    }
+    world.set_portals(args.portals != Some(Portals::Off));
     let prefix = args
         .out
         .clone()
