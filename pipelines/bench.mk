@@ -172,8 +172,8 @@ $(BENCH_PORTALS_DIR)/scene.xml: scenes/$(BENCH_PORTALS_SCENE).ron $(SCENE_COMPIL
 
 reports/bench/$(BENCH_PORTALS_SCENE)-portals.md: build/$(BENCH_PORTALS_SCENE)/scene.lxs \
 		$(call lx_ref,$(BENCH_PORTALS_DIR)/ref,hdr) $(BENCH_PORTALS_DIR)/scene.xml $(TRACE) $(EVALUATE) \
-		pipelines/bench_portals.py pipelines/mitsuba_render.py
-	python3 pipelines/bench_portals.py --scene $< --reference $(word 2,$^) --mitsuba-scene $(word 3,$^) \
+		pipelines/bench_portals.py pipelines/mitsuba_render.py $(VENV)/$(VENV_STAMP)
+	$(PYTHON) pipelines/bench_portals.py --scene $< --reference $(word 2,$^) --mitsuba-scene $(word 3,$^) \
 		--peers-python $(PEERS_PYTHON) --trace $(TRACE) --evaluate $(EVALUATE) \
 		--resolution $(BENCH_PORTALS_RESOLUTION) --spp $(subst $(space),$(comma),$(BENCH_PORTALS_SPP)) \
 		--spp-off $(subst $(space),$(comma),$(BENCH_PORTALS_SPP_OFF)) \

@@ -17,6 +17,9 @@ import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "python"))
+from luxest_contract import image_name  # noqa: E402
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from atomic import write_text  # noqa: E402
 from host import host_summary  # noqa: E402
@@ -80,7 +83,7 @@ def main(argv=None):
             prefix = work / f"trace_{portals}_r{rep}"
             cmd = [a.trace, a.scene, "--spp", spp, "--resolution", a.resolution, "--seed", rep]
             cpu, _ = child_cpu([*cmd, "--portals", portals, "-o", prefix])
-            return cpu, work / f"{prefix.name}_{spp:06d}spp.hdr.exr"
+            return cpu, work / image_name(prefix.name, "hdr", spp)
 
         return run
 

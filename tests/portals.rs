@@ -156,3 +156,36 @@ fn bad_portals_are_one_line_errors() {
         "{m}"
     );
 }
+
+#[test]
+fn portals_option_is_refused_where_it_has_no_effect() {
+    // The room without its window (the scene has no portal): an explicit --portals is refused
+    // with a one-line usage error; with the window it runs.
+    let dir = TempDir::new("portals-cli");
+    let closed = room(false, OVERCAST).replace(
+        "windows: [(corner: (0.7, 0.3, 2), u: (0, 0.5, 0), v: (0.6, 0, 0))],",
+        "",
+    );
+    let trace = |lxs: &std::path::Path, out: &str| {
+        let out = dir.path().join(out);
+        let argv = [
+            "trace",
+            lxs.to_str().unwrap(),
+            "--spp",
+            "1",
+            "--portals",
+            "off",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        let a = luxest_io::cli::parse::<trace::Args>(argv).unwrap().unwrap();
+        trace::run(a)
+    };
+    let e = trace(&compile_text(&dir, "closed", &closed), "closed").unwrap_err();
+    let m = e.to_string();
+    assert!(
+        e.exit_code() == 2 && m.contains("--portals") && !m.contains('\n'),
+        "{m}"
+    );
+    trace(&compile_text(&dir, "open", &room(false, OVERCAST)), "open").unwrap();
+}

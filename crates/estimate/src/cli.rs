@@ -64,9 +64,23 @@ pub struct RunArgs {
     #[arg(long, value_parser = Real::positive("m"))]
     pub edge_offset: Option<f64>,
     /// The environment sampled through the scene's portals (its open windows and `portals`)
-    /// where it has any (`auto`), or over the whole sky (`off`).
-    #[arg(long, value_enum, default_value_t = Portals::Auto)]
-    pub portals: Portals,
+    /// at the sensors (`auto`, the default), or over the whole sky (`off`); refused where the
+    /// scene has no portals, and by estimate direct.
+    #[arg(long, value_enum)]
+    pub portals: Option<Portals>,
+}
+
+/// Refuses an explicit `--portals` on a world without portals (before `set_portals`), else
+/// applies it (`auto` when not given).
+fn apply_portals(world: &mut World, portals: Option<Portals>) -> Result<()> {
+    if portals.is_some() && world.portal_count() == 0 {
+        return Err(no_effect(
+            "--portals",
+            "on a scene without portals (no open rectangular windows, no `portals`, or no environment)",
+        ));
+    }
+    world.set_portals(portals != Some(Portals::Off));
+    Ok(())
 }
 
 /// Whether a stage samples the environment through the scene's portals.
@@ -90,7 +104,7 @@ impl RunArgs {
     /// memory available (--batches 2^20 over a 1000-point grid would need 67 GB).
     fn load(&self) -> Result<World> {
         let mut world = load_world(&self.scene)?;
-        world.set_portals(self.portals == Portals::Auto);
+        apply_portals(&mut world, self.portals)?;
         let points: usize = world
             .scene
             .header
@@ -393,10 +407,11 @@ pub struct ImageArgs {
     /// whose camera would see mirrors or glass are refused.
     #[arg(long, conflicts_with_all = ["mis_paths", "pixel_samples", "singularity", "eps"])]
     pub light_tracing: bool,
-    /// The environment sampled through the scene's portals where it has any (`auto`), or over
-    /// the whole sky (`off`).
-    #[arg(long, value_enum, default_value_t = Portals::Auto)]
-    pub portals: Portals,
+    /// The environment sampled through the scene's portals at the points the camera sees
+    /// (`auto`, the default), or over the whole sky (`off`); refused where the scene has no
+    /// portals, and with --light-tracing.
+    #[arg(long, value_enum, conflicts_with = "light_tracing")]
+    pub portals: Option<Portals>,
 }
 
 /// Runs the command line.
@@ -451,7 +466,7 @@ fn image_run(args: ImageArgs) -> Result<()> {
     let singularity = singularity.unwrap_or(SingularityMode::Clamp);
     check_eps(singularity, eps)?;
     let (mut world, cam) = load_with_camera(&scene, resolution.as_deref(), Traversal::Robust)?;
-    world.set_portals(portals == Portals::Auto);
+    apply_portals(&mut world, portals)?;
     if explicit && mis_paths > 0 && !world.scene.header.features.specular_paths {
         return Err(no_effect(
             "--singularity/--eps",
@@ -688,6 +703,12 @@ fn sensors(
 /// `estimate direct`: the direct-simulation baseline, photons counted in disks.
 fn direct(run: &RunArgs, paths: u64, bin_radius: f64) -> Result<()> {
     run.check("--paths", paths)?;
+    if run.portals.is_some() {
+        return Err(no_effect(
+            "--portals",
+            "on estimate direct (its light paths leave the sky through the bounding disk)",
+        ));
+    }
     if run.edge_offset.is_some() {
         return Err(no_effect(
             "--edge-offset",

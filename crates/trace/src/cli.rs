@@ -56,9 +56,10 @@ pub struct Args {
     #[arg(long, default_value = "bvh", value_parser = clap::value_parser!(LightSampler))]
     pub light_sampler: LightSampler,
     /// Next-event estimation of the environment through the scene's portals (its open windows
-    /// and `portals`): `auto` uses them where the scene has any, `off` samples the whole sky.
-    #[arg(long, value_enum, default_value_t = Portals::Auto)]
-    pub portals: Portals,
+    /// and `portals`): `auto` (the default) uses them, `off` samples the whole sky; refused
+    /// where the scene has none.
+    #[arg(long, value_enum)]
+    pub portals: Option<Portals>,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -107,7 +108,14 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (mut world, camera) = crate::load(&args.scene, args.resolution.as_deref())?;
     world.set_light_sampler(args.light_sampler);
-    world.set_portals(args.portals == Portals::Auto);
+    if args.portals.is_some() && world.portal_count() == 0 {
+        return Err(Error::Usage(
+            "--portals has no effect on a scene without portals (no open rectangular windows, \
+             no `portals`, or no environment); leave it out"
+                .into(),
+        ));
+    }
+    world.set_portals(args.portals != Some(Portals::Off));
     let prefix = args
         .out
         .clone()
