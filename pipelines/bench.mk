@@ -40,6 +40,32 @@ $(foreach s,$(BENCH_SCENES),$(eval $(call lx_bench_rules,$(s))))
 
 bench-pt: $(foreach s,$(BENCH_SCENES),reports/bench/$(s).md)
 
+# `make bench-lights`: next-event estimation's light choice at equal error on the many-light
+# scenes (pipelines/bench_light_sampler.py): `trace --light-sampler bvh` and `power` against
+# Mitsuba 3 `path` with its multijitter sampler, interleaved, at a small resolution (the
+# references are 4096-spp `trace` images with their own seed): reports/bench/lights-<scene>.md
+# (with `setup.sh --peers`; about 10 CPU-minutes a scene).
+LIGHT_SCENES ?= open-plan-office mixed-emitters
+BENCH_LIGHTS_RESOLUTION ?= 80x60
+BENCH_LIGHTS_SPP ?= 32,128,512
+BENCH_LIGHTS_REF_SPP ?= 4096
+
+.PHONY: bench-lights
+
+define lx_bench_lights_rules
+$(call lx_ref,build/bench/lights/$(1)/ref,hdr): build/$(1)/scene.lxs $$(TRACE)
+	$$(LAUNCH) $$(TRACE) $$< --reference --spp $$(BENCH_LIGHTS_REF_SPP) --resolution $$(BENCH_LIGHTS_RESOLUTION) --seed $$(REF_SEED) -o build/bench/lights/$(1)/ref
+
+reports/bench/lights-$(1).md: build/$(1)/scene.lxs $(call lx_ref,build/bench/lights/$(1)/ref,hdr) build/bench/$(1)/scene.xml \
+		$$(TRACE) $$(EVALUATE) pipelines/bench_light_sampler.py $$(VENV)/$$(VENV_STAMP)
+	$$(PYTHON) pipelines/bench_light_sampler.py --scene $$< --reference $$(word 2,$$^) --mitsuba-scene $$(word 3,$$^) \
+		--peers-python $$(PEERS_PYTHON) --trace $$(TRACE) --evaluate $$(EVALUATE) --resolution $$(BENCH_LIGHTS_RESOLUTION) \
+		--spp $$(BENCH_LIGHTS_SPP) --work-dir build/bench/lights/$(1)/runs -o $$@
+endef
+$(foreach s,$(LIGHT_SCENES),$(eval $(call lx_bench_lights_rules,$(s))))
+
+bench-lights: $(foreach s,$(LIGHT_SCENES),reports/bench/lights-$(s).md)
+
 # `make bench-sensors` (part of `make bench`, needs .venv-peers): the local estimate and luxest's
 # backward estimate at the default scene's sensors against Mitsuba 3 irradiance meters, CPU-s until
 # every sensor and the median sensor reach 1 % standard error (pipelines/bench_sensors.py);
