@@ -101,8 +101,8 @@ reports/bench/denoise.md: $(foreach k,hdr $(LX_FEATURES),$(call lx_image,$(EVAL_
 	mkdir -p reports/bench
 	$(PYTHON) pipelines/bench_denoise.py --input $< --features $(subst $(space),$(comma),$(LX_FEATURES)) \
 		--model $(DEFAULT_MODEL) --denoise $(DENOISE) --oidn "$(OIDN_DENOISE)" \
-		--peer "oidn-2.5.1-high-clean=$(OIDN2_DENOISE) --aux $(OIDN2_AUX_ANTIALIASED)" \
-		--peer "oidn-2.5.1-high-prefilter=$(OIDN2_DENOISE) --aux $(OIDN2_AUX_DEFAULT)" \
+		$(call if_oidn2,--peer "oidn-2.5.1-high-clean=$(OIDN2_DENOISE) --aux $(OIDN2_AUX_ANTIALIASED)" \
+		--peer "oidn-2.5.1-high-prefilter=$(OIDN2_DENOISE) --aux $(OIDN2_AUX_DEFAULT)") \
 		--work-dir build/bench/denoise -o $@
 
 bench-denoise: reports/bench/denoise.md

@@ -98,7 +98,19 @@ $(call lx_le_pattern,$(EVAL_CB_OIDN),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) $
 # each kind — antialiased ones passed as clean (cleanAux), the snapshot's own denoised first by
 # their own filters (prefilter; pipelines/oidn_denoise.py). Its command begins with options, its
 # images go to oidn2/ directories, suffixed `-oidn2` (evaluate labels them `+oidn2`).
-OIDN2_LIB ?= $(or $(firstword $(wildcard .venv-peers/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2)),.venv-peers/lib/python3/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2)
+# EVAL_OIDN2 (yes or no): whether its images are scored; yes where .venv-peers has it, otherwise
+# no with a warning (a machine set up without --peers still runs make eval, with 1.4.3 alone).
+OIDN2_FOUND := $(firstword $(wildcard .venv-peers/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2))
+OIDN2_LIB ?= $(or $(OIDN2_FOUND),.venv-peers/lib/python3/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2)
+EVAL_OIDN2 ?= $(if $(OIDN2_FOUND),yes,no)
+ifeq ($(filter yes no,$(EVAL_OIDN2)),)
+$(error EVAL_OIDN2=$(EVAL_OIDN2): expected yes or no)
+endif
+ifeq ($(EVAL_OIDN2)$(filter eval $(EVAL_DIR)/% $(REPORTS)/% bench-denoise,$(MAKECMDGOALS)),no)
+else ifeq ($(EVAL_OIDN2),no)
+$(warning OIDN 2.5.1 not found in .venv-peers (scripts/setup.sh --peers installs it): make eval scores OIDN 1.4.3 alone)
+endif
+if_oidn2 = $(if $(filter yes,$(EVAL_OIDN2)),$(1))
 OIDN2_DENOISE ?= $(OIDN_DENOISE) --oidn-lib $(OIDN2_LIB) --quality high
 OIDN2_AUX_ANTIALIASED := clean
 OIDN2_AUX_DEFAULT := prefilter
@@ -114,7 +126,7 @@ $(call lx_le_pattern,$(EVAL_CB_OIDN2),dn): $(call lx_le_pattern,$(EVAL_CB),hdr) 
 	@mkdir -p $(@D)
 	$(LAUNCH) $(OIDN2_DENOISE) --aux $(OIDN2_AUX_ANTIALIASED) $< --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
 
-$(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb,hdr) $(call eval_cb,dn) $(call eval_cb_le,hdr) $(call eval_cb_le,dn) $(eval_cb_lt) $(eval_cb_oidn) $(eval_cb_oidn2) $(EVALUATE)
+$(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb,hdr) $(call eval_cb,dn) $(call eval_cb_le,hdr) $(call eval_cb_le,dn) $(eval_cb_lt) $(eval_cb_oidn) $(call if_oidn2,$(eval_cb_oidn2)) $(EVALUATE)
 	@mkdir -p $(@D) $(EVAL_DIR)/flip
 	$(LAUNCH) $(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip
 
@@ -147,7 +159,7 @@ $(call lx_image_pattern,$(EVAL_CB_DF_OIDN2),dn): $(call lx_image_pattern,$(EVAL_
 	$(LAUNCH) $(OIDN2_DENOISE) --aux $(OIDN2_AUX_DEFAULT) $< --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
 
 $(EVAL_CSV)/cornell-box-default-features.images.csv: $(call lx_ref,$(EVAL_CB),hdr) \
-		$(foreach s,$(EVAL_DF_SNAPSHOTS),$(call lx_image,$(EVAL_CB),$(s),hdr) $(call lx_image,$(EVAL_CB_DF_DN),$(s),dn) $(call lx_image,$(EVAL_CB_DF_OIDN),$(s),dn) $(call lx_image,$(EVAL_CB_DF_OIDN2),$(s),dn)) $(EVALUATE)
+		$(foreach s,$(EVAL_DF_SNAPSHOTS),$(call lx_image,$(EVAL_CB),$(s),hdr) $(call lx_image,$(EVAL_CB_DF_DN),$(s),dn) $(call lx_image,$(EVAL_CB_DF_OIDN),$(s),dn) $(call if_oidn2,$(call lx_image,$(EVAL_CB_DF_OIDN2),$(s),dn))) $(EVALUATE)
 	@mkdir -p $(@D) $(EVAL_DIR)/flip/cornell-box-default-features
 	$(LAUNCH) $(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip/cornell-box-default-features
 
@@ -204,8 +216,8 @@ $(call lx_le_pattern,$(EVAL_DS)/oidn2/$(1)-oidn2,dn): $(call lx_le_pattern,$(EVA
 	$(LAUNCH) $(OIDN2_DENOISE) --aux $(OIDN2_AUX_ANTIALIASED) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
 
 $(EVAL_CSV)/dataset-$(1).images.csv: $(call eval_heldout_ref,$(1)) $(EVAL_HELDOUT_REF_STAMP) \
-		$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr) $(call lx_image,$(EVAL_DS)/$(1),$(s),dn) $(call lx_image,$(EVAL_DS)/oidn/$(1)-oidn,$(s),dn) $(call lx_image,$(EVAL_DS)/oidn2/$(1)-oidn2,$(s),dn)) \
-		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/oidn/$(1)-oidn,$(n),dn) $(call lx_le,$(EVAL_DS)/oidn2/$(1)-oidn2,$(n),dn)) \
+		$(foreach s,$(NOISY_LEVELS),$(call lx_image,$(EVAL_DATA)/$(1),$(s),hdr) $(call lx_image,$(EVAL_DS)/$(1),$(s),dn) $(call lx_image,$(EVAL_DS)/oidn/$(1)-oidn,$(s),dn) $(call if_oidn2,$(call lx_image,$(EVAL_DS)/oidn2/$(1)-oidn2,$(s),dn))) \
+		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/oidn/$(1)-oidn,$(n),dn) $(call if_oidn2,$(call lx_le,$(EVAL_DS)/oidn2/$(1)-oidn2,$(n),dn))) \
 		$(foreach n,$(EVAL_DATA_DLE),$(call lx_le,$(EVAL_DS)/$(1),$(n),hdr) $(call lx_le,$(EVAL_DS)/$(1),$(n),dn)) $(EVALUATE)
 	@mkdir -p $$(@D)
 	$$(LAUNCH) $$(EVALUATE) images --reference $$< $$(filter-out $$< $(EVALUATE) $(EVAL_HELDOUT_REF_STAMP),$$^) -o $$@ --ron $$(@:.csv=.ron)
@@ -301,13 +313,13 @@ $(call lx_le_pattern,$(EVAL_PUB)/$(1)/oidn2/$(1)-oidn2,dn): $(call lx_le_pattern
 	$$(LAUNCH) $$(OIDN2_DENOISE) --aux $(OIDN2_AUX_ANTIALIASED) $$< --alb $$(word 2,$$^) --nrm $$(word 3,$$^) -o $$@
 
 $(EVAL_CSV)/public-$(1).images.csv: $(call lx_ref,$(P),hdr) $(call lx_ref,$(P),alb) \
-		$(foreach s,$(EVAL_PUBLIC_SPP),$(call lx_image,$(P),$(s),hdr) $(call lx_image,$(P),$(s),dn) $(call lx_image,$(EVAL_PUB)/$(1)/oidn/$(1)-oidn,$(s),dn) $(call lx_image,$(EVAL_PUB)/$(1)/oidn2/$(1)-oidn2,$(s),dn)) \
-		$(foreach n,$(EVAL_PUBLIC_DLE),$(call lx_le,$(P),$(n),hdr) $(call lx_le,$(P),$(n),dn) $(call lx_le,$(EVAL_PUB)/$(1)/oidn/$(1)-oidn,$(n),dn) $(call lx_le,$(EVAL_PUB)/$(1)/oidn2/$(1)-oidn2,$(n),dn)) $(EVALUATE)
+		$(foreach s,$(EVAL_PUBLIC_SPP),$(call lx_image,$(P),$(s),hdr) $(call lx_image,$(P),$(s),dn) $(call lx_image,$(EVAL_PUB)/$(1)/oidn/$(1)-oidn,$(s),dn) $(call if_oidn2,$(call lx_image,$(EVAL_PUB)/$(1)/oidn2/$(1)-oidn2,$(s),dn))) \
+		$(foreach n,$(EVAL_PUBLIC_DLE),$(call lx_le,$(P),$(n),hdr) $(call lx_le,$(P),$(n),dn) $(call lx_le,$(EVAL_PUB)/$(1)/oidn/$(1)-oidn,$(n),dn) $(call if_oidn2,$(call lx_le,$(EVAL_PUB)/$(1)/oidn2/$(1)-oidn2,$(n),dn))) $(EVALUATE)
 	@mkdir -p $$(@D) $(EVAL_DIR)/flip/public-$(1)
 	$$(LAUNCH) $$(EVALUATE) images --reference $$< $$(filter-out $$< $$(word 2,$$^) $$(EVALUATE),$$^) -o $$@ --ron $$(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip/public-$(1)
 
 $(EVAL_CSV)/public-$(1)-default-features.images.csv: $(call lx_ref,$(P),hdr) $(call lx_ref,$(P),alb) \
-		$(foreach s,$(EVAL_PUBLIC_SPP),$(call lx_image,$(P),$(s),hdr) $(call lx_image,$(DF)-df,$(s),dn) $(call lx_image,$(DF)-df-oidn,$(s),dn) $(call lx_image,$(DF)-df-oidn2,$(s),dn)) $(EVALUATE)
+		$(foreach s,$(EVAL_PUBLIC_SPP),$(call lx_image,$(P),$(s),hdr) $(call lx_image,$(DF)-df,$(s),dn) $(call lx_image,$(DF)-df-oidn,$(s),dn) $(call if_oidn2,$(call lx_image,$(DF)-df-oidn2,$(s),dn))) $(EVALUATE)
 	@mkdir -p $$(@D) $(EVAL_DIR)/flip/public-$(1)-default-features
 	$$(LAUNCH) $$(EVALUATE) images --reference $$< $$(filter-out $$< $$(word 2,$$^) $$(EVALUATE),$$^) -o $$@ --ron $$(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip/public-$(1)-default-features
 endef

@@ -32,7 +32,7 @@ def make(*args, **variables):
     (make eval writes its model stamp even in a dry run); `variables` override these. A dry run
     (`-n`) is made once per session for each command line (every make reads all the pipeline's
     makefiles, a second or two: several tests ask for the same plan)."""
-    v = {**STAGES, "DATASET": "pytest-dry-run", "EVAL_DIR": str(_STAGE_DIR / "eval"), **variables}
+    v = {**STAGES, "DATASET": "pytest-dry-run", "EVAL_DIR": str(_STAGE_DIR / "eval"), "EVAL_OIDN2": "yes", **variables}
     command = ("make", "--no-print-directory", *args, *(f"{k}={val}" for k, val in v.items()))
     return _dry_run(command) if "-n" in args else _run(command)
 
