@@ -894,6 +894,8 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
 
     if ds_mean:
         lines += peer_table(ds_mean, f"held-out scenes, mean over {len(ds_names)}") + gap_table(ds_rows, ds_names)
+    else:
+        lines += ["## Held-out test scenes", "", "Not scored in this summary: no dataset reports were given.", ""]
 
     lines += public_section(public or {}, args.public_ref_spp)
 
