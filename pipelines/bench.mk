@@ -114,10 +114,12 @@ reports/bench/$(DEFAULT_SCENE)-edges.md: $(BENCH_EDGES_DIR)/edges.md
 bench-edges: reports/bench/$(DEFAULT_SCENE)-edges.md
 
 # `make bench-denoise` (part of `make bench`): CPU seconds of luxest's `denoise` and of Intel Open
-# Image Denoise 1.4.3 (the peer, pipelines/oidn_denoise.py, in .venv) on the same input in the
-# same run: one of make eval's Cornell snapshots (BENCH_DENOISE_SPP) with the default model's
-# features, whole processes interleaved, per megapixel between the snapshot and its 1024² tiling
-# (pipelines/bench_denoise.py); reports/bench/denoise.md and .csv.
+# Image Denoise 1.4.3 (the peer, pipelines/oidn_denoise.py, in .venv) and 2.5.1 (OIDN2_DENOISE,
+# pipelines/eval.mk: .venv-peers, quality high; once with the features clean, as make eval
+# passes antialiased ones, once prefiltered, as it passes aov-write's default ones) on the same
+# input in the same run: one of make eval's Cornell snapshots (BENCH_DENOISE_SPP) with the
+# default model's features, whole processes interleaved, per megapixel between the snapshot and
+# its 1024² tiling (pipelines/bench_denoise.py); reports/bench/denoise.md and .csv.
 BENCH_DENOISE_SPP ?= 16
 
 .PHONY: bench-denoise
@@ -126,7 +128,10 @@ reports/bench/denoise.md: $(foreach k,hdr $(LX_FEATURES),$(call lx_image,$(EVAL_
 		$(DEFAULT_MODEL) $(DENOISE) pipelines/bench_denoise.py pipelines/oidn_denoise.py $(VENV)/$(VENV_STAMP)
 	mkdir -p reports/bench
 	$(PYTHON) pipelines/bench_denoise.py --input $< --features $(subst $(space),$(comma),$(LX_FEATURES)) \
-		--model $(DEFAULT_MODEL) --denoise $(DENOISE) --oidn "$(OIDN_DENOISE)" --work-dir build/bench/denoise -o $@
+		--model $(DEFAULT_MODEL) --denoise $(DENOISE) --oidn "$(OIDN_DENOISE)" \
+		$(call if_oidn2,--peer "oidn-2.5.1-high-clean=$(OIDN2_DENOISE) --aux $(OIDN2_AUX_ANTIALIASED)" \
+		--peer "oidn-2.5.1-high-prefilter=$(OIDN2_DENOISE) --aux $(OIDN2_AUX_DEFAULT)") \
+		--work-dir build/bench/denoise -o $@
 
 bench-denoise: reports/bench/denoise.md
 

@@ -11,7 +11,9 @@ denoiser goes first. The marginal cost per megapixel — (median CPU-s on the la
 on the small one) / (the difference in megapixels) — cancels what does not grow with the image
 (start-up, model load, file names); the inference criterion compares it (luxest's over OIDN's).
 Any denoiser honouring the `denoise` command line can be measured (`--denoise`, `DENOISE=` in
-make).
+make). More peers with oidn_denoise.py's command line (`--peer NAME=COMMAND`, repeated: OIDN
+2.5.1 at quality high with clean and with prefiltered features in `make bench-denoise`) run in the
+same rounds, each a row and a ratio.
 
 Output: a Markdown table (`-o`) with a row per denoiser and the peer's column kept, and a CSV
 beside it (`.csv`)."""
@@ -82,8 +84,9 @@ def run(cmd):
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), wall
 
 
-def commands(denoise, model, oidn, hdr, out_dir, kinds):
-    """The two command lines for one input: luxest's `denoise` and the OIDN peer."""
+def commands(denoise, model, oidn, hdr, out_dir, kinds, peers=()):
+    """The command lines for one input: luxest's `denoise`, the OIDN peer and the further peers
+    (name, command), by name."""
     parsed = contract.parse_image_name(hdr.name)
     feature = lambda kind: str(hdr.with_name(contract.image_name(parsed.name, kind, parsed.spp, parsed.unit)))
     luxest = shlex.split(denoise) + [
@@ -93,16 +96,19 @@ def commands(denoise, model, oidn, hdr, out_dir, kinds):
         "-o",
         str(out_dir / f"luxest-{hdr.parent.name}.dn.exr"),
     ]
-    peer = shlex.split(oidn) + [
-        str(hdr),
-        "--alb",
-        feature("alb"),
-        "--nrm",
-        feature("nrm"),
-        "-o",
-        str(out_dir / f"oidn-{hdr.parent.name}.dn.exr"),
-    ]
-    return {"luxest": luxest, "oidn": peer}
+    peer = lambda name, cmd: (
+        shlex.split(cmd)
+        + [
+            str(hdr),
+            "--alb",
+            feature("alb"),
+            "--nrm",
+            feature("nrm"),
+            "-o",
+            str(out_dir / f"{name}-{hdr.parent.name}.dn.exr"),
+        ]
+    )
+    return {"luxest": luxest, "oidn": peer("oidn", oidn), **{name: peer(name, cmd) for name, cmd in peers}}
 
 
 def marginal(small, large, mp_small, mp_large):
@@ -117,6 +123,13 @@ def main(argv=None):
     ap.add_argument("--model", required=True)
     ap.add_argument("--denoise", required=True, help="luxest's denoise command")
     ap.add_argument("--oidn", required=True, help="the peer's command (pipelines/oidn_denoise.py)")
+    ap.add_argument(
+        "--peer",
+        action="append",
+        default=[],
+        metavar="NAME=COMMAND",
+        help="a further peer with oidn_denoise.py's command line (repeatable)",
+    )
     ap.add_argument("--side", type=int, default=1024, help="side of the large (tiled) image")
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--work-dir", required=True)
@@ -133,22 +146,29 @@ def main(argv=None):
             fail(f"{p}: not a file this benchmark may write")
     if Path(args.input).resolve().parent in ((work / "small").resolve(), (work / "large").resolve()):
         fail(f"{args.input}: inside the work directory, whose copies would overwrite it")
+    peers = []
+    for p in args.peer:
+        name, sep, cmd = p.partition("=")
+        if not sep or not name or not cmd.strip() or name in ("luxest", "oidn") or name in dict(peers):
+            fail(f"--peer {p!r}: expected NAME=COMMAND with a new name (not luxest or oidn)")
+        peers.append((name, cmd))
+    names = ["luxest", "oidn"] + [n for n, _ in peers]
     kinds = [k for k in args.features.split(",") if k]
     inputs, mp = prepare(args.input, kinds, args.side, work)
     if mp["large"] <= mp["small"]:
         fail(f"--side {args.side}: the large image must be larger than the input")
-    cpu = {(d, s): [] for d in ("luxest", "oidn") for s in inputs}
-    wall = {(d, s): [] for d in ("luxest", "oidn") for s in inputs}
+    cpu = {(d, s): [] for d in names for s in inputs}
+    wall = {(d, s): [] for d in names for s in inputs}
     for r in range(args.rounds):
         for size, hdr in inputs.items():
-            cmds = commands(args.denoise, args.model, args.oidn, hdr, work, kinds)
-            order = ["luxest", "oidn"] if r % 2 == 0 else ["oidn", "luxest"]
+            cmds = commands(args.denoise, args.model, args.oidn, hdr, work, kinds, peers)
+            order = names if r % 2 == 0 else names[::-1]
             for d in order:
                 c, w = run(cmds[d])
                 cpu[(d, size)].append(c)
                 wall[(d, size)].append(w)
     rows = []
-    for d in ("luxest", "oidn"):
+    for d in names:
         rows.append(
             {
                 "denoiser": d,
@@ -177,12 +197,20 @@ def main(argv=None):
         "|---|---|---|---|---|---|",
     ]
     for row in rows:
-        label = f"luxest `denoise` ({Path(args.model).name})" if row["denoiser"] == "luxest" else "OIDN 1.4.3 (peer)"
+        label = {"luxest": f"luxest `denoise` ({Path(args.model).name})", "oidn": "OIDN 1.4.3 (peer)"}.get(
+            row["denoiser"], f"{row['denoiser']} (peer)"
+        )
         lines.append(
             f"| {label} | {row['cpu_s_small']:.2f} | {row['cpu_s_large']:.2f} | {row['wall_s_large']:.2f} | "
             f"{row['cpu_s_per_megapixel']:.2f} | {row['wall_s_per_megapixel']:.2f} |"
         )
     lines += ["", f"luxest / OIDN, CPU-s per megapixel: {ratio:.2f}", ""]
+    for row in rows[2:]:
+        lines += [
+            f"luxest / {row['denoiser']}, CPU-s per megapixel: "
+            f"{rows[0]['cpu_s_per_megapixel'] / row['cpu_s_per_megapixel']:.2f}",
+            "",
+        ]
     tmp_md = out.with_name(out.name + ".tmp")
     tmp_md.write_text("\n".join(lines))
     tmp_csv.replace(out_csv)

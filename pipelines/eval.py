@@ -3,13 +3,18 @@
 from the CSV/RON reports of the `evaluate` stage that the rules of pipelines/eval.mk write
 (every stage run is a Make rule; this file only reads reports and draws).
 
-  eval.py summary --reports reports --cornell CSV --dataset CSV... --sensors CSV... [values of
+  eval.py summary --reports reports --cornell CSV [--cornell-default-features CSV] --dataset CSV...
+                  [--public CSV... --flip-dir DIR] --sensors CSV... [values of
                   pipelines/presets.mk: --preset --model --ref-spp --ref-seed --noisy-seed
-                  --dataset-ref-spp --sensor-scale]
+                  --dataset-ref-spp --public-ref-spp --sensor-scale]
 
 1. Cornell box (256 x 256): error vs wall-clock time and vs samples for path tracing, + denoise,
    double local estimate, + denoise, and the Pareto front over all of them.
 2. The held-out test scenes of the dataset: the same, means over the scenes.
+2b. The public interiors held out (scenes/public/): luxest's denoiser against Intel Open Image
+   Denoise 1.4.3 and 2.5.1 with antialiased and with aov-write's default features, PSNR, SSIM,
+   FLIP, FLIP on textured regions (texture_mask), colour shift, inference CPU seconds per
+   megapixel, and the double-local-estimate images.
 3. The seed's experiment done right: PSNR/SSIM/FLIP of the noisy and the denoised progressive
    snapshots against the converged reference over time, and the time at which each reaches
    SSIM 0.95 and 0.98.
@@ -35,7 +40,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 THRESHOLDS = (0.95, 0.98)
 METRICS = [("rel_mse", "relMSE (linear)"), ("one_minus_ssim", "1 - SSIM (tonemapped)"), ("flip", "FLIP (LDR)")]
 PT, DLE, LT = contract.PATH_TRACING, contract.DOUBLE_LOCAL_ESTIMATE, contract.LIGHT_TRACING
-DENOISED, OIDN = contract.DENOISED_SUFFIX, contract.OIDN_SUFFIX
+DENOISED, OIDN, OIDN2 = contract.DENOISED_SUFFIX, contract.OIDN_SUFFIX, contract.OIDN2_SUFFIX
+PEER_NAMES = {OIDN: "OIDN 1.4.3", OIDN2: "OIDN 2.5.1"}
+# The textured regions of an image (texture_mask): pixels whose albedo luminance varies, over the
+# (2 TEXTURE_RADIUS + 1)² window around them, with a standard deviation of at least
+# TEXTURE_STD (albedo units: texture detail and object edges; flat-coloured walls are out).
+TEXTURE_RADIUS = 3
+TEXTURE_STD = 0.02
 STYLE = {
     PT: ("tab:blue", "o"),
     PT + DENOISED: ("tab:orange", "s"),
@@ -44,6 +55,8 @@ STYLE = {
     LT: ("tab:purple", "v"),
     PT + OIDN: ("tab:gray", "P"),
     DLE + OIDN: ("tab:brown", "X"),
+    PT + OIDN2: ("tab:olive", "p"),
+    DLE + OIDN2: ("tab:cyan", "x"),
 }
 
 
@@ -203,7 +216,11 @@ def main(argv=None):
     c = sub.add_parser("summary")
     c.add_argument("--reports", required=True)
     c.add_argument("--cornell", required=True)
+    c.add_argument("--cornell-default-features", help="the Cornell report with aov-write's default features")
     c.add_argument("--dataset", nargs="*", default=[])
+    c.add_argument("--public", nargs="*", default=[], help="public-<name>[-default-features].images.csv reports")
+    c.add_argument("--flip-dir", help="the FLIP maps' directory (a subdirectory per public report)")
+    c.add_argument("--public-ref-spp", type=int)
     c.add_argument("--sensors", nargs="*", default=[])
     c.add_argument("--preset", required=True)
     c.add_argument("--model", required=True)
@@ -225,7 +242,92 @@ def main(argv=None):
             ds_rows.append(r)
         ds_names.append(name)
     sensor_rows = [sensor_row(f) for f in args.sensors]
-    write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, Path(args.model))
+    cb_df_rows = read_csv(args.cornell_default_features) if args.cornell_default_features else []
+    public = read_public(args.public, args.flip_dir)
+    for rows in [cb_rows, cb_df_rows, ds_rows] + [rows for by in public.values() for rows in by.values()]:
+        check_seeds(rows)
+    write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, Path(args.model), cb_df_rows, public)
+
+
+def read_public(paths, flip_dir):
+    """The public interiors' reports: {scene: {"antialiased" | "default": rows}}, each row with its
+    FLIP on textured regions (`flip_textured`, None without a map or an albedo)."""
+    out = {}
+    for f in sorted(paths):
+        stem = Path(f).name[: -len(".images.csv")]
+        name = stem[len("public-") :]
+        features = "antialiased"
+        if name.endswith("-default-features"):
+            name, features = name[: -len("-default-features")], "default"
+        rows = read_csv(f)
+        for r in rows:
+            r["scene"] = name
+            r["flip_textured"] = textured_flip(r["image"], r["reference"], Path(flip_dir) / stem) if flip_dir else None
+        out.setdefault(name, {})[features] = rows
+    return out
+
+
+def texture_mask(albedo):
+    """The textured regions of an image from its albedo (H, W, 3): True where the albedo's
+    luminance has a standard deviation of at least TEXTURE_STD over the (2 TEXTURE_RADIUS + 1)²
+    window around the pixel (the window clipped at the border). The one definition of the
+    summary's FLIP on textured regions."""
+    import numpy as np
+
+    y = np.asarray(albedo, np.float64) @ np.array([0.2126, 0.7152, 0.0722])
+
+    def box(a):  # window sums by summed-area tables, clipped at the border
+        p = np.pad(a, ((1, 0), (1, 0))).cumsum(0).cumsum(1)
+        h, w = a.shape
+        i0 = np.clip(np.arange(h) - TEXTURE_RADIUS, 0, h)
+        i1 = np.clip(np.arange(h) + TEXTURE_RADIUS + 1, 0, h)
+        j0 = np.clip(np.arange(w) - TEXTURE_RADIUS, 0, w)
+        j1 = np.clip(np.arange(w) + TEXTURE_RADIUS + 1, 0, w)
+        return p[i1][:, j1] - p[i0][:, j1] - p[i1][:, j0] + p[i0][:, j0]
+
+    n = box(np.ones_like(y))
+    mean = box(y) / n
+    var = np.maximum(box(y * y) / n - mean * mean, 0.0)
+    return var >= TEXTURE_STD**2
+
+
+@functools.lru_cache(maxsize=None)
+def _mask(albedo_path):
+    return texture_mask(contract.read(albedo_path).pixels)
+
+
+def textured_flip(image, reference, flip_dir):
+    """Mean of an image's FLIP map (`evaluate images --flip-maps`: <flip_dir>/<image name
+    without .exr>.flip.exr) over the texture mask of the reference's albedo (`<ref>_ref.alb.exr`
+    beside the reference, aov-write --reference); None when either file is missing or the mask
+    is empty."""
+    parsed = contract.parse_image_name(Path(reference).name)
+    if parsed is None:
+        return None
+    albedo = Path(reference).with_name(contract.image_name(parsed.name, "alb", None))
+    flip = Path(flip_dir) / (Path(image).name[: -len(".exr")] + ".flip.exr")
+    if not (albedo.exists() and flip.exists()):
+        return None
+    mask = _mask(str(albedo))
+    if not mask.any():
+        return None
+    return float(contract.read(flip).pixels[..., 0].astype("float64")[mask].mean())
+
+
+@functools.lru_cache(maxsize=None)
+def _seed(path):
+    return contract.read(path).value(contract.SEED) if Path(path).exists() else None
+
+
+def check_seeds(rows):
+    """Exit with one line if a scored image shares its reference's seed (luxest.seed): its
+    samples would be the reference's own, and the error it is scored with too small."""
+    for r in rows:
+        if "image" not in r:
+            continue
+        ref, img = _seed(r["reference"]), _seed(r["image"])
+        if ref is not None and ref == img:
+            raise SystemExit(f"eval: {r['image']}: rendered with its reference's seed {ref} ({r['reference']})")
 
 
 def level_key(r):
@@ -294,39 +396,46 @@ def _pct(v):
 
 
 def peer_table(rows, what):
-    """luxest's denoiser against Intel Open Image Denoise (the `+oidn` rows) on the same inputs:
-    PSNR / SSIM / FLIP per input level, and the inference time per megapixel of each, wall-clock
-    and CPU seconds (excluding I/O, the run's threads)."""
+    """luxest's denoiser against Intel Open Image Denoise (the `+oidn` rows, and `+oidn2` where
+    there are any) on the same inputs: PSNR / SSIM / FLIP per input level, and the inference time
+    per megapixel of each, wall-clock and CPU seconds (excluding I/O, the run's threads)."""
     by = {(r["estimator"], int(r["samples"])): r for r in rows}
     out = []
     for base in (PT, DLE):
-        levels = sorted(n for (e, n) in by if e == base + OIDN and (base, n) in by and (base + DENOISED, n) in by)
+        peers = [p for p in (OIDN, OIDN2) if any(e == base + p for e, _ in by)]
+        levels = sorted(
+            n for (e, n) in by if e == base + DENOISED and (base, n) in by and any((base + p, n) in by for p in peers)
+        )
         if not levels:
             continue
         trs = []
         for n in levels:
-            a, d, o = by[(base, n)], by[(base + DENOISED, n)], by[(base + OIDN, n)]
+            a, d = by[(base, n)], by[(base + DENOISED, n)]
+            ps = [by.get((base + p, n)) for p in peers]
+            cell = lambda r, k, f: "—" if r is None else f"{r[k]:{f}}"
             trs.append(
                 [n]
                 + [
-                    f"{a[k]:{f}} / {d[k]:{f}} / {o[k]:{f}}"
+                    " / ".join(cell(r, k, f) for r in [a, d] + ps)
                     for k, f in (("psnr_db", ".2f"), ("ssim", ".4f"), ("flip", ".4f"))
                 ]
                 + [
                     " / ".join(
                         "—" if v is None else f"{scale * v:{f}}"
-                        for v in (row_denoise_costs(d)[j], row_denoise_costs(o)[j])
+                        for v in [row_denoise_costs(r)[j] if r is not None else None for r in [d] + ps]
                     )
                     for j, scale, f in ((0, 1e3, ".0f"), (1, 1.0, ".2f"))
                 ]
-                + [" / ".join(_pct(row_colour_shift(r)) for r in (a, d, o))]
+                + [" / ".join("—" if r is None else _pct(row_colour_shift(r)) for r in [a, d] + ps)]
             )
         unit = "spp" if base == PT else "paths"
+        names = " / ".join(PEER_NAMES[p] for p in peers)
         out += [
-            f"### {base}: luxest's denoiser against Intel Open Image Denoise 1.4.3 ({what})",
+            f"### {base}: luxest's denoiser against Intel Open Image Denoise {names.replace('OIDN ', '')} ({what})",
             "",
-            "Each cell: noisy / luxest (`denoise`) / OIDN (hdr + albedo + normal, pipelines/oidn_denoise.py), "
-            "the same inputs and features.",
+            f"Each cell: noisy / luxest (`denoise`) / {names} (hdr + albedo + normal, pipelines/oidn_denoise.py"
+            + (", 2.5.1 at quality high" if OIDN2 in peers else "")
+            + "), the same inputs and features.",
             "",
             table(
                 [
@@ -334,8 +443,8 @@ def peer_table(rows, what):
                     "PSNR dB",
                     "SSIM",
                     "FLIP",
-                    "inference ms per megapixel (luxest / OIDN)",
-                    "inference CPU-s per megapixel (luxest / OIDN)",
+                    f"inference ms per megapixel (luxest / {names})",
+                    f"inference CPU-s per megapixel (luxest / {names})",
                     "colour shift: max over R, G, B of abs(mean / reference mean − 1)"
                     + (" (mean over scenes)" if "colour_shift" in rows[0] else ""),
                 ],
@@ -346,20 +455,21 @@ def peer_table(rows, what):
     return out
 
 
-def paired_gaps(rows, base, key="psnr_db"):
-    """Scene by scene, luxest's denoised `key` minus OIDN's on the same input (`<base>+denoise`
-    against `<base>+oidn` rows with a `scene`), per level in increasing order: [(level, {scene:
-    difference}, [scenes scored by one of the two only, or with a non-finite difference])]."""
+def paired_gaps(rows, base, key="psnr_db", peer=OIDN):
+    """Scene by scene, luxest's denoised `key` minus the peer's on the same input (`<base>+denoise`
+    against `<base><peer>` rows with a `scene`; peer `+oidn` or `+oidn2`), per level in increasing
+    order: [(level, {scene: difference}, [scenes scored by one of the two only, or with a
+    non-finite difference])]."""
     by = {}
     for r in rows:
-        if r["estimator"] in (base + DENOISED, base + OIDN):
+        if r["estimator"] in (base + DENOISED, base + peer):
             one = by.setdefault(int(r["samples"]), {}).setdefault(r["scene"], {})
             if r["estimator"] in one:
                 raise SystemExit(f"eval: scene {r['scene']}: two {r['estimator']} rows at {int(r['samples'])}")
             one[r["estimator"]] = r[key]
     out = []
     for n, scenes in sorted(by.items()):
-        diffs = {s: v[base + DENOISED] - v[base + OIDN] for s, v in sorted(scenes.items()) if len(v) == 2}
+        diffs = {s: v[base + DENOISED] - v[base + peer] for s, v in sorted(scenes.items()) if len(v) == 2}
         diffs = {s: d for s, d in diffs.items() if math.isfinite(d)}
         if diffs:
             out.append((n, diffs, sorted(set(scenes) - set(diffs))))
@@ -375,14 +485,17 @@ def gap_stats(diffs):
     return mean, se, min(v), max(v), sum(x > 0 for x in v)
 
 
-def gap_table(rows, names):
+def gap_table(rows, names, peer=None):
     """The held-out bar (luxest ≥ OIDN + 1 dB in mean PSNR at every level), scene by
     scene: the mean difference with its standard error over the scenes, its range, the scenes
     where luxest is ahead, and each scene's difference when there are few; a level where a scene
-    lacks one of the two is scored over the others and says which."""
+    lacks one of the two is scored over the others and says which. Against OIDN 2.5.1 where
+    `rows` have its images (peer None), else 1.4.3."""
     out, few = [], len(names) <= 6
+    if peer is None:
+        peer = OIDN2 if any(r["estimator"].endswith(OIDN2) for r in rows) else OIDN
     for base, unit in ((PT, "spp"), (DLE, "paths")):
-        gaps = paired_gaps(rows, base)
+        gaps = paired_gaps(rows, base, peer=peer)
         if not gaps:
             continue
         trs, notes = [], []
@@ -401,7 +514,7 @@ def gap_table(rows, names):
             if missing:
                 notes.append(f"- {n} {unit}: without {', '.join(missing)} (scored by one denoiser only, or not finite)")
         out += [
-            f"### {base}: luxest − OIDN in PSNR dB, scene by scene (held-out scenes)",
+            f"### {base}: luxest − {PEER_NAMES[peer] if peer == OIDN2 else 'OIDN'} in PSNR dB, scene by scene (held-out scenes)",
             "",
             "The mean difference ± its standard error over the scenes (sample standard deviation / √n): how far the "
             "held-out bar's mean would move with other scenes of the same kind.",
@@ -415,7 +528,179 @@ def gap_table(rows, names):
     return out
 
 
-def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, model):
+def _by(rows):
+    return {(r["estimator"], int(r["samples"])): r for r in rows}
+
+
+def _yes(ok):
+    return "yes" if ok else "**no**"
+
+
+def cornell_bar(aa_rows, df_rows, levels=(1, 4, 16, 64)):
+    """Issue 52's Cornell-box bar, per features kind and level: luxest ≥ OIDN 2.5.1 in PSNR,
+    SSIM and FLIP (lower FLIP is better), colour shift within 1 %, and never worse than its
+    input (PSNR) at any level."""
+    out = []
+    for kind, rows in (("antialiased", aa_rows), ("aov-write's default", df_rows)):
+        by = _by(rows)
+        trs = []
+        for n in sorted({int(r["samples"]) for r in rows if r["estimator"] == PT + DENOISED}):
+            d, o, a = by.get((PT + DENOISED, n)), by.get((PT + OIDN2, n)), by.get((PT, n))
+            if d is None or a is None:
+                continue
+            shift = row_colour_shift(d)
+            cells = [n, _yes(d["psnr_db"] >= a["psnr_db"]), "—" if shift is None else _yes(shift <= 0.01)]
+            if o is not None and n in levels:
+                cells += [
+                    f"{d['psnr_db'] - o['psnr_db']:+.2f} {_yes(d['psnr_db'] >= o['psnr_db'])}",
+                    f"{d['ssim'] - o['ssim']:+.4f} {_yes(d['ssim'] >= o['ssim'])}",
+                    f"{d['flip'] - o['flip']:+.4f} {_yes(d['flip'] <= o['flip'])}",
+                ]
+            else:
+                cells += ["", "", ""]
+            trs.append(cells)
+        if trs:
+            out += [
+                f"Features {kind}:",
+                "",
+                table(
+                    [
+                        "spp",
+                        "luxest ≥ noisy (PSNR)",
+                        "colour shift ≤ 1 %",
+                        "PSNR luxest − OIDN 2.5.1",
+                        "SSIM luxest − OIDN 2.5.1",
+                        "FLIP luxest − OIDN 2.5.1 (≤ 0 is ahead)",
+                    ],
+                    trs,
+                ),
+                "",
+            ]
+    return out
+
+
+def public_section(public, ref_spp):
+    """The public interiors: per scene and features kind, the peer table (noisy / luxest / OIDN
+    1.4.3 / OIDN 2.5.1), FLIP on textured regions, and issue 52's bar over the interiors' means."""
+    if not public:
+        return []
+    names = sorted(public)
+    out = [
+        f"## Public interiors held out ({', '.join(names)})",
+        "",
+        "Scenes no one here wrote (scenes/public/, CC-BY, credited in scenes/public/README.md; never in training), "
+        f"imported by `scene-compile`, path-traced by `trace`: references of {ref_spp} spp with their own seed, one "
+        "progressive run with the noisy seed, its features antialiased (`aov-write --min-samples`) and aov-write's "
+        "default (each snapshot's own samples); double-local-estimate images denoised with the last snapshot's "
+        "antialiased features. OIDN 2.5.1 runs at quality high, antialiased features as clean (cleanAux), default "
+        "ones prefiltered by its own filters (pipelines/oidn_denoise.py). FLIP on textured regions: the mean of the "
+        f"FLIP map where the reference albedo's luminance has a standard deviation ≥ {TEXTURE_STD} over a "
+        f"{2 * TEXTURE_RADIUS + 1}² window (pipelines/eval.py `texture_mask`).",
+        "",
+    ]
+    for name in names:
+        for kind in ("antialiased", "default"):
+            rows = public[name].get(kind)
+            if not rows:
+                continue
+            what = f"{name}, {'antialiased' if kind == 'antialiased' else 'aov-write' + chr(39) + 's default'} features"
+            out += peer_table(rows, what)
+            by = _by(rows)
+            trs = []
+            for n in sorted({int(r["samples"]) for r in rows if r["estimator"] == PT}):
+                cells = [by.get((e, n)) for e in (PT, PT + DENOISED, PT + OIDN, PT + OIDN2)]
+                if any(c is not None and c.get("flip_textured") is not None for c in cells):
+                    trs.append(
+                        [n]
+                        + [
+                            " / ".join(
+                                "—" if c is None or c.get("flip_textured") is None else f"{c['flip_textured']:.4f}"
+                                for c in cells
+                            )
+                        ]
+                    )
+            if trs:
+                frac = _mask_fraction(rows)
+                out += [
+                    f"FLIP on textured regions ({what}; "
+                    + ("" if frac is None else f"{100 * frac:.0f} % of the pixels; ")
+                    + "noisy / luxest / OIDN 1.4.3 / OIDN 2.5.1):",
+                    "",
+                    table(["spp", "FLIP, textured regions"], trs),
+                    "",
+                ]
+    # The bar: means over the interiors, luxest − OIDN 2.5.1.
+    trs = []
+    for kind, tol in (("antialiased", 0.0), ("default", -0.5)):
+        per = [public[n][kind] for n in names if kind in public[n]]
+        if len(per) != len(names):
+            continue
+        for base in (PT, DLE):
+            levels = sorted(
+                set.intersection(
+                    *[{int(r["samples"]) for r in rows if r["estimator"] == base + DENOISED} for rows in per]
+                )
+            )
+            for n in levels:
+                rs = [_by(rows) for rows in per]
+                if not all((base + OIDN2, n) in b and (base, n) in b for b in rs):
+                    continue
+                mean = lambda e, k: sum(b[(e, n)][k] for b in rs) / len(rs)
+                dp = mean(base + DENOISED, "psnr_db") - mean(base + OIDN2, "psnr_db")
+                df = mean(base + DENOISED, "flip") - mean(base + OIDN2, "flip")
+                tex = [
+                    (b[(base + DENOISED, n)].get("flip_textured"), b[(base + OIDN2, n)].get("flip_textured"))
+                    for b in rs
+                ]
+                dt = None if any(t is None for p in tex for t in p) else sum(a - o for a, o in tex) / len(tex)
+                gain = mean(base + DENOISED, "psnr_db") - mean(base, "psnr_db")
+                trs.append(
+                    [
+                        "antialiased" if kind == "antialiased" else "default",
+                        base,
+                        n,
+                        f"{dp:+.2f} {_yes(dp >= tol)}",
+                        f"{df:+.4f} {_yes(df <= 0)}" if kind == "antialiased" else f"{df:+.4f}",
+                        "—" if dt is None else f"{dt:+.4f} {_yes(dt <= 0)}",
+                        f"{gain:+.2f}",
+                    ]
+                )
+    if trs:
+        out += [
+            "### Issue 52's bar on the public interiors: luxest − OIDN 2.5.1, means over the interiors",
+            "",
+            "PSNR: ≥ 0 with antialiased features, ≥ −0.5 dB with default ones; FLIP (lower is better): ≤ 0 with "
+            "antialiased features; FLIP on textured regions ≤ 0; the denoiser's gain over its input in PSNR.",
+            "",
+            table(
+                [
+                    "features",
+                    "estimator",
+                    "spp / paths",
+                    "PSNR dB",
+                    "FLIP",
+                    "FLIP, textured regions",
+                    "luxest − noisy, PSNR dB",
+                ],
+                trs,
+            ),
+            "",
+        ]
+    return out
+
+
+def _mask_fraction(rows):
+    """The fraction of pixels in the texture mask of a report's reference albedo, None without
+    it."""
+    ref = rows[0]["reference"]
+    parsed = contract.parse_image_name(Path(ref).name)
+    if parsed is None:
+        return None
+    albedo = Path(ref).with_name(contract.image_name(parsed.name, "alb", None))
+    return float(_mask(str(albedo)).mean()) if albedo.exists() else None
+
+
+def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows, model, cb_df_rows=(), public=None):
     plot_trade(cb_rows, "Cornell box 256² — error vs time", plots / "cornell-box-time.png")
     plot_trade(
         cb_rows,
@@ -507,7 +792,14 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
         "",
     ]
 
-    lines += peer_table(cb_rows, "Cornell box 256²")
+    lines += peer_table(cb_rows, "Cornell box 256², antialiased features")
+    if cb_df_rows:
+        lines += peer_table(cb_df_rows, "Cornell box 256², aov-write's default features (each snapshot's own samples)")
+    if any(r["estimator"] == PT + OIDN2 for r in cb_rows):
+        lines += [
+            "### Issue 52's bar on the Cornell box: luxest against OIDN 2.5.1",
+            "",
+        ] + cornell_bar(cb_rows, list(cb_df_rows))
 
     # Progressive experiment.
     lines += [
@@ -602,6 +894,10 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
 
     if ds_mean:
         lines += peer_table(ds_mean, f"held-out scenes, mean over {len(ds_names)}") + gap_table(ds_rows, ds_names)
+    else:
+        lines += ["## Held-out test scenes", "", "Not scored in this summary: no dataset reports were given.", ""]
+
+    lines += public_section(public or {}, args.public_ref_spp)
 
     # Sensors.
     lines += [

@@ -70,6 +70,13 @@ $(eval $(call lx_preset,EVAL_DLE,100 300 1000 3000,100 300 1000 3000 10000 30000
 $(eval $(call lx_preset,EVAL_LT,1000000 4000000 16000000,1000000 4000000 16000000 64000000 256000000))
 $(eval $(call lx_preset,EVAL_DATA_DLE,100 1000,100 1000 10000))
 $(eval $(call lx_preset,EVAL_SENSOR_SCALE,0.25,1))
+# The public interiors held out (pipelines/eval.mk (4)): pixels on the long side (short: 16:9),
+# reference spp (seed REF_SEED), noisy snapshots, double-local-estimate light paths.
+$(eval $(call lx_preset,EVAL_PUBLIC_LONG,256,512))
+$(eval $(call lx_preset,EVAL_PUBLIC_SHORT,144,288))
+$(eval $(call lx_preset,EVAL_PUBLIC_REF_SPP,1024,8192))
+$(eval $(call lx_preset,EVAL_PUBLIC_SPP,1 2 4 8 16 32 64,1 2 4 8 16 32 64))
+$(eval $(call lx_preset,EVAL_PUBLIC_DLE,100 300,100 300 1000))
 
 # Benchmark at equal error (pipelines/bench.mk): reference spp; the timed runs' spp of path
 # tracing, light paths of light tracing and of the double local estimate.

@@ -180,15 +180,20 @@ ESTIMATORS = (
 """Every estimator name, in the order of Rust's `header::estimator::ALL`."""
 
 DENOISED_SUFFIX = "+denoise"  # evaluate's label of an image a luxest model denoised: <estimator>+denoise
-OIDN_SUFFIX = "+oidn"  # ... and of one Intel Open Image Denoise denoised: <estimator>+oidn
+OIDN_SUFFIX = "+oidn"  # ... and of one Intel Open Image Denoise 1.x denoised: <estimator>+oidn
+OIDN2_SUFFIX = "+oidn2"  # ... and of one OIDN 2.x denoised (the peer of make eval): <estimator>+oidn2
 
 
 def estimator_label(estimator, denoiser=None):
     """How `evaluate images` labels an image of `estimator` denoised by `denoiser` (its
-    `luxest.denoiser`, None if not denoised): evaluate's `images::estimator_label`."""
+    `luxest.denoiser`, None if not denoised): evaluate's `images::estimator_label` (`+oidn` for
+    OIDN 1.x, `+oidn<major>` for a later release)."""
     if denoiser is None:
         return estimator
-    return estimator + (OIDN_SUFFIX if denoiser.startswith(OIDN_DENOISER_PREFIX) else DENOISED_SUFFIX)
+    if not denoiser.startswith(OIDN_DENOISER_PREFIX):
+        return estimator + DENOISED_SUFFIX
+    major = denoiser[len(OIDN_DENOISER_PREFIX) :].split(".")[0]
+    return estimator + OIDN_SUFFIX + (major if major not in ("", "1") else "")
 
 
 class ContractError(ValueError):

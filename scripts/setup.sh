@@ -15,7 +15,10 @@
 #   - with --peers: the optional peer programs in .venv-peers (PyPI pyradiance, which bundles the
 #     Radiance binaries ies2rad, oconv, rtrace, ~40 MB, used by `make lighting-radiance`; PyPI
 #     mitsuba 3 with Debian's libllvm19 for its llvm_ad_rgb variant, which renders
-#     `scene-compile --export-mitsuba` scenes, used by `make mitsuba-check`).
+#     `scene-compile --export-mitsuba` scenes, used by `make mitsuba-check`; PyPI pyoidn 2.5.1,
+#     which ships Intel Open Image Denoise 2.5.1's shared libraries, the denoiser peer of `make
+#     eval` and `make bench-denoise` beside OIDN 1.4.3 of .venv: pipelines/oidn_denoise.py loads
+#     the library from there).
 #
 # Usage: scripts/setup.sh [--no-ort] [--no-python] [--peers]
 set -euo pipefail
@@ -95,6 +98,10 @@ if [ "$want_peers" -eq 1 ]; then
         echo "setup: creating $peers with pyradiance (Radiance binaries) and mitsuba 3" >&2
         python3 -m venv "$peers"
         "$peers/bin/pip" install --quiet "pyradiance==1.3.*" "mitsuba==3.9.*"
+    fi
+    if ! "$peers/bin/python" -c "import pyoidn.version as v, sys; sys.exit(v.oidn_version != '2.5.1')" >/dev/null 2>&1; then
+        echo "setup: installing pyoidn 2.5.1 (Intel Open Image Denoise 2.5.1) into $peers" >&2
+        "$peers/bin/pip" install --quiet "pyoidn==2.5.1.*"
     fi
 fi
 echo "setup: ok" >&2

@@ -93,10 +93,12 @@ fn naming_json() -> String {
 /// `denoiser.json`: the OIDN prefix of `luxest.denoiser` and the labels of a few cases.
 fn denoiser_json() -> String {
     let oidn = format!("{}1.4.3", header::OIDN_DENOISER_PREFIX);
+    let oidn2 = format!("{}2.5.1", header::OIDN_DENOISER_PREFIX);
     let cases = [
         ("path-tracing", None),
         ("path-tracing", Some("default.onnx")),
         ("double-local-estimate", Some(oidn.as_str())),
+        ("path-tracing", Some(oidn2.as_str())),
     ];
     let rows: Vec<String> = cases
         .iter()

@@ -83,17 +83,23 @@ def test_the_marginal_cost_per_megapixel_is_the_denoisers_own(tmp_path):
     # (64² and 256²): the medians of 3 rounds differ by 0.24 and 0.12 CPU-s.
     hdr = scene(tmp_path)
     (tmp_path / "out").mkdir()
-    r = bench(tmp_path, hdr, (0.15, 4.0), (0.06, 2.0))
+    # A further peer (--peer NAME=COMMAND, as OIDN 2.5.1 in make bench-denoise): 8.0 CPU-s per
+    # megapixel, its own row and ratio, in the same rounds.
+    fake = tmp_path / "fake.py"
+    r = bench(tmp_path, hdr, (0.15, 4.0), (0.06, 2.0), "--peer", f"oidn2={sys.executable} {fake} 0.03 8.0")
     assert r.returncode == 0, r.stderr
     rows = {row["denoiser"]: row for row in contract._read_csv(tmp_path / "out" / "bench.csv")}
     assert float(rows["luxest"]["cpu_s_per_megapixel"]) == pytest.approx(4.0, rel=0.25)
     assert float(rows["oidn"]["cpu_s_per_megapixel"]) == pytest.approx(2.0, rel=0.25)
+    assert float(rows["oidn2"]["cpu_s_per_megapixel"]) == pytest.approx(8.0, rel=0.25)
     # The per-call cost shows in the small image's seconds, not in the per-megapixel ones.
     assert float(rows["luxest"]["cpu_s_small"]) > float(rows["oidn"]["cpu_s_small"]) + 0.05
     table = (tmp_path / "out" / "bench.md").read_text()
     assert "OIDN 1.4.3 (peer)" in table
     ratio = float(table.split("luxest / OIDN, CPU-s per megapixel: ")[1].split()[0])
     assert ratio == pytest.approx(2.0, rel=0.25)
+    assert "| oidn2 (peer) |" in table
+    assert float(table.split("luxest / oidn2, CPU-s per megapixel: ")[1].split()[0]) == pytest.approx(0.5, rel=0.25)
 
 
 def test_bad_input_one_line_and_nothing_written(tmp_path):

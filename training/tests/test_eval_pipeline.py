@@ -156,3 +156,48 @@ def test_peer_table_shows_both_denoisers_inference_seconds_per_megapixel(tmp_pat
     )
     assert [c.strip() for c in line.strip("|").split("|")][4:6] == ["250 / —", "0.50 / 0.75"]
     assert ev.mean_or_none([1.0, 3.0]) == 2.0 and ev.mean_or_none([1.0, None]) is None and ev.mean_or_none([]) is None
+
+
+def test_texture_mask_is_the_albedo_luminance_local_deviation():
+    # Against a direct computation: for each pixel, the standard deviation of the albedo's
+    # luminance over the (2r + 1)² window clipped at the border, compared with TEXTURE_STD.
+    import numpy as np
+
+    rng = np.random.default_rng(3)
+    albedo = np.full((20, 30, 3), 0.5)
+    albedo[5:12, 8:20] = rng.random((7, 12, 3))  # a texture patch on a flat wall
+    albedo[15:, 25:] = [0.1, 0.1, 0.1]  # a flat darker patch: its edge is in the mask
+    y = albedo @ np.array([0.2126, 0.7152, 0.0722])
+    r = ev.TEXTURE_RADIUS
+    want = np.array(
+        [
+            [y[max(i - r, 0) : i + r + 1, max(j - r, 0) : j + r + 1].std() >= ev.TEXTURE_STD for j in range(30)]
+            for i in range(20)
+        ]
+    )
+    mask = ev.texture_mask(albedo)
+    assert mask.shape == (20, 30) and np.array_equal(mask, want)
+    assert mask[8, 14] and not mask[0, 0] and mask[15, 25]  # texture and an edge in, flat wall out
+    assert not ev.texture_mask(np.full((9, 9, 3), 0.3)).any()
+
+
+def test_the_bar_tables_compare_with_oidn_2_5_1(tmp_path):
+    # gap_table and peer_table name OIDN 2.5.1 and score against its rows (+oidn2) when a report
+    # has them; with 1.4.3's rows alone they are as before.
+    rows = [
+        {"estimator": e, "samples": n, "scene": s, "psnr_db": v}
+        for n in (1, 4)
+        for s, off in (("a", 0.0), ("b", 1.0))
+        for e, v in (
+            ("path-tracing+denoise", 30 + off),
+            ("path-tracing+oidn", 29 + off),
+            ("path-tracing+oidn2", 30.5 + off),
+        )
+    ]
+    lines = "\n".join(ev.gap_table(rows, ["a", "b"])).splitlines()
+    assert any("luxest − OIDN 2.5.1" in x for x in lines)
+    row = next(x for x in lines if x.startswith("| 1 |"))
+    assert [c.strip() for c in row.strip("|").split("|")][1] == "-0.50 ± 0.00"
+    old = [r for r in rows if not r["estimator"].endswith("oidn2")]
+    row = next(x for x in "\n".join(ev.gap_table(old, ["a", "b"])).splitlines() if x.startswith("| 1 |"))
+    assert [c.strip() for c in row.strip("|").split("|")][1] == "+1.00 ± 0.00"

@@ -32,7 +32,7 @@ def make(*args, **variables):
     (make eval writes its model stamp even in a dry run); `variables` override these. A dry run
     (`-n`) is made once per session for each command line (every make reads all the pipeline's
     makefiles, a second or two: several tests ask for the same plan)."""
-    v = {**STAGES, "DATASET": "pytest-dry-run", "EVAL_DIR": str(_STAGE_DIR / "eval"), **variables}
+    v = {**STAGES, "DATASET": "pytest-dry-run", "EVAL_DIR": str(_STAGE_DIR / "eval"), "EVAL_OIDN2": "yes", **variables}
     command = ("make", "--no-print-directory", *args, *(f"{k}={val}" for k, val in v.items()))
     return _dry_run(command) if "-n" in args else _run(command)
 
@@ -84,6 +84,11 @@ def test_features_follow_feature_spp():
         assert hdr and stamp not in hdr.group(1).split() and "feature-spp" not in hdr.group(1), level
     cmds = dry_run("reference", "noisy", "eval", FEATURE_SPP="32", EVAL_MODEL="models/default.onnx")
     aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"]]
+    # (make eval also renders aov-write's default features, without --min-samples, in
+    # default-features/ directories, and the public interiors' reference albedo at full samples.)
+    default = [c for c in aovs if "/default-features/" in flag(c, "-o")]
+    aovs = [c for c in aovs if c not in default and not ("--reference" in c and "/public/" in flag(c, "-o"))]
+    assert default and not [c for c in default if "--min-samples" in c]
     assert any("cornell-box" in c[1] for c in aovs) and all(flag(c, "--min-samples") == "32" for c in aovs)
     assert not [c for c in cmds if c[0] == STAGES["TRACE"] and "--min-samples" in c]
     # The main job's features too.
@@ -271,12 +276,25 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     assert len(ref) == len(prog) == 1 and flag(ref[0], "--seed") != flag(prog[0], "--seed")
     snapshots = flag(prog[0], "--snapshots").split(",")
     denoised = [c for c in cmds if c[0] == STAGES["DENOISE"] and "/cornell-box/" in c[1]]
+    # With aov-write's default features (default-features/: each snapshot's own samples, the
+    # powers of two) the same snapshots are denoised again, their features taken from there.
+    default = [c for c in denoised if "/default-features/" in flag(c, "-o")]
+    denoised = [c for c in denoised if c not in default]
+    powers = [s for s in snapshots if int(s) & (int(s) - 1) == 0]
+    assert sorted(int(re.search(r"_(\d{6})spp\.hdr\.exr$", c[1]).group(1)) for c in default) == sorted(map(int, powers))
+    assert all("/default-features/" in flag(c, "--features-of") for c in default)
     images = [c for c in cmds if c[0] == STAGES["ESTIMATE"] and c[1] == "image" and "cornell-box" in c[2]]
     dle = [c for c in images if "--light-tracing" not in c]
     assert len(denoised) == len(snapshots) + len(dle)
-    # The peer (Intel Open Image Denoise) denoises exactly the same inputs.
+    # The peers (Intel Open Image Denoise 1.4.3, and 2.5.1 through --oidn-lib at quality high)
+    # denoise exactly the same inputs, with the same features.
     oidn = [c for c in cmds if c[0] == STAGES["OIDN_DENOISE"] and "/cornell-box/" in c[1]]
-    assert sorted(c[1] for c in oidn) == sorted(c[1] for c in denoised)
+    assert sorted(c[1] for c in oidn) == sorted(c[1] for c in denoised + default)
+    oidn2 = [c[c.index("--aux") + 2 :] + c[c.index("--aux") : c.index("--aux") + 2] for c in cmds if "--oidn-lib" in c]
+    oidn2 = [c for c in oidn2 if "/cornell-box/" in c[0]]
+    assert sorted(c[0] for c in oidn2) == sorted(c[1] for c in denoised + default)
+    assert all(flag(c, "--aux") == ("prefilter" if "/default-features/" in flag(c, "-o") else "clean") for c in oidn2)
+    assert {flag(c, "--alb") for c in oidn2} == {flag(c, "--alb") for c in oidn}
     # The double-local-estimate images are denoised with the features of one snapshot (those
     # its model takes, whichever they are: denoise --features-of).
     le = [c for c in denoised if re.search(r"le\.hdr\.exr$", c[1])]
@@ -320,6 +338,7 @@ def test_held_out_references_follow_eval_heldout_ref_spp():
             and "--reference" in c
             and not flag(c, "-o").startswith("data/")
             and "cornell-box" not in c[1]
+            and "/public/" not in flag(c, "-o")
         ]
         scored = [c for c in cmds if c[0] == STAGES["EVALUATE"] and c[1] == "images" and "dataset-" in flag(c, "-o")]
         return refs, scored, cmds
@@ -335,6 +354,51 @@ def test_held_out_references_follow_eval_heldout_ref_spp():
     assert {flag(c, "--reference") for c in scored} == made and all("/ref-4096/" in m for m in made)
     # The stamp is a prerequisite, not an image to score.
     assert not any("heldout-ref-spp" in a for c in scored for a in c)
+
+
+def test_public_interiors_are_scored_with_independent_references_and_both_features():
+    # make eval's public interiors (scenes/public/): each a reference with the reference seed, one
+    # progressive run with the noisy seed, antialiased features beside it and aov-write's default
+    # ones apart, every snapshot denoised by luxest and both OIDN releases, two reports a scene.
+    cmds = dry_run("eval", EVAL_MODEL="models/default.onnx")
+    names = ("living-room", "staircase")
+    for name in names:
+        traces = [c for c in cmds if c[0] == STAGES["TRACE"] and c[1] == f"build/public/{name}/scene.lxs"]
+        ref = [c for c in traces if "--reference" in c]
+        prog = [c for c in traces if "--reference" not in c]
+        assert len(ref) == len(prog) == 1 and flag(ref[0], "--seed") != flag(prog[0], "--seed")
+        assert flag(ref[0], "--resolution") == flag(prog[0], "--resolution")
+        levels = flag(prog[0], "--snapshots").split(",")
+        aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and c[1] == f"build/public/{name}/scene.lxs"]
+        noisy_aovs = [c for c in aovs if "--reference" not in c]
+        assert sorted("--min-samples" in c for c in noisy_aovs) == [False, True]
+        assert all(
+            flag(c, "--seed") == flag(prog[0], "--seed") and flag(c, "--snapshots") == ",".join(levels)
+            for c in noisy_aovs
+        )
+        snap = [c for c in cmds if c[0] == STAGES["DENOISE"] and f"/public/{name}/" in c[1] and "spp.hdr" in c[1]]
+        assert len(snap) == 2 * len(levels)  # antialiased and default features
+        oidn = [c for c in cmds if c[0] == STAGES["OIDN_DENOISE"] and f"/public/{name}/" in c[1] and "spp.hdr" in c[1]]
+        oidn2 = [
+            c for c in cmds if "--oidn-lib" in c and f"/public/{name}/" in flag(c, "-o") and "spp.dn" in flag(c, "-o")
+        ]
+        assert len(oidn) == len(oidn2) == 2 * len(levels)
+        reports = [c for c in cmds if c[0] == STAGES["EVALUATE"] and f"public-{name}" in flag(c, "-o")]
+        assert len(reports) == 2 and all(flag(c, "--reference") == flag(ref[0], "-o") + "_ref.hdr.exr" for c in reports)
+        # The albedo of the texture mask is not scored.
+        assert not any(a.endswith("_ref.alb.exr") for c in reports for a in c)
+    summary = next(
+        c
+        for c in (
+            shlex.split(x)
+            for x in make("-n", "eval", EVAL_MODEL="models/default.onnx").stdout.replace("\\\n", " ").splitlines()
+            if "eval.py summary" in x
+        )
+    )
+    public = summary[summary.index("--public") + 1 : summary.index("--flip-dir")]
+    assert sorted(Path(p).name for p in public) == sorted(
+        f"public-{n}{k}.images.csv" for n in names for k in ("", "-default-features")
+    )
 
 
 def old_cornell_box(ev, *more):

@@ -217,13 +217,22 @@ impl ImageReport {
 }
 
 /// The estimator label of an image: the header's estimator, `+oidn` appended when the denoiser
-/// header names Intel Open Image Denoise (`oidn-<version>`, pipelines/oidn_denoise.py), `+denoise`
-/// for any other denoiser (a luxest model's file name).
+/// header names Intel Open Image Denoise 1.x (`oidn-<version>`, pipelines/oidn_denoise.py),
+/// `+oidn<major>` for a later major release (`+oidn2` for `oidn-2.5.1`: both releases are
+/// scored side by side in one report), `+denoise` for any other denoiser (a luxest model's file
+/// name).
 pub fn estimator_label(estimator: &str, denoiser: Option<&str>) -> String {
     match denoiser {
         None => estimator.to_string(),
-        Some(d) if d.starts_with(header::OIDN_DENOISER_PREFIX) => format!("{estimator}+oidn"),
-        Some(_) => format!("{estimator}+denoise"),
+        Some(d) => match d.strip_prefix(header::OIDN_DENOISER_PREFIX) {
+            Some(version) => match version.split('.').next() {
+                Some(major) if major != "1" && !major.is_empty() => {
+                    format!("{estimator}+oidn{major}")
+                }
+                _ => format!("{estimator}+oidn"),
+            },
+            None => format!("{estimator}+denoise"),
+        },
     }
 }
 
@@ -241,6 +250,10 @@ mod label_tests {
         assert_eq!(
             estimator_label("double-local-estimate", Some("oidn-1.4.3")),
             "double-local-estimate+oidn"
+        );
+        assert_eq!(
+            estimator_label("path-tracing", Some("oidn-2.5.1")),
+            "path-tracing+oidn2"
         );
     }
 }

@@ -66,7 +66,7 @@ pub const ALL: [&str; 14] = [
 
 /// The values of [`ESTIMATOR`]: which estimator made an image or sensor results (also
 /// `RunInfo::estimator` in sensor results). `evaluate` labels denoised images
-/// `<estimator>+denoise` or `<estimator>+oidn`. Python's `luxest_contract` has the same names,
+/// `<estimator>+denoise`, `<estimator>+oidn` (OIDN 1.x) or `<estimator>+oidn2` (OIDN 2.x). Python's `luxest_contract` has the same names,
 /// tied by `tests/fixtures/contract/estimators.json`.
 pub mod estimator {
     /// `trace`: path tracing.
