@@ -433,6 +433,9 @@ def test_export_matches_onnxruntime(models, name):
     assert export.outputs(head, scales) in meta[contract.MODEL_TRANSFER]
     assert (export.DETAIL_GATE in meta[contract.MODEL_TRANSFER]) == gate
     back, state = export.load_onnx(onnx_path)
+    # The test runs train with config's defaults: both feature sets, the input scaled to 1/16.
+    assert back.own_features and meta[contract.FEATURE_SAMPLES] == "1"
+    assert float(meta[contract.MEAN_LUMINANCE]) == back.mean_luminance == 0.0625
     assert back.detail_gate == gate and back.scales == scales
     assert all(torch.equal(state[k], v) for k, v in net.state_dict().items())
 
@@ -970,6 +973,10 @@ def test_committed_models_keep_the_contract(name):
     record = json.loads((root / "models" / f"{name}.config.json").read_text())
     recorded = config.Config.from_values(record)
     assert [getattr(cfg, k) for k in config.NETWORK] == [getattr(recorded, k) for k in config.NETWORK]
+    # The features it takes and the scaling of its input, as its recipe trained it.
+    meta = {p.key: p.value for p in __import__("onnx").load(str(root / "models" / f"{name}.onnx")).metadata_props}
+    assert meta[contract.FEATURE_SAMPLES] == str(config.feature_samples(recorded))
+    assert contract.model_mean_luminance(meta) == config.scale_luminance(recorded)
     x = _uniform_irradiance(h=40, w=56)[0].permute(1, 2, 0).numpy()
     hdr, alb, nrm = x[..., 0:3].copy(), x[..., 3:6], x[..., 6:9]
     emission = np.zeros_like(hdr)
