@@ -108,7 +108,7 @@ endif
 
 # The features at each level's own sample count (OIDN trains with noisy auxiliary images too):
 # the levels below FEATURE_SPP (at and above it both sets are the same images) written by
-# aov-write without --min-samples, seed NOISY_SEED (the samples of the split's radiance of the
+# aov-write --min-samples 1, seed NOISY_SEED (the samples of the split's radiance of the
 # level) into $(DATA_DIR)/<split>/own/ (luxest_contract.OWN_FEATURES_DIR) under the scene's own
 # names; preprocess.py pairs them with the split's radiance and reference, and training draws
 # one of the two feature sets per crop. Test scenes too (make eval scores both kinds).
@@ -120,7 +120,7 @@ own_set = $(call lx_image,$(call own_prefix,$(1)),$(NOISY_OWN_MAX),nrm)
 define dataset_own
 $(call own_set,$(1)): build/dataset/$(DATASET)/$(1).lxs $(AOV_WRITE)
 	@mkdir -p $(call lx_own,$(DATA_DIR)/$(patsubst %/,%,$(dir $(1))))
-	$$(LAUNCH) $$(AOV_WRITE) $$< --spp $(NOISY_OWN_MAX) --snapshots $(NOISY_OWN_SNAPSHOTS) --seed $(NOISY_SEED) -o $(call own_prefix,$(1))
+	$$(LAUNCH) $$(AOV_WRITE) $$< --spp $(NOISY_OWN_MAX) --snapshots $(NOISY_OWN_SNAPSHOTS) --seed $(NOISY_SEED) --min-samples 1 -o $(call own_prefix,$(1))
 endef
 DATASET_OWN :=
 ifneq ($(NOISY_OWN),)

@@ -62,7 +62,7 @@ class ImageName:
 
 OWN_FEATURES_DIR = "own"
 """The directory, inside a split's, of the feature images of its scenes' noisy levels below
-FEATURE_SPP at the level's own sample count (aov-write without --min-samples, seed NOISY_SEED):
+FEATURE_SPP at the level's own sample count (aov-write --min-samples 1, seed NOISY_SEED):
 `<split>/own/<name>_<count>spp.{alb,nrm,emi,ema}.exr`, paired with the split's own radiance
 `<split>/<name>_<count>spp.hdr.exr` (the same samples) and reference (make noisy;
 pipelines/naming.mk lx_own). The split's own features are antialiased (--min-samples

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Scores denoising models on one scene with both kinds of features, in one run: antialiased
 (aov-write --min-samples FEATURE_SPP, what make run and make eval write) and the default ones at
-each snapshot's own sample count (aov-write without --min-samples), by `evaluate images` (the
+each snapshot's own sample count (aov-write --min-samples 1), by `evaluate images` (the
 scoring of make eval: PSNR, SSIM and FLIP on the evaluation tonemap) against an independent
 reference — the comparison that decides whether a fine-tuned model replaces the committed one
 (models/README.md).
@@ -11,7 +11,7 @@ reference — the comparison that decides whether a fine-tuned model replaces th
 
 Renders (once; existing files are kept) the reference (seed REF_SEED), one progressive run of
 the snapshots (seed NOISY_SEED) and both feature sets; denoises every snapshot with every model
-and feature set (`denoise` refuses features a model's metadata does not take: reported as
+and feature set (into model-<model's file stem>/, again when the model is newer) (`denoise` refuses features a model's metadata does not take: reported as
 refused); writes <work-dir>/scores.csv (evaluate's) and prints a table per feature set."""
 
 import argparse
@@ -75,7 +75,7 @@ def render(args, bins, work):
         )
         if err:
             sys.exit(f"compare_features: trace: {err}")
-    for kind, extra in zip(FEATURE_SETS, (["--min-samples", args.feature_spp], [])):
+    for kind, extra in zip(FEATURE_SETS, (["--min-samples", args.feature_spp], ["--min-samples", 1])):
         (work / kind).mkdir(exist_ok=True)
         if not Path(contract.image_name(str(work / kind / "scene"), "nrm", top)).exists():
             err = run(
@@ -115,7 +115,7 @@ def main(argv=None):
     images, refused = [], {}
     for m, model in enumerate(args.models):
         for kind in FEATURE_SETS:
-            out = work / f"model{m}" / kind
+            out = work / f"model-{Path(model).stem}" / kind
             out.mkdir(parents=True, exist_ok=True)
             for spp in args.spp:
                 hdr = contract.image_name(str(work / "scene"), "hdr", spp)
@@ -125,7 +125,7 @@ def main(argv=None):
                     for k in contract.FEATURES[1:]
                     for a in (f"--{k}", contract.image_name(str(work / kind / "scene"), k, spp))
                 ]
-                if not dn.exists():
+                if not dn.exists() or dn.stat().st_mtime < Path(model).stat().st_mtime:
                     err = run([bins / "denoise", hdr, "--model", model, *feats, "-o", dn])
                     if err:
                         refused[(m, kind, spp)] = err

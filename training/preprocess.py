@@ -192,7 +192,7 @@ def _check_own(noisy, alb):
         if a.value(key, required=True) != noisy.value(key, required=True):
             raise contract.ContractError(
                 f"{alb}: {key} = {a.value(key)}, its radiance {noisy.path} {noisy.value(key)} "
-                "(the features of a level's own samples: aov-write without --min-samples, the radiance's seed)"
+                "(the features of a level's own samples: aov-write --min-samples 1, the radiance's seed)"
             )
 
 

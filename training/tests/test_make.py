@@ -60,11 +60,20 @@ def flag(cmd, name):
 def test_dataset_references_have_their_own_seed_and_features_share_traces():
     cmds = dry_run("reference", "noisy")
     traces = [c for c in cmds if c[0] == STAGES["TRACE"]]
-    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"]]
+    own_dir = f"/{contract.OWN_FEATURES_DIR}/"
+    own = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and own_dir in flag(c, "-o")]
+    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and c not in own]
     assert len(traces) == len(aovs) == 2 * 24  # quick: 24 scenes, a reference and a noisy run each
     ref_seeds = {flag(c, "--seed") for c in traces if "--reference" in c}
     noisy_seeds = {flag(c, "--seed") for c in traces if "--reference" not in c}
     assert len(ref_seeds) == len(noisy_seeds) == 1 and ref_seeds.isdisjoint(noisy_seeds)
+    # The features at each level's own samples: one run per scene, the levels below FEATURE_SPP,
+    # the noisy radiance's seed, --min-samples 1, into <split>/own/ under the scene's name.
+    assert len(own) == 24 and all(flag(c, "--min-samples") == "1" for c in own)
+    assert {(flag(c, "--seed"), flag(c, "--spp"), flag(c, "--snapshots")) for c in own} == {(*noisy_seeds, "8", "1,2,4,8")}
+    assert sorted(Path(flag(c, "-o")).name for c in own) == sorted(
+        Path(flag(c, "-o")).name for c in traces if "--reference" not in c
+    )
     # aov-write gets exactly trace's arguments for each image set (same seed, spp, snapshots),
     # and the features' least samples per pixel.
     assert all(flag(c, "--min-samples") == "16" for c in aovs)
@@ -83,8 +92,12 @@ def test_features_follow_feature_spp():
         assert nrm and stamp in nrm.group(1).split(), level
         assert hdr and stamp not in hdr.group(1).split() and "feature-spp" not in hdr.group(1), level
     cmds = dry_run("reference", "noisy", "eval", FEATURE_SPP="32", EVAL_MODEL="models/default.onnx")
-    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"]]
+    own_dir = f"/{contract.OWN_FEATURES_DIR}/"
+    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and own_dir not in flag(c, "-o")]
     assert any("cornell-box" in c[1] for c in aovs) and all(flag(c, "--min-samples") == "32" for c in aovs)
+    # The features at each level's own samples: the levels below FEATURE_SPP.
+    own = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and own_dir in flag(c, "-o")]
+    assert own and {flag(c, "--snapshots") for c in own} == {"1,2,4,8,16"}
     assert not [c for c in cmds if c[0] == STAGES["TRACE"] and "--min-samples" in c]
     # The main job's features too.
     run = [c for c in dry_run("run", FEATURE_SPP="32") if c[0] == STAGES["AOV_WRITE"]]

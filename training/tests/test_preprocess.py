@@ -324,8 +324,8 @@ def test_crops_draw_a_scenes_level_then_one_of_its_realizations(tmp_path):
 
 
 def write_own(split_dir, name, spp, seed, rng, samples=None):
-    """The features of level `spp` at its own sample count in `<split>/own/` (aov-write without
-    --min-samples), with `samples` in their headers (default: the level's); returns the albedo."""
+    """The features of level `spp` at its own sample count in `<split>/own/` (aov-write
+    --min-samples 1), with `samples` in their headers (default: the level's); returns the albedo."""
     d = split_dir / contract.OWN_FEATURES_DIR
     d.mkdir(exist_ok=True)
     header = {contract.SAMPLES: samples or spp, contract.SEED: seed}

@@ -1,6 +1,7 @@
 """Tests of the training toolkit: shapes, the transfer, learning, export parity, config."""
 
 import json
+import re
 import sys
 from dataclasses import asdict
 from pathlib import Path
@@ -977,6 +978,11 @@ def test_committed_models_keep_the_contract(name):
     meta = {p.key: p.value for p in __import__("onnx").load(str(root / "models" / f"{name}.onnx")).metadata_props}
     assert meta[contract.FEATURE_SAMPLES] == str(config.feature_samples(recorded))
     assert contract.model_mean_luminance(meta) == config.scale_luminance(recorded)
+    if name == "default":
+        # aov-write's default --min-samples writes features the default model takes.
+        cli = (root / "crates" / "aov-write" / "src" / "cli.rs").read_text()
+        default_min = int(re.search(r"pub const DEFAULT_MIN_SAMPLES: u32 = (\d+);", cli).group(1))
+        assert default_min >= int(meta[contract.FEATURE_SAMPLES])
     x = _uniform_irradiance(h=40, w=56)[0].permute(1, 2, 0).numpy()
     hdr, alb, nrm = x[..., 0:3].copy(), x[..., 3:6], x[..., 6:9]
     emission = np.zeros_like(hdr)

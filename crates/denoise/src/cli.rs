@@ -298,7 +298,9 @@ pub fn check_feature_samples(
                 return Err(Error::input(
                     path,
                     format!(
-                        "{} feature of {n} samples per pixel, but the model {} takes features of                          at least {required} (write them with aov-write --min-samples {required})",
+                        "{} feature of {n} samples per pixel, but the model {} takes features \
+                         of at least {required} (write them with aov-write --min-samples \
+                         {required})",
                         feature.name(),
                         model.display()
                     ),
@@ -505,7 +507,7 @@ mod tests {
             "{err}"
         );
         assert!(
-            err.contains("--min-samples 16") && !err.contains('\n'),
+            err.contains("--min-samples 16") && !err.contains('\n') && !err.contains("  "),
             "{err}"
         );
         // The normal alone short of the count; an image without the header is taken as it is.
