@@ -70,7 +70,9 @@ def test_dataset_references_have_their_own_seed_and_features_share_traces():
     # The features at each level's own samples: one run per scene, the levels below FEATURE_SPP,
     # the noisy radiance's seed, --min-samples 1, into <split>/own/ under the scene's name.
     assert len(own) == 24 and all(flag(c, "--min-samples") == "1" for c in own)
-    assert {(flag(c, "--seed"), flag(c, "--spp"), flag(c, "--snapshots")) for c in own} == {(*noisy_seeds, "8", "1,2,4,8")}
+    assert {(flag(c, "--seed"), flag(c, "--spp"), flag(c, "--snapshots")) for c in own} == {
+        (*noisy_seeds, "8", "1,2,4,8")
+    }
     assert sorted(Path(flag(c, "-o")).name for c in own) == sorted(
         Path(flag(c, "-o")).name for c in traces if "--reference" not in c
     )
