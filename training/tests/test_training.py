@@ -635,6 +635,16 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path, capsys, monkeypatch):
         for x, y in zip(one, two):
             assert x.shape == y.shape and torch.equal(x, y)
         assert one[0].is_contiguous(memory_format=torch.channels_last)
+    # With a mean luminance (each input's radiance and its reference scaled by a power of two,
+    # with the exposures of the scaled images) both cut the same batches too.
+    scaled = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=16, extra_seeds=[5], mean_luminance=0.0625)
+    # hdr and emi uniform on [0, 1): mean of max(hdr - emi, 0) about 1/6, halved into [1/16, 1/8).
+    assert set(scaled.scales) == {0.5}
+    pairs = list(zip(train.batches(scaled, cfg, cpu), torch.utils.data.DataLoader(scaled, batch_size=8)))
+    assert len(pairs) == 2
+    for one, two in pairs:
+        for x, y in zip(one, two):
+            assert torch.equal(x, y)
     # A length that is not a multiple of the batch ends in a partial batch, as the DataLoader's.
     short = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=10)
     ours = list(train.batches(short, config.parse(["--batch", "4", "--cropper", "device"]), cpu))
