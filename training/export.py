@@ -154,6 +154,10 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
     print(f"export: wrote {out_path}")
 
 
+SETTABLE = (contract.FEATURE_SAMPLES, contract.MEAN_LUMINANCE)
+"""The metadata keys `--set-metadata` sets: what a model takes, recorded after its export."""
+
+
 def set_metadata(model_path, values):
     """Sets the metadata entries `values` ({key: text}) of an exported model in place (weights
     and graph unchanged): how a model exported before a key existed gets it, e.g. the
@@ -180,7 +184,7 @@ def main(argv=None):
         "--set-metadata",
         nargs="+",
         metavar="KEY=VALUE",
-        help="set these metadata entries of the model --out in place (e.g. luxest.feature_samples=16)",
+        help="set metadata entries KEY=VALUE of the model --out in place (SETTABLE: its feature samples, mean luminance)",
     )
     ap.add_argument("--out", required=True)
     ap.add_argument(
@@ -191,10 +195,11 @@ def main(argv=None):
     args = ap.parse_args(argv)
     if args.set_metadata:
         pairs = [kv.partition("=") for kv in args.set_metadata]
-        bad = [k for k, eq, _ in pairs if not eq or not k.startswith("luxest.")]
+        bad = [k for k, eq, _ in pairs if not eq or k not in SETTABLE]
         if bad or not Path(args.out).is_file():
             raise SystemExit(
-                f"export: --set-metadata: expected luxest.KEY=VALUE pairs and an existing --out model ({bad or args.out})"
+                f"export: --set-metadata: expected KEY=VALUE pairs of {', '.join(SETTABLE)} and an existing "
+                f"--out model ({', '.join(bad) or args.out})"
             )
         set_metadata(args.out, {k: v for k, _, v in pairs})
         print(f"export: set {', '.join(k for k, _, _ in pairs)} in {args.out}")
