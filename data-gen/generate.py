@@ -20,6 +20,12 @@ diffuse colours and the metals' specular colour, repeated at varied scales and o
 textured emitters (windows, patterned ceiling panels). The other rooms, and the spheres (which
 have no texture coordinates), stay untextured.
 
+A quarter of the rooms (SKY_SHARE, drawn from a generator of their own so that the rest of a room
+is what it would be without) are daylit as well: an environment — the CIE overcast, intermediate
+or clear sky (with or without the sun, 3000 to 20 000 lx diffuse horizontal illuminance) or a
+constant one of 500 to 8000 cd/m² — shining through an opening cut in the right wall and, in
+rooms open at the front, seen past the opening.
+
   generate.py --preset quick|full --side N --out DIR   write DIR/<split>/<name>.ron, N x N
                                                        images, and the library DIR/textures/
   generate.py ... --only scenes|textures               write only the scenes or only the library
@@ -72,6 +78,8 @@ METALS = {
     "silver": ((0.155, 0.117, 0.138), (4.828, 3.122, 2.147)),
     "chromium": ((4.368, 2.910, 1.654), (5.205, 4.231, 3.755)),
 }
+# The share of rooms lit by daylight too: a sky through an opening in the right wall.
+SKY_SHARE = 0.25
 # Length along the meshes' u (the ring, the knot) over the length around their tube (v).
 MESH_ASPECT = {"torus.obj": 3, "trefoil.glb": 12}
 PICTURES = ("photo-landscape", "photo-still-life", "paper-text")
@@ -218,8 +226,29 @@ def scene(preset, index, seed, side, scene_dir=None):
     open_front = rng.random() < 0.25
     # One wall covering for the four walls of a textured room (each wall its own scale).
     wall_lib = rng.choice(sorted(WALLS)) if textured and rng.random() < 0.6 else None
+    # Daylight in some rooms (from an rng of its own, so the other draws are those of a room
+    # without it): an environment (the CIE overcast, intermediate or clear sky, or a constant
+    # one) seen through an opening cut in the right wall, and past the open front of a room seen
+    # from outside.
+    sky_rng = random.Random(f"sky-{seed}-{index}")
+    sky = sky_rng.random() < SKY_SHARE
+    hole = None
+    if sky:
+        hw, hh = sky_rng.uniform(0.6, min(2.0, d - 0.6)), sky_rng.uniform(0.6, min(1.6, h - 1.0))
+        hole = (sky_rng.uniform(0.8, h - hh - 0.2), sky_rng.uniform(0.3, d - hw - 0.3), hh, hw)
     for name, corner, u, v, su, sv in walls:
         if open_front and name == "front":
+            continue
+        if hole is not None and name == "right":
+            # The right wall (x = w, u along z, v along y) around the opening: below, above,
+            # and either side.
+            y0, z0, hh, hw = hole
+            m = material("lambert")
+            pieces = [(0, 0, d, y0), (0, y0 + hh, d, h - y0 - hh), (0, y0, z0, hh), (z0 + hw, y0, d - z0 - hw, hh)]
+            for j, (z, y, lz, ly) in enumerate(pieces):
+                objects.append(
+                    f'(name: "right{j}", shape: Quad(corner: {v3(w, y, z)}, u: {v3(0, 0, lz)}, v: {v3(0, ly, 0)}), material: "{m}")'
+                )
             continue
         if name == "floor":
             tex = maybe(FLOORS, su, sv, 0.85)
@@ -377,6 +406,19 @@ def scene(preset, index, seed, side, scene_dir=None):
     else:
         cam = v3(rng.uniform(0.3, w - 0.3), rng.uniform(0.8, h - 0.5), rng.uniform(0.2, min(0.8, tz - 0.3)))
         look = v3(tx, rng.uniform(0.2, 1.0), tz)
+    environment = ""
+    if sky:
+        kind = sky_rng.choice(["Overcast", "Intermediate", "Clear", "Constant"])
+        if kind == "Constant":
+            lum = f(sky_rng.uniform(500, 8000))
+            environment = f"    environment: Constant(({lum}, {lum}, {lum})),\n"
+        else:
+            alt, azi = f(sky_rng.uniform(10, 60)), f(sky_rng.uniform(-180, 180))
+            sun = "true" if kind != "Overcast" and sky_rng.random() < 0.5 else "false"
+            environment = (
+                f"    environment: Sky((kind: {kind}, sun: {sun}, angles: Some((altitude: {alt}, azimuth: {azi})), "
+                f"horizontal_illuminance: Some({f(sky_rng.uniform(3000, 20000))}), resolution: 128)),\n"
+            )
     mats = ",\n        ".join(f'"{k}": {v}' for k, v in materials.items())
     objs = ",\n        ".join(objects)
     lts = ",\n        ".join(lights)
@@ -391,7 +433,7 @@ Scene(
     materials: {{
         {mats},
     }},
-{tex}    objects: [
+{tex}{environment}    objects: [
         {objs},
     ],
     point_lights: [

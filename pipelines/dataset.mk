@@ -106,6 +106,28 @@ $(foreach s,$(DATASET_TRAIN_SCENES),$(foreach k,$(NOISY_EXTRA_SEEDS),$(eval $(ca
 DATASET_REALIZATIONS := $(foreach s,$(DATASET_TRAIN_SCENES),$(foreach k,$(NOISY_EXTRA_SEEDS),$(call extra_set,$(s),$(k))))
 endif
 
+# The features at each level's own sample count (OIDN trains with noisy auxiliary images too):
+# the levels below FEATURE_SPP (at and above it both sets are the same images) written by
+# aov-write --min-samples 1, seed NOISY_SEED (the samples of the split's radiance of the
+# level) into $(DATA_DIR)/<split>/own/ (luxest_contract.OWN_FEATURES_DIR) under the scene's own
+# names; preprocess.py pairs them with the split's radiance and reference, and training draws
+# one of the two feature sets per crop. Test scenes too (make eval scores both kinds).
+NOISY_OWN := $(shell for l in $(NOISY_LEVELS); do [ $$l -lt $(FEATURE_SPP) ] && echo $$l; done)
+NOISY_OWN_MAX := $(lastword $(NOISY_OWN))
+NOISY_OWN_SNAPSHOTS := $(subst $(space),$(comma),$(strip $(NOISY_OWN)))
+own_prefix = $(call lx_own,$(DATA_DIR)/$(patsubst %/,%,$(dir $(1))))/$(notdir $(1))
+own_set = $(call lx_image,$(call own_prefix,$(1)),$(NOISY_OWN_MAX),nrm)
+define dataset_own
+$(call own_set,$(1)): build/dataset/$(DATASET)/$(1).lxs $(AOV_WRITE)
+	@mkdir -p $(call lx_own,$(DATA_DIR)/$(patsubst %/,%,$(dir $(1))))
+	$$(LAUNCH) $$(AOV_WRITE) $$< --spp $(NOISY_OWN_MAX) --snapshots $(NOISY_OWN_SNAPSHOTS) --seed $(NOISY_SEED) --min-samples 1 -o $(call own_prefix,$(1))
+endef
+DATASET_OWN :=
+ifneq ($(NOISY_OWN),)
+$(foreach s,$(DATASET_SCENES),$(eval $(call dataset_own,$(s))))
+DATASET_OWN := $(foreach s,$(DATASET_SCENES),$(call own_set,$(s)))
+endif
+
 # The local-estimate family (not for the test scenes: make eval renders theirs).
 DATASET_LE_SCENES := $(filter-out test/%,$(DATASET_SCENES))
 define dataset_le
@@ -118,4 +140,4 @@ dataset-scenes: $(patsubst %,build/dataset/$(DATASET)/%.lxs,$(DATASET_SCENES))
 reference: $(foreach s,$(DATASET_SCENES),$(foreach k,hdr nrm,$(call lx_ref,$(DATA_DIR)/$(s),$(k))))
 noisy: $(foreach s,$(DATASET_SCENES),$(foreach k,hdr nrm,$(call lx_image,$(DATA_DIR)/$(s),$(NOISY_MAX),$(k)))) \
 	$(foreach s,$(DATASET_LE_SCENES),$(foreach n,$(DATASET_DLE),$(call lx_le,$(DATA_DIR)/$(s),$(n),hdr))) \
-	$(DATASET_REALIZATIONS)
+	$(DATASET_REALIZATIONS) $(DATASET_OWN)

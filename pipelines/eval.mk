@@ -16,10 +16,10 @@
 # images at EVAL_DATA_DLE paths, denoised with the NOISY_MAX features. (3) The cases of `make validate` at EVAL_SENSOR_SCALE times
 # their paths, against exact values. (4) The public interiors of scenes/public/ (EVAL_PUBLIC;
 # CC-BY, credited in scenes/public/README.md; never in training): their own references (seed
-# REF_SEED), noisy levels EVAL_PUBLIC_SPP, features both antialiased and aov-write's default,
+# REF_SEED), noisy levels EVAL_PUBLIC_SPP, features both antialiased and of each snapshot's own samples,
 # double-local-estimate images. Every image luxest's model denoises in (1), (2) and (4) is also
 # denoised by Intel Open Image Denoise 1.4.3 and 2.5.1 (the peers; hdr + albedo + normal),
-# scored beside it; (1) and (4) also with aov-write's default features (the snapshot's own
+# scored beside it; (1) and (4) also with the features of each snapshot's own samples (the snapshot's own
 # samples, not antialiased), in a report of their own.
 # A local-estimate image is denoised with the features of a path-traced level (denoise
 # --features-of): denoise reads from there the features its model's metadata lists.
@@ -130,25 +130,26 @@ $(EVAL_CSV)/cornell-box.images.csv: $(call lx_ref,$(EVAL_CB),hdr) $(call eval_cb
 	@mkdir -p $(@D) $(EVAL_DIR)/flip
 	$(LAUNCH) $(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip
 
-# The same progressive run denoised with aov-write's default features (no --min-samples: each
+# The same progressive run denoised with the features of each snapshot's own samples (aov-write --min-samples 1: each
 # snapshot's features average that snapshot's own samples, same seed), at the powers of two up to
-# EVAL_PROG_SPP: luxest's model (denoise --features-of), OIDN 1.4.3 (features as they are) and
+# EVAL_PROG_SPP: luxest's model (denoise --features-of --any-feature-samples: the committed
+# model asks for antialiased ones and refuses these otherwise), OIDN 1.4.3 (features as they are) and
 # OIDN 2.5.1 (prefiltered), in directories of their own; a report of their own (the labels are
 # those of the antialiased report).
 EVAL_DF_SNAPSHOTS := $(shell p=1; while [ $$p -le $(EVAL_PROG_SPP) ]; do echo $$p; p=$$((p * 2)); done)
 EVAL_DF_LAST := $(lastword $(EVAL_DF_SNAPSHOTS))
-EVAL_CB_DF := $(EVAL_DIR)/cornell-box/default-features/cb
-EVAL_CB_DF_DN := $(EVAL_DIR)/cornell-box/default-features/cb-df
-EVAL_CB_DF_OIDN := $(EVAL_DIR)/cornell-box/default-features/oidn/cb-df-oidn
-EVAL_CB_DF_OIDN2 := $(EVAL_DIR)/cornell-box/default-features/oidn2/cb-df-oidn2
+EVAL_CB_DF := $(EVAL_DIR)/cornell-box/own-features/cb
+EVAL_CB_DF_DN := $(EVAL_DIR)/cornell-box/own-features/cb-df
+EVAL_CB_DF_OIDN := $(EVAL_DIR)/cornell-box/own-features/oidn/cb-df-oidn
+EVAL_CB_DF_OIDN2 := $(EVAL_DIR)/cornell-box/own-features/oidn2/cb-df-oidn2
 
 $(call lx_image,$(EVAL_CB_DF),$(EVAL_DF_LAST),nrm): $(EVAL_CB_SCENE) $(AOV_WRITE)
 	@mkdir -p $(@D)
-	$(LAUNCH) $(AOV_WRITE) $< --spp $(EVAL_DF_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_DF_SNAPSHOTS)) --seed $(NOISY_SEED) --resolution $(EVAL_RES) -o $(EVAL_CB_DF)
+	$(LAUNCH) $(AOV_WRITE) $< --spp $(EVAL_DF_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_DF_SNAPSHOTS)) --seed $(NOISY_SEED) --min-samples 1 --resolution $(EVAL_RES) -o $(EVAL_CB_DF)
 $(filter-out $(call lx_image,$(EVAL_CB_DF),$(EVAL_DF_LAST),nrm),$(foreach k,$(LX_FEATURES),$(foreach s,$(EVAL_DF_SNAPSHOTS),$(call lx_image,$(EVAL_CB_DF),$(s),$(k))))): $(call lx_image,$(EVAL_CB_DF),$(EVAL_DF_LAST),nrm) ;
 
 $(call lx_image_pattern,$(EVAL_CB_DF_DN),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(foreach k,$(LX_FEATURES),$(call lx_image_pattern,$(EVAL_CB_DF),$(k))) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
-	$(LAUNCH) $(DENOISE) $< --model $(EVAL_MODEL) --features-of $(EVAL_CB_DF)_$*spp.hdr.exr -o $@
+	$(LAUNCH) $(DENOISE) $< --model $(EVAL_MODEL) --any-feature-samples --features-of $(EVAL_CB_DF)_$*spp.hdr.exr -o $@
 
 $(call lx_image_pattern,$(EVAL_CB_DF_OIDN),dn): $(call lx_image_pattern,$(EVAL_CB),hdr) $(call lx_image_pattern,$(EVAL_CB_DF),alb) $(call lx_image_pattern,$(EVAL_CB_DF),nrm) pipelines/oidn_denoise.py
 	@mkdir -p $(@D)
@@ -158,10 +159,10 @@ $(call lx_image_pattern,$(EVAL_CB_DF_OIDN2),dn): $(call lx_image_pattern,$(EVAL_
 	@mkdir -p $(@D)
 	$(LAUNCH) $(OIDN2_DENOISE) --aux $(OIDN2_AUX_DEFAULT) $< --alb $(word 2,$^) --nrm $(word 3,$^) -o $@
 
-$(EVAL_CSV)/cornell-box-default-features.images.csv: $(call lx_ref,$(EVAL_CB),hdr) \
+$(EVAL_CSV)/cornell-box-own-features.images.csv: $(call lx_ref,$(EVAL_CB),hdr) \
 		$(foreach s,$(EVAL_DF_SNAPSHOTS),$(call lx_image,$(EVAL_CB),$(s),hdr) $(call lx_image,$(EVAL_CB_DF_DN),$(s),dn) $(call lx_image,$(EVAL_CB_DF_OIDN),$(s),dn) $(call if_oidn2,$(call lx_image,$(EVAL_CB_DF_OIDN2),$(s),dn))) $(EVALUATE)
-	@mkdir -p $(@D) $(EVAL_DIR)/flip/cornell-box-default-features
-	$(LAUNCH) $(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip/cornell-box-default-features
+	@mkdir -p $(@D) $(EVAL_DIR)/flip/cornell-box-own-features
+	$(LAUNCH) $(EVALUATE) images --reference $< $(filter-out $< $(EVALUATE),$^) -o $@ --ron $(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip/cornell-box-own-features
 
 # (2) The held-out test scenes (references and noisy levels from make reference noisy; the
 #    local-estimate images from the scenes compiled for the dataset).
@@ -237,11 +238,11 @@ $(EVAL_CSV)/sensors-%.csv: $(EVAL_DIR)/sensors/%.sensors.ron $(VALIDATE_DIR)/%.l
 #    in EVAL_PUBLIC (their films' aspects, EVAL_PUBLIC_LONG pixels on the long side). Each: a
 #    reference of EVAL_PUBLIC_REF_SPP spp (seed REF_SEED) and its albedo (the texture mask of
 #    the summary, pipelines/eval.py), one progressive run (seed NOISY_SEED) with snapshots at
-#    EVAL_PUBLIC_SPP, its features antialiased (FEATURE_SPP, beside it) and aov-write's default
-#    (default-features/), double-local-estimate images at EVAL_PUBLIC_DLE paths denoised with the
+#    EVAL_PUBLIC_SPP, its features antialiased (FEATURE_SPP, beside it) and of each snapshot's own samples
+#    (own-features/), double-local-estimate images at EVAL_PUBLIC_DLE paths denoised with the
 #    last snapshot's antialiased features; every image denoised by luxest's model, OIDN 1.4.3 and
 #    OIDN 2.5.1. Two reports a scene: public-<name>.images.csv (antialiased features, and the
-#    double local estimate) and public-<name>-default-features.images.csv; FLIP maps under
+#    double local estimate) and public-<name>-own-features.images.csv; FLIP maps under
 #    $(EVAL_DIR)/flip/<report>/ (the summary's FLIP on textured regions reads them).
 EVAL_PUBLIC ?= living-room=$(EVAL_PUBLIC_LONG)x$(EVAL_PUBLIC_SHORT) staircase=$(EVAL_PUBLIC_SHORT)x$(EVAL_PUBLIC_LONG)
 EVAL_PUBLIC_NAMES := $(foreach p,$(EVAL_PUBLIC),$(firstword $(subst =, ,$(p))))
@@ -256,7 +257,7 @@ build/public/%/scene.lxs: scenes/public/%/scene.xml $(SCENE_COMPILE)
 define eval_public_scene
 # $(1): the name, $(2): the resolution; P: the noisy run's prefix (antialiased features beside it).
 $(eval P := $(EVAL_PUB)/$(1)/$(1))
-$(eval DF := $(EVAL_PUB)/$(1)/default-features/$(1))
+$(eval DF := $(EVAL_PUB)/$(1)/own-features/$(1))
 build/public/$(1)/scene.lxs: $(shell find scenes/public/$(1) -type f -not -name '*.xml' -not -name '* *' 2>/dev/null)
 
 $(call lx_ref,$(P),hdr): $(call eval_pub_scene,$(1)) $(TRACE)
@@ -279,18 +280,18 @@ $(filter-out $(call lx_image,$(P),$(EVAL_PUBLIC_LAST),nrm),$(foreach k,$(LX_FEAT
 
 $(call lx_image,$(DF),$(EVAL_PUBLIC_LAST),nrm): $(call eval_pub_scene,$(1)) $(AOV_WRITE)
 	@mkdir -p $$(@D)
-	$$(LAUNCH) $$(AOV_WRITE) $$< --spp $(EVAL_PUBLIC_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_PUBLIC_SPP)) --seed $(NOISY_SEED) --resolution $(2) -o $(DF)
+	$$(LAUNCH) $$(AOV_WRITE) $$< --spp $(EVAL_PUBLIC_LAST) --snapshots $(subst $(space),$(comma),$(EVAL_PUBLIC_SPP)) --seed $(NOISY_SEED) --min-samples 1 --resolution $(2) -o $(DF)
 $(filter-out $(call lx_image,$(DF),$(EVAL_PUBLIC_LAST),nrm),$(foreach k,$(LX_FEATURES),$(foreach s,$(EVAL_PUBLIC_SPP),$(call lx_image,$(DF),$(s),$(k))))): $(call lx_image,$(DF),$(EVAL_PUBLIC_LAST),nrm) ;
 
 $(call lx_le_pattern,$(P),hdr): $(call eval_pub_scene,$(1)) $(ESTIMATE)
 	@mkdir -p $$(@D)
 	$$(LAUNCH) $$(ESTIMATE) image $$< --paths $$* --seed $(NOISY_SEED) --resolution $(2) -o $$@
 
-# luxest's model: antialiased features beside the image; the default ones through --features-of.
+# luxest's model: antialiased features beside the image; the own-sample ones through --features-of.
 $(call lx_image_pattern,$(P),dn): $(foreach k,hdr $(LX_FEATURES),$(call lx_image_pattern,$(P),$(k))) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	$$(LAUNCH) $$(DENOISE) $$< --model $(EVAL_MODEL) -o $$@
 $(call lx_image_pattern,$(DF)-df,dn): $(call lx_image_pattern,$(P),hdr) $(foreach k,$(LX_FEATURES),$(call lx_image_pattern,$(DF),$(k))) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
-	$$(LAUNCH) $$(DENOISE) $$< --model $(EVAL_MODEL) --features-of $(DF)_$$*spp.hdr.exr -o $$@
+	$$(LAUNCH) $$(DENOISE) $$< --model $(EVAL_MODEL) --any-feature-samples --features-of $(DF)_$$*spp.hdr.exr -o $$@
 $(call lx_le_pattern,$(P),dn): $(call lx_le_pattern,$(P),hdr) $(call lx_features,$(P),$(EVAL_PUBLIC_LAST)) $(EVAL_MODEL) $(EVAL_MODEL_STAMP) $(DENOISE)
 	$$(LAUNCH) $$(DENOISE) $$< --model $(EVAL_MODEL) --features-of $(call lx_image,$(P),$(EVAL_PUBLIC_LAST),hdr) -o $$@
 
@@ -318,22 +319,22 @@ $(EVAL_CSV)/public-$(1).images.csv: $(call lx_ref,$(P),hdr) $(call lx_ref,$(P),a
 	@mkdir -p $$(@D) $(EVAL_DIR)/flip/public-$(1)
 	$$(LAUNCH) $$(EVALUATE) images --reference $$< $$(filter-out $$< $$(word 2,$$^) $$(EVALUATE),$$^) -o $$@ --ron $$(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip/public-$(1)
 
-$(EVAL_CSV)/public-$(1)-default-features.images.csv: $(call lx_ref,$(P),hdr) $(call lx_ref,$(P),alb) \
+$(EVAL_CSV)/public-$(1)-own-features.images.csv: $(call lx_ref,$(P),hdr) $(call lx_ref,$(P),alb) \
 		$(foreach s,$(EVAL_PUBLIC_SPP),$(call lx_image,$(P),$(s),hdr) $(call lx_image,$(DF)-df,$(s),dn) $(call lx_image,$(DF)-df-oidn,$(s),dn) $(call if_oidn2,$(call lx_image,$(DF)-df-oidn2,$(s),dn))) $(EVALUATE)
-	@mkdir -p $$(@D) $(EVAL_DIR)/flip/public-$(1)-default-features
-	$$(LAUNCH) $$(EVALUATE) images --reference $$< $$(filter-out $$< $$(word 2,$$^) $$(EVALUATE),$$^) -o $$@ --ron $$(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip/public-$(1)-default-features
+	@mkdir -p $$(@D) $(EVAL_DIR)/flip/public-$(1)-own-features
+	$$(LAUNCH) $$(EVALUATE) images --reference $$< $$(filter-out $$< $$(word 2,$$^) $$(EVALUATE),$$^) -o $$@ --ron $$(@:.csv=.ron) --flip-maps $(EVAL_DIR)/flip/public-$(1)-own-features
 endef
 $(foreach p,$(EVAL_PUBLIC),$(eval $(call eval_public_scene,$(firstword $(subst =, ,$(p))),$(lastword $(subst =, ,$(p))))))
-EVAL_PUBLIC_REPORTS := $(foreach n,$(EVAL_PUBLIC_NAMES),$(EVAL_CSV)/public-$(n).images.csv $(EVAL_CSV)/public-$(n)-default-features.images.csv)
+EVAL_PUBLIC_REPORTS := $(foreach n,$(EVAL_PUBLIC_NAMES),$(EVAL_CSV)/public-$(n).images.csv $(EVAL_CSV)/public-$(n)-own-features.images.csv)
 
 # The summary: tables and plots from the reports (pipelines/eval.py summary).
-EVAL_REPORTS := $(EVAL_CSV)/cornell-box.images.csv $(EVAL_CSV)/cornell-box-default-features.images.csv \
+EVAL_REPORTS := $(EVAL_CSV)/cornell-box.images.csv $(EVAL_CSV)/cornell-box-own-features.images.csv \
 	$(patsubst %,$(EVAL_CSV)/dataset-%.images.csv,$(EVAL_TEST_SCENES)) $(EVAL_PUBLIC_REPORTS) \
 	$(patsubst %,$(EVAL_CSV)/sensors-%.csv,$(VALIDATE_CASES))
 
 $(REPORTS)/summary.md: $(EVAL_REPORTS) pipelines/eval.py python/luxest_contract.py $(VENV)/$(VENV_STAMP)
 	$(PYTHON) pipelines/eval.py summary --reports $(REPORTS) --preset $(PRESET) --model $(EVAL_MODEL) \
-		--cornell $(EVAL_CSV)/cornell-box.images.csv --cornell-default-features $(EVAL_CSV)/cornell-box-default-features.images.csv \
+		--cornell $(EVAL_CSV)/cornell-box.images.csv --cornell-own-features $(EVAL_CSV)/cornell-box-own-features.images.csv \
 		--dataset $(filter $(EVAL_CSV)/dataset-%,$^) --public $(filter $(EVAL_CSV)/public-%,$^) --flip-dir $(EVAL_DIR)/flip \
 		--public-ref-spp $(EVAL_PUBLIC_REF_SPP) \
 		--sensors $(filter $(EVAL_CSV)/sensors-%,$^) \

@@ -3,7 +3,7 @@
 from the CSV/RON reports of the `evaluate` stage that the rules of pipelines/eval.mk write
 (every stage run is a Make rule; this file only reads reports and draws).
 
-  eval.py summary --reports reports --cornell CSV [--cornell-default-features CSV] --dataset CSV...
+  eval.py summary --reports reports --cornell CSV [--cornell-own-features CSV] --dataset CSV...
                   [--public CSV... --flip-dir DIR] --sensors CSV... [values of
                   pipelines/presets.mk: --preset --model --ref-spp --ref-seed --noisy-seed
                   --dataset-ref-spp --public-ref-spp --sensor-scale]
@@ -12,7 +12,7 @@ from the CSV/RON reports of the `evaluate` stage that the rules of pipelines/eva
    double local estimate, + denoise, and the Pareto front over all of them.
 2. The held-out test scenes of the dataset: the same, means over the scenes.
 2b. The public interiors held out (scenes/public/): luxest's denoiser against Intel Open Image
-   Denoise 1.4.3 and 2.5.1 with antialiased and with aov-write's default features, PSNR, SSIM,
+   Denoise 1.4.3 and 2.5.1 with antialiased features and with those of each snapshot's own samples, PSNR, SSIM,
    FLIP, FLIP on textured regions (texture_mask), colour shift, inference CPU seconds per
    megapixel, and the double-local-estimate images.
 3. The seed's experiment done right: PSNR/SSIM/FLIP of the noisy and the denoised progressive
@@ -216,9 +216,9 @@ def main(argv=None):
     c = sub.add_parser("summary")
     c.add_argument("--reports", required=True)
     c.add_argument("--cornell", required=True)
-    c.add_argument("--cornell-default-features", help="the Cornell report with aov-write's default features")
+    c.add_argument("--cornell-own-features", help="the Cornell report with the features of each snapshot's own samples")
     c.add_argument("--dataset", nargs="*", default=[])
-    c.add_argument("--public", nargs="*", default=[], help="public-<name>[-default-features].images.csv reports")
+    c.add_argument("--public", nargs="*", default=[], help="public-<name>[-own-features].images.csv reports")
     c.add_argument("--flip-dir", help="the FLIP maps' directory (a subdirectory per public report)")
     c.add_argument("--public-ref-spp", type=int)
     c.add_argument("--sensors", nargs="*", default=[])
@@ -242,7 +242,7 @@ def main(argv=None):
             ds_rows.append(r)
         ds_names.append(name)
     sensor_rows = [sensor_row(f) for f in args.sensors]
-    cb_df_rows = read_csv(args.cornell_default_features) if args.cornell_default_features else []
+    cb_df_rows = read_csv(args.cornell_own_features) if args.cornell_own_features else []
     public = read_public(args.public, args.flip_dir)
     for rows in [cb_rows, cb_df_rows, ds_rows] + [rows for by in public.values() for rows in by.values()]:
         check_seeds(rows)
@@ -250,15 +250,15 @@ def main(argv=None):
 
 
 def read_public(paths, flip_dir):
-    """The public interiors' reports: {scene: {"antialiased" | "default": rows}}, each row with its
+    """The public interiors' reports: {scene: {"antialiased" | "own": rows}}, each row with its
     FLIP on textured regions (`flip_textured`, None without a map or an albedo)."""
     out = {}
     for f in sorted(paths):
         stem = Path(f).name[: -len(".images.csv")]
         name = stem[len("public-") :]
         features = "antialiased"
-        if name.endswith("-default-features"):
-            name, features = name[: -len("-default-features")], "default"
+        if name.endswith("-own-features"):
+            name, features = name[: -len("-own-features")], "own"
         rows = read_csv(f)
         for r in rows:
             r["scene"] = name
@@ -541,7 +541,7 @@ def cornell_bar(aa_rows, df_rows, levels=(1, 4, 16, 64)):
     SSIM and FLIP (lower FLIP is better), colour shift within 1 %, and never worse than its
     input (PSNR) at any level."""
     out = []
-    for kind, rows in (("antialiased", aa_rows), ("aov-write's default", df_rows)):
+    for kind, rows in (("antialiased", aa_rows), ("own-sample", df_rows)):
         by = _by(rows)
         trs = []
         for n in sorted({int(r["samples"]) for r in rows if r["estimator"] == PT + DENOISED}):
@@ -590,20 +590,20 @@ def public_section(public, ref_spp):
         "",
         "Scenes no one here wrote (scenes/public/, CC-BY, credited in scenes/public/README.md; never in training), "
         f"imported by `scene-compile`, path-traced by `trace`: references of {ref_spp} spp with their own seed, one "
-        "progressive run with the noisy seed, its features antialiased (`aov-write --min-samples`) and aov-write's "
-        "default (each snapshot's own samples); double-local-estimate images denoised with the last snapshot's "
-        "antialiased features. OIDN 2.5.1 runs at quality high, antialiased features as clean (cleanAux), default "
+        "progressive run with the noisy seed, its features antialiased (`aov-write --min-samples`) and of each "
+        "snapshot's own samples (`--min-samples 1`); double-local-estimate images denoised with the last snapshot's "
+        "antialiased features. OIDN 2.5.1 runs at quality high, antialiased features as clean (cleanAux), own-sample "
         "ones prefiltered by its own filters (pipelines/oidn_denoise.py). FLIP on textured regions: the mean of the "
         f"FLIP map where the reference albedo's luminance has a standard deviation ≥ {TEXTURE_STD} over a "
         f"{2 * TEXTURE_RADIUS + 1}² window (pipelines/eval.py `texture_mask`).",
         "",
     ]
     for name in names:
-        for kind in ("antialiased", "default"):
+        for kind in ("antialiased", "own"):
             rows = public[name].get(kind)
             if not rows:
                 continue
-            what = f"{name}, {'antialiased' if kind == 'antialiased' else 'aov-write' + chr(39) + 's default'} features"
+            what = f"{name}, {'antialiased' if kind == 'antialiased' else 'own-sample'} features"
             out += peer_table(rows, what)
             by = _by(rows)
             trs = []
@@ -631,7 +631,7 @@ def public_section(public, ref_spp):
                 ]
     # The bar: means over the interiors, luxest − OIDN 2.5.1.
     trs = []
-    for kind, tol in (("antialiased", 0.0), ("default", -0.5)):
+    for kind, tol in (("antialiased", 0.0), ("own", -0.5)):
         per = [public[n][kind] for n in names if kind in public[n]]
         if len(per) != len(names):
             continue
@@ -656,7 +656,7 @@ def public_section(public, ref_spp):
                 gain = mean(base + DENOISED, "psnr_db") - mean(base, "psnr_db")
                 trs.append(
                     [
-                        "antialiased" if kind == "antialiased" else "default",
+                        "antialiased" if kind == "antialiased" else "own",
                         base,
                         n,
                         f"{dp:+.2f} {_yes(dp >= tol)}",
@@ -669,7 +669,7 @@ def public_section(public, ref_spp):
         out += [
             "### Issue 52's bar on the public interiors: luxest − OIDN 2.5.1, means over the interiors",
             "",
-            "PSNR: ≥ 0 with antialiased features, ≥ −0.5 dB with default ones; FLIP (lower is better): ≤ 0 with "
+            "PSNR: ≥ 0 with antialiased features, ≥ −0.5 dB with own-sample ones; FLIP (lower is better): ≤ 0 with "
             "antialiased features; FLIP on textured regions ≤ 0; the denoiser's gain over its input in PSNR.",
             "",
             table(
@@ -794,7 +794,7 @@ def write_summary(args, reports, plots, cb_rows, ds_rows, ds_names, sensor_rows,
 
     lines += peer_table(cb_rows, "Cornell box 256², antialiased features")
     if cb_df_rows:
-        lines += peer_table(cb_df_rows, "Cornell box 256², aov-write's default features (each snapshot's own samples)")
+        lines += peer_table(cb_df_rows, "Cornell box 256², features of each snapshot's own samples")
     if any(r["estimator"] == PT + OIDN2 for r in cb_rows):
         lines += [
             "### Issue 52's bar on the Cornell box: luxest against OIDN 2.5.1",

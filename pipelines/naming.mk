@@ -15,6 +15,9 @@ lx_ref = $(1)_ref.$(2).exr
 #   $(call lx_realization,DIR,7)           DIR/seed7   an extra noise realization's directory
 #                                                      (luxest_contract.REALIZATION_DIR)
 lx_realization = $(1)/seed$(2)
+#   $(call lx_own,DIR)                     DIR/own     the features at each level's own samples
+#                                                      (luxest_contract.OWN_FEATURES_DIR)
+lx_own = $(1)/own
 
 # Pattern forms for rules, the level standing for %: $(call lx_image_pattern,PREFIX,dn) gives
 # PREFIX_%spp.dn.exr (% = 000064), $(call lx_le_pattern,PREFIX,hdr) gives PREFIX_%le.hdr.exr.

@@ -60,6 +60,14 @@ class ImageName:
         return image_name(self.name, self.kind, None if self.reference else self.spp, unit=self.unit)
 
 
+OWN_FEATURES_DIR = "own"
+"""The directory, inside a split's, of the feature images of its scenes' noisy levels below
+FEATURE_SPP at the level's own sample count (aov-write --min-samples 1, seed NOISY_SEED):
+`<split>/own/<name>_<count>spp.{alb,nrm,emi,ema}.exr`, paired with the split's own radiance
+`<split>/<name>_<count>spp.hdr.exr` (the same samples) and reference (make noisy;
+pipelines/naming.mk lx_own). The split's own features are antialiased (--min-samples
+FEATURE_SPP); training draws one of the two sets per crop."""
+
 REALIZATION_DIR = "seed{seed}"
 """The directory, inside a split's, of an extra noise realization of its scenes' noisy levels:
 `<split>/seed<k>/<name>_<count>spp.<kind>.exr`, rendered with seed k (make noisy's
@@ -126,6 +134,13 @@ MODEL_TRANSFER = "luxest.transfer"  # ONNX metadata: the transfer function and e
 MODEL_PADDING = "luxest.padding"  # ONNX metadata: how H and W are padded
 MODEL_CONFIG = "luxest.config"  # ONNX metadata: the training configuration (JSON)
 MODEL_METRICS = "luxest.metrics"  # ONNX metadata: scores on the held-out scenes (JSON)
+# ONNX metadata: the least samples per pixel of the albedo and normal features the model was
+# trained for (aov-write --min-samples); 1: features of any count, antialiased or the image's own.
+# denoise refuses features of fewer (an image of at least that many samples always passes).
+FEATURE_SAMPLES = "luxest.feature_samples"
+# ONNX metadata: the mean luminance the model's input radiance is scaled into by a power of two,
+# [v, 2 v) (range_exponent); absent: only dim images are brightened (dim_exponent).
+MEAN_LUMINANCE = "luxest.mean_luminance"
 EXPOSURE = "luxest.exposure"  # preprocessed data: the whole image's autoexposure
 
 KEYS = (
@@ -344,6 +359,42 @@ DIM_LUMINANCE = 1.0 / 32.0
 """The mean luminance below which a denoiser brightens its input (luxest-io `DIM_LUMINANCE`)."""
 
 
+def filtered_luminance(hdr, emi=None):
+    """The mean over pixels of the Rec. 709 luminance of max(hdr - emi, 0) (per channel, float64;
+    max(hdr, 0) without `emi`): the radiance a model with the `emi` feature denoises, the mean
+    that dim_exponent and range_exponent bring into range (luxest-io `filtered_luminance`)."""
+    a = np.asarray(hdr, dtype=np.float64)
+    if a.size == 0:
+        return 0.0
+    a = np.maximum(a - np.asarray(emi, dtype=np.float64), 0.0) if emi is not None else np.maximum(a, 0.0)
+    return float(luminance(a).mean())
+
+
+def range_exponent(hdr, emi=None, low=None):
+    """The power of two e by which a denoiser multiplies the radiance features it gives a model
+    that records `low` in its metadata MEAN_LUMINANCE: the e (negative for a bright image) with
+    low <= 2**e L < 2 low, L = filtered_luminance(hdr, emi), so that images differing by a power
+    of two give the model the same input, bright or dim; 0 for a black image. Without `low`,
+    dim_exponent (models without the key). Exactly luxest-io's `range_exponent`."""
+    if low is None:
+        return dim_exponent(hdr, emi)
+    mean = filtered_luminance(hdr, emi)
+    if not mean > 0.0 or not math.isfinite(mean):
+        return 0
+    e = 0
+    while mean * 2.0**e < low:
+        e += 1
+    while mean * 2.0**e >= 2.0 * low:
+        e -= 1
+    return e
+
+
+def model_mean_luminance(metadata):
+    """The MEAN_LUMINANCE of a model's metadata map as a float, or None when absent."""
+    v = metadata.get(MEAN_LUMINANCE)
+    return None if v is None else float(v)
+
+
 def dim_exponent(hdr, emi=None):
     """The power of two e by which a denoiser multiplies the radiance features it gives a model
     (with the exposure of the brightened hdr, `exposure(hdr, 2**e)`; the output is divided by
@@ -351,11 +402,7 @@ def dim_exponent(hdr, emi=None):
     0) (per channel, float64; max(hdr, 0) without `emi`); 0 for a black or not dim image. Exactly
     luxest-io's `dim_exponent` (the autoexposure's 1e-4 would otherwise make a model's input
     depend on the radiance's unit; docs/architecture.md, *Exposure and tonemap*)."""
-    a = np.asarray(hdr, dtype=np.float64)
-    if a.size == 0:
-        return 0
-    a = np.maximum(a - np.asarray(emi, dtype=np.float64), 0.0) if emi is not None else np.maximum(a, 0.0)
-    mean = float(luminance(a).mean())
+    mean = filtered_luminance(hdr, emi)
     if not mean > 0.0 or mean >= DIM_LUMINANCE:
         return 0
     e = 0  # the least e with mean 2**e >= DIM_LUMINANCE

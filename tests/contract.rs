@@ -13,10 +13,13 @@
 //!   the name of its constant;
 //! - `tensors.json`: the names of the denoiser model graph's tensors
 //!   ([`denoise::model::tensor`]), which `training/export.py` gives the graph;
+//! - `model_meta.json`: the model metadata keys `denoise` reads ([`header::CHANNELS`],
+//!   [`header::model`]), which `training/export.py` writes;
 //! - `exposure_input.exr` + `exposure.json`: a fixed image and its
 //!   [`RgbImage::autoexposure`], the denoiser's brightening of it scaled dim
 //!   ([`luxest_io::exposure::dim_exponent`], with and without emission, the exposure the model then
-//!   gets, and the evaluation's, `evaluate::metrics::autoexposure`), and
+//!   gets, and the evaluation's, `evaluate::metrics::autoexposure`), its scaling into a model's
+//!   octave of mean luminance ([`luxest_io::exposure::range_exponent`]), and
 //!   the evaluation tonemap of a few values (`evaluate::metrics::tonemap`) at its exposure.
 //!
 //! The test regenerates every file in a temporary directory and asserts that the committed copy
@@ -27,7 +30,10 @@
 
 use crate::util::{repo_root, TempDir};
 use denoise::model::tensor;
-use luxest_io::exposure::{dim_exponent, DIM_LUMINANCE};
+use luxest_io::exposure::{dim_exponent, range_exponent, DIM_LUMINANCE};
+
+/// The mean luminance of the fixture's range cases (what training/config.py's default records).
+const RANGE_LUMINANCE: f64 = 1.0 / 16.0;
 use luxest_io::exr::write_rgb;
 use luxest_io::header;
 use luxest_io::header::estimator;
@@ -155,6 +161,16 @@ fn tensors_json() -> String {
     json_names(&names)
 }
 
+/// `model_meta.json`: the ONNX metadata keys of a model that `denoise` reads, by their
+/// constant's name (`header::CHANNELS`, `header::model`).
+fn model_meta_json() -> String {
+    json_names(&[
+        ("CHANNELS", header::CHANNELS),
+        ("FEATURE_SAMPLES", header::model::FEATURE_SAMPLES),
+        ("MEAN_LUMINANCE", header::model::MEAN_LUMINANCE),
+    ])
+}
+
 /// Writes `header.exr` and returns `header.json`'s text.
 fn write_header_fixture(dir: &Path) -> String {
     let mut image = RgbImage::new(5, 3);
@@ -265,16 +281,41 @@ fn write_exposure_fixture(dir: &Path) -> String {
         }
     }
 
+    // The scaling into a model's octave of mean luminance (range_exponent, 1/16 as the models
+    // record it): bright images dimmed, dim ones brightened, with and without the emission.
+    let mut range = Vec::new();
+    for factor in [1.0f32, 1e-3, 3e-7, 1e4, 1e12] {
+        let mut scaled = image.clone();
+        for p in &mut scaled.pixels {
+            *p = p.map(|c| c * factor);
+        }
+        let mut half = scaled.clone();
+        for p in &mut half.pixels {
+            *p = p.map(|c| 0.5 * c);
+        }
+        for (label, emission) in [("none", None), ("half", Some(&half))] {
+            let e = range_exponent(&scaled, emission, RANGE_LUMINANCE);
+            range.push(format!(
+                "    {{\"factor\": {}, \"emission\": {}, \"exponent\": {e}, \"exposure\": {}}}",
+                json_f64(factor as f64),
+                json_str(label),
+                json_f64(scaled.autoexposure_scaled(2f64.powi(e)))
+            ));
+        }
+    }
+
     let inputs = [0.0f32, 1e-3, 0.05, 0.18, 1.0, 4.0, 100.0, -0.5];
     let mut row = RgbImage::new(inputs.len(), 1);
     row.pixels = inputs.iter().map(|&v| [v; 3]).collect();
     let display = evaluate::metrics::tonemap(&row, exposure);
     let list = |v: Vec<String>| format!("[{}]", v.join(", "));
     format!(
-        "{{\n  \"exposure\": {},\n  \"dim_luminance\": {},\n  \"dim\": [\n{}\n  ],\n  \"tonemap\": {{\n    \"definition\": {},\n    \"exposure\": {},\n    \"input\": {},\n    \"output\": {}\n  }}\n}}\n",
+        "{{\n  \"exposure\": {},\n  \"dim_luminance\": {},\n  \"dim\": [\n{}\n  ],\n  \"range_luminance\": {},\n  \"range\": [\n{}\n  ],\n  \"tonemap\": {{\n    \"definition\": {},\n    \"exposure\": {},\n    \"input\": {},\n    \"output\": {}\n  }}\n}}\n",
         json_f64(exposure),
         json_f64(DIM_LUMINANCE),
         dim.join(",\n"),
+        json_f64(RANGE_LUMINANCE),
+        range.join(",\n"),
         json_str(evaluate::images::TONEMAP),
         json_f64(exposure),
         list(inputs.iter().map(|&v| json_f64(v as f64)).collect()),
@@ -291,6 +332,7 @@ fn contract_fixtures_are_what_luxest_io_writes() {
     std::fs::write(tmp.path().join("denoiser.json"), denoiser_json()).unwrap();
     std::fs::write(tmp.path().join("estimators.json"), estimators_json()).unwrap();
     std::fs::write(tmp.path().join("tensors.json"), tensors_json()).unwrap();
+    std::fs::write(tmp.path().join("model_meta.json"), model_meta_json()).unwrap();
     let exposure_json = write_exposure_fixture(tmp.path());
     std::fs::write(tmp.path().join("exposure.json"), exposure_json).unwrap();
 
@@ -304,6 +346,7 @@ fn contract_fixtures_are_what_luxest_io_writes() {
         "denoiser.json",
         "estimators.json",
         "tensors.json",
+        "model_meta.json",
         "exposure_input.exr",
         "exposure.json",
     ] {

@@ -61,6 +61,18 @@ def preset_ints(name):
     return [int(v) for v in preset_text(name).split()]
 
 
+def feature_samples(cfg):
+    """The least samples per pixel of albedo and normal a model trained with `cfg` takes (its
+    metadata FEATURE_SAMPLES): 1 when it was trained on the features of each level's own samples
+    too, else FEATURE_SPP."""
+    return 1 if cfg.own_features else int(preset_text("FEATURE_SPP"))
+
+
+def scale_luminance(cfg):
+    """The model's MEAN_LUMINANCE of `cfg` (None: unscaled)."""
+    return cfg.mean_luminance if cfg.mean_luminance > 0 else None
+
+
 def preset_extra_spp():
     """The levels of the extra noise realizations as make passes them: those of
     NOISY_EXTRA_LEVELS among NOISY_LEVELS, in NOISY_LEVELS' order (pipelines/dataset.mk's
@@ -87,6 +99,14 @@ class Config:
     # The extra noise realizations (<split>/seed<k>/) to use, and their levels.
     extra_seeds: list = field(default_factory=lambda: preset_ints("NOISY_EXTRA_SEEDS"))
     extra_spp: list = field(default_factory=preset_extra_spp)
+    # Also train on the noisy levels with the features of their own sample count (<split>/own/):
+    # one of the two feature sets per crop. The model then takes either (FEATURE_SAMPLES 1);
+    # without, the antialiased ones only (FEATURE_SPP, pipelines/presets.mk).
+    own_features: bool = True
+    # The mean luminance [v, 2 v) the input radiance is scaled into by a power of two, dim or
+    # bright (luxest_contract.range_exponent; the model's MEAN_LUMINANCE); 0: unscaled, only dim
+    # images brightened at inference (models trained before the option).
+    mean_luminance: float = 0.0625
     crop: int = 64  # training crop side (multiple of 16)
     batch: int = 16
     base_width: int = 24  # U-Net channels of the first level
@@ -137,6 +157,8 @@ class Config:
         values.setdefault("detail_gate", False)
         values.setdefault("loss", "l1")
         values.setdefault("scales", 4)
+        values.setdefault("own_features", False)
+        values.setdefault("mean_luminance", 0.0)
         return Config(**values)
 
 

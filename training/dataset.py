@@ -45,31 +45,53 @@ def wanted(unit, count, noisy_spp, dle_paths):
     return levels is None or count in levels
 
 
-def pairs(prep_split_dir, noisy_spp=None, dle_paths=None, extra_seeds=(), extra_spp=None):
+def pairs(prep_split_dir, noisy_spp=None, dle_paths=None, extra_seeds=(), extra_spp=None, own_features=False):
     """[(input path, reference path, metadata dict)] of one preprocessed split: the noisy levels
     in `noisy_spp` and the local-estimate images in `dle_paths` (None: all of that family), so
     that arrays left by an earlier configuration are not trained on, then the noisy levels of
     the extra noise realizations of seeds `extra_seeds` (`seed<k>/`, paired with the split's
-    references) at the levels in `extra_spp` (None: all)."""
+    references) at the levels in `extra_spp` (None: all), then with `own_features` the noisy
+    levels with the features of their own sample count (`own/`, preprocess.py)."""
     out = []
     d = Path(prep_split_dir)
     realizations = [d / contract.REALIZATION_DIR.format(seed=k) for k in sorted(set(extra_seeds))]
-    for meta_path in sorted(list(d.glob("*spp.json")) + list(d.glob("*le.json"))) + [
-        m for r in realizations for m in sorted(r.glob("*spp.json"))
-    ]:
+    own = d / contract.OWN_FEATURES_DIR
+    for meta_path in (
+        sorted(list(d.glob("*spp.json")) + list(d.glob("*le.json")))
+        + [m for r in realizations for m in sorted(r.glob("*spp.json"))]
+        + (sorted(own.glob("*spp.json")) if own_features else [])
+    ):
         meta = json.loads(meta_path.read_text())
         if not wanted(meta.get("unit", "spp"), meta["samples"], noisy_spp, dle_paths):
             continue
-        if meta_path.parent != d and extra_spp is not None and meta["samples"] not in extra_spp:
+        if meta_path.parent in realizations and extra_spp is not None and meta["samples"] not in extra_spp:
             continue
         out.append((meta_path.with_suffix(".npy"), d / prep_name(meta["name"], None), meta))
     return out
 
 
+def radiance_channels(channels):
+    """The indices of the input channels that are radiance (hdr, emi, ema: scaled together by
+    the input's power of two) among the features `channels`."""
+    return [3 * g + j for g, name in enumerate(channels) if name in contract.RADIANCE_FEATURES for j in range(3)]
+
+
+def input_scale(inp, channels, low):
+    """The power of two 2**e by which a denoiser scales the radiance of input array `inp` (H, W,
+    3 x features `channels`) for a model of MEAN_LUMINANCE `low` (contract.range_exponent of its
+    hdr and emi; 1.0 when `low` is None, as training did before the key: its images were not dim)."""
+    if low is None:
+        return 1.0
+    hdr = np.asarray(inp[..., :3], dtype=np.float32)
+    emi = np.asarray(inp[..., 3 * channels.index("emi") : 3 * channels.index("emi") + 3]) if "emi" in channels else None
+    return 2.0 ** contract.range_exponent(hdr, emi, low)
+
+
 def groups(metas):
     """The pair indices grouped by what they are an image of — (scene, unit, count) — in the
-    order of first appearance: a scene's noisy level and its extra noise realizations
-    (`seed<k>/`, preprocess.py) form one group."""
+    order of first appearance: a scene's noisy level, its extra noise realizations
+    (`seed<k>/`) and its input with the features of its own samples (`own/`, preprocess.py)
+    form one group."""
     out = {}
     for i, m in enumerate(metas):
         out.setdefault((m["name"], m.get("unit", "spp"), m["samples"]), []).append(i)
@@ -94,17 +116,31 @@ class Crops(torch.utils.data.Dataset):
         extra_seeds=(),
         extra_spp=None,
         start=0,
+        own_features=False,
+        mean_luminance=None,
     ):
         refs = {}  # a scene's inputs share its reference array (DeviceCrops holds it once)
-        self.pairs = []
-        found = pairs(prep_split_dir, noisy_spp, dle_paths, extra_seeds, extra_spp)
+        ref_exposures_at = {}  # (reference, scale): its exposures
+        self.pairs, self.scales, self.radiance = [], [], None
+        found = pairs(prep_split_dir, noisy_spp, dle_paths, extra_seeds, extra_spp, own_features)
         self.groups = groups([m for *_, m in found])
         for i, r, m in found:
             if r not in refs:
-                arr = np.load(r, mmap_mode="r")
-                refs[r] = (arr, whole_image_exposures(np.asarray(arr, dtype=np.float32), evaluation=True))
-            ref, ref_exposures = refs[r]
-            self.pairs.append((np.load(i, mmap_mode="r"), ref, m["exposures"], ref_exposures))
+                refs[r] = np.load(r, mmap_mode="r")
+            ref, inp = refs[r], np.load(i, mmap_mode="r")
+            # With MEAN_LUMINANCE the input and its reference are scaled by the power of two a
+            # denoiser applies (input_scale): the crop gets the exposures of the scaled images.
+            s = input_scale(inp, m["channels"], mean_luminance)
+            if (r, s) not in ref_exposures_at:
+                ref_exposures_at[(r, s)] = whole_image_exposures(np.asarray(ref, dtype=np.float64) * s, evaluation=True)
+            exposures = (
+                m["exposures"]
+                if s == 1.0
+                else [contract.exposure(np.asarray(inp[..., list(p)], dtype=np.float32), s) for p in PERMUTATIONS]
+            )
+            self.pairs.append((inp, ref, exposures, ref_exposures_at[(r, s)]))
+            self.scales.append(s)
+            self.radiance = radiance_channels(m["channels"])
         if not self.pairs:
             raise FileNotFoundError(f"{prep_split_dir}: no preprocessed pairs (run preprocess.py)")
         self.split_dir, self.crop, self.seed, self.length = Path(prep_split_dir), crop, seed, length
@@ -135,6 +171,10 @@ class Crops(torch.utils.data.Dataset):
         c = self.crop
         a = np.array(inp[y : y + c, x : x + c], dtype=np.float32)
         b = np.array(ref[y : y + c, x : x + c], dtype=np.float32)
+        s = self.scales[p]
+        if s != 1.0:  # a power of two: exact in float32
+            a[..., self.radiance] *= np.float32(s)
+            b *= np.float32(s)
         if flip_x:
             a, b = a[:, ::-1], b[:, ::-1]
         if flip_y:
@@ -204,6 +244,11 @@ class DeviceCrops:
         self.orders = long([channel_order(k, self.inputs.shape[1]) for k in range(len(PERMUTATIONS))])
         self.exposures = to(torch.tensor([e for _, _, e, _ in crops.pairs], dtype=torch.float32))
         self.ref_exposures = to(torch.tensor([e for *_, e in crops.pairs], dtype=torch.float32))
+        # Each pair's power of two (Crops.scales) on its radiance channels and reference.
+        self.scales = to(torch.tensor(crops.scales, dtype=torch.float32))
+        mask = torch.zeros(self.inputs.shape[1], dtype=torch.bool)
+        mask[crops.radiance] = True
+        self.radiance = to(mask)
         grid = torch.arange(crops.crop, device=self.device)
         self.rows, self.cols = grid.view(1, -1, 1), grid.view(1, 1, -1)
 
@@ -226,6 +271,9 @@ class DeviceCrops:
         a = self.inputs[self.starts[p] + pixel]  # (N, c, c, C)
         b = self.refs[self.ref_starts[p] + pixel]
         order = self.orders[k.view(-1)][:, None, None, :]
+        scale = self.scales[p.view(-1)].view(-1, 1, 1, 1)
+        a = a * torch.where(self.radiance, scale, torch.ones_like(scale))
+        b = b * scale
         a = torch.gather(a, 3, order.expand_as(a))
         b = torch.gather(b, 3, order[..., :3].expand_as(b))
         at = (p.view(-1), k.view(-1))

@@ -141,6 +141,9 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
         contract.MODEL_PADDING: "replicate to multiples of 16; in graph",
         contract.MODEL_CONFIG: json.dumps(asdict(cfg)),
     }
+    meta[contract.FEATURE_SAMPLES] = str(config.feature_samples(cfg))
+    if config.scale_luminance(cfg) is not None:
+        meta[contract.MEAN_LUMINANCE] = repr(float(cfg.mean_luminance))
     if metrics:
         meta[contract.MODEL_METRICS] = json.dumps(metrics)
     for k, v in meta.items():
@@ -151,11 +154,38 @@ def export(run_dir, out_path, metrics=None, antialiased_emission=False):
     print(f"export: wrote {out_path}")
 
 
+SETTABLE = (contract.FEATURE_SAMPLES, contract.MEAN_LUMINANCE)
+"""The metadata keys `--set-metadata` sets: what a model takes, recorded after its export."""
+
+
+def set_metadata(model_path, values):
+    """Sets the metadata entries `values` ({key: text}) of an exported model in place (weights
+    and graph unchanged): how a model exported before a key existed gets it, e.g. the
+    FEATURE_SAMPLES of the antialiased features it was trained on."""
+    proto = onnx.load(str(model_path))
+    props = {p.key: p for p in proto.metadata_props}
+    for k, v in values.items():
+        if k in props:
+            props[k].value = v
+        else:
+            p = proto.metadata_props.add()
+            p.key, p.value = k, v
+    tmp = temp_of(model_path)
+    onnx.save(proto, str(tmp))
+    tmp.replace(model_path)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     src = ap.add_mutually_exclusive_group(required=True)
     src.add_argument("--run-dir", help="the training run (config.json, checkpoint.pt)")
     src.add_argument("--from-onnx", help="a model exported by this script: its configuration and weights")
+    src.add_argument(
+        "--set-metadata",
+        nargs="+",
+        metavar="KEY=VALUE",
+        help="set metadata entries KEY=VALUE of the model --out in place (SETTABLE: its feature samples, mean luminance)",
+    )
     ap.add_argument("--out", required=True)
     ap.add_argument(
         "--antialiased-emission",
@@ -163,6 +193,17 @@ def main(argv=None):
         help="export a run trained with the emi feature as a model that adds back ema (same weights)",
     )
     args = ap.parse_args(argv)
+    if args.set_metadata:
+        pairs = [kv.partition("=") for kv in args.set_metadata]
+        bad = [k for k, eq, _ in pairs if not eq or k not in SETTABLE]
+        if bad or not Path(args.out).is_file():
+            raise SystemExit(
+                f"export: --set-metadata: expected KEY=VALUE pairs of {', '.join(SETTABLE)} and an existing "
+                f"--out model ({', '.join(bad) or args.out})"
+            )
+        set_metadata(args.out, {k: v for k, _, v in pairs})
+        print(f"export: set {', '.join(k for k, _, _ in pairs)} in {args.out}")
+        return
     needed = (
         [Path(args.from_onnx)] if args.from_onnx else [Path(args.run_dir) / f for f in ("config.json", "checkpoint.pt")]
     )

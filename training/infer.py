@@ -21,11 +21,14 @@ def channels(session):
 
 
 def denoise(session, hdr, *features):
-    """`features`: the images of channels(session)[1:], in that order. A dim image is brightened
-    by 2**e first (luxest_contract.dim_exponent, as crates/denoise does) and the result dimmed."""
+    """`features`: the images of channels(session)[1:], in that order. The radiance is scaled by
+    2**e first (luxest_contract.range_exponent for the model's MEAN_LUMINANCE: dim images
+    brightened, and bright ones dimmed where the model records it; as crates/denoise does) and
+    the result by 2**-e."""
     names = channels(session)
     images = [hdr, *features]
-    e = contract.dim_exponent(hdr, images[names.index("emi")] if "emi" in names else None)
+    low = contract.model_mean_luminance(session.get_modelmeta().custom_metadata_map)
+    e = contract.range_exponent(hdr, images[names.index("emi")] if "emi" in names else None, low)
     s = 2.0**e
     if e:
         images = [

@@ -42,17 +42,22 @@ def samples_of(image, expected):
     return spp
 
 
-def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATURES, extra_seeds=(), extra_spp=None):
+def preprocess_split(
+    src, dst, noisy_spp, dle_paths=(), features=contract.FEATURES, extra_seeds=(), extra_spp=None, own_features=False
+):
     """Writes the arrays of one split directory; returns the number written. Inputs: the noisy
     levels in `noisy_spp`, and the double-local-estimate images at `dle_paths` light paths
     (with the features of the scene's largest noisy level, as make eval denoises them), and the
     extra noise realizations of seeds `extra_seeds` (`<src>/seed<k>/`) at the noisy levels in
-    `extra_spp` (None: all)."""
+    `extra_spp` (None: all), and with `own_features` the noisy levels with the features of their
+    own sample count (`<src>/own/`, the split's radiance of the level) into `<dst>/own/`."""
     n = 0
     dst.mkdir(parents=True, exist_ok=True)
     scenes = contract.scan(src)
     local_estimates = contract.scan(src, unit="le")
     realized = _realizations(src, scenes, extra_seeds)
+    own_dir = src / contract.OWN_FEATURES_DIR
+    own = contract.scan(own_dir) if own_features and own_dir.is_dir() else {}
     with progress.Progress(f"preprocess {src.name}", len(scenes), "scenes") as shown:
         for name, levels in scenes.items():
             if None not in levels or "hdr" not in levels[None]:
@@ -108,6 +113,27 @@ def preprocess_split(src, dst, noisy_spp, dle_paths=(), features=contract.FEATUR
                         features,
                         check,
                     )
+            # The levels with the features of their own samples: the split's radiance of the level.
+            for count, feats in sorted((c, v) for c, v in own.get(name, {}).items() if c is not None):
+                if count not in levels or "hdr" not in levels[count]:
+                    raise contract.ContractError(f"{own_dir}: {name} at {count} spp has no radiance image in {src}")
+                feats = {**feats, "hdr": levels[count]["hdr"]}
+                _require_features(own_dir, name, count, feats, features)
+                check = functools.partial(_check_own, alb=feats["alb"])
+                n += _write_input(
+                    dst / own_dir.name,
+                    name,
+                    ref,
+                    levels[None]["hdr"],
+                    feats["hdr"],
+                    feats,
+                    count,
+                    "spp",
+                    noisy_spp,
+                    (),
+                    features,
+                    check,
+                )
             if not ref_out.exists() or ref_out.stat().st_mtime < levels[None]["hdr"].stat().st_mtime:
                 if not np.isfinite(ref.pixels).all():
                     raise contract.ContractError(f"{ref.path}: non-finite values")
@@ -156,6 +182,18 @@ def _check_realization(noisy, seed, twin):
         raise contract.ContractError(
             f"{noisy.path} and {twin}: the same {contract.SEED} = {seed} (a realization must have a seed of its own)"
         )
+
+
+def _check_own(noisy, alb):
+    """ContractError unless the own-sample features `alb` have the seed and the samples of the
+    radiance image `noisy` they go with."""
+    a = contract.read(alb)
+    for key in (contract.SEED, contract.SAMPLES):
+        if a.value(key, required=True) != noisy.value(key, required=True):
+            raise contract.ContractError(
+                f"{alb}: {key} = {a.value(key)}, its radiance {noisy.path} {noisy.value(key)} "
+                "(the features of a level's own samples: aov-write --min-samples 1, the radiance's seed)"
+            )
 
 
 def _write_input(
@@ -244,6 +282,7 @@ def main(argv=None):
                 cfg.features,
                 cfg.extra_seeds if split == "train" else (),
                 cfg.extra_spp,
+                cfg.own_features,
             )
     except contract.ContractError as e:
         print(f"preprocess: error: {e}", file=sys.stderr)

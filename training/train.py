@@ -179,25 +179,33 @@ def objective(net, out, exp, ref, ref_exp, cfg):
 
 
 def validation_loss(net, prep_dir, cfg):
-    """Mean loss on centre crops of the valid split (all noisy levels), each transferred with
-    its whole image's stored exposure."""
+    """Mean loss on centre crops of the valid split (all noisy levels, with both feature sets
+    where the run trains on both), each transferred with its whole image's exposure, scaled as
+    the model scales it (dataset.input_scale)."""
     import numpy as np
 
     total, n = 0.0, 0
     to = lambda arr: torch.from_numpy(arr.transpose(2, 0, 1).copy())[None]
-    ref_exposures = {}  # of each whole reference, once
+    ref_exposures = {}  # of each whole reference at each scale, once
+    low = config.scale_luminance(cfg)
     with torch.no_grad():
-        for inp_path, ref_path, meta in dataset.pairs(Path(prep_dir) / "valid", cfg.noisy_spp, cfg.dle_paths):
-            ref = np.load(ref_path)
-            if ref_path not in ref_exposures:
-                ref_exposures[ref_path] = contract.evaluation_exposure(ref)
+        for inp_path, ref_path, meta in dataset.pairs(
+            Path(prep_dir) / "valid", cfg.noisy_spp, cfg.dle_paths, own_features=cfg.own_features
+        ):
+            inp = np.load(inp_path)
+            s = dataset.input_scale(inp, meta["channels"], low)
+            ref = np.load(ref_path) * np.float32(s)
+            inp[..., dataset.radiance_channels(meta["channels"])] *= np.float32(s)
+            if (ref_path, s) not in ref_exposures:
+                ref_exposures[(ref_path, s)] = contract.evaluation_exposure(ref)
+            exposure = meta["exposures"][0] if s == 1.0 else contract.exposure(inp[..., :3])
             h, w = ref.shape[:2]
             c = min(h, w) // 16 * 16
             y0, x0 = (h - c) // 2, (w - c) // 2
-            a = to(np.load(inp_path)[y0 : y0 + c, x0 : x0 + c])
+            a = to(inp[y0 : y0 + c, x0 : x0 + c])
             b = to(ref[y0 : y0 + c, x0 : x0 + c])
-            pred, exp = net.transferred(a, torch.tensor([meta["exposures"][0]]))
-            total += float(objective(net, pred, exp, b, torch.tensor([ref_exposures[ref_path]]), cfg))
+            pred, exp = net.transferred(a, torch.tensor([exposure]))
+            total += float(objective(net, pred, exp, b, torch.tensor([ref_exposures[(ref_path, s)]]), cfg))
             n += 1
     return total / max(n, 1)
 
@@ -268,6 +276,8 @@ def main(argv=None):
             dle_paths=cfg.dle_paths,
             extra_seeds=cfg.extra_seeds,
             extra_spp=cfg.extra_spp,
+            own_features=cfg.own_features,
+            mean_luminance=config.scale_luminance(cfg),
         )
     except FileNotFoundError as e:  # before the run directory is written
         raise SystemExit(f"train: {e}")

@@ -248,6 +248,33 @@ def test_python_dim_exponent_equals_rusts():
     assert 0 in exponents and max(exponents) > 60  # the fixture covers the bright and the very dim
 
 
+def test_python_range_exponent_equals_rusts():
+    # The scaling into a model's octave of mean luminance (the same power of two and exposure
+    # as crates/denoise for a model with MEAN_LUMINANCE).
+    expected = json.loads(fixture("exposure.json").read_text())
+    low = expected["range_luminance"]
+    hdr = contract.read_rgb(fixture("exposure_input.exr"))
+    exponents = set()
+    for case in expected["range"]:
+        scaled = hdr * np.float32(case["factor"])
+        emi = scaled * np.float32(0.5) if case["emission"] == "half" else None
+        e = contract.range_exponent(scaled, emi, low)
+        assert e == case["exponent"], case
+        assert math.isclose(contract.exposure(scaled, 2.0**e), case["exposure"], rel_tol=1e-12), case
+        mean = contract.filtered_luminance(scaled, emi) * 2.0**e
+        assert low <= mean < 2 * low, case
+        exponents.add(e)
+    assert min(exponents) < -30 and max(exponents) > 10  # bright and dim both covered
+
+
+def test_model_metadata_keys_match_rust():
+    # The metadata keys export.py writes are those crates/denoise reads (luxest-io header).
+    expected = json.loads(fixture("model_meta.json").read_text())
+    assert list(expected) == ["CHANNELS", "FEATURE_SAMPLES", "MEAN_LUMINANCE"]
+    for name, value in expected.items():
+        assert getattr(contract, name) == value, name
+
+
 def test_dim_exponent_against_closed_forms():
     # A uniform image of luminance Y < 1/32 is brightened by the least 2^e with 2^e Y >= 1/32.
     grey = np.full((4, 5, 3), 1e-3)

@@ -60,11 +60,22 @@ def flag(cmd, name):
 def test_dataset_references_have_their_own_seed_and_features_share_traces():
     cmds = dry_run("reference", "noisy")
     traces = [c for c in cmds if c[0] == STAGES["TRACE"]]
-    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"]]
+    own_dir = f"/{contract.OWN_FEATURES_DIR}/"
+    own = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and own_dir in flag(c, "-o")]
+    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and c not in own]
     assert len(traces) == len(aovs) == 2 * 24  # quick: 24 scenes, a reference and a noisy run each
     ref_seeds = {flag(c, "--seed") for c in traces if "--reference" in c}
     noisy_seeds = {flag(c, "--seed") for c in traces if "--reference" not in c}
     assert len(ref_seeds) == len(noisy_seeds) == 1 and ref_seeds.isdisjoint(noisy_seeds)
+    # The features at each level's own samples: one run per scene, the levels below FEATURE_SPP,
+    # the noisy radiance's seed, --min-samples 1, into <split>/own/ under the scene's name.
+    assert len(own) == 24 and all(flag(c, "--min-samples") == "1" for c in own)
+    assert {(flag(c, "--seed"), flag(c, "--spp"), flag(c, "--snapshots")) for c in own} == {
+        (*noisy_seeds, "8", "1,2,4,8")
+    }
+    assert sorted(Path(flag(c, "-o")).name for c in own) == sorted(
+        Path(flag(c, "-o")).name for c in traces if "--reference" not in c
+    )
     # aov-write gets exactly trace's arguments for each image set (same seed, spp, snapshots),
     # and the features' least samples per pixel.
     assert all(flag(c, "--min-samples") == "16" for c in aovs)
@@ -83,13 +94,17 @@ def test_features_follow_feature_spp():
         assert nrm and stamp in nrm.group(1).split(), level
         assert hdr and stamp not in hdr.group(1).split() and "feature-spp" not in hdr.group(1), level
     cmds = dry_run("reference", "noisy", "eval", FEATURE_SPP="32", EVAL_MODEL="models/default.onnx")
-    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"]]
-    # (make eval also renders aov-write's default features, without --min-samples, in
-    # default-features/ directories, and the public interiors' reference albedo at full samples.)
-    default = [c for c in aovs if "/default-features/" in flag(c, "-o")]
-    aovs = [c for c in aovs if c not in default and not ("--reference" in c and "/public/" in flag(c, "-o"))]
-    assert default and not [c for c in default if "--min-samples" in c]
+    own_dir = f"/{contract.OWN_FEATURES_DIR}/"
+    aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and own_dir not in flag(c, "-o")]
+    # (make eval also renders the features of each snapshot's own samples, --min-samples 1, in
+    # own-features/ directories, and the public interiors' reference albedo at full samples.)
+    own_eval = [c for c in aovs if "/own-features/" in flag(c, "-o")]
+    aovs = [c for c in aovs if c not in own_eval and not ("--reference" in c and "/public/" in flag(c, "-o"))]
+    assert own_eval and all(flag(c, "--min-samples") == "1" for c in own_eval)
     assert any("cornell-box" in c[1] for c in aovs) and all(flag(c, "--min-samples") == "32" for c in aovs)
+    # The features at each level's own samples: the levels below FEATURE_SPP.
+    own = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and own_dir in flag(c, "-o")]
+    assert own and {flag(c, "--snapshots") for c in own} == {"1,2,4,8,16"}
     assert not [c for c in cmds if c[0] == STAGES["TRACE"] and "--min-samples" in c]
     # The main job's features too.
     run = [c for c in dry_run("run", FEATURE_SPP="32") if c[0] == STAGES["AOV_WRITE"]]
@@ -276,13 +291,14 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     assert len(ref) == len(prog) == 1 and flag(ref[0], "--seed") != flag(prog[0], "--seed")
     snapshots = flag(prog[0], "--snapshots").split(",")
     denoised = [c for c in cmds if c[0] == STAGES["DENOISE"] and "/cornell-box/" in c[1]]
-    # With aov-write's default features (default-features/: each snapshot's own samples, the
+    # With the features of each snapshot's own samples (own-features/: each snapshot's own samples, the
     # powers of two) the same snapshots are denoised again, their features taken from there.
-    default = [c for c in denoised if "/default-features/" in flag(c, "-o")]
+    default = [c for c in denoised if "/own-features/" in flag(c, "-o")]
     denoised = [c for c in denoised if c not in default]
     powers = [s for s in snapshots if int(s) & (int(s) - 1) == 0]
     assert sorted(int(re.search(r"_(\d{6})spp\.hdr\.exr$", c[1]).group(1)) for c in default) == sorted(map(int, powers))
-    assert all("/default-features/" in flag(c, "--features-of") for c in default)
+    assert all("/own-features/" in flag(c, "--features-of") for c in default)
+    assert all("--any-feature-samples" in c for c in default)
     images = [c for c in cmds if c[0] == STAGES["ESTIMATE"] and c[1] == "image" and "cornell-box" in c[2]]
     dle = [c for c in images if "--light-tracing" not in c]
     assert len(denoised) == len(snapshots) + len(dle)
@@ -293,7 +309,7 @@ def test_eval_reference_is_independent_and_every_snapshot_is_denoised():
     oidn2 = [c[c.index("--aux") + 2 :] + c[c.index("--aux") : c.index("--aux") + 2] for c in cmds if "--oidn-lib" in c]
     oidn2 = [c for c in oidn2 if "/cornell-box/" in c[0]]
     assert sorted(c[0] for c in oidn2) == sorted(c[1] for c in denoised + default)
-    assert all(flag(c, "--aux") == ("prefilter" if "/default-features/" in flag(c, "-o") else "clean") for c in oidn2)
+    assert all(flag(c, "--aux") == ("prefilter" if "/own-features/" in flag(c, "-o") else "clean") for c in oidn2)
     assert {flag(c, "--alb") for c in oidn2} == {flag(c, "--alb") for c in oidn}
     # The double-local-estimate images are denoised with the features of one snapshot (those
     # its model takes, whichever they are: denoise --features-of).
@@ -358,7 +374,7 @@ def test_held_out_references_follow_eval_heldout_ref_spp():
 
 def test_public_interiors_are_scored_with_independent_references_and_both_features():
     # make eval's public interiors (scenes/public/): each a reference with the reference seed, one
-    # progressive run with the noisy seed, antialiased features beside it and aov-write's default
+    # progressive run with the noisy seed, antialiased features beside it and of each snapshot's own samples
     # ones apart, every snapshot denoised by luxest and both OIDN releases, two reports a scene.
     cmds = dry_run("eval", EVAL_MODEL="models/default.onnx")
     names = ("living-room", "staircase")
@@ -397,7 +413,7 @@ def test_public_interiors_are_scored_with_independent_references_and_both_featur
     )
     public = summary[summary.index("--public") + 1 : summary.index("--flip-dir")]
     assert sorted(Path(p).name for p in public) == sorted(
-        f"public-{n}{k}.images.csv" for n in names for k in ("", "-default-features")
+        f"public-{n}{k}.images.csv" for n in names for k in ("", "-own-features")
     )
 
 

@@ -321,3 +321,81 @@ def test_crops_draw_a_scenes_level_then_one_of_its_realizations(tmp_path):
     assert abs(n_a / 8000 - 0.5) < 4 * math.sqrt(0.25 / 8000)
     for p in (0, 2, 3, 4):
         assert abs(counts[p] / n_a - 0.25) < 4 * math.sqrt(0.25 * 0.75 / n_a)
+
+
+def write_own(split_dir, name, spp, seed, rng, samples=None):
+    """The features of level `spp` at its own sample count in `<split>/own/` (aov-write
+    --min-samples 1), with `samples` in their headers (default: the level's); returns the albedo."""
+    d = split_dir / contract.OWN_FEATURES_DIR
+    d.mkdir(exist_ok=True)
+    header = {contract.SAMPLES: samples or spp, contract.SEED: seed}
+    planes = {}
+    for kind in ("alb", "nrm", "emi", "ema"):
+        planes[kind] = rng.random((32, 48, 3)).astype(np.float32)
+        contract.write(d / contract.image_name(name, kind, spp), planes[kind], header)
+    return planes["alb"]
+
+
+def test_own_sample_features_pair_with_the_splits_radiance_and_group_with_it(tmp_path):
+    rng = np.random.default_rng(21)
+    src, prep = tmp_path / "train", tmp_path / "prep"
+    src.mkdir()
+    write_ref(src, "a", 1000001, rng)
+    hdr = {spp: write_set(src, "a", spp, 1, rng) for spp in (1, 4, 16)}
+    alb = {spp: write_own(src, "a", spp, 1, rng) for spp in (1, 4)}
+    # Not asked for: none written; asked for: the two own-feature inputs beside the three.
+    assert preprocess.preprocess_split(src, prep, [1, 4, 16]) == 3 + 1
+    assert preprocess.preprocess_split(src, prep, [1, 4, 16], own_features=True) == 2
+    assert len(dataset.pairs(prep, [1, 4, 16])) == 3
+    found = dataset.pairs(prep, [1, 4, 16], own_features=True)
+    rel = [str(i.relative_to(prep)) for i, _, _ in found]
+    assert rel[3:] == ["own/a_000001spp.npy", "own/a_000004spp.npy"]
+    for (i, r, m), spp in zip(found[3:], (1, 4)):
+        arr = np.load(i)
+        # The split's radiance of the level (the same samples), the own albedo, the scene's reference.
+        assert np.array_equal(arr[..., :3], hdr[spp]) and np.array_equal(arr[..., 3:6], alb[spp])
+        assert r == prep / "a_ref.npy" and m["samples"] == spp
+    # One group per (scene, level): each own input draws against its antialiased twin.
+    assert dataset.groups([m for *_, m in found]) == [[0, 3], [1, 4], [2]]
+
+
+def test_refuses_own_features_of_another_sample_count(tmp_path):
+    rng = np.random.default_rng(22)
+    src = tmp_path / "train"
+    src.mkdir()
+    write_ref(src, "a", 1000001, rng)
+    write_set(src, "a", 4, 1, rng)
+    write_own(src, "a", 4, 1, rng, samples=16)
+    with pytest.raises(contract.ContractError, match=r"own/a_000004spp.alb.exr: luxest.samples = 16, its radiance"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [4], own_features=True)
+    write_own(src, "a", 4, 1, rng)
+    write_own(src, "a", 8, 1, rng)
+    with pytest.raises(contract.ContractError, match=r"a at 8 spp has no radiance image"):
+        preprocess.preprocess_split(src, tmp_path / "prep", [4, 8], own_features=True)
+
+
+@pytest.mark.parametrize("factor", [2.0**-12, 2.0**-3, 2.0**5, 2.0**20])
+def test_crops_of_images_differing_by_a_power_of_two_are_the_same_with_a_mean_luminance(tmp_path, factor):
+    """With MEAN_LUMINANCE the input and its reference are scaled into [v, 2 v) (range_exponent):
+    an image and its copy times a power of two, bright or dim, give the same crops, exposures and
+    reference exposures to the bit."""
+    data = {}
+    for tag, f in (("one", 1.0), ("scaled", factor)):
+        src, prep = tmp_path / tag / "train", tmp_path / tag / "prep"
+        src.mkdir(parents=True)
+        r = np.random.default_rng(24)
+        write_ref(src, "a", 1000001, r)
+        write_set(src, "a", 4, 1, r)
+        for p in src.glob("*.exr"):  # the radiance times f: hdr, emi, ema and the reference
+            kind = p.name.split(".")[-2]
+            if kind in contract.RADIANCE_FEATURES:
+                img = contract.read(p)
+                contract.write(p, (img.pixels.astype(np.float64) * f).astype(np.float32), dict(img.header))
+        preprocess.preprocess_split(src, prep, [4])
+        data[tag] = dataset.Crops(prep, crop=16, seed=3, length=20, mean_luminance=0.0625)
+    one, scaled = data["one"], data["scaled"]
+    assert one.scales[0] != 1.0  # the test image is brighter than the range: it is scaled
+    assert scaled.scales[0] == one.scales[0] / factor
+    for i in range(20):
+        for u, v in zip(one[i], scaled[i]):
+            assert torch.equal(u, v)

@@ -1,6 +1,7 @@
 """Tests of the training toolkit: shapes, the transfer, learning, export parity, config."""
 
 import json
+import re
 import sys
 from dataclasses import asdict
 from pathlib import Path
@@ -433,6 +434,9 @@ def test_export_matches_onnxruntime(models, name):
     assert export.outputs(head, scales) in meta[contract.MODEL_TRANSFER]
     assert (export.DETAIL_GATE in meta[contract.MODEL_TRANSFER]) == gate
     back, state = export.load_onnx(onnx_path)
+    # The test runs train with config's defaults: both feature sets, the input scaled to 1/16.
+    assert back.own_features and meta[contract.FEATURE_SAMPLES] == "1"
+    assert float(meta[contract.MEAN_LUMINANCE]) == back.mean_luminance == 0.0625
     assert back.detail_gate == gate and back.scales == scales
     assert all(torch.equal(state[k], v) for k, v in net.state_dict().items())
 
@@ -631,6 +635,16 @@ def test_crops_cut_on_the_device_are_the_loaders(tmp_path, capsys, monkeypatch):
         for x, y in zip(one, two):
             assert x.shape == y.shape and torch.equal(x, y)
         assert one[0].is_contiguous(memory_format=torch.channels_last)
+    # With a mean luminance (each input's radiance and its reference scaled by a power of two,
+    # with the exposures of the scaled images) both cut the same batches too.
+    scaled = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=16, extra_seeds=[5], mean_luminance=0.0625)
+    # hdr and emi uniform on [0, 1): mean of max(hdr - emi, 0) about 1/6, halved into [1/16, 1/8).
+    assert set(scaled.scales) == {0.5}
+    pairs = list(zip(train.batches(scaled, cfg, cpu), torch.utils.data.DataLoader(scaled, batch_size=8)))
+    assert len(pairs) == 2
+    for one, two in pairs:
+        for x, y in zip(one, two):
+            assert torch.equal(x, y)
     # A length that is not a multiple of the batch ends in a partial batch, as the DataLoader's.
     short = dataset.Crops(tmp_path / "prep" / "train", 32, seed=3, length=10)
     ours = list(train.batches(short, config.parse(["--batch", "4", "--cropper", "device"]), cpu))
@@ -970,6 +984,15 @@ def test_committed_models_keep_the_contract(name):
     record = json.loads((root / "models" / f"{name}.config.json").read_text())
     recorded = config.Config.from_values(record)
     assert [getattr(cfg, k) for k in config.NETWORK] == [getattr(recorded, k) for k in config.NETWORK]
+    # The features it takes and the scaling of its input, as its recipe trained it.
+    meta = {p.key: p.value for p in __import__("onnx").load(str(root / "models" / f"{name}.onnx")).metadata_props}
+    assert meta[contract.FEATURE_SAMPLES] == str(config.feature_samples(recorded))
+    assert contract.model_mean_luminance(meta) == config.scale_luminance(recorded)
+    if name == "default":
+        # aov-write's default --min-samples writes features the default model takes.
+        cli = (root / "crates" / "aov-write" / "src" / "cli.rs").read_text()
+        default_min = int(re.search(r"pub const DEFAULT_MIN_SAMPLES: u32 = (\d+);", cli).group(1))
+        assert default_min >= int(meta[contract.FEATURE_SAMPLES])
     x = _uniform_irradiance(h=40, w=56)[0].permute(1, 2, 0).numpy()
     hdr, alb, nrm = x[..., 0:3].copy(), x[..., 3:6], x[..., 6:9]
     emission = np.zeros_like(hdr)

@@ -43,8 +43,9 @@ pub struct Args {
     /// first hits per pixel. The emission (`emi`) always averages exactly the image's samples
     /// (a denoiser subtracts it from trace's radiance of those samples); `ema` is the emission
     /// over as many samples as the albedo (what a denoiser adds back). `luxest.samples` records
-    /// the samples of each feature image.
-    #[arg(long, value_parser = SPP, default_value_t = 1)]
+    /// the samples of each feature image. 1: every image's features of its own samples. The
+    /// default is what the committed model takes (its metadata `luxest.feature_samples`).
+    #[arg(long, value_parser = SPP, default_value_t = DEFAULT_MIN_SAMPLES)]
     pub min_samples: u32,
     /// Also write depth (.z.exr, R = G = B = distance in m).
     #[arg(long)]
@@ -55,6 +56,12 @@ pub struct Args {
     #[command(flatten)]
     pub common: CommonArgs,
 }
+
+/// The default of `--min-samples`: the least samples per pixel of albedo and normal that the
+/// committed denoiser `models/default.onnx` takes (its metadata `luxest.feature_samples`,
+/// checked by training/tests/test_training.py), so that aov-write's features as written by
+/// default are what `denoise` accepts; `FEATURE_SPP` in pipelines/presets.mk is the pipelines'.
+pub const DEFAULT_MIN_SAMPLES: u32 = 16;
 
 /// Samples per pixel: at least one.
 const SPP: Count<u32> = Count::range(1, u32::MAX as u64, "samples per pixel");

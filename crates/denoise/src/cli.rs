@@ -71,6 +71,11 @@ pub struct Args {
     /// Also write an sRGB PNG preview of each output next to it (`.dn.png`).
     #[arg(long)]
     pub preview: bool,
+    /// Denoise even with albedo/normal features of fewer samples per pixel than the model's
+    /// `luxest.feature_samples` (refused otherwise): for measuring how a model does with
+    /// features it was not trained for.
+    #[arg(long)]
+    pub any_feature_samples: bool,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -227,6 +232,15 @@ pub fn run(args: Args) -> Result<()> {
                 ));
             }
         }
+        if !args.any_feature_samples {
+            check_feature_samples(
+                denoiser.features(),
+                &images,
+                &job.features,
+                denoiser.feature_samples(),
+                &model,
+            )?;
+        }
         let (start, cpu_start) = (Instant::now(), process_cpu_seconds());
         let refs: Vec<&RgbImage> = images.iter().collect();
         let mut result = denoiser
@@ -265,6 +279,41 @@ pub fn run(args: Args) -> Result<()> {
     plan.commit()?;
     for line in done {
         console.note(line);
+    }
+    Ok(())
+}
+
+/// Refuses an albedo or normal image (`images[i]` of feature `features[i]`, read from
+/// `paths[i]`) whose header records fewer samples per pixel than `required`, the model's
+/// `luxest.feature_samples`: a model trained on antialiased features only (aov-write
+/// --min-samples) denoises the features of a 1-spp image poorly, several dB below what it is
+/// measured at (docs/measurements.md). An image without `luxest.samples` (not aov-write's) is
+/// taken as it is.
+pub fn check_feature_samples(
+    features: &[Feature],
+    images: &[RgbImage],
+    paths: &[PathBuf],
+    required: u64,
+    model: &Path,
+) -> Result<()> {
+    for ((feature, image), path) in features.iter().zip(images).zip(paths) {
+        if !matches!(feature, Feature::Alb | Feature::Nrm) {
+            continue;
+        }
+        if let Some(n) = header::parse::<u64>(path, &image.attributes, header::SAMPLES)? {
+            if n < required {
+                return Err(Error::input(
+                    path,
+                    format!(
+                        "{} feature of {n} samples per pixel, but the model {} takes features \
+                         of at least {required} (write them with aov-write --min-samples \
+                         {required})",
+                        feature.name(),
+                        model.display()
+                    ),
+                ));
+            }
+        }
     }
     Ok(())
 }
@@ -426,6 +475,60 @@ fn read_checked(path: &Path) -> Result<RgbImage> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn features_of_fewer_samples_than_the_model_takes_are_refused() {
+        let image = |samples: Option<u64>| {
+            let mut img = RgbImage::new(2, 2);
+            if let Some(n) = samples {
+                img.set_attribute(header::SAMPLES, n);
+            }
+            img
+        };
+        let features = [Feature::Hdr, Feature::Alb, Feature::Nrm, Feature::Emi];
+        let paths: Vec<PathBuf> = ["a.hdr.exr", "a.alb.exr", "a.nrm.exr", "a.emi.exr"]
+            .map(PathBuf::from)
+            .to_vec();
+        let model = Path::new("m.onnx");
+        // A 1-spp image: its own features (1 sample), antialiased ones (16), the emission of
+        // the image's own sample count whatever the model.
+        let own = [
+            image(Some(1)),
+            image(Some(1)),
+            image(Some(1)),
+            image(Some(1)),
+        ];
+        let antialiased = [
+            image(Some(1)),
+            image(Some(16)),
+            image(Some(16)),
+            image(Some(1)),
+        ];
+        assert!(check_feature_samples(&features, &own, &paths, 1, model).is_ok());
+        assert!(check_feature_samples(&features, &antialiased, &paths, 16, model).is_ok());
+        let err = check_feature_samples(&features, &own, &paths, 16, model)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("a.alb.exr") && err.contains("alb feature of 1 samples"),
+            "{err}"
+        );
+        assert!(
+            err.contains("--min-samples 16") && !err.contains('\n') && !err.contains("  "),
+            "{err}"
+        );
+        // The normal alone short of the count; an image without the header is taken as it is.
+        let short_normal = [image(Some(1)), image(Some(16)), image(Some(8)), image(None)];
+        let err = check_feature_samples(&features, &short_normal, &paths, 16, model)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("a.nrm.exr") && err.contains("8 samples"),
+            "{err}"
+        );
+        let unknown = [image(None), image(None), image(None), image(None)];
+        assert!(check_feature_samples(&features, &unknown, &paths, 16, model).is_ok());
+    }
 
     #[cfg(all(target_os = "linux", target_pointer_width = "64"))]
     #[test]

@@ -1,7 +1,7 @@
 //! The ONNX model through ONNX Runtime: loading it (once per process, the library found at run
 //! time), checking it against the model contract, and running it over an image in tiles.
 
-use luxest_io::exposure::dim_exponent;
+use luxest_io::exposure::{dim_exponent, range_exponent};
 use luxest_io::header;
 use luxest_io::image::RgbImage;
 use luxest_io::progress::Progress;
@@ -69,6 +69,8 @@ pub struct Denoiser {
     session: Session,
     features: Vec<Feature>,
     path: PathBuf,
+    feature_samples: u64,
+    mean_luminance: Option<f64>,
 }
 
 fn tensor_shape(v: &ValueType) -> Option<Vec<i64>> {
@@ -205,11 +207,61 @@ impl Denoiser {
                 ),
             ));
         }
+        let meta = |key: &str| session.metadata().ok().and_then(|m| m.custom(key));
+        let feature_samples = match meta(header::model::FEATURE_SAMPLES) {
+            Some(v) => v
+                .trim()
+                .parse::<u64>()
+                .ok()
+                .filter(|&n| n >= 1)
+                .ok_or_else(|| {
+                    Error::input(
+                        model,
+                        format!(
+                            "metadata {} = `{v}`: expected a sample count of at least 1",
+                            header::model::FEATURE_SAMPLES
+                        ),
+                    )
+                })?,
+            None => 1,
+        };
+        let mean_luminance = match meta(header::model::MEAN_LUMINANCE) {
+            Some(v) => Some(
+                v.trim()
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite() && *x > 0.0)
+                    .ok_or_else(|| {
+                        Error::input(
+                            model,
+                            format!(
+                                "metadata {} = `{v}`: expected a positive luminance",
+                                header::model::MEAN_LUMINANCE
+                            ),
+                        )
+                    })?,
+            ),
+            None => None,
+        };
         Ok(Denoiser {
             session,
             features,
             path: model.to_path_buf(),
+            feature_samples,
+            mean_luminance,
         })
+    }
+
+    /// The least samples per pixel of the albedo and normal images the model takes (its
+    /// metadata `luxest.feature_samples`; 1 when absent: any).
+    pub fn feature_samples(&self) -> u64 {
+        self.feature_samples
+    }
+
+    /// The mean luminance whose octave the model's input radiance is scaled into (its metadata
+    /// `luxest.mean_luminance`), or None: only dim images are brightened.
+    pub fn mean_luminance(&self) -> Option<f64> {
+        self.mean_luminance
     }
 
     /// The features the model takes, in channel order (always starting with hdr).
@@ -274,7 +326,9 @@ impl Denoiser {
         // A dim image (mean luminance below DIM_LUMINANCE) is brightened by a power of two
         // instead, with the exposure of the brightened image: the autoexposure's 1e-4 would
         // otherwise make the model's input depend on the radiance's unit (luxest_io::exposure::
-        // dim_exponent). Exclusive with the above: a dim image's peak is far from the limit.
+        // dim_exponent); a model that records a mean luminance gets every image scaled into
+        // its octave, bright ones dimmed (range_exponent). Exclusive with the above: an image
+        // near the limit is scaled by it (its mean is far above any recorded luminance).
         let (hdr_scale, exposure) = if k > 0 {
             let s = 2f64.powi(-k);
             (s, inputs[0].autoexposure() / s)
@@ -284,7 +338,11 @@ impl Denoiser {
                 .iter()
                 .position(|f| *f == Feature::Emi)
                 .map(|i| inputs[i]);
-            let s = 2f64.powi(dim_exponent(inputs[0], emission));
+            let e = match self.mean_luminance {
+                Some(low) => range_exponent(inputs[0], emission, low),
+                None => dim_exponent(inputs[0], emission),
+            };
+            let s = 2f64.powi(e);
             (s, inputs[0].autoexposure_scaled(s))
         };
         let exposure = exposure as f32;

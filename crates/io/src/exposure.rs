@@ -1,8 +1,8 @@
 //! The exposure contract shared by Rust and Python: the autoexposure `k` of a whole image
 //! (the denoiser's input transfer and the evaluation tonemap use it; `luxest_contract.exposure`
 //! computes the same, tied by `tests/fixtures/contract/exposure.json`), and the power of two by
-//! which the denoiser brightens a dim image before it (docs/architecture.md, *Exposure and
-//! tonemap*).
+//! which the denoiser brightens a dim image before it, or scales any image into the octave of
+//! mean luminance its model records (docs/architecture.md, *Exposure and tonemap*).
 
 use crate::color::Rgb;
 use crate::image::RgbImage;
@@ -48,8 +48,25 @@ pub const DIM_LUMINANCE: f64 = 1.0 / 32.0;
 /// lost 10 dB at 256 spp before this, while a brighter one denoises alike (docs/measurements.md,
 /// *Dim images*). Powers of two are exact in f32, so images differing by one are denoised alike.
 pub fn dim_exponent(hdr: &RgbImage, emission: Option<&RgbImage>) -> i32 {
-    if hdr.pixels.is_empty() {
+    let mean = filtered_luminance(hdr, emission);
+    if mean.is_nan() || mean <= 0.0 || mean >= DIM_LUMINANCE {
         return 0;
+    }
+    // The least e with mean · 2^e ≥ DIM_LUMINANCE (below 200: a positive mean of f32 values is at
+    // least 2^-149 over the pixel count).
+    let mut e = 0;
+    while mean * 2f64.powi(e) < DIM_LUMINANCE {
+        e += 1;
+    }
+    e
+}
+
+/// The mean over pixels of the Rec. 709 luminance of `max(hdr − emission, 0)` (per channel, f64;
+/// `max(hdr, 0)` without `emission`): the radiance a model with the `emi` feature denoises, the
+/// mean [`dim_exponent`] and [`range_exponent`] bring into range; 0 for an empty image.
+pub fn filtered_luminance(hdr: &RgbImage, emission: Option<&RgbImage>) -> f64 {
+    if hdr.pixels.is_empty() {
+        return 0.0;
     }
     let dimmed = |h: &[f32; 3], e: &[f32; 3]| {
         Rgb(std::array::from_fn(|c| {
@@ -66,15 +83,29 @@ pub fn dim_exponent(hdr: &RgbImage, emission: Option<&RgbImage>) -> i32 {
             .sum(),
         None => hdr.pixels.iter().map(|h| dimmed(h, &[0.0; 3])).sum(),
     };
-    let mean = sum / hdr.pixels.len() as f64;
-    if mean.is_nan() || mean <= 0.0 || mean >= DIM_LUMINANCE {
+    sum / hdr.pixels.len() as f64
+}
+
+/// The power of two `e` by which the denoiser multiplies the radiance it gives a model whose
+/// metadata records the mean luminance `low` (`luxest.mean_luminance`): the `e`, negative for a
+/// bright image, with `low ≤ 2^e · L < 2 · low`, `L` = [`filtered_luminance`]; 0 for a black
+/// image. Images that differ by a power of two, dim or bright, then give the model the same
+/// input: the autoexposure's `1e-4` floor (a black pixel's) weighs the same against every image,
+/// where unscaled it weighs ever less against a brighter one and a model's input would depend on
+/// the radiance's unit (docs/architecture.md, *Exposure and tonemap*). `luxest_contract.
+/// range_exponent` computes the same (`tests/fixtures/contract/exposure.json`).
+pub fn range_exponent(hdr: &RgbImage, emission: Option<&RgbImage>, low: f64) -> i32 {
+    let mean = filtered_luminance(hdr, emission);
+    if !(mean > 0.0 && mean.is_finite()) {
         return 0;
     }
-    // The least e with mean · 2^e ≥ DIM_LUMINANCE (below 200: a positive mean of f32 values is at
-    // least 2^-149 over the pixel count).
+    // |e| stays below 300: a positive mean of f32 values lies in [2^-149 / pixels, 2^128].
     let mut e = 0;
-    while mean * 2f64.powi(e) < DIM_LUMINANCE {
+    while mean * 2f64.powi(e) < low {
         e += 1;
+    }
+    while mean * 2f64.powi(e) >= 2.0 * low {
+        e -= 1;
     }
     e
 }
@@ -107,6 +138,32 @@ mod tests {
         emi.pixels[0] = [100.0; 3];
         assert_eq!(dim_exponent(&hdr, None), 0);
         assert_eq!(dim_exponent(&hdr, Some(&emi)), 16);
+    }
+
+    #[test]
+    fn range_exponent_brings_the_mean_into_its_octave() {
+        // Uniform grey v: L = v exactly, so e is the integer with low <= 2^e v < 2 low.
+        for (v, e) in [
+            (1.5f32, -4),
+            (0.07, 0),
+            (0.2, -1),
+            (0.03, 2),
+            (1000.0, -13),
+            (1e-6, 16),
+        ] {
+            assert_eq!(
+                range_exponent(&uniform(3, 2, v), None, 1.0 / 16.0),
+                e,
+                "{v}"
+            );
+        }
+        assert_eq!(range_exponent(&uniform(3, 2, 0.0), None, 1.0 / 16.0), 0);
+        // The emission is left out of the mean, as in dim_exponent.
+        let hdr = uniform(2, 1, 3.0);
+        let mut emi = uniform(2, 1, 0.0);
+        emi.pixels[0] = [3.0; 3];
+        assert!((filtered_luminance(&hdr, Some(&emi)) - 1.5).abs() < 1e-12);
+        assert_eq!(range_exponent(&hdr, Some(&emi), 1.0 / 16.0), -4);
     }
 
     #[test]

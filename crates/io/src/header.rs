@@ -64,6 +64,19 @@ pub const ALL: [&str; 14] = [
     CHANNELS,
 ];
 
+/// ONNX model metadata beside [`CHANNELS`] (`training/export.py` writes them;
+/// `luxest_contract`'s keys of the same names, tied by `tests/fixtures/contract/model_meta.json`).
+pub mod model {
+    /// The least samples per pixel of the albedo and normal features the model was trained for
+    /// (`aov-write --min-samples`), decimal; `1`: features of any count. `denoise` refuses
+    /// features of fewer samples.
+    pub const FEATURE_SAMPLES: &str = "luxest.feature_samples";
+    /// The mean luminance `v` whose octave `[v, 2v)` the model's input radiance is scaled into by
+    /// a power of two (`luxest_io::exposure::range_exponent`); absent: only dim images are
+    /// brightened (`dim_exponent`).
+    pub const MEAN_LUMINANCE: &str = "luxest.mean_luminance";
+}
+
 /// The values of [`ESTIMATOR`]: which estimator made an image or sensor results (also
 /// `RunInfo::estimator` in sensor results). `evaluate` labels denoised images
 /// `<estimator>+denoise`, `<estimator>+oidn` (OIDN 1.x) or `<estimator>+oidn2` (OIDN 2.x). Python's `luxest_contract` has the same names,
