@@ -387,13 +387,13 @@ def test_public_interiors_are_scored_with_independent_references_and_both_featur
         levels = flag(prog[0], "--snapshots").split(",")
         aovs = [c for c in cmds if c[0] == STAGES["AOV_WRITE"] and c[1] == f"build/public/{name}/scene.lxs"]
         noisy_aovs = [c for c in aovs if "--reference" not in c]
-        assert sorted("--min-samples" in c for c in noisy_aovs) == [False, True]
+        assert sorted(flag(c, "--min-samples") == "1" for c in noisy_aovs) == [False, True]
         assert all(
             flag(c, "--seed") == flag(prog[0], "--seed") and flag(c, "--snapshots") == ",".join(levels)
             for c in noisy_aovs
         )
         snap = [c for c in cmds if c[0] == STAGES["DENOISE"] and f"/public/{name}/" in c[1] and "spp.hdr" in c[1]]
-        assert len(snap) == 2 * len(levels)  # antialiased and default features
+        assert len(snap) == 2 * len(levels)  # antialiased and own-sample features
         oidn = [c for c in cmds if c[0] == STAGES["OIDN_DENOISE"] and f"/public/{name}/" in c[1] and "spp.hdr" in c[1]]
         oidn2 = [
             c for c in cmds if "--oidn-lib" in c and f"/public/{name}/" in flag(c, "-o") and "spp.dn" in flag(c, "-o")
