@@ -122,36 +122,12 @@ fn apply_reversed(t: &[[u32; 256]; 4], i: u32) -> u32 {
 /// reversed columns of the set bits of byte value `v` at byte `b` of the index (the shuffled
 /// indices use all 32 bits). Reversed because the Owen scramble works on reversed bits: the
 /// table saves a bit reversal per draw (x86 has no instruction for one).
-const SOBOL_1_REV_BYTES: [[u32; 256]; 4] = {
-    let mut t = [[0u32; 256]; 4];
-    let mut b = 0;
-    while b < 4 {
-        let mut v = 0;
-        while v < 256 {
-            let mut x = 0;
-            let mut j = 0;
-            while j < 8 {
-                if v & (1 << j) != 0 {
-                    x ^= SOBOL_1[8 * b + j].reverse_bits();
-                }
-                j += 1;
-            }
-            t[b][v] = x;
-            v += 1;
-        }
-        b += 1;
-    }
-    t
-};
+const SOBOL_1_REV_BYTES: [[u32; 256]; 4] = reversed_byte_tables(SOBOL_1);
 
 /// Sobol dimension 1 of index `i`, as 32 fraction bits, bit-reversed.
 #[inline]
 fn sobol_1_reversed(i: u32) -> u32 {
-    let [b0, b1, b2, b3] = i.to_le_bytes();
-    SOBOL_1_REV_BYTES[0][b0 as usize]
-        ^ SOBOL_1_REV_BYTES[1][b1 as usize]
-        ^ SOBOL_1_REV_BYTES[2][b2 as usize]
-        ^ SOBOL_1_REV_BYTES[3][b3 as usize]
+    apply_reversed(&SOBOL_1_REV_BYTES, i)
 }
 
 /// Sobol dimension 1 of index `i`, as 32 fraction bits.

@@ -51,6 +51,24 @@ pub struct RayLog {
     pub shadow_depths: Vec<u32>,
 }
 
+impl RayLog {
+    /// Counts a shadow ray of bounce `depth` from `origin` along `direction` up to `tfar`, and
+    /// keeps it when recording.
+    #[inline]
+    fn shadow_ray(&mut self, depth: u32, origin: Vec3, direction: Vec3, tfar: f64) {
+        self.shadow += 1;
+        if self.record {
+            self.shadow_depths.push(depth);
+            self.shadow_rays.push(Ray {
+                origin,
+                direction,
+                tnear: 0.0,
+                tfar,
+            });
+        }
+    }
+}
+
 /// Russian roulette's weight window: a path survives with probability
 /// min(0.95, max throughput / RR_WEIGHT), so survivors carry about RR_WEIGHT.
 const RR_WEIGHT: f64 = 0.25;
@@ -179,17 +197,8 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                         _ => Rgb::BLACK,
                     };
                     if contribution.max_component() > 0.0 {
-                        log.shadow += 1;
                         let from = world.offset(sp.position, sp.ng, w);
-                        if log.record {
-                            log.shadow_depths.push(depth);
-                            log.shadow_rays.push(Ray {
-                                origin: from,
-                                direction: w,
-                                tnear: 0.0,
-                                tfar: d,
-                            });
-                        }
+                        log.shadow_ray(depth, from, w, d);
                         if !world.occluded(from, lp.position) {
                             l = l + beta * contribution;
                         }
@@ -207,17 +216,8 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                 let (f, bp) = f_cos(w);
                 if es.pdf > 0.0 && f.max_component() > 0.0 {
                     let contribution = f * es.radiance * (power_heuristic(es.pdf, bp) / es.pdf);
-                    log.shadow += 1;
                     let from = world.offset(sp.position, sp.ng, w);
-                    if log.record {
-                        log.shadow_depths.push(depth);
-                        log.shadow_rays.push(Ray {
-                            origin: from,
-                            direction: w,
-                            tnear: 0.0,
-                            tfar: f64::INFINITY,
-                        });
-                    }
+                    log.shadow_ray(depth, from, w, f64::INFINITY);
                     if world.escapes(from, w) {
                         l = l + beta * contribution;
                     }
