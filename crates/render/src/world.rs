@@ -10,8 +10,7 @@ use crate::luminaire::GoniometricLight;
 use crate::portal::{PortalSampler, Views};
 use crate::rt::{Hit, RayTracer};
 use crate::sampling::{
-    cosine_hemisphere, uniform_sphere, Distribution1D, PlanarRectangle, Rng, Sampler,
-    TriangleMeshSampler,
+    cosine_hemisphere, uniform_sphere, Distribution1D, Rng, Sampler, TriangleMeshSampler,
 };
 use crate::scene::{Material, OpacityChannel};
 use crate::shading::Shading;
@@ -79,11 +78,6 @@ pub struct World {
     /// Per area emitter, uniform points on its triangles from one 2D sample (None for point
     /// emitters).
     triangle_choice: Vec<Option<TriangleMeshSampler>>,
-    /// Per area emitter that is one rectangle (two triangles), the rectangle, whose solid
-    /// angle next-event estimation samples when [`World::set_solid_angle_sampling`] is on.
-    rectangles: Vec<Option<PlanarRectangle>>,
-    /// Whether [`World::sample_light_point_facing`] samples rectangles by solid angle.
-    solid_angle: bool,
     /// Per area emitter, its triangles as (corner, edge 1, edge 2, unit normal), for fast
     /// sampling of points on lights.
     emitter_triangles: Vec<Vec<[Vec3; 4]>>,
@@ -342,21 +336,6 @@ impl World {
                 TriangleMeshSampler::new(&corners)
             })
             .collect();
-        let rectangles = emitter_triangles
-            .iter()
-            .zip(&triangle_choice)
-            .map(
-                |(tris, mesh): (&Vec<[Vec3; 4]>, &Option<TriangleMeshSampler>)| {
-                    match (mesh, tris.as_slice()) {
-                        // The parallelogram a + s (b − a) + t (d − a): triangles (a, b, c), (a, c, d).
-                        (Some(m), [[a, e1, _, _], [_, _, ed, _]]) if m.is_parallelogram() => {
-                            PlanarRectangle::new(*a, *e1, *ed)
-                        }
-                        _ => None,
-                    }
-                },
-            )
-            .collect();
         let luminaires = if scene.header.features.goniometric_luminaires {
             GoniometricLight::for_emitters(&scene.header.emitters, &scene.header.photometries)
                 .map_err(|m| luxest_io::Error::input(&scene.header.name, m))?
@@ -448,8 +427,6 @@ impl World {
             light_choice,
             single_light,
             triangle_choice,
-            rectangles,
-            solid_angle: false,
             emitter_triangles,
             luminaires,
             smooth,
@@ -474,19 +451,6 @@ impl World {
     /// How [`World::sample_light_point`] picks its light.
     pub fn light_sampler(&self) -> LightSampler {
         self.light_sampler
-    }
-
-    /// Whether [`World::sample_light_point_facing`] draws points on rectangular area emitters
-    /// uniformly in the solid angle they subtend at the receiver (Ureña et al. 2013; area
-    /// sampling where that angle is tiny or the receiver is near their plane) rather than
-    /// uniformly in area (the default; `trace` turns it on).
-    pub fn set_solid_angle_sampling(&mut self, on: bool) {
-        self.solid_angle = on;
-    }
-
-    /// Whether rectangles are sampled by solid angle ([`World::set_solid_angle_sampling`]).
-    pub fn solid_angle_sampling(&self) -> bool {
-        self.solid_angle
     }
 
     /// The shading frame at a point of `triangle` with texture coordinates `uv`, geometric
@@ -968,13 +932,6 @@ impl World {
     /// A uniformly distributed point on area emitter `ei`: (position, unit front normal,
     /// its luminance there).
     fn sample_area_point(&self, ei: usize, rng: &mut impl Sampler) -> (Vec3, Vec3, Rgb) {
-        let (u1, u2) = rng.next_2d();
-        self.area_point_at(ei, u1, u2)
-    }
-
-    /// The point of area emitter `ei` that the mesh sampler maps `(u1, u2)` to (rectangle
-    /// coordinates for a parallelogram): (position, unit front normal, its luminance there).
-    fn area_point_at(&self, ei: usize, u1: f64, u2: f64) -> (Vec3, Vec3, Rgb) {
         let Emitter::Area {
             first_triangle,
             radiance_rgb,
@@ -987,6 +944,7 @@ impl World {
         let mesh = self.triangle_choice[ei]
             .as_ref()
             .expect("area emitter has triangles");
+        let (u1, u2) = rng.next_2d();
         let (ti, b1, b2) = mesh.sample(u1, u2);
         let [a, e1, e2, n] = self.emitter_triangles[ei][ti];
         let radiance = match texture {
@@ -1064,38 +1022,11 @@ impl World {
                 emitted: point_intensity(*intensity_rgb, spot, receiver - *position),
                 pdf: p_e,
             },
-            Emitter::Area { .. } => match self.spherical_rectangle(ei, receiver) {
-                Some(sr) => {
-                    let (u1, u2) = rng.next_2d();
-                    let (s, t) = sr.sample(u1, u2);
-                    let (position, normal, radiance) = self.area_point_at(ei, s, t);
-                    LightPoint {
-                        position,
-                        normal: Some(normal),
-                        emitted: radiance,
-                        pdf: p_e * sr.area_density((position - receiver).length()),
-                    }
-                }
-                None => self.area_light_point(ei, p_e, rng),
-            },
+            Emitter::Area { .. } => self.area_light_point(ei, p_e, rng),
             Emitter::Environment { .. } => {
                 unreachable!("the light choice gives the environment weight 0")
             }
         }
-    }
-
-    /// Area emitter `ei` as a spherical rectangle about `receiver`, where next-event estimation
-    /// samples it by solid angle.
-    #[inline]
-    fn spherical_rectangle(
-        &self,
-        ei: usize,
-        receiver: Vec3,
-    ) -> Option<crate::sampling::SphericalRectangle> {
-        if !self.solid_angle {
-            return None;
-        }
-        self.rectangles[ei].as_ref()?.seen_from(receiver)
     }
 
     /// A uniformly sampled point of the area emitter `ei`, chosen with probability `p_e`.
@@ -1147,40 +1078,13 @@ impl World {
     }
 
     /// Area density with which [`World::sample_light_point`] picks a point on the area emitter
-    /// `emitter` for the receiver `receiver` (for multiple importance sampling) when it samples
-    /// by area (see [`World::light_point_pdf_facing`]).
+    /// `emitter` for the receiver `receiver` (for multiple importance sampling).
     pub fn light_point_pdf(&self, emitter: u32, receiver: Vec3) -> f64 {
         self.light_point_pdf_facing(emitter, receiver, None)
     }
 
-    /// Area density with which [`World::sample_light_point_facing`] picks the point `point` on
-    /// the area emitter `emitter` for the receiver `receiver` of normal `normal` (for multiple
-    /// importance sampling): with solid-angle sampling of a rectangle it depends on the point.
-    pub fn light_point_pdf_at(
-        &self,
-        emitter: u32,
-        receiver: Vec3,
-        normal: Option<Vec3>,
-        point: Vec3,
-    ) -> f64 {
-        match self.spherical_rectangle(emitter as usize, receiver) {
-            Some(sr)
-                if matches!(
-                    self.scene.header.emitters[emitter as usize],
-                    Emitter::Area { .. }
-                ) =>
-            {
-                self.light_choice_pmf(emitter, receiver, normal)
-                    * sr.area_density((point - receiver).length())
-            }
-            _ => self.light_point_pdf_facing(emitter, receiver, normal),
-        }
-    }
-
     /// Area density with which [`World::sample_light_point_facing`] picks a point on the area
-    /// emitter `emitter` for the receiver `receiver` of normal `normal` when it samples by
-    /// area: always without [`World::set_solid_angle_sampling`], and for emitters other than
-    /// rectangles (else [`World::light_point_pdf_at`]).
+    /// emitter `emitter` for the receiver `receiver` of normal `normal`.
     pub fn light_point_pdf_facing(
         &self,
         emitter: u32,

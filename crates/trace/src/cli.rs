@@ -60,11 +60,6 @@ pub struct Args {
     /// where the scene has none.
     #[arg(long, value_enum)]
     pub portals: Option<Portals>,
-    /// How next-event estimation draws points on rectangular area emitters: `solid-angle`
-    /// (uniform in the solid angle they subtend at the shading point; by area where it is tiny
-    /// or the point is near their plane) or `area` (uniform in area).
-    #[arg(long, value_enum, default_value = "solid-angle")]
-    pub rectangle_sampling: RectangleSampling,
     #[command(flatten)]
     pub common: CommonArgs,
 }
@@ -74,13 +69,6 @@ pub struct Args {
 pub enum Portals {
     Auto,
     Off,
-}
-
-/// How `trace` samples points on rectangular lights.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
-pub enum RectangleSampling {
-    SolidAngle,
-    Area,
 }
 
 /// Longest render time --time accepts, s: a bound that makes `--time inf` (which never ended)
@@ -128,7 +116,6 @@ pub fn run(args: Args) -> Result<()> {
         ));
     }
     world.set_portals(args.portals != Some(Portals::Off));
-    world.set_solid_angle_sampling(args.rectangle_sampling == RectangleSampling::SolidAngle);
     let prefix = args
         .out
         .clone()

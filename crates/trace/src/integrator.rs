@@ -123,11 +123,10 @@ pub fn radiance<const POINT: bool, const AREA: bool, const SPECULAR: bool, const
                         1.0
                     } else {
                         let cos_l = sp.ng.dot(wo).abs();
-                        let light_pdf =
-                            world.light_point_pdf_at(e, from_vertex, from_normal, sp.position)
-                                * sp.distance
-                                * sp.distance
-                                / cos_l;
+                        let light_pdf = world.light_point_pdf_facing(e, from_vertex, from_normal)
+                            * sp.distance
+                            * sp.distance
+                            / cos_l;
                         power_heuristic(bsdf_pdf, light_pdf)
                     };
                     l = l + beta * le * w;

@@ -19,8 +19,8 @@ pub use film::Film;
 /// Loads a compiled scene for path tracing: its world, with Embree's fast traversal (the path
 /// tracer's rays start at sampled interior points of surfaces, never on the edges and corners
 /// that need the robust mode), and its camera, with an optional `WIDTHxHEIGHT` resolution
-/// override, next-event estimation choosing its light through the light BVH and sampling
-/// rectangular lights by solid angle. Errors name the scene file.
+/// override, next-event estimation choosing its light through the light BVH. Errors name the
+/// scene file.
 pub fn load(
     path: &std::path::Path,
     resolution: Option<&str>,
@@ -31,7 +31,6 @@ pub fn load(
     use luxest_render::world::{load_with_camera, Traversal};
     let (mut world, camera) = load_with_camera(path, resolution, Traversal::Fast)?;
     world.set_light_sampler(luxest_render::light_bvh::LightSampler::Bvh);
-    world.set_solid_angle_sampling(true);
     Ok((world, camera))
 }
 pub use renderer::{pixel_sampler, Renderer, TILE};
