@@ -12,7 +12,8 @@
 #
 # Per scene, BENCH_<X>_<scene> replaces BENCH_<X> (X: RESOLUTION, SPP, REF_SPP, LT, DLE,
 # DLE_PLAIN; an empty LT/DLE/DLE_PLAIN leaves those rows out), and BENCH_VARIANTS_<scene> adds
-# trace rows (`--trace-variant LABEL=EXTRA_ARGS`, bench_pt.py). The many-light scenes and the
+# trace rows (`--trace-variant LABEL=EXTRA_ARGS`, bench_pt.py); BENCH_PATH_TARGET_<scene> is the
+# issue's target for trace / Mitsuba at its best there (else the Cornell box's, by host). The many-light scenes and the
 # daylit room are benched at small films, path tracing only, so that their 4096-spp references
 # finish in minutes on a 2-core machine.
 
@@ -26,6 +27,7 @@ BENCH_LT_open-plan-office ?=
 BENCH_DLE_open-plan-office ?=
 BENCH_DLE_PLAIN_open-plan-office ?=
 BENCH_VARIANTS_open-plan-office ?= --trace-variant "power=--light-sampler power"
+BENCH_PATH_TARGET_open-plan-office ?= 0.5
 
 BENCH_RESOLUTION_mixed-emitters ?= 80x60
 BENCH_SPP_mixed-emitters ?= 32 128 512
@@ -34,6 +36,7 @@ BENCH_LT_mixed-emitters ?=
 BENCH_DLE_mixed-emitters ?=
 BENCH_DLE_PLAIN_mixed-emitters ?=
 BENCH_VARIANTS_mixed-emitters ?= --trace-variant "power=--light-sampler power"
+BENCH_PATH_TARGET_mixed-emitters ?= 0.5
 
 BENCH_RESOLUTION_daylit-room ?= 128x96
 BENCH_SPP_daylit-room ?= 16 64 256
@@ -42,6 +45,7 @@ BENCH_LT_daylit-room ?=
 BENCH_DLE_daylit-room ?=
 BENCH_DLE_PLAIN_daylit-room ?=
 BENCH_VARIANTS_daylit-room ?= --trace-variant "no-portals=--portals off"
+BENCH_PATH_TARGET_daylit-room ?= 0.5
 
 # $(call bench_var,X,scene): BENCH_X_scene where it is defined (even empty), else BENCH_X.
 bench_var = $(if $(filter undefined,$(origin BENCH_$(1)_$(2))),$(BENCH_$(1)),$(BENCH_$(1)_$(2)))
@@ -65,6 +69,7 @@ build/bench/$(1)/pt.md: build/$(1)/scene.lxs $(call lx_ref,build/bench/$(1)/ref,
 	$$(PYTHON) pipelines/bench_pt.py --scene $$< --reference $$(word 2,$$^) --mitsuba-scene $$(word 3,$$^) \
 		--peers-python $$(PEERS_PYTHON) --trace $$(TRACE) --estimate $$(ESTIMATE) --evaluate $$(EVALUATE) \
 		--resolution $$(call bench_var,RESOLUTION,$(1)) --spp $$(call bench_list,SPP,$(1)) $$(BENCH_VARIANTS_$(1)) \
+		$$(if $$(BENCH_PATH_TARGET_$(1)),--path-target $$(BENCH_PATH_TARGET_$(1))) \
 		--lt-paths "$$(call bench_list,LT,$(1))" --dle-paths "$$(call bench_list,DLE,$(1))" --dle-mis-paths $$(BENCH_DLE_MIS) \
 		--dle-plain-paths "$$(call bench_list,DLE_PLAIN,$(1))" \
 		--work-dir build/bench/$(1)/runs -o $$@ --plot build/bench/$(1)/pt.png

@@ -58,6 +58,10 @@ def test_ratios_divide_by_the_best_sampler_and_name_the_host_target():
     assert "2.00 at 0.01 (stratified), 1.89 at 0.001 (independent)" in lt
     avx2 = bench_pt.at_its_best(table(), SAMPLERS, "Intel Xeon, 8 CPUs, AVX2 (no AVX-512)")
     assert any("at most 0.5 on this AVX2 host" in x for x in avx2)
+    # A scene with its own target (the office, the daylit room: 0.5) names it instead.
+    office = bench_pt.at_its_best(table(), SAMPLERS, "AMD EPYC, 2 CPUs, AVX-512", 0.5)
+    trace = next(x for x in office if x.startswith("luxest trace / Mitsuba path at its best"))
+    assert trace.endswith("The target at 0.001 on this scene: at most 0.5.")
 
 
 class FakeResolver:
