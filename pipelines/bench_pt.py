@@ -2,7 +2,11 @@
 scene in the same run. Path tracing: `trace` against Mitsuba's `path`; light transport from the
 lights: the light tracer (`estimate image --light-tracing`) and the double local estimate
 (`estimate image`, combined with light tracing by multiple importance sampling, and plain with
-`--mis-paths 0`) against Mitsuba's `ptracer`. Mitsuba runs with each of its samplers
+`--mis-paths 0`) against Mitsuba's `ptracer`. Variants of `trace` (`--trace-variant
+LABEL=EXTRA_ARGS`, repeatable: e.g. `power=--light-sampler power` for the flux-proportional light
+choice beside the light BVH, `no-portals=--portals off` for a daylit room without its window
+portals) are rows of their own, rendered interleaved with the rest at the trace budgets and
+compared with Mitsuba's `path` as the main trace row is. Mitsuba runs with each of its samplers
 (`--mitsuba-samplers`: independent, stratified, ldsampler, multijitter), one row each, and the
 report compares luxest with Mitsuba at its best: for each target relMSE, the sampler that
 reaches it in the least CPU time, named. For each repetition and each budget every
@@ -20,6 +24,7 @@ import csv
 import math
 import os
 import re
+import shlex
 import subprocess
 import sys
 import time
@@ -59,6 +64,22 @@ def counts(text):
     return [int(v) for v in text.split(",") if v]
 
 
+TRACE = "luxest trace"
+
+
+def trace_variant(text):
+    """`LABEL=EXTRA_ARGS` -> (row name, extra `trace` arguments); argparse's type for
+    --trace-variant (a bad value is a usage error naming it)."""
+    label, sep, extra = text.partition("=")
+    label = label.strip()
+    args = shlex.split(extra)
+    if not sep or not label or not args or not re.fullmatch(r"[A-Za-z0-9_.+-]+", label):
+        raise argparse.ArgumentTypeError(
+            f"{text!r}: expected LABEL=EXTRA_ARGS (LABEL of letters, digits, _ . + -; arguments not empty)"
+        )
+    return f"{TRACE}, {label}", args
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", required=True, help="compiled scene (.lxs)")
@@ -70,6 +91,14 @@ def main(argv=None):
     ap.add_argument("--evaluate", required=True)
     ap.add_argument("--resolution", required=True, help="WIDTHxHEIGHT")
     ap.add_argument("--spp", required=True, help="path tracing: comma-separated samples per pixel")
+    ap.add_argument(
+        "--trace-variant",
+        type=trace_variant,
+        action="append",
+        default=[],
+        metavar="LABEL=EXTRA_ARGS",
+        help="a further trace row with these extra arguments (repeatable), e.g. power=--light-sampler power",
+    )
     ap.add_argument("--lt-paths", default="", help="light tracing: comma-separated light paths")
     ap.add_argument("--dle-paths", default="", help="double local estimate: comma-separated light paths")
     ap.add_argument(
@@ -88,6 +117,12 @@ def main(argv=None):
         default=MITSUBA_SAMPLERS,
         help=f"Mitsuba's samplers, one row each (comma-separated; default {MITSUBA_SAMPLERS})",
     )
+    ap.add_argument(
+        "--path-target",
+        type=float,
+        help="the issue's target for trace / Mitsuba path at its best at relMSE 1e-3 on this scene "
+        "(default: the Cornell box's, by host: " + ", ".join(f"{v:g} on {k}" for k, v in PATH_TARGET.items()) + ")",
+    )
     ap.add_argument("--reps", type=int, default=2)
     ap.add_argument("--work-dir", required=True)
     ap.add_argument("-o", "--out", required=True, help="Markdown table")
@@ -100,10 +135,15 @@ def main(argv=None):
     pixels = w * h
     samplers = [v for v in a.mitsuba_samplers.split(",") if v]
 
-    def luxest_trace(rep, spp):
-        prefix = work / f"trace_r{rep}"
-        cpu, _ = child_cpu([a.trace, a.scene, "--spp", spp, "--resolution", a.resolution, "--seed", rep, "-o", prefix])
-        return cpu, work / image_name(prefix.name, "hdr", spp), spp * pixels
+    def luxest_trace(tag, extra):
+        def run(rep, spp):
+            prefix = work / f"{tag}_r{rep}"
+            cpu, _ = child_cpu(
+                [a.trace, a.scene, "--spp", spp, "--resolution", a.resolution, "--seed", rep, "-o", prefix, *extra]
+            )
+            return cpu, work / image_name(prefix.name, "hdr", spp), spp * pixels
+
+        return run
 
     def luxest_image(extra, tag):
         def run(rep, paths):
@@ -163,7 +203,11 @@ def main(argv=None):
         return run
 
     # (name, unit, budgets, samples per budget unit, runner)
-    methods = [("luxest trace", "spp", counts(a.spp), pixels, luxest_trace)]
+    methods = [(TRACE, "spp", counts(a.spp), pixels, luxest_trace("trace", []))]
+    for k, (name, extra) in enumerate(a.trace_variant):
+        if any(m[0] == name for m in methods):
+            sys.exit(f"error: --trace-variant: the row {name!r} is given twice")
+        methods.append((name, "spp", counts(a.spp), pixels, luxest_trace(f"trace_v{k + 1}", extra)))
     if peer:
         for sm in samplers:
             methods.append((mitsuba_name("path", sm), "spp", counts(a.spp), pixels, mitsuba("path", sm, True)))
@@ -237,8 +281,9 @@ def main(argv=None):
     for name, *_ in methods:
         lines.append(f"| {name} | " + " | ".join(f"{to_target[name, t]:.2f}" for t in TARGETS) + " |")
     lines.append("")
+    lines += against_variants(to_target)
     if peer:
-        lines += at_its_best(to_target, samplers, host)
+        lines += at_its_best(to_target, samplers, host, a.path_target)
     else:
         lines.append("Mitsuba not installed (`scripts/setup.sh --no-python --no-ort --peers`): no peer rows.")
     if a.plot:
@@ -247,18 +292,35 @@ def main(argv=None):
     print("\n".join(lines))
 
 
+def trace_rows(to_target):
+    """The trace rows scored: the main one first, then its variants in the order given."""
+    names = [n for n, t in to_target if t == TARGETS[0] and (n == TRACE or n.startswith(TRACE + ", "))]
+    return sorted(names, key=lambda n: n != TRACE)
+
+
+def against_variants(to_target):
+    """Lines comparing the main trace row with each variant: CPU time to equal relMSE, main over
+    variant (below 1: the default is faster)."""
+    lines = []
+    for name in trace_rows(to_target)[1:]:
+        ratios = ", ".join(f"{to_target[TRACE, t] / to_target[name, t]:.2f} at {t:g}" for t in TARGETS)
+        lines.append(f"{TRACE} / {name}, CPU time to equal relMSE: {ratios}.")
+    return lines + [""] if lines else lines
+
+
 def best_sampler(to_target, integrator, samplers, t):
     """The sampler with which Mitsuba's `integrator` reaches relMSE `t` in the least CPU time."""
     return min(samplers, key=lambda sm: to_target[mitsuba_name(integrator, sm), t])
 
 
-def at_its_best(to_target, samplers, host):
+def at_its_best(to_target, samplers, host, path_target=None):
     """The report's closing lines: Mitsuba's best sampler per integrator and target, and luxest's
-    CPU time to equal error over Mitsuba's at its best (and with each sampler)."""
+    CPU time to equal error over Mitsuba's at its best (and with each sampler); the main trace
+    row names its target: `path_target` where given, else the Cornell box's for the host."""
     lines = []
     # host_summary ends in "AVX-512", "AVX2 (no AVX-512)" or "no AVX2".
     simd = "AVX-512" if host.endswith(", AVX-512") else "AVX2"
-    pairs = [("luxest trace", "path")]
+    pairs = [(n, "path") for n in trace_rows(to_target)]
     pairs += [(n, "ptracer") for n in ("luxest light tracer", DLE, DLE_PLAIN) if (n, TARGETS[0]) in to_target]
     for integrator in ("path", "ptracer"):
         if (mitsuba_name(integrator, samplers[0]), TARGETS[0]) not in to_target:
@@ -275,7 +337,9 @@ def at_its_best(to_target, samplers, host):
                 sm = best_sampler(to_target, integrator, samplers, t)
                 ratios.append(f"{to_target[name, t] / to_target[mitsuba_name(integrator, sm), t]:.2f} at {t:g} ({sm})")
             note = ""
-            if name == "luxest trace":
+            if name == TRACE and path_target is not None:
+                note = f" The target at {TARGETS[-1]:g} on this scene: at most {path_target:g}."
+            elif name == TRACE:
                 note = (
                     f" The target at {TARGETS[-1]:g}: at most {PATH_TARGET[simd]:g} on this {simd} host "
                     f"({', '.join(f'{v:g} on {k}' for k, v in PATH_TARGET.items())})."
