@@ -344,14 +344,7 @@ impl World {
         };
         let environment = environment_light(&scene)
             .map_err(|m| luxest_io::Error::input(&scene.header.name, m))?;
-        let portals = match &environment {
-            Some((_, env)) if !scene.header.portals.is_empty() => Some(PortalSampler::new(
-                env,
-                &scene.header.portals,
-                crate::portal::RESOLUTION,
-            )),
-            _ => None,
-        };
+        let portals = portal_sampler(&scene, &environment);
         let smooth = scene.header.features.smooth_normals;
         let triangle_normals = (0..scene.triangle_count())
             .map(|t| {
@@ -765,7 +758,7 @@ impl World {
             None => 0.0,
             Some(views) => {
                 let p_sun = sun_share_through(env, portals, &views);
-                p_sun * env.sun_pdf(w) + (1.0 - p_sun) * portals.pdf(&views, w)
+                through_portals_pdf(env, portals, &views, p_sun, w)
             }
         }
     }
@@ -793,7 +786,7 @@ impl World {
         Some(EnvSample {
             direction,
             radiance: env.radiance(direction),
-            pdf: p_sun * env.sun_pdf(direction) + (1.0 - p_sun) * portals.pdf(&views, direction),
+            pdf: through_portals_pdf(env, portals, &views, p_sun, direction),
         })
     }
 
@@ -803,12 +796,7 @@ impl World {
         if !on {
             self.portals = None;
         } else if self.portals.is_none() {
-            self.portals = match &self.environment {
-                Some((_, env)) if !self.scene.header.portals.is_empty() => Some(
-                    PortalSampler::new(env, &self.scene.header.portals, crate::portal::RESOLUTION),
-                ),
-                _ => None,
-            };
+            self.portals = portal_sampler(&self.scene, &self.environment);
         }
     }
 
@@ -1227,6 +1215,34 @@ fn point_intensity(intensity: Rgb, spot: &Option<crate::spot::SpotCone>, toward:
 /// The probability of sampling the sun's cone from a point with portal views `views`: the
 /// environment's own share where the cone may pass through a portal, else 0 (the shadow ray of
 /// every sun direction would be blocked).
+/// The portal sampler of the scene's environment, if it has one and the compiled header lists
+/// portals.
+fn portal_sampler(
+    scene: &CompiledScene,
+    environment: &Option<(u32, EnvironmentLight)>,
+) -> Option<PortalSampler> {
+    match environment {
+        Some((_, env)) if !scene.header.portals.is_empty() => Some(PortalSampler::new(
+            env,
+            &scene.header.portals,
+            crate::portal::RESOLUTION,
+        )),
+        _ => None,
+    }
+}
+
+/// Solid-angle density of `w` drawn from the sun with probability `p_sun`, else through the
+/// portals seen as `views`.
+fn through_portals_pdf(
+    env: &EnvironmentLight,
+    portals: &PortalSampler,
+    views: &Views,
+    p_sun: f64,
+    w: Vec3,
+) -> f64 {
+    p_sun * env.sun_pdf(w) + (1.0 - p_sun) * portals.pdf(views, w)
+}
+
 fn sun_share_through(env: &EnvironmentLight, portals: &PortalSampler, views: &Views) -> f64 {
     match env.sun_cone() {
         Some((d, cos_max)) if portals.cone_may_pass(views, d, cos_max) => env.sun_share(),
